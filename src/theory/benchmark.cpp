@@ -1,0 +1,77 @@
+#include "hapticd/theory/benchmark.hpp"
+
+#include <limits>
+
+namespace hapticd::theory {
+
+std::string_view to_string(HoldModel model) {
+    return model == HoldModel::paper ? "paper" : "encoder";
+}
+
+std::optional<HoldModel> parse_hold_model(std::string_view name) {
+    if (name == "paper") return HoldModel::paper;
+    if (name == "encoder") return HoldModel::encoder;
+    return std::nullopt;
+}
+
+Complex device_impedance(const DeviceModel& device, double theta, double sample_period_s) {
+    const Complex s = tustin_s(unit_circle_point(theta), sample_period_s);
+    return device.mass_kg * s + device.damping_n_s_per_m;  // (12)
+}
+
+Complex coupling_impedance(const SpringDamperCoupling& coupling, double theta,
+                           double sample_period_s) {
+    const Complex s = backward_difference_s(unit_circle_point(theta), sample_period_s);
+    return coupling.damping_n_s_per_m + coupling.stiffness_n_per_m / s;  // (16)
+}
+
+Complex hold_term(HoldModel model, double theta) {
+    const Complex z = unit_circle_point(theta);
+    if (model == HoldModel::paper) return 0.5 * (z + 1.0) / z;  // (13)
+    const double s = sinc(theta / 2.0);
+    return std::polar(s * s, -theta);
+}
+
+double hold_delay_samples(HoldModel model) { return model == HoldModel::paper ? 0.5 : 1.0; }
+
+TwoPort impedance_display(const DeviceModel& device, HoldModel model, double theta,
+                          double sample_period_s) {
+    // (14): [F_h, -v_d*] = [[Z_dI, ZOH], [-1, 0]] [v_h, F_d*].
+    return {ImmittanceForm::hybrid, device_impedance(device, theta, sample_period_s),
+            hold_term(model, theta), -1.0, 0.0};
+}
+
+TwoPort coupling_network(const SpringDamperCoupling& coupling, double theta,
+                         double sample_period_s) {
+    // (17): [F_d*, -v_e*] = [[0, 1], [-1, 1/Z_cI]] [v_d*, F_e*].
+    return {ImmittanceForm::hybrid, 0.0, 1.0, -1.0,
+            1.0 / coupling_impedance(coupling, theta, sample_period_s)};
+}
+
+TwoPort impedance_interface(const DeviceModel& device, const SpringDamperCoupling& coupling,
+                            HoldModel model, double theta, double sample_period_s) {
+    // (18): the cascade of (14) and (17) changes only the lower-right term.
+    TwoPort network = impedance_display(device, model, theta, sample_period_s);
+    network.p22 = 1.0 / coupling_impedance(coupling, theta, sample_period_s);
+    return network;
+}
+
+double coupling_margin(const DeviceModel& device, const SpringDamperCoupling& coupling,
+                       HoldModel model, double theta, double sample_period_s) {
+    const double bound = conductance_bound(model, device.damping_n_s_per_m, theta);
+    const double conductance = coupling_conductance(
+        coupling.stiffness_n_per_m, coupling.damping_n_s_per_m, theta, sample_period_s);
+    if (bound <= 0.0) return std::numeric_limits<double>::infinity();
+    return conductance / bound - 1.0;
+}
+
+double coupling_margin_at_dc(const DeviceModel& device, const SpringDamperCoupling& coupling,
+                             HoldModel model, double sample_period_s) {
+    const double k_t = coupling.stiffness_n_per_m * sample_period_s;
+    if (k_t <= 0.0) return std::numeric_limits<double>::infinity();  // a damper alone
+    const double tau = hold_delay_samples(model);
+    const double resistance = coupling.damping_n_s_per_m + k_t / 2.0;
+    return 4.0 * device.damping_n_s_per_m * resistance / (k_t * k_t * tau * tau) - 1.0;
+}
+
+}  // namespace hapticd::theory

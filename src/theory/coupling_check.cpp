@@ -1,0 +1,29 @@
+#include "hapticd/theory/coupling_check.hpp"
+
+#include "hapticd/theory/frequency_grid.hpp"
+
+namespace hapticd::theory {
+
+CouplingCheck check_coupling(const DeviceModel& device, const SpringDamperCoupling& coupling,
+                             HoldModel model, double rate_hz, int grid_points) {
+    const double period = 1.0 / rate_hz;
+    const auto margin = [&](double theta) {
+        return coupling_margin(device, coupling, model, theta, period);
+    };
+    const GridMinimum interior = minimize_on_grid(margin, frequency_grid(grid_points));
+    const double dc = coupling_margin_at_dc(device, coupling, model, period);
+    CouplingCheck result;
+    if (dc <= interior.value) {
+        result.worst_margin = dc;
+        result.worst_frequency_hz = 0.0;
+    } else {
+        result.worst_margin = interior.value;
+        result.worst_frequency_hz = frequency_hz(interior.theta, period);
+    }
+    // (19): Re Z_dI = b > 0 and Re(1/Z_cI) = R/(R²+X²) >= 0 for non-negative gains; (20)-(21)
+    // is the margin.
+    result.unconditionally_stable = device.damping_n_s_per_m > 0.0 && result.worst_margin >= 0.0;
+    return result;
+}
+
+}  // namespace hapticd::theory

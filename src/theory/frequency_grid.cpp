@@ -1,0 +1,69 @@
+#include "hapticd/theory/frequency_grid.hpp"
+
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+namespace hapticd::theory {
+
+std::vector<double> frequency_grid(int points, double lowest_theta) {
+    constexpr double kKnee = 0.1;
+    if (points < 16) throw std::invalid_argument("frequency_grid: need at least 16 points");
+    if (!(lowest_theta > 0.0 && lowest_theta < kKnee)) {
+        throw std::invalid_argument("frequency_grid: lowest_theta must be in (0, 0.1)");
+    }
+    const int geometric = points / 4;
+    const int uniform = points - geometric;
+    std::vector<double> grid;
+    grid.reserve(static_cast<std::size_t>(points));
+    const double ratio = std::pow(kKnee / lowest_theta, 1.0 / geometric);
+    double theta = lowest_theta;
+    for (int i = 0; i < geometric; ++i, theta *= ratio) grid.push_back(theta);
+    const double step = (std::numbers::pi - kKnee) / uniform;
+    for (int i = 0; i < uniform; ++i) grid.push_back(kKnee + step * i);
+    grid.back() = std::numbers::pi;
+    return grid;
+}
+
+GridMinimum minimize_on_grid(const std::function<double(double)>& f,
+                             const std::vector<double>& grid) {
+    std::size_t best = 0;
+    double best_value = f(grid[0]);
+    for (std::size_t i = 1; i < grid.size(); ++i) {
+        const double v = f(grid[i]);
+        if (v < best_value) {
+            best_value = v;
+            best = i;
+        }
+    }
+    // Golden-section between the neighbours; the grid is fine enough that the bracket
+    // holds a single minimum.
+    double lo = grid[best == 0 ? 0 : best - 1];
+    double hi = grid[best + 1 == grid.size() ? best : best + 1];
+    const double inv_phi = (std::sqrt(5.0) - 1.0) / 2.0;
+    double x1 = hi - inv_phi * (hi - lo);
+    double x2 = lo + inv_phi * (hi - lo);
+    double f1 = f(x1);
+    double f2 = f(x2);
+    for (int i = 0; i < 80 && hi - lo > 1e-13 * hi; ++i) {
+        if (f1 < f2) {
+            hi = x2;
+            x2 = x1;
+            f2 = f1;
+            x1 = hi - inv_phi * (hi - lo);
+            f1 = f(x1);
+        } else {
+            lo = x1;
+            x1 = x2;
+            f1 = f2;
+            x2 = lo + inv_phi * (hi - lo);
+            f2 = f(x2);
+        }
+    }
+    GridMinimum result{best_value, grid[best]};
+    if (f1 < result.value) result = {f1, x1};
+    if (f2 < result.value) result = {f2, x2};
+    return result;
+}
+
+}  // namespace hapticd::theory

@@ -1,0 +1,399 @@
+#include "hapticd/tune/coupling_sizing.hpp"
+
+#include <ceres/ceres.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <numbers>
+#include <sstream>
+#include <vector>
+
+#include "hapticd/theory/frequency_grid.hpp"
+#include "hapticd/tune/input_checks.hpp"
+
+namespace hapticd::tune {
+namespace {
+
+using theory::HoldModel;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr int kScanPoints = 512;
+constexpr int kVerifyPoints = 20000;
+constexpr double kLowestTheta = 1e-6;  // the f -> 0 limit, to O(θ²) = 1e-12 relative
+
+/// r(θ), the least Re(1/W) the display needs, and its slope dr/dθ.
+struct ConductanceBound {
+    std::function<double(double)> value;
+    std::function<double(double)> slope;
+};
+
+/// Largest α >= 0 with Re(1/W) >= r at θ, for W = β + α T z/(z - 1). Re(1/W) falls
+/// monotonically with α (docs/sizing.md), so the feasible set is [0, α_max], where α_max is
+/// the larger root of  r a²(1 + c²) α² + a(2rβ - 1) α + β(rβ - 1) = 0,  a = T/2,
+/// c = cot(θ/2). Returns +inf when r <= 0 and a negative number when even α = 0 fails.
+double alpha_max(double theta, double beta, double r, double period) {
+    if (!(r > 0.0)) return r == 0.0 ? kInf : -1.0;  // NaN or negative r: treat as failing
+    if (std::isinf(r)) return -1.0;
+    const double a = period / 2.0;
+    const double half_sine = std::sin(theta / 2.0);
+    const double qa = r * a * a / (half_sine * half_sine);  // 1 + c² = 1/sin²(θ/2)
+    const double qb = a * (2.0 * r * beta - 1.0);
+    const double qc = beta * (r * beta - 1.0);
+    if (qc > 0.0) return -1.0;  // Re(1/W) at α = 0 is 1/β < r
+    const double root = std::sqrt(qb * qb - 4.0 * qa * qc);
+    // The larger root without cancellation: (-b + √d)/2a when b <= 0, else 2c/(-b - √d).
+    return qb <= 0.0 ? (-qb + root) / (2.0 * qa) : (qb + root > 0.0 ? -2.0 * qc / (qb + root) : 0.0);
+}
+
+/// Re(1/W) and its partial derivatives in α and θ, by forward-mode automatic differentiation.
+struct ConductancePartials {
+    double d_alpha = 0.0;
+    double d_theta = 0.0;
+};
+ConductancePartials conductance_partials(double alpha, double beta, double theta, double period) {
+    using Jet = ceres::Jet<double, 2>;
+    const Jet g = theory::coupling_conductance(Jet(alpha, 0), Jet(beta), Jet(theta, 1), period);
+    return {g.v[0], g.v[1]};
+}
+
+/// dα_max/dθ at fixed β: zero where the coupling's conductance curve touches the bound.
+/// From G(α_max(θ), θ) = r(θ):  dα_max/dθ = (r'(θ) - ∂G/∂θ) / ∂G/∂α.
+struct TangencyResidual {
+    const ConductanceBound* bound;
+    double beta;
+    double period;
+    bool operator()(const double* theta, double* residual) const {
+        const double r = bound->value(theta[0]);
+        const double alpha = alpha_max(theta[0], beta, r, period);
+        if (!(alpha >= 0.0) || std::isinf(alpha)) return false;
+        const ConductancePartials p = conductance_partials(alpha, beta, theta[0], period);
+        residual[0] = (bound->slope(theta[0]) - p.d_theta) / p.d_alpha;
+        return std::isfinite(residual[0]);
+    }
+};
+
+/// The best pair (α, β) is a saddle of α_max(θ, β): a minimum over θ, a maximum over β.
+/// ∂G/∂β = 0 there, which is X = R: the coupling's phase is 45° at the binding frequency.
+/// Along that curve α = κ(θ) = tan(θ/2)/(T r(θ)) and β = (1 - tan(θ/2))/(2 r(θ)), and the
+/// saddle is a stationary point of κ:  d ln κ/dθ = 1/sin θ - r'(θ)/r(θ) = 0.
+struct SaddleResidual {
+    const ConductanceBound* bound;
+    bool operator()(const double* theta, double* residual) const {
+        const double r = bound->value(theta[0]);
+        residual[0] = 1.0 / std::sin(theta[0]) - bound->slope(theta[0]) / r;
+        return std::isfinite(residual[0]);
+    }
+};
+double saddle_alpha(const ConductanceBound& bound, double theta, double period) {
+    return std::tan(theta / 2.0) / (period * bound.value(theta));
+}
+double saddle_beta(const ConductanceBound& bound, double theta) {
+    return (1.0 - std::tan(theta / 2.0)) / (2.0 * bound.value(theta));
+}
+
+/// Drives a one-parameter residual to zero with Ceres' trust-region solver, θ kept inside
+/// [lo, hi]. The Jacobian is taken by central differences of the (analytic) residual.
+template <typename Residual>
+double solve_in_bracket(const Residual& residual, double lo, double hi, double start,
+                        int* iterations) {
+    double theta = start;
+    ceres::Problem problem;
+    problem.AddResidualBlock(
+        new ceres::NumericDiffCostFunction<Residual, ceres::CENTRAL, 1, 1>(new Residual(residual)),
+        nullptr, &theta);
+    problem.SetParameterLowerBound(&theta, 0, lo);
+    problem.SetParameterUpperBound(&theta, 0, hi);
+    ceres::Solver::Options options;
+    options.linear_solver_type = ceres::DENSE_QR;
+    options.logging_type = ceres::SILENT;
+    options.max_num_iterations = 100;
+    options.function_tolerance = 1e-20;
+    options.gradient_tolerance = 1e-30;
+    options.parameter_tolerance = 1e-15;
+    ceres::Solver::Summary summary;
+    ceres::Solve(options, &problem, &summary);
+    *iterations += summary.num_successful_steps + summary.num_unsuccessful_steps;
+    return theta;
+}
+
+struct FixedBetaSolution {
+    double alpha = 0.0;
+    double theta = 0.0;
+    std::string method;
+};
+
+/// The largest α for a given β: the minimum over θ of α_max(θ), found on a scan grid,
+/// refined with Ceres at the tangency point, and checked on a dense grid (a tangency the
+/// scan missed is refined in turn).
+FixedBetaSolution size_fixed_beta(const ConductanceBound& bound, double beta, double period,
+                                  const std::vector<double>& scan,
+                                  const std::vector<double>& dense, int* iterations) {
+    const auto solve_from = [&](const std::vector<double>& grid) {
+        std::size_t best = 0;
+        double best_alpha = kInf;
+        for (std::size_t i = 0; i < grid.size(); ++i) {
+            const double alpha = alpha_max(grid[i], beta, bound.value(grid[i]), period);
+            if (alpha < best_alpha) {
+                best_alpha = alpha;
+                best = i;
+            }
+        }
+        FixedBetaSolution s{best_alpha, grid[best], "bracket"};
+        if (best == 0) {
+            s.method = "dc-limit";
+            s.theta = 0.0;
+        } else if (best + 1 == grid.size()) {
+            s.method = "nyquist";
+        } else if (std::isfinite(best_alpha) && best_alpha >= 0.0) {
+            const double theta = solve_in_bracket(TangencyResidual{&bound, beta, period},
+                                                  grid[best - 1], grid[best + 1], grid[best],
+                                                  iterations);
+            const double alpha = alpha_max(theta, beta, bound.value(theta), period);
+            if (alpha <= best_alpha) s = {alpha, theta, "tangency"};
+        }
+        return s;
+    };
+    FixedBetaSolution solution = solve_from(scan);
+    if (solution.alpha < 0.0) return solution;
+    const FixedBetaSolution check = solve_from(dense);
+    if (check.alpha < solution.alpha * (1.0 - 1e-10)) solution = check;
+    return solution;
+}
+
+/// Smallest relative margin Re(1/W)/r - 1 of the final answer over the dense grid.
+double verified_margin(const ConductanceBound& bound, double alpha, double beta, double period,
+                       const std::vector<double>& dense) {
+    double worst = kInf;
+    for (double theta : dense) {
+        const double r = bound.value(theta);
+        if (r <= 0.0) continue;
+        worst = std::min(worst, theory::coupling_conductance(alpha, beta, theta, period) / r - 1.0);
+    }
+    return worst;
+}
+
+/// Where r(θ) is largest: the frequency that decides how much β may be.
+struct BoundPeak {
+    double value = 0.0;
+    double theta = 0.0;
+};
+BoundPeak bound_peak(const ConductanceBound& bound, const std::vector<double>& dense) {
+    BoundPeak peak;
+    for (double theta : dense) {
+        const double r = bound.value(theta);
+        if (r > peak.value) peak = {r, theta};
+    }
+    return peak;
+}
+
+struct PairSolution {
+    double alpha = 0.0;
+    double beta = 0.0;
+    double theta = 0.0;
+    std::string method;
+};
+
+/// The best (α, β): saddle points of α_max(θ, β), each confirmed by a fixed-β sizing at its
+/// β; β = 0 is the boundary candidate. If no saddle is confirmed, a golden-section search
+/// over β of the fixed-β answer decides.
+PairSolution size_best_pair(const ConductanceBound& bound, double period,
+                            const std::vector<double>& scan, const std::vector<double>& dense,
+                            double beta_limit, int* iterations) {
+    const FixedBetaSolution at_zero = size_fixed_beta(bound, 0.0, period, scan, dense, iterations);
+    PairSolution best{at_zero.alpha, 0.0, at_zero.theta, at_zero.method};
+    bool confirmed = false;
+    // β >= 0 needs tan(θ/2) <= 1, so saddles lie below half the Nyquist angle.
+    std::vector<double> kappa;
+    std::vector<double> thetas;
+    for (double theta : scan) {
+        if (theta >= std::numbers::pi / 2.0) break;
+        thetas.push_back(theta);
+        kappa.push_back(saddle_alpha(bound, theta, period));
+    }
+    for (std::size_t i = 1; i + 1 < kappa.size(); ++i) {
+        if (!(kappa[i] <= kappa[i - 1] && kappa[i] <= kappa[i + 1])) continue;
+        const double theta = solve_in_bracket(SaddleResidual{&bound}, thetas[i - 1],
+                                              thetas[i + 1], thetas[i], iterations);
+        const double beta = saddle_beta(bound, theta);
+        const double alpha = saddle_alpha(bound, theta, period);
+        if (!(beta >= 0.0)) continue;
+        const FixedBetaSolution fixed = size_fixed_beta(bound, beta, period, scan, dense, iterations);
+        if (std::abs(fixed.alpha - alpha) > 1e-7 * alpha) continue;  // another θ binds first
+        confirmed = true;
+        if (fixed.alpha > best.alpha) best = {fixed.alpha, beta, theta, "saddle"};
+    }
+    if (confirmed) return best;
+    // Golden-section over β in [0, beta_limit) on the fixed-β answer.
+    const auto alpha_at = [&](double beta) {
+        return size_fixed_beta(bound, beta, period, scan, dense, iterations).alpha;
+    };
+    const double inv_phi = (std::sqrt(5.0) - 1.0) / 2.0;
+    double lo = 0.0;
+    double hi = beta_limit;
+    double b1 = hi - inv_phi * (hi - lo);
+    double b2 = lo + inv_phi * (hi - lo);
+    double a1 = alpha_at(b1);
+    double a2 = alpha_at(b2);
+    for (int i = 0; i < 60 && hi - lo > 1e-9 * beta_limit; ++i) {
+        if (a1 > a2) {
+            hi = b2, b2 = b1, a2 = a1, b1 = hi - inv_phi * (hi - lo), a1 = alpha_at(b1);
+        } else {
+            lo = b1, b1 = b2, a1 = a2, b2 = lo + inv_phi * (hi - lo), a2 = alpha_at(b2);
+        }
+    }
+    const double beta = a1 > a2 ? b1 : b2;
+    if (std::max(a1, a2) > best.alpha) {
+        const FixedBetaSolution s = size_fixed_beta(bound, beta, period, scan, dense, iterations);
+        best = {s.alpha, beta, s.theta, "golden-section"};
+    }
+    return best;
+}
+
+ConductanceBound impedance_display_bound(const theory::DeviceModel& device, HoldModel model) {
+    const double b = device.damping_n_s_per_m;
+    return {[=](double theta) { return theory::conductance_bound(model, b, theta); },
+            [=](double theta) {
+                using Jet = ceres::Jet<double, 1>;
+                return theory::conductance_bound(model, b, Jet(theta, 0)).v[0];
+            }};
+}
+
+ConductanceBound admittance_display_bound(const theory::DeviceModel& device,
+                                          const theory::PiVelocityLoop& loop, HoldModel model,
+                                          double period) {
+    const auto value = [=](double theta) {
+        return theory::admittance_coupling_bound(device, loop, model, theta, period);
+    };
+    // (37) is complex arithmetic end to end; its slope is taken by a central difference.
+    return {value, [=](double theta) {
+                const double h = 1e-6 * std::max(theta, 1e-3);
+                return (value(theta + h) - value(theta - h)) / (2.0 * h);
+            }};
+}
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
+ImpedanceSizing size_impedance_coupling(const ImpedanceSizingRequest& request) {
+    const auto start = std::chrono::steady_clock::now();
+    check_device(request.device);
+    check_rate(request.rate_hz);
+    if (request.coupling_damping_n_s_per_m) {
+        check_non_negative("coupling damping b_c", *request.coupling_damping_n_s_per_m, "N s/m");
+    }
+    const double period = 1.0 / request.rate_hz;
+    const ConductanceBound bound = impedance_display_bound(request.device, request.model);
+    const std::vector<double> scan = theory::frequency_grid(kScanPoints, kLowestTheta);
+    const std::vector<double> dense = theory::frequency_grid(kVerifyPoints, kLowestTheta);
+    const BoundPeak peak = bound_peak(bound, dense);
+
+    ImpedanceSizing result;
+    int iterations = 0;
+    if (request.coupling_damping_n_s_per_m) {
+        const double b_c = *request.coupling_damping_n_s_per_m;
+        if (b_c * peak.value >= 1.0) {
+            std::ostringstream why;
+            why << "coupling damping b_c = " << b_c << " N s/m is infeasible for model '"
+                << theory::to_string(request.model) << "': (21) needs Re(1/Z_c) >= "
+                << peak.value << " S at " << theory::frequency_hz(peak.theta, period)
+                << " Hz, and a coupling with damping b_c has Re(1/Z_c) < 1/b_c at any k_c > 0; "
+                << "b_c must be below " << 1.0 / peak.value << " N s/m";
+            throw InfeasibleCoupling(why.str());
+        }
+        const FixedBetaSolution s = size_fixed_beta(bound, b_c, period, scan, dense, &iterations);
+        result.coupling = {s.alpha, b_c};
+        result.binding_frequency_hz = theory::frequency_hz(s.theta, period);
+        result.report.method = s.method;
+    } else {
+        const PairSolution s =
+            size_best_pair(bound, period, scan, dense, 1.0 / peak.value, &iterations);
+        result.coupling = {s.alpha, s.beta};
+        result.binding_frequency_hz = theory::frequency_hz(s.theta, period);
+        result.report.method = s.method;
+    }
+    result.verified_worst_margin =
+        verified_margin(bound, result.coupling.stiffness_n_per_m,
+                        result.coupling.damping_n_s_per_m, period, dense);
+    result.report.ceres_iterations = iterations;
+    result.report.verify_points = kVerifyPoints;
+    result.report.solver_time_s = seconds_since(start);
+    return result;
+}
+
+AdmittanceSizing size_admittance_coupling(const AdmittanceSizingRequest& request) {
+    const auto start = std::chrono::steady_clock::now();
+    check_device(request.device);
+    check_rate(request.rate_hz);
+    check_non_negative("proportional gain k_p", request.loop.proportional_gain_n_s_per_m,
+                       "N s/m");
+    check_non_negative("integral gain k_i", request.loop.integral_gain_n_per_m, "N/m");
+    if (request.coupling_damping_n_s_per_m) {
+        check_positive_or_infinite("coupling damping b_c", *request.coupling_damping_n_s_per_m,
+                                   "N s/m");
+    }
+    const double period = 1.0 / request.rate_hz;
+    const ConductanceBound bound =
+        admittance_display_bound(request.device, request.loop, request.model, period);
+    const std::vector<double> scan = theory::frequency_grid(kScanPoints, kLowestTheta);
+    const std::vector<double> dense = theory::frequency_grid(kVerifyPoints, kLowestTheta);
+
+    // (35): the display's own conductance Re(1/Z_dA) must be >= 0 everywhere; where it is
+    // negative the bound is infinite and no coupling can meet (37).
+    for (double theta : dense) {
+        const double conductance = theory::admittance_display_conductance(
+            request.device, request.loop, request.model, theta, period);
+        if (conductance < 0.0) {
+            std::ostringstream why;
+            why << "(37) cannot be met with k_p = " << request.loop.proportional_gain_n_s_per_m
+                << " N s/m, k_i = " << request.loop.integral_gain_n_per_m
+                << " N/m: the velocity loop makes the display active at "
+                << theory::frequency_hz(theta, period) << " Hz (Re(1/Z_dA) = " << conductance
+                << " m/(N s) < 0, so (35) fails and no passive coupling restores unconditional "
+                << "stability; lower the PI gains or raise the rate)";
+            throw InfeasibleCoupling(why.str());
+        }
+    }
+    const BoundPeak peak = bound_peak(bound, dense);
+    AdmittanceSizing result;
+    int iterations = 0;
+    double alpha = 0.0;
+    double beta = 0.0;
+    double theta = 0.0;
+    if (request.coupling_damping_n_s_per_m) {
+        beta = 1.0 / *request.coupling_damping_n_s_per_m;
+        if (beta * peak.value >= 1.0) {
+            std::ostringstream why;
+            why << "coupling damping b_c = " << *request.coupling_damping_n_s_per_m
+                << " N s/m is infeasible: (37) needs Re(Z_cA) >= " << peak.value << " N s/m at "
+                << theory::frequency_hz(peak.theta, period)
+                << " Hz, and a series mass-damper has Re(Z_cA) < b_c; b_c must exceed "
+                << peak.value << " N s/m";
+            throw InfeasibleCoupling(why.str());
+        }
+        const FixedBetaSolution s = size_fixed_beta(bound, beta, period, scan, dense, &iterations);
+        alpha = s.alpha;
+        theta = s.theta;
+        result.report.method = s.method;
+    } else {
+        const PairSolution s =
+            size_best_pair(bound, period, scan, dense, 1.0 / peak.value, &iterations);
+        alpha = s.alpha;
+        beta = s.beta;
+        theta = s.theta;
+        result.report.method = s.method;
+    }
+    result.coupling = {1.0 / alpha, beta > 0.0 ? 1.0 / beta : kInf};
+    result.binding_frequency_hz = theory::frequency_hz(theta, period);
+    result.verified_worst_margin = verified_margin(bound, alpha, beta, period, dense);
+    result.report.ceres_iterations = iterations;
+    result.report.verify_points = kVerifyPoints;
+    result.report.solver_time_s = seconds_since(start);
+    return result;
+}
+
+}  // namespace hapticd::tune
