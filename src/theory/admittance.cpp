@@ -13,12 +13,12 @@ Complex pi_gain(const PiVelocityLoop& loop, double theta, double sample_period_s
 Complex velocity_tracking(const DeviceModel& device, const PiVelocityLoop& loop,
                           HoldModel model, double theta, double sample_period_s) {
     const Complex forward = hold_term(model, theta) * pi_gain(loop, theta, sample_period_s);
-    return forward / (device_impedance(device, theta, sample_period_s) + forward);  // (29)
+    return forward / (device_impedance(device, model, theta, sample_period_s) + forward);  // (29)
 }
 
 Complex admittance_display_impedance(const DeviceModel& device, const PiVelocityLoop& loop,
                                      HoldModel model, double theta, double sample_period_s) {
-    return device_impedance(device, theta, sample_period_s) +
+    return device_impedance(device, model, theta, sample_period_s) +
            pi_gain(loop, theta, sample_period_s) * hold_term(model, theta);  // (30)
 }
 

@@ -19,6 +19,12 @@ Complex device_impedance(const DeviceModel& device, double theta, double sample_
     return device.mass_kg * s + device.damping_n_s_per_m;  // (12)
 }
 
+Complex device_impedance(const DeviceModel& device, HoldModel model, double theta,
+                         double sample_period_s) {
+    if (model == HoldModel::paper) return device_impedance(device, theta, sample_period_s);
+    return Complex(device.damping_n_s_per_m, device.mass_kg * theta / sample_period_s);
+}
+
 Complex coupling_impedance(const SpringDamperCoupling& coupling, double theta,
                            double sample_period_s) {
     const Complex s = backward_difference_s(unit_circle_point(theta), sample_period_s);
@@ -37,7 +43,7 @@ double hold_delay_samples(HoldModel model) { return model == HoldModel::paper ? 
 TwoPort impedance_display(const DeviceModel& device, HoldModel model, double theta,
                           double sample_period_s) {
     // (14): [F_h, -v_d*] = [[Z_dI, ZOH], [-1, 0]] [v_h, F_d*].
-    return {ImmittanceForm::hybrid, device_impedance(device, theta, sample_period_s),
+    return {ImmittanceForm::hybrid, device_impedance(device, model, theta, sample_period_s),
             hold_term(model, theta), -1.0, 0.0};
 }
 

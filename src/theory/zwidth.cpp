@@ -6,17 +6,18 @@ Complex perceived_impedance(const DeviceModel& device, const SpringDamperCouplin
                             HoldModel model, Complex environment_impedance, double theta,
                             double sample_period_s) {
     const Complex zc = coupling_impedance(coupling, theta, sample_period_s);
-    return device_impedance(device, theta, sample_period_s) +
+    return device_impedance(device, model, theta, sample_period_s) +
            zc * hold_term(model, theta) * environment_impedance / (zc + environment_impedance);
 }
 
-Complex impedance_display_zmin(const DeviceModel& device, double theta, double sample_period_s) {
-    return device_impedance(device, theta, sample_period_s);
+Complex impedance_display_zmin(const DeviceModel& device, HoldModel model, double theta,
+                               double sample_period_s) {
+    return device_impedance(device, model, theta, sample_period_s);
 }
 
 Complex impedance_display_zmax(const DeviceModel& device, const SpringDamperCoupling& coupling,
                                HoldModel model, double theta, double sample_period_s) {
-    return device_impedance(device, theta, sample_period_s) +
+    return device_impedance(device, model, theta, sample_period_s) +
            coupling_impedance(coupling, theta, sample_period_s) * hold_term(model, theta);
 }
 

@@ -22,6 +22,9 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr int kScanPoints = 512;
 constexpr int kVerifyPoints = 20000;
 constexpr double kLowestTheta = 1e-6;  // the f -> 0 limit, to O(θ²) = 1e-12 relative
+// The answer is backed off by this relative amount so that rounding (and the O(θ²) of the
+// f -> 0 limit) never puts a design that touches the bound on its wrong side.
+constexpr double kBackOff = 1e-11;
 
 /// r(θ), the least Re(1/W) the display needs, and its slope dr/dθ.
 struct ConductanceBound {
@@ -188,6 +191,15 @@ BoundPeak bound_peak(const ConductanceBound& bound, const std::vector<double>& d
     return peak;
 }
 
+/// Re(1/W) of any coupling with α > 0 vanishes like θ² as θ -> 0 (X ~ 1/θ). A bound that
+/// does not vanish as fast cannot be met there by any such coupling. Returns r(θ)/θ² growth
+/// between θ = 1e-5 and 1e-6: about 1 for a bound ~ θ², about 100 for one that stays finite.
+double low_frequency_growth(const ConductanceBound& bound) {
+    const double q_low = bound.value(kLowestTheta) / (kLowestTheta * kLowestTheta);
+    const double q_high = bound.value(10.0 * kLowestTheta) / (100.0 * kLowestTheta * kLowestTheta);
+    return q_low / q_high;
+}
+
 struct PairSolution {
     double alpha = 0.0;
     double beta = 0.0;
@@ -316,6 +328,7 @@ ImpedanceSizing size_impedance_coupling(const ImpedanceSizingRequest& request) {
         result.binding_frequency_hz = theory::frequency_hz(s.theta, period);
         result.report.method = s.method;
     }
+    result.coupling.stiffness_n_per_m *= 1.0 - kBackOff;
     result.verified_worst_margin =
         verified_margin(bound, result.coupling.stiffness_n_per_m,
                         result.coupling.damping_n_s_per_m, period, dense);
@@ -358,6 +371,16 @@ AdmittanceSizing size_admittance_coupling(const AdmittanceSizingRequest& request
             throw InfeasibleCoupling(why.str());
         }
     }
+    if (const double growth = low_frequency_growth(bound); growth > 10.0) {
+        std::ostringstream why;
+        why << "(37) cannot be met as f -> 0 with k_i = " << request.loop.integral_gain_n_per_m
+            << " N/m: with integral action the bound stays near "
+            << bound.value(kLowestTheta) << " N s/m at "
+            << theory::frequency_hz(kLowestTheta, period)
+            << " Hz, while the series mass-damper coupling (32) has no resistance at DC "
+            << "(Re(Z_cA) ~ f²); use k_i = 0 (proportional velocity feedback)";
+        throw InfeasibleCoupling(why.str());
+    }
     const BoundPeak peak = bound_peak(bound, dense);
     AdmittanceSizing result;
     int iterations = 0;
@@ -387,6 +410,7 @@ AdmittanceSizing size_admittance_coupling(const AdmittanceSizingRequest& request
         theta = s.theta;
         result.report.method = s.method;
     }
+    alpha *= 1.0 - kBackOff;
     result.coupling = {1.0 / alpha, beta > 0.0 ? 1.0 / beta : kInf};
     result.binding_frequency_hz = theory::frequency_hz(theta, period);
     result.verified_worst_margin = verified_margin(bound, alpha, beta, period, dense);

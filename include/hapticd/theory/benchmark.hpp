@@ -41,6 +41,13 @@ std::optional<HoldModel> parse_hold_model(std::string_view name);
 /// unit circle, which is why Tustin preserves passivity.
 Complex device_impedance(const DeviceModel& device, double theta, double sample_period_s);
 
+/// The device impedance each model uses: (12) for HoldModel::paper; for the encoder model
+/// m jω + b at the true frequency, consistent with its exact (unwarped) hold term. Both
+/// have real part b, so (21) is the same either way; the admittance display (29)-(30)
+/// sees the difference near Nyquist, where Tustin's warping sends |Z_dI| to infinity.
+Complex device_impedance(const DeviceModel& device, HoldModel model, double theta,
+                         double sample_period_s);
+
 /// (16): Z_cI(z) = b_c + k_c T z/(z - 1).
 Complex coupling_impedance(const SpringDamperCoupling& coupling, double theta,
                            double sample_period_s);

@@ -13,7 +13,8 @@ Complex perceived_impedance(const DeviceModel& device, const SpringDamperCouplin
                             double sample_period_s);
 
 /// (24): Z_min = Z_dI (free space, Z_e -> 0).
-Complex impedance_display_zmin(const DeviceModel& device, double theta, double sample_period_s);
+Complex impedance_display_zmin(const DeviceModel& device, HoldModel model, double theta,
+                               double sample_period_s);
 
 /// (25): Z_max = Z_dI + Z_cI H (rigid environment, Z_e -> ∞).
 Complex impedance_display_zmax(const DeviceModel& device, const SpringDamperCoupling& coupling,

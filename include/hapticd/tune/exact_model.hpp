@@ -1,0 +1,176 @@
+// The `exact` stability model (DESIGN.md): the sampled-data closed loop of the continuous
+// device (10) under an exact zero-order hold, a sampled encoder and a backward-difference
+// velocity, with the spring-damper virtual coupling (16), judged by the eigenvalues of the
+// discrete closed-loop state matrix against a sweep of passive human operators and passive
+// environments. It is the ground truth the `paper` and `encoder` models are held against.
+//
+// One servo tick n, as modelled (and as the runtime must implement it):
+//   x_d[n]  sampled encoder position (no quantisation, no computation delay: the force
+//           F[n] is applied from t = nT and held until (n+1)T, the exact ZOH);
+//   v_d[n] = (x_d[n] - x_d[n-1]) / T                                     backward difference
+//   F[n]   = k_c (x_d[n] - x_e[n]) + b_c (v_d[n] - v_e[n])               coupling (16)
+//   the device obeys  m dv/dt + b v = F_h - F[n]  (10): positive F pushes the handle back,
+//   and the same F pulls the environment toward the handle (+F on it along +x).
+//
+// Environments (discrete, in the tick; both passive, see Definition 2):
+//   rigid wall:    x_e = v_e = 0 (persistent contact, linearised), F = k_c x_d + b_c v_d.
+//   mass-spring:   virtual mass m_e on a spring k_e to ground with damper b_e, driven by F.
+//     It is integrated by implicit (backward) Euler, with the coupling force taken at the
+//     END of the step, i.e. solved together with the environment:
+//       m_e (v_e[n] - v_e[n-1]) / T = F[n] - k_e x_e[n] - b_e v_e[n]
+//       x_e[n] = x_e[n-1] + T v_e[n]
+//     Substituting F[n] and x_e[n] gives the update the servo computes each tick:
+//       D      = m_e + T (b_c + b_e) + T² (k_c + k_e)
+//       v_e[n] = ( m_e v_e[n-1] + T [ k_c (x_d[n] - x_e[n-1]) + b_c v_d[n] - k_e x_e[n-1] ] ) / D
+//       x_e[n] = x_e[n-1] + T v_e[n],   then F[n] from (16) as above.
+//     This makes the environment the implicit-Euler admittance
+//       Y_e(z) = 1 / ( m_e (1 - z⁻¹)/T + b_e + k_e T/(1 - z⁻¹) ),
+//     which is positive real (its impedance has Re = b_e + m_e(1 - cos θ)/T + k_e T/2 on
+//     the unit circle),
+//     and v_e, x_e obey the same x[n] = x[n-1] + T v[n] that (16) assumes. Taking F[n-1]
+//     instead (an explicit coupling force) would multiply Y_e by z⁻¹: for a pure mass that
+//     has Re Y_e = -T/(2 m_e) < 0, an active environment, so it is not used.
+//
+// Operators (continuous, attached at the handle, passive; a set-point does not change
+// stability, so springs act around 0):
+//   hands-off:      nothing attached.
+//   heavy hand:     mass m_h rigidly on the handle, damper b_h to ground.
+//   stiff grasp:    mass m_h rigidly on the handle, spring k_h and damper b_h to ground.
+//   two-mass grasp: handle --(skin k_s, b_s)-- hand mass m_h --(arm k_a, b_a)-- ground.
+//
+// Default sweep (log-spaced grids; the zero dampings are the classic worst cases):
+//   heavy hand      m_h 0.1..10 kg (9), b_h {0, 0.3, 1, 3, 10} N s/m                    45
+//   stiff grasp     m_h 0.1..10 kg (5), k_h 10..1e4 N/m (7), b_h {0, 1, 10} N s/m      105
+//   tuned steel grip  a stiff grasp with m_h = b_h = 0 and k_h = m (r π rate)², which
+//                   makes the handle resonate at r = {1/8, 1/4, 1/2, 3/4, 0.9, 1} of the
+//                   Nyquist frequency: the lossless spring cancels the device's mass
+//                   reactance there, so Re(1/Z_handle) reaches its passive maximum 1/b.
+//                   r = 1 is the worst passive operator for the coupling damping (at
+//                   k_h ≈ 1e6 N/m for m = 0.1 kg at 1 kHz: no hand does that, but
+//                   unconditional stability, Definition 4, is about every passive one)  6
+//   two-mass grasp  k_s 1e2..1e5 N/m (4), b_s {0, 1, 10} N s/m, m_h 0.1..10 kg (5),
+//                   k_a {0, 1e2, 1e3, 1e4} N/m, b_a {0, 10} N s/m                      480
+//   plus hands-off: 637 operators.
+//   environments    rigid wall, and mass-spring with m_e = m·{0.01, 0.1, 1, 10, 100}
+//                   (m the device mass), k_e 1..1e6 N/m (7), b_e {0, 1, 30} N s/m:     106
+//   637 x 106 = 67522 cases. The environments are grounded (k_e > 0) and the wall grounds
+//   the handle through k_c, so no eigenvalue sits on the unit circle unless k_c = 0 leaves
+//   the handle free (a simple z = 1).
+//
+// What the sweep finds (tests/tune/exact_model_test.cpp): the loop is stable against all
+// of it iff, to within a fraction of a percent,
+//   k_c T/2 < b + b_c           low frequency, heavy hands: the hold's half-sample delay
+//                               turns k_c into a negative damping k_c T/2 (Colgate &
+//                               Schenkel's k_c < 2b/T at b_c = 0);
+//   k_c T/2 < (π²/8) b - b_c    z = -1, the steel grip tuned to Nyquist. The hold's two
+//                               alias branches at ±π/T fold onto z = -1 and add; the
+//                               `encoder` model's e^{-jθ} sinc²(θ/2) keeps one of them and
+//                               allows b_c + k_c T/2 up to (π²/4) b there, twice as much.
+// The `paper` model (13) allows k_c up to 8b/T at b_c = 0.
+#pragma once
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "hapticd/theory/benchmark.hpp"
+#include "hapticd/theory/unit_circle.hpp"
+
+namespace hapticd::tune {
+
+enum class OperatorFamily { hands_off, heavy_hand, stiff_grasp, two_mass_grasp };
+
+/// "hands-off", "heavy hand", "stiff grasp", "two-mass grasp".
+std::string_view to_string(OperatorFamily family);
+
+/// A passive human operator. Only the fields its family uses may be non-zero
+/// (closed_loop_poles rejects the others, so a typo cannot be silently ignored).
+struct OperatorModel {
+    OperatorFamily family = OperatorFamily::hands_off;
+    double hand_mass_kg = 0.0;            ///< heavy hand, stiff grasp, two-mass grasp
+    double hand_damping_n_s_per_m = 0.0;  ///< heavy hand, stiff grasp (to ground)
+    double hand_stiffness_n_per_m = 0.0;  ///< stiff grasp (to ground)
+    double skin_stiffness_n_per_m = 0.0;  ///< two-mass grasp: handle to hand
+    double skin_damping_n_s_per_m = 0.0;  ///< two-mass grasp: handle to hand
+    double arm_stiffness_n_per_m = 0.0;   ///< two-mass grasp: hand to ground
+    double arm_damping_n_s_per_m = 0.0;   ///< two-mass grasp: hand to ground
+
+    static OperatorModel hands_off();
+    static OperatorModel heavy_hand(double hand_mass_kg, double hand_damping_n_s_per_m);
+    static OperatorModel stiff_grasp(double hand_mass_kg, double hand_stiffness_n_per_m,
+                                     double hand_damping_n_s_per_m);
+    static OperatorModel two_mass_grasp(double skin_stiffness_n_per_m,
+                                        double skin_damping_n_s_per_m, double hand_mass_kg,
+                                        double arm_stiffness_n_per_m, double arm_damping_n_s_per_m);
+
+    /// For example "stiff grasp (m_h = 1 kg, k_h = 1000 N/m, b_h = 0 N s/m)".
+    std::string describe() const;
+};
+
+/// A passive virtual environment, run in the servo tick (update in the file comment).
+struct EnvironmentModel {
+    enum class Kind { rigid_wall, mass_spring };
+    Kind kind = Kind::rigid_wall;
+    double mass_kg = 0.0;            ///< mass-spring: m_e >= 0
+    double stiffness_n_per_m = 0.0;  ///< mass-spring: k_e > 0 (grounds the loop)
+    double damping_n_s_per_m = 0.0;  ///< mass-spring: b_e >= 0
+
+    static EnvironmentModel rigid_wall();
+    static EnvironmentModel mass_spring(double mass_kg, double stiffness_n_per_m,
+                                        double damping_n_s_per_m = 0.0);
+
+    /// For example "mass-spring (m_e = 0.1 kg, k_e = 1000 N/m, b_e = 0 N s/m)".
+    std::string describe() const;
+};
+
+/// Eigenvalues of the discrete closed-loop state matrix, one tick to the next.
+struct ClosedLoopPoles {
+    double spectral_radius = 0.0;        ///< max |λ|; < 1 asymptotically stable
+    double dominant_frequency_hz = 0.0;  ///< |arg λ|/(2π T) of the largest |λ|, 0..rate/2
+    std::vector<theory::Complex> eigenvalues;
+};
+
+/// The closed loop of device + operator + coupling + environment. Throws
+/// std::invalid_argument naming the offending value for non-physical input.
+ClosedLoopPoles closed_loop_poles(const theory::DeviceModel& device,
+                                  const theory::SpringDamperCoupling& coupling, double rate_hz,
+                                  const OperatorModel& human, const EnvironmentModel& environment);
+
+/// A spectral radius up to 1 + this counts as stable: the only unit-circle eigenvalue the
+/// models produce is the simple z = 1 of a free handle (k_c = 0), marginal and therefore
+/// stable by Definition 1.
+inline constexpr double kMarginalTolerance = 1e-8;
+
+/// The worst case of a sweep. When the loop is stable, worst_margin is tiny (1e-9..1e-7 for
+/// the default sweep) and worst_frequency_hz belongs to a lightly damped operator mode,
+/// e.g. an undamped 10 kg hand on a 100 N/m skin at 0.5 Hz, which the coupling barely
+/// touches: 1 - ρ is not a distance to instability. When it is unstable, both describe the
+/// growing mode (ρ per tick, its frequency).
+struct ExactCheck {
+    bool stable = false;  ///< worst_margin >= -kMarginalTolerance
+    double worst_spectral_radius = 0.0;
+    double worst_margin = 0.0;        ///< 1 - worst_spectral_radius; >= 0 stable
+    double worst_frequency_hz = 0.0;  ///< dominant frequency of the worst case
+    OperatorModel worst_operator;
+    EnvironmentModel worst_environment;
+    int cases_checked = 0;
+};
+
+/// The tuned steel grips depend on the device mass and the rate (see the file comment).
+std::vector<OperatorModel> default_operator_sweep(const theory::DeviceModel& device,
+                                                  double rate_hz);
+/// Environment masses scale with the device mass (see the file comment).
+std::vector<EnvironmentModel> default_environment_sweep(const theory::DeviceModel& device);
+
+/// Worst case of closed_loop_poles over every operator x environment pair. The first
+/// case with the largest spectral radius is reported.
+ExactCheck check_exact(const theory::DeviceModel& device,
+                       const theory::SpringDamperCoupling& coupling, double rate_hz,
+                       const std::vector<OperatorModel>& operators,
+                       const std::vector<EnvironmentModel>& environments);
+
+/// check_exact over the default sweep.
+ExactCheck check_exact(const theory::DeviceModel& device,
+                       const theory::SpringDamperCoupling& coupling, double rate_hz);
+
+}  // namespace hapticd::tune

@@ -1,0 +1,158 @@
+// haptic-tune size and check, end to end through the real executable.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+#include <cctype>
+#include <ostream>
+#include <string>
+
+#include "run_command.hpp"
+
+namespace hapticd {
+namespace {
+
+using hapticd::testing::run_command;
+using nlohmann::json;
+
+std::string tune(const std::string& args) { return std::string(HAPTIC_TUNE) + " " + args; }
+
+TEST(HapticTuneSize, PrintsThePublicFieldsAsJson) {
+    const auto r = tune("size --mass 0.1 --damping 2 --rate 1000 --model encoder --json");
+    const auto result = run_command(r);
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    const json j = json::parse(result.out);
+    EXPECT_NEAR(j.at("stiffness").get<double>(), 4000.0, 1e-6);  // Colgate: 2b/T
+    EXPECT_EQ(j.at("damping").get<double>(), 0.0);
+    EXPECT_EQ(j.at("binding_frequency_hz").get<double>(), 0.0);
+    EXPECT_EQ(j.at("model"), "encoder");
+    EXPECT_GT(j.at("solver_time_s").get<double>(), 0.0);
+}
+
+TEST(HapticTuneSize, ReadsTheDeviceFromAConfigFileAndFlagsOverrideIt) {
+    const std::string config = std::string(HAPTICD_SOURCE_DIR) + "/config/devices/pen-display.toml";
+    const auto from_file = run_command(tune("size --config " + config + " --json"));
+    ASSERT_EQ(from_file.exit_code, 0) << from_file.err;
+    EXPECT_NEAR(json::parse(from_file.out).at("stiffness").get<double>(), 4000.0, 1e-6);
+    const auto overridden = run_command(tune("size --config " + config + " --damping 1 --json"));
+    ASSERT_EQ(overridden.exit_code, 0) << overridden.err;
+    EXPECT_NEAR(json::parse(overridden.out).at("stiffness").get<double>(), 2000.0, 1e-6);
+}
+
+TEST(HapticTuneSize, OptimizeDampingFindsAStifferPair) {
+    const auto result = run_command(tune("size --mass 0.1 --damping 2 --rate 1000 --optimize-damping --json"));
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    const json j = json::parse(result.out);
+    EXPECT_GT(j.at("stiffness").get<double>(), 4000.0);
+    EXPECT_GT(j.at("damping").get<double>(), 0.0);
+    EXPECT_GT(j.at("binding_frequency_hz").get<double>(), 0.0);
+}
+
+TEST(HapticTuneSize, TextOutputNamesEveryField) {
+    const auto result = run_command(tune("size --mass 0.1 --damping 2 --rate 1000"));
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    for (const char* key : {"stiffness", "damping", "binding_frequency_hz", "model", "solver_time_s"}) {
+        EXPECT_NE(result.out.find(key), std::string::npos) << key;
+    }
+}
+
+TEST(HapticTuneSize, AdmittanceDisplayExplainsAnInfeasibleLoop) {
+    const auto result = run_command(tune(
+        "size --display admittance --mass 2 --damping 5 --rate 1000 --kp 2000 --ki 0"));
+    EXPECT_EQ(result.exit_code, 2);
+    EXPECT_NE(result.err.find("(35) fails"), std::string::npos) << result.err;
+}
+
+struct BadInput {
+    std::string args;
+    std::string must_name;
+};
+void PrintTo(const BadInput& b, std::ostream* os) { *os << b.args; }
+
+class HapticTuneBadInput : public ::testing::TestWithParam<BadInput> {};
+
+// Readable, stable test names: "size_mass_-1_..." -> letters and digits only.
+std::string bad_input_name(const ::testing::TestParamInfo<BadInput>& info) {
+    std::string name = std::to_string(info.index) + "_";
+    for (char ch : info.param.args) name += std::isalnum(static_cast<unsigned char>(ch)) ? ch : '_';
+    return name;
+}
+
+TEST_P(HapticTuneBadInput, ExitsTwoAndNamesTheValue) {
+    const auto result = run_command(tune(GetParam().args));
+    EXPECT_EQ(result.exit_code, 2) << result.out;
+    EXPECT_NE(result.err.find(GetParam().must_name), std::string::npos) << result.err;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Cases, HapticTuneBadInput,
+    ::testing::Values(
+        BadInput{"size --mass -1 --damping 2 --rate 1000", "-1"},
+        BadInput{"size --mass 0 --damping 2 --rate 1000", "0"},
+        BadInput{"size --mass 0.1 --damping nan --rate 1000", "nan"},
+        BadInput{"size --mass 0.1 --damping 2 --rate -5", "-5"},
+        BadInput{"size --mass 0.1 --damping 2 --rate 1000 --model magic", "magic"},
+        BadInput{"size --mass 0.1 --damping 2 --rate 1000 --coupling-damping 50", "b_c = 50"},
+        BadInput{"size --mass 0.1 --damping 2 --rate 1000 --coupling-damping 1 --optimize-damping", "--optimize-damping"},
+        BadInput{"size --mass 0.1 --damping 2", "--rate"},
+        BadInput{"size --mass abc --damping 2 --rate 1000", "abc"},
+        BadInput{"check --mass 0.1 --damping 2 --rate 1000", "--stiffness"},
+        BadInput{"check --mass 0.1 --damping 2 --rate 1000 --stiffness 100 --model exactly", "exactly"},
+        BadInput{"size --config /nonexistent.toml", "/nonexistent.toml"}),
+    bad_input_name);
+
+TEST(HapticTuneConfig, ErrorsNameTheFileTheKeyAndTheRange) {
+    const std::string path = "/tmp/hapticd-cli-test-bad.toml";
+    std::FILE* f = std::fopen(path.c_str(), "w");
+    std::fputs("[servo]\nrate_hz = 1000\n[device.model]\nmass = -0.5\ndamping = 2\n", f);
+    std::fclose(f);
+    const auto result = run_command(tune("size --config " + path));
+    EXPECT_EQ(result.exit_code, 2);
+    EXPECT_NE(result.err.find(path), std::string::npos) << result.err;
+    EXPECT_NE(result.err.find("[device.model] mass = -0.5"), std::string::npos) << result.err;
+    EXPECT_NE(result.err.find("> 0"), std::string::npos) << result.err;
+    f = std::fopen(path.c_str(), "w");
+    std::fputs("[device.model]\nmass = 0.1\ndamping = 2\ninertia = 3\n", f);
+    std::fclose(f);
+    const auto unknown = run_command(tune("size --config " + path + " --rate 1000"));
+    EXPECT_EQ(unknown.exit_code, 2);
+    EXPECT_NE(unknown.err.find("inertia"), std::string::npos) << unknown.err;
+    std::remove(path.c_str());
+}
+
+TEST(HapticTuneCheck, ExitCodeIsTheVerdict) {
+    const auto stable = run_command(tune("check --mass 0.1 --damping 2 --rate 1000 --stiffness 3900 --json"));
+    EXPECT_EQ(stable.exit_code, 0) << stable.err;
+    const json s = json::parse(stable.out);
+    EXPECT_TRUE(s.at("unconditionally_stable").get<bool>());
+    EXPECT_NEAR(s.at("worst_margin").get<double>(), 4000.0 / 3900.0 - 1.0, 1e-9);
+    EXPECT_EQ(s.at("worst_frequency_hz").get<double>(), 0.0);
+
+    const auto unstable = run_command(tune("check --mass 0.1 --damping 2 --rate 1000 --stiffness 4100 --json"));
+    EXPECT_EQ(unstable.exit_code, 1);
+    EXPECT_FALSE(json::parse(unstable.out).at("unconditionally_stable").get<bool>());
+}
+
+TEST(HapticTuneCheck, PaperModelAcceptsWhatTheEncoderModelRejects) {
+    const std::string design = "check --mass 0.1 --damping 2 --rate 1000 --stiffness 12000";
+    EXPECT_EQ(run_command(tune(design + " --model paper")).exit_code, 0);
+    EXPECT_EQ(run_command(tune(design + " --model encoder")).exit_code, 1);
+}
+
+TEST(HapticTuneCheck, ExactModelNamesTheWorstOperator) {
+    const auto result = run_command(
+        tune("check --mass 0.1 --damping 2 --rate 1000 --stiffness 16000 --model exact --json"));
+    EXPECT_EQ(result.exit_code, 1) << result.err;
+    const json j = json::parse(result.out);
+    EXPECT_FALSE(j.at("unconditionally_stable").get<bool>());
+    EXPECT_LT(j.at("worst_margin").get<double>(), 0.0);
+    EXPECT_FALSE(j.at("worst_operator").get<std::string>().empty());
+}
+
+TEST(HapticTune, HelpExitsZero) {
+    const auto result = run_command(tune("size --help"));
+    EXPECT_EQ(result.exit_code, 0);
+    EXPECT_NE(result.out.find("--optimize-damping"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace hapticd

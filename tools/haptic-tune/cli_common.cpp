@@ -1,0 +1,113 @@
+#include "cli_common.hpp"
+
+#include <cmath>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+#include "device_file.hpp"
+
+namespace hapticd::tools {
+namespace {
+
+CLI::Validator numeric_range(std::string allowed, std::function<bool(double)> ok,
+                             std::string unit) {
+    return CLI::Validator(
+        [allowed, ok, unit](std::string& text) -> std::string {
+            double value = 0.0;
+            try {
+                std::size_t used = 0;
+                value = std::stod(text, &used);
+                if (used != text.size()) throw std::invalid_argument(text);
+            } catch (const std::exception&) {
+                return "value '" + text + "' is not a number (" + unit + ")";
+            }
+            if (!ok(value)) return "value " + text + " is out of range: allowed " + allowed +
+                                   " (" + unit + ")";
+            return {};
+        },
+        allowed + " " + unit);
+}
+
+}  // namespace
+
+CLI::Validator positive_finite(std::string unit) {
+    return numeric_range("finite and > 0", [](double v) { return std::isfinite(v) && v > 0.0; },
+                         std::move(unit));
+}
+
+CLI::Validator non_negative_finite(std::string unit) {
+    return numeric_range("finite and >= 0",
+                         [](double v) { return std::isfinite(v) && v >= 0.0; }, std::move(unit));
+}
+
+void add_device_options(CLI::App& command, DeviceOptions& options) {
+    command.add_option("--config", options.config_path,
+                       "hapticd config file to take [device.model], [servo] rate_hz and "
+                       "[coupling] from; flags override it")
+        ->check(CLI::ExistingFile);
+    command.add_option("--mass", options.mass_kg, "device mass m (kg)")
+        ->check(positive_finite("kg"));
+    command.add_option("--damping", options.damping_n_s_per_m, "device damping b (N s/m)")
+        ->check(positive_finite("N s/m"));
+    command.add_option("--rate", options.rate_hz, "servo rate 1/T (Hz)")
+        ->check(positive_finite("Hz"));
+}
+
+DesignInput resolve_design_input(const DeviceOptions& options) {
+    DeviceFile file;
+    if (!options.config_path.empty()) file = read_device_file(options.config_path);
+    const auto pick = [](const std::optional<double>& flag, const std::optional<double>& cfg,
+                         const char* what) {
+        if (flag) return *flag;
+        if (cfg) return *cfg;
+        throw UsageError(std::string("missing ") + what);
+    };
+    DesignInput input;
+    input.device.mass_kg = pick(options.mass_kg, file.mass_kg, "--mass (or [device.model] mass in --config)");
+    input.device.damping_n_s_per_m = pick(options.damping_n_s_per_m, file.damping_n_s_per_m,
+                                          "--damping (or [device.model] damping in --config)");
+    input.rate_hz = pick(options.rate_hz, file.rate_hz, "--rate (or [servo] rate_hz in --config)");
+    input.coupling_stiffness_n_per_m = file.coupling_stiffness_n_per_m;
+    input.coupling_damping_n_s_per_m = file.coupling_damping_n_s_per_m;
+    return input;
+}
+
+namespace {
+
+// Flattens nested objects into dotted keys ("device.mass") for the text output.
+void flatten(const nlohmann::ordered_json& node, const std::string& prefix,
+             std::vector<std::pair<std::string, std::string>>& rows) {
+    for (const auto& [key, value] : node.items()) {
+        const std::string name = prefix.empty() ? key : prefix + "." + key;
+        if (value.is_object()) {
+            flatten(value, name, rows);
+        } else if (value.is_string()) {
+            rows.emplace_back(name, value.get<std::string>());
+        } else if (value.is_number_float()) {
+            std::ostringstream number;
+            number << std::setprecision(10) << value.get<double>();
+            rows.emplace_back(name, number.str());
+        } else {
+            rows.emplace_back(name, value.dump());
+        }
+    }
+}
+
+}  // namespace
+
+void print_result(const nlohmann::ordered_json& fields, bool json) {
+    if (json) {
+        std::cout << fields.dump(2) << '\n';
+        return;
+    }
+    std::vector<std::pair<std::string, std::string>> rows;
+    flatten(fields, "", rows);
+    std::size_t width = 0;
+    for (const auto& row : rows) width = std::max(width, row.first.size());
+    for (const auto& [key, value] : rows) {
+        std::cout << std::left << std::setw(static_cast<int>(width) + 2) << key << value << '\n';
+    }
+}
+
+}  // namespace hapticd::tools

@@ -1,0 +1,92 @@
+// haptic-tune check: is a design unconditionally stable under a stability model?
+// Exit 0 when it is, 1 when it is not.
+#include <memory>
+
+#include "commands.hpp"
+#include "hapticd/theory/coupling_check.hpp"
+#include "hapticd/tune/exact_model.hpp"
+#include "hapticd/tune/input_checks.hpp"
+
+namespace hapticd::tools {
+namespace {
+
+struct CheckOptions {
+    DeviceOptions device;
+    std::optional<double> stiffness;
+    std::optional<double> coupling_damping;
+    std::string model = "encoder";
+    bool json = false;
+};
+
+int run_check(const CheckOptions& o) {
+    const DesignInput input = resolve_design_input(o.device);
+    theory::SpringDamperCoupling coupling;
+    if (o.stiffness) {
+        coupling.stiffness_n_per_m = *o.stiffness;
+    } else if (input.coupling_stiffness_n_per_m) {
+        coupling.stiffness_n_per_m = *input.coupling_stiffness_n_per_m;
+    } else {
+        throw UsageError("missing --stiffness (or [coupling] stiffness in --config)");
+    }
+    coupling.damping_n_s_per_m =
+        o.coupling_damping.value_or(input.coupling_damping_n_s_per_m.value_or(0.0));
+    if (coupling.stiffness_n_per_m == 0.0 && coupling.damping_n_s_per_m == 0.0) {
+        throw UsageError("--stiffness 0 with --coupling-damping 0 is no coupling at all");
+    }
+    tune::check_device(input.device);
+    tune::check_rate(input.rate_hz);
+
+    nlohmann::ordered_json out;
+    bool stable = false;
+    if (o.model == "exact") {
+        const tune::ExactCheck exact = tune::check_exact(input.device, coupling, input.rate_hz);
+        stable = exact.stable;
+        out = {{"unconditionally_stable", exact.stable},
+               {"worst_margin", exact.worst_margin},
+               {"worst_frequency_hz", exact.worst_frequency_hz},
+               {"model", "exact"},
+               {"worst_operator", exact.worst_operator.describe()},
+               {"worst_environment", exact.worst_environment.describe()},
+               {"worst_spectral_radius", exact.worst_spectral_radius},
+               {"cases_checked", exact.cases_checked}};
+    } else {
+        const theory::HoldModel model = *theory::parse_hold_model(o.model);
+        const theory::CouplingCheck check =
+            theory::check_coupling(input.device, coupling, model, input.rate_hz);
+        stable = check.unconditionally_stable;
+        out = {{"unconditionally_stable", check.unconditionally_stable},
+               {"worst_margin", check.worst_margin},
+               {"worst_frequency_hz", check.worst_frequency_hz},
+               {"model", o.model}};
+    }
+    out["stiffness"] = coupling.stiffness_n_per_m;
+    out["damping"] = coupling.damping_n_s_per_m;
+    out["device"] = {{"mass", input.device.mass_kg}, {"damping", input.device.damping_n_s_per_m}};
+    out["rate_hz"] = input.rate_hz;
+    print_result(out, o.json);
+    return stable ? kExitOk : kExitVerdictNo;
+}
+
+}  // namespace
+
+void add_check_command(CLI::App& app, Invocation& invocation) {
+    auto options = std::make_shared<CheckOptions>();
+    CLI::App* command = app.add_subcommand(
+        "check", "Check a coupling design; exit 0 if unconditionally stable, 1 if not");
+    add_device_options(*command, options->device);
+    command->add_option("--stiffness", options->stiffness, "coupling stiffness k_c (N/m)")
+        ->check(non_negative_finite("N/m"));
+    command->add_option("--coupling-damping", options->coupling_damping,
+                        "coupling damping b_c (N s/m), default 0")
+        ->check(non_negative_finite("N s/m"));
+    command->add_option("--model", options->model,
+                        "stability model: paper (13), encoder (exact ZOH and backward "
+                        "difference) or exact (closed-loop eigenvalues over an operator sweep)")
+        ->check(CLI::IsMember({"paper", "encoder", "exact"}));
+    command->add_flag("--json", options->json, "print the result as JSON");
+    command->callback([options, &invocation] {
+        invocation.run = [options] { return run_check(*options); };
+    });
+}
+
+}  // namespace hapticd::tools

@@ -1,0 +1,125 @@
+// haptic-tune plot: the paper's design procedure as a chart. "Plot the right-hand side of
+// (21) versus frequency, then synthesize 1/Z_c so that its real part is positive and
+// exceeds this lower bound": one bound curve per stability model, the coupling's
+// conductance Re(1/Z_c) of (16), and each model's binding (worst) frequency.
+#include <memory>
+
+#include "chart_renderer.hpp"
+#include "commands.hpp"
+#include "hapticd/theory/coupling_check.hpp"
+#include "hapticd/theory/unit_circle.hpp"
+
+namespace hapticd::tools {
+namespace {
+
+nlohmann::ordered_json model_curve(const DesignInput& input, const ImpedanceDesign& design,
+                                   theory::HoldModel model,
+                                   const std::vector<double>& frequencies) {
+    const double period = 1.0 / input.rate_hz;
+    const double b = input.device.damping_n_s_per_m;
+    std::vector<double> bound;
+    std::vector<double> margin;  // +inf (JSON null) where the bound is zero
+    bound.reserve(frequencies.size());
+    margin.reserve(frequencies.size());
+    for (const double f : frequencies) {
+        const double theta = theory::normalized_frequency(f, period);
+        bound.push_back(theory::conductance_bound(model, b, theta));
+        margin.push_back(
+            theory::coupling_margin(input.device, design.coupling, model, theta, period));
+    }
+    const theory::CouplingCheck check =
+        theory::check_coupling(input.device, design.coupling, model, input.rate_hz);
+    // Where to mark the binding point: the worst frequency, or the chart's left edge when
+    // (21) binds in the limit f -> 0 (worst_frequency_hz = 0).
+    const double marker_hz =
+        check.worst_frequency_hz > 0.0 ? check.worst_frequency_hz : frequencies.front();
+    const double marker_theta = theory::normalized_frequency(marker_hz, period);
+    return {
+        {"bound", bound},
+        {"margin", margin},
+        {"unconditionally_stable", check.unconditionally_stable},
+        {"worst_margin", check.worst_margin},
+        {"worst_frequency_hz", check.worst_frequency_hz},
+        {"marker",
+         {{"frequency_hz", marker_hz},
+          {"bound", theory::conductance_bound(model, b, marker_theta)},
+          {"conductance", theory::coupling_conductance(design.coupling.stiffness_n_per_m,
+                                                       design.coupling.damping_n_s_per_m,
+                                                       marker_theta, period)}}},
+    };
+}
+
+int run_plot(const ChartOptions& o) {
+    const std::vector<theory::HoldModel> models = parse_model_list(o.models);
+    check_chart_output(o);
+    const DesignInput input = resolve_design_input(o.device);
+    const ImpedanceDesign design = resolve_impedance_design(o, input);
+    const double period = 1.0 / input.rate_hz;
+
+    const std::vector<double> frequencies = chart_frequencies_hz(input.rate_hz, o.points);
+    std::vector<double> conductance;
+    conductance.reserve(frequencies.size());
+    for (const double f : frequencies) {
+        conductance.push_back(theory::coupling_conductance(
+            design.coupling.stiffness_n_per_m, design.coupling.damping_n_s_per_m,
+            theory::normalized_frequency(f, period), period));
+    }
+    nlohmann::ordered_json per_model = nlohmann::ordered_json::object();
+    for (const theory::HoldModel model : models) {
+        per_model[std::string(theory::to_string(model))] =
+            model_curve(input, design, model, frequencies);
+    }
+    const std::string title = "Design procedure, (21): " + describe_device(input) + "\n" +
+                              describe_design(design);
+    nlohmann::ordered_json chart = {
+        {"kind", "design-procedure"},
+        {"title", title},
+        {"device", {{"mass", input.device.mass_kg}, {"damping", input.device.damping_n_s_per_m}}},
+        {"rate_hz", input.rate_hz},
+        {"nyquist_hz", theory::nyquist_hz(period)},
+        {"design", design_json(design)},
+        {"frequency_hz", frequencies},
+        {"coupling_conductance", conductance},
+        {"models", per_model},
+    };
+    if (!o.out.empty()) render_chart(chart, o.out, chart_format(o.out));
+
+    if (o.json) {
+        print_result(chart, true);
+        return kExitOk;
+    }
+    nlohmann::ordered_json summary = {
+        {"chart", o.out},
+        {"stiffness", design.coupling.stiffness_n_per_m},
+        {"damping", design.coupling.damping_n_s_per_m},
+        {"coupling_source", design.source == "sized"
+                                ? "sized from (21) with the encoder model (no --stiffness, "
+                                  "no [coupling] stiffness)"
+                                : design.source},
+        {"device", {{"mass", input.device.mass_kg}, {"damping", input.device.damping_n_s_per_m}}},
+        {"rate_hz", input.rate_hz},
+    };
+    for (const auto& [name, curve] : per_model.items()) {
+        summary["worst_margin[" + name + "]"] = curve["worst_margin"];
+        summary["worst_frequency_hz[" + name + "]"] = curve["worst_frequency_hz"];
+        summary["unconditionally_stable[" + name + "]"] = curve["unconditionally_stable"];
+    }
+    print_result(summary, false);
+    return kExitOk;
+}
+
+}  // namespace
+
+void add_plot_command(CLI::App& app, Invocation& invocation) {
+    auto options = std::make_shared<ChartOptions>();
+    CLI::App* command = app.add_subcommand(
+        "plot",
+        "Chart the design procedure of (21): the least coupling conductance each stability "
+        "model needs against frequency, and the coupling's Re(1/Z_c)");
+    add_chart_options(*command, *options);
+    command->callback([options, &invocation] {
+        invocation.run = [options] { return run_plot(*options); };
+    });
+}
+
+}  // namespace hapticd::tools

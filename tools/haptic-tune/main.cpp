@@ -1,0 +1,43 @@
+// haptic-tune: the offline design tool. Sizes the virtual coupling from (21), checks any
+// design against the stability models, and draws the design-procedure charts.
+#include <iostream>
+
+#include "commands.hpp"
+#include "device_file.hpp"
+#include "hapticd/tune/coupling_sizing.hpp"
+
+int main(int argc, char** argv) {
+    using namespace hapticd::tools;
+    CLI::App app{
+        "haptic-tune: size and check the virtual coupling of an impedance haptic display "
+        "(Adams & Hannaford 1999, inequality (21))",
+        "haptic-tune"};
+    app.require_subcommand(1);
+    Invocation invocation;
+    add_size_command(app, invocation);
+    add_check_command(app, invocation);
+    add_plot_command(app, invocation);
+    add_zwidth_command(app, invocation);
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::CallForHelp& help) {
+        return app.exit(help);
+    } catch (const CLI::CallForAllHelp& help) {
+        return app.exit(help);
+    } catch (const CLI::ParseError& error) {
+        app.exit(error);  // prints the message and the usage hint
+        return kExitUsage;
+    }
+    try {
+        return invocation.run();
+    } catch (const UsageError& error) {
+        std::cerr << "haptic-tune: error: " << error.what() << '\n';
+    } catch (const ConfigError& error) {
+        std::cerr << "haptic-tune: config error: " << error.what() << '\n';
+    } catch (const hapticd::tune::InfeasibleCoupling& error) {
+        std::cerr << "haptic-tune: infeasible: " << error.what() << '\n';
+    } catch (const std::invalid_argument& error) {
+        std::cerr << "haptic-tune: invalid input: " << error.what() << '\n';
+    }
+    return kExitUsage;
+}
