@@ -38,13 +38,25 @@ TEST(HapticTuneSize, ReadsTheDeviceFromAConfigFileAndFlagsOverrideIt) {
     EXPECT_NEAR(json::parse(overridden.out).at("stiffness").get<double>(), 2000.0, 1e-6);
 }
 
-TEST(HapticTuneSize, OptimizeDampingFindsAStifferPair) {
+TEST(HapticTuneSize, OptimizeDampingFindsAStifferPairAndWarnsThatTheExactModelDisagrees) {
     const auto result = run_command(tune("size --mass 0.1 --damping 2 --rate 1000 --optimize-damping --json"));
     ASSERT_EQ(result.exit_code, 0) << result.err;
     const json j = json::parse(result.out);
     EXPECT_GT(j.at("stiffness").get<double>(), 4000.0);
     EXPECT_GT(j.at("damping").get<double>(), 0.0);
     EXPECT_GT(j.at("binding_frequency_hz").get<double>(), 0.0);
+    // The encoder model ignores the hold's alias at Nyquist (docs/stability-models.md).
+    EXPECT_FALSE(j.at("exact_check").at("stable").get<bool>());
+    EXPECT_NE(result.err.find("warning: the exact sampled-data model"), std::string::npos);
+}
+
+TEST(HapticTuneSize, DefaultDesignPassesTheExactCrossCheckQuietly) {
+    const auto result = run_command(tune("size --mass 0.1 --damping 2 --rate 1000 --json"));
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    EXPECT_TRUE(json::parse(result.out).at("exact_check").at("stable").get<bool>());
+    EXPECT_EQ(result.err, "");
+    const auto skipped = run_command(tune("size --mass 0.1 --damping 2 --rate 1000 --json --no-exact-check"));
+    EXPECT_FALSE(json::parse(skipped.out).contains("exact_check"));
 }
 
 TEST(HapticTuneSize, TextOutputNamesEveryField) {

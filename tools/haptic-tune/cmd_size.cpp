@@ -1,10 +1,12 @@
 // haptic-tune size: the largest coupling stiffness (and optionally the best damping) that
 // keeps the interface unconditionally stable, from (21) or, for an admittance display, (37).
 #include <cmath>
+#include <iostream>
 #include <memory>
 
 #include "commands.hpp"
 #include "hapticd/tune/coupling_sizing.hpp"
+#include "hapticd/tune/exact_model.hpp"
 
 namespace hapticd::tools {
 namespace {
@@ -18,6 +20,7 @@ struct SizeOptions {
     std::optional<double> kp;
     std::optional<double> ki;
     bool json = false;
+    bool skip_exact_check = false;
 };
 
 nlohmann::ordered_json report_fields(const tune::SizingReport& report) {
@@ -25,6 +28,29 @@ nlohmann::ordered_json report_fields(const tune::SizingReport& report) {
             {"ceres_iterations", report.ceres_iterations},
             {"verify_points", report.verify_points},
             {"solver_time_s", report.solver_time_s}};
+}
+
+/// The sized design held against the exact sampled-data model, the ground truth the
+/// frequency-domain models approximate. Warns on stderr when it disagrees.
+nlohmann::ordered_json exact_cross_check(const DesignInput& input,
+                                         const theory::SpringDamperCoupling& coupling) {
+    const tune::ExactCheck exact = tune::check_exact(input.device, coupling, input.rate_hz);
+    if (!exact.stable) {
+        std::cerr << "haptic-tune: warning: the exact sampled-data model finds this design "
+                     "unstable: "
+                  << exact.worst_operator.describe() << " against "
+                  << exact.worst_environment.describe() << " grows by |z| = "
+                  << exact.worst_spectral_radius << " per tick at " << exact.worst_frequency_hz
+                  << " Hz. The frequency-domain models ignore aliasing of the hold (see "
+                     "docs/stability-models.md); size with --coupling-damping 0 or confirm with "
+                     "'haptic-tune check --model exact'.\n";
+    }
+    return {{"stable", exact.stable},
+            {"worst_spectral_radius", exact.worst_spectral_radius},
+            {"worst_frequency_hz", exact.worst_frequency_hz},
+            {"worst_operator", exact.worst_operator.describe()},
+            {"worst_environment", exact.worst_environment.describe()},
+            {"cases_checked", exact.cases_checked}};
 }
 
 int run_impedance(const SizeOptions& o, const DesignInput& input, theory::HoldModel model) {
@@ -49,6 +75,7 @@ int run_impedance(const SizeOptions& o, const DesignInput& input, theory::HoldMo
         {"rate_hz", input.rate_hz},
         {"solver", report_fields(sizing.report)},
     };
+    if (!o.skip_exact_check) out["exact_check"] = exact_cross_check(input, sizing.coupling);
     print_result(out, o.json);
     return kExitOk;
 }
@@ -112,6 +139,8 @@ void add_size_command(CLI::App& app, Invocation& invocation) {
     command->add_option("--ki", options->ki, "admittance display: PI integral gain (N/m)")
         ->check(non_negative_finite("N/m"));
     command->add_flag("--json", options->json, "print the result as JSON");
+    command->add_flag("--no-exact-check", options->skip_exact_check,
+                      "impedance display: skip holding the answer against the exact model");
     command->callback([options, &invocation] {
         invocation.run = [options] {
             const DesignInput input = resolve_design_input(options->device);

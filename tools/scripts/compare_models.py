@@ -1,0 +1,61 @@
+#!/usr/bin/python3
+"""Largest coupling stiffness each stability model allows, for a few coupling dampings.
+
+paper and encoder come from `haptic-tune size`; exact is a bisection on
+`haptic-tune check --model exact` (the closed-loop eigenvalue sweep). Prints a Markdown
+table for docs/stability-models.md.
+
+usage: tools/scripts/compare_models.py HAPTIC_TUNE --mass M --damping B --rate HZ BC...
+"""
+import argparse
+import json
+import subprocess
+
+
+def run(tool, args):
+    return subprocess.run([tool] + args, capture_output=True, text=True)
+
+
+def sized(tool, device, model, b_c):
+    r = run(tool, ["size"] + device + ["--model", model, "--coupling-damping", str(b_c),
+                                       "--json", "--no-exact-check"])
+    return json.loads(r.stdout)["stiffness"] if r.returncode == 0 else None
+
+
+def exact_limit(tool, device, b_c, hi):
+    lo = 0.0
+    while hi - lo > 1e-4 * hi:
+        mid = 0.5 * (lo + hi)
+        r = run(tool, ["check"] + device + ["--stiffness", str(mid), "--coupling-damping",
+                                            str(b_c), "--model", "exact"])
+        if r.returncode == 0:
+            lo = mid
+        elif r.returncode == 1:
+            hi = mid
+        else:
+            raise SystemExit(r.stderr)
+    return lo
+
+
+def main():
+    p = argparse.ArgumentParser()
+    p.add_argument("tool")
+    p.add_argument("--mass", required=True)
+    p.add_argument("--damping", required=True)
+    p.add_argument("--rate", required=True)
+    p.add_argument("dampings", nargs="+", type=float)
+    a = p.parse_args()
+    device = ["--mass", a.mass, "--damping", a.damping, "--rate", a.rate]
+    print("| b_c (N s/m) | paper k_c (N/m) | encoder k_c (N/m) | exact k_c (N/m) |")
+    print("|---|---|---|---|")
+    for b_c in a.dampings:
+        paper = sized(a.tool, device, "paper", b_c)
+        encoder = sized(a.tool, device, "encoder", b_c)
+        hi = 2.0 * max(v for v in (paper, encoder, 1.0) if v is not None)
+        exact = exact_limit(a.tool, device, b_c, hi)
+        fmt = lambda v: "infeasible" if v is None else f"{v:.0f}"
+        print(f"| {b_c:g} | {fmt(paper)} | {fmt(encoder)} | {exact:.0f} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
