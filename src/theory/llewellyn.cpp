@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
+
+#include "hapticd/theory/frequency_grid.hpp"
 
 namespace hapticd::theory {
 
@@ -32,6 +35,25 @@ LlewellynResult llewellyn(const TwoPort& network) {
     r.margin = rhs > 0.0 ? lhs / rhs - 1.0 : (lhs >= 0.0 ? kInf : -kInf);
     r.unconditionally_stable = r.re_p11 >= 0.0 && r.re_p22 >= 0.0 && lhs >= rhs;
     return r;
+}
+
+LlewellynSweep llewellyn_over_frequency(const std::function<TwoPort(double)>& network_at,
+                                        double rate_hz, int grid_points) {
+    const std::vector<double> grid = frequency_grid(grid_points);
+    const GridMinimum worst = minimize_on_grid(
+        [&](double theta) { return llewellyn(network_at(theta)).margin; }, grid);
+    LlewellynSweep sweep;
+    sweep.worst_margin = worst.value;
+    sweep.worst_frequency_hz = frequency_hz(worst.theta, 1.0 / rate_hz);
+    sweep.worst_re_p11 = std::numeric_limits<double>::infinity();
+    bool all_hold = true;
+    for (double theta : grid) {
+        const LlewellynResult r = llewellyn(network_at(theta));
+        sweep.worst_re_p11 = std::min(sweep.worst_re_p11, r.re_p11);
+        all_hold = all_hold && r.unconditionally_stable;
+    }
+    sweep.unconditionally_stable = all_hold && worst.value >= 0.0;
+    return sweep;
 }
 
 }  // namespace hapticd::theory

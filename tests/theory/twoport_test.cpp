@@ -108,6 +108,27 @@ TEST(Llewellyn, TheHapticInterfaceGivesTheSameVerdictInAllFourForms) {
     }
 }
 
+TEST(Llewellyn, SweepFindsTheWorstFrequencyOfTheInterface) {
+    // Against (21)'s own check: same worst margin and frequency for an interior binding.
+    const DeviceModel device{0.1, 2.0};
+    const SpringDamperCoupling coupling{4000.0, 3.0};
+    const LlewellynSweep sweep = llewellyn_over_frequency(
+        [&](double theta) {
+            return impedance_interface(device, coupling, HoldModel::encoder, theta, 1e-3);
+        },
+        1000.0);
+    EXPECT_FALSE(sweep.unconditionally_stable);
+    EXPECT_GT(sweep.worst_re_p11, 0.0);  // Re Z_dI = b > 0: only the second inequality fails
+    double worst = 1e300;
+    double worst_theta = 0.0;
+    for (double theta = 1e-3; theta <= 3.14159; theta += 1e-5) {
+        const double m = coupling_margin(device, coupling, HoldModel::encoder, theta, 1e-3);
+        if (m < worst) worst = m, worst_theta = theta;
+    }
+    EXPECT_NEAR(sweep.worst_margin, worst, 1e-6 * std::abs(worst));
+    EXPECT_NEAR(sweep.worst_frequency_hz, worst_theta / (2 * 3.14159265358979 * 1e-3), 0.01);
+}
+
 TEST(Passivity, CoincidesWithLlewellynForReciprocalNetworks) {
     // Section II-C: for z21 = z12 the tests (7) and (8) are identical.
     std::mt19937 rng(3);

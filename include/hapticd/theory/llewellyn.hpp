@@ -2,6 +2,8 @@
 // evaluated at one frequency, with margins that say how far it is from failing.
 #pragma once
 
+#include <functional>
+
 #include "hapticd/theory/twoport.hpp"
 
 namespace hapticd::theory {
@@ -38,5 +40,16 @@ struct LlewellynResult {
 };
 
 LlewellynResult llewellyn(const TwoPort& network);
+
+/// (8) checked at every frequency up to Nyquist: how far the network is from failing, and
+/// where. `network_at(θ)` gives the two-port at the normalised frequency θ = ωT.
+struct LlewellynSweep {
+    bool unconditionally_stable = false;  ///< (8) held at every frequency checked
+    double worst_margin = 0.0;            ///< smallest LlewellynResult::margin
+    double worst_frequency_hz = 0.0;      ///< where it occurs
+    double worst_re_p11 = 0.0;            ///< smallest Re p11 (the first inequality of (8))
+};
+LlewellynSweep llewellyn_over_frequency(const std::function<TwoPort(double)>& network_at,
+                                        double rate_hz, int grid_points = 4096);
 
 }  // namespace hapticd::theory
