@@ -1,0 +1,64 @@
+// The Device interface (DESIGN.md): what the servo loop reads and writes each tick.
+//
+// Units: encoder counts are integers, converted to metres with DeviceInfo::counts_per_meter;
+// Command::force_n is the force the device applies to the handle along each +axis, in
+// newtons. Every device plugin (sim, usb, hid, serial) implements this class and is loaded
+// through the versioned C factory of plugin_abi.hpp.
+//
+// Real-time contract: read() and write() are called from the servo tick. They must not
+// allocate, lock, log or throw; errors are returned as IoResult and status bits.
+#pragma once
+
+#include <string>
+
+#include "hapticd/servo/io.hpp"
+
+namespace hapticd::device {
+
+using servo::Command;
+using servo::IoResult;
+using servo::kMaxAxes;
+using servo::Sample;
+
+/// What a device says about itself; read once after open(), outside the tick.
+struct DeviceInfo {
+    int axes = 1;                   ///< 1..kMaxAxes Cartesian axes
+    double counts_per_meter = 0.0;  ///< encoder resolution, counts/m, > 0
+    double force_limit_n = 0.0;     ///< largest |force| per axis the device accepts, N
+    /// True when read() itself paces the loop: it blocks until the device's next period
+    /// (or, on a lockstep clock, returns the next virtual-time sample at once), so the loop
+    /// must not also sleep to a deadline.
+    bool paces_loop = false;
+    bool lockstep = false;          ///< virtual time: sample times are exact multiples of T
+    std::string name;               ///< e.g. "sim", "usb"
+    std::string serial;             ///< device serial number, if it has one
+};
+
+/// What the daemon passes to Device::open.
+struct DeviceConfig {
+    int axes = 1;             ///< [device] axes
+    double rate_hz = 1000.0;  ///< [servo] rate_hz
+    bool lockstep = false;    ///< hapticd --lockstep: virtual time, as fast as the CPU goes
+    /// The plugin's own table, [device.<plugin>], as TOML text. The plugin validates it and
+    /// rejects unknown keys, naming `source` (the config file) and the key.
+    std::string plugin_table_toml;
+    std::string source = "<config>";
+};
+
+class Device {
+public:
+    virtual ~Device() = default;
+    /// Outside the tick. Throws std::runtime_error naming the file, key, value and allowed
+    /// range on bad configuration, or saying why the device could not be opened.
+    virtual void open(const DeviceConfig& config) = 0;
+    virtual DeviceInfo info() const = 0;
+    /// Tick: the next sample. No allocation, lock, log or throw.
+    virtual IoResult read(Sample& sample) noexcept = 0;
+    /// Tick: the force to hold until the next write. No allocation, lock, log or throw.
+    virtual IoResult write(const Command& command) noexcept = 0;
+    /// Leaves the device at zero force and releases it. Safe to call more than once and
+    /// after a failed open().
+    virtual void close() noexcept = 0;
+};
+
+}  // namespace hapticd::device
