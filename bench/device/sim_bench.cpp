@@ -1,0 +1,91 @@
+// The sim device's share of a lockstep servo tick: one read() and one write(), for 1 and 3
+// axes, per operator family, with and without Coulomb friction (which substeps 32 times).
+// Run with --benchmark_repetitions=N --benchmark_report_aggregates_only=true for medians.
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+
+#include "hapticd/device/sim/sim_device.hpp"
+
+namespace {
+
+using hapticd::device::Command;
+using hapticd::device::Sample;
+using namespace hapticd::device::sim;
+
+SimConfig config(int axes, HumanFamily family, double coulomb_n) {
+    SimConfig c;
+    c.axes = axes;
+    c.clock = SimClock::lockstep;
+    c.coulomb_n = coulomb_n;
+    for (int i = 0; i < axes; ++i) {
+        HumanModel& h = c.human[i];
+        h.family = family;
+        if (family != HumanFamily::hands_off) h.hand_mass_kg = 0.5;
+        if (family == HumanFamily::heavy_hand || family == HumanFamily::stiff_grasp) {
+            h.hand_damping_n_s_per_m = 1.0;
+        }
+        if (family == HumanFamily::stiff_grasp) h.hand_stiffness_n_per_m = 1000.0;
+        if (family == HumanFamily::two_mass_grasp) {
+            h.skin_stiffness_n_per_m = 5000.0;
+            h.skin_damping_n_s_per_m = 1.0;
+            h.arm_stiffness_n_per_m = 300.0;
+            h.arm_damping_n_s_per_m = 5.0;
+        }
+    }
+    return c;
+}
+
+void lockstep_tick(benchmark::State& state, HumanFamily family, double coulomb_n) {
+    const int axes = static_cast<int>(state.range(0));
+    SimDevice dev;
+    dev.open(config(axes, family, coulomb_n));
+    Sample sample;
+    Command command;
+    command.enable = true;
+    double phase = 0.0;
+    for (auto _ : state) {
+        dev.read(sample);
+        // A small oscillating force, so the state stays bounded over billions of ticks.
+        const double f = 0.5 * std::sin(phase) - 20.0 * dev.plant(0).state().position_m;
+        phase += 0.01;
+        command.force_n = {f, -f, 0.5 * f};
+        dev.write(command);
+        benchmark::DoNotOptimize(sample);
+    }
+    state.SetItemsProcessed(state.iterations());
+    state.counters["ns_per_tick"] = benchmark::Counter(
+        static_cast<double>(state.iterations()), benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
+void BM_SimLockstepHandsOff(benchmark::State& s) { lockstep_tick(s, HumanFamily::hands_off, 0.0); }
+void BM_SimLockstepStiffGrasp(benchmark::State& s) { lockstep_tick(s, HumanFamily::stiff_grasp, 0.0); }
+void BM_SimLockstepTwoMassGrasp(benchmark::State& s) { lockstep_tick(s, HumanFamily::two_mass_grasp, 0.0); }
+void BM_SimLockstepHandsOffCoulomb(benchmark::State& s) { lockstep_tick(s, HumanFamily::hands_off, 0.2); }
+
+BENCHMARK(BM_SimLockstepHandsOff)->Arg(1)->Arg(3);
+BENCHMARK(BM_SimLockstepStiffGrasp)->Arg(1)->Arg(3);
+BENCHMARK(BM_SimLockstepTwoMassGrasp)->Arg(1)->Arg(3);
+BENCHMARK(BM_SimLockstepHandsOffCoulomb)->Arg(1)->Arg(3);
+
+/// Realtime clock: read() + write() each read CLOCK_MONOTONIC and advance to now.
+void BM_SimRealtimeTick(benchmark::State& state) {
+    SimConfig c = config(static_cast<int>(state.range(0)), HumanFamily::stiff_grasp, 0.0);
+    c.clock = SimClock::realtime;
+    SimDevice dev;
+    dev.open(c);
+    Sample sample;
+    Command command;
+    command.enable = true;
+    for (auto _ : state) {
+        dev.read(sample);
+        dev.write(command);
+        benchmark::DoNotOptimize(sample);
+    }
+    state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_SimRealtimeTick)->Arg(1)->Arg(3);
+
+}  // namespace
+
+BENCHMARK_MAIN();

@@ -1,0 +1,89 @@
+// hapticd's configuration file (TOML), with the keys DESIGN.md fixes:
+//
+//   [servo]        rate_hz (Hz, 100..20000), realtime ("enforce"|"warn"|"off"),
+//                  priority (SCHED_FIFO 1..99), cpu (core to pin the servo thread to, >= 0)
+//   [device]       plugin (a name such as "sim", or a path to a .so), axes (1..3)
+//   [device.model] mass (kg, > 0), damping (N s/m, > 0): the model the start-up check uses
+//   [device.<plugin>]  the plugin's own table, handed to it as TOML text; it validates it
+//   [coupling]     stiffness (N/m, >= 0), damping (N s/m, >= 0),
+//                  check ("paper"|"encoder"|"exact"|"off", the start-up stability model),
+//                  enabled (default true; false: no coupling, the scene's forces act on the
+//                  device directly: the conventional design, for experiments; needs
+//                  check = "off" and no gains)
+//   [scene]        file (a scene TOML, relative to this file's folder)
+//   [safety]       max_force (N, > 0), max_speed (m/s, > 0),
+//                  soft_start_ramp (s, 0..10, default 0.5: force ramp after a still handle),
+//                  passivity ("observe" | "control": Hannaford and Ryu's time-domain
+//                  passivity controller adds damping when the observed energy goes negative)
+//
+// Every key is checked for type and range, and unknown keys and tables are errors. Each
+// message names the file, the key, the value and the allowed range.
+#pragma once
+
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+
+namespace hapticd::daemon {
+
+class ConfigError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+struct ServoSection {
+    double rate_hz = 1000.0;
+    std::string realtime = "warn";
+    int priority = 80;
+    std::optional<int> cpu;
+};
+
+struct DeviceSection {
+    std::string plugin = "sim";
+    int axes = 1;
+    std::optional<double> model_mass_kg;
+    std::optional<double> model_damping_n_s_per_m;
+    /// [device.<plugin>] as TOML text (empty when absent), for the plugin to validate.
+    std::string plugin_table_toml;
+};
+
+struct CouplingSection {
+    bool enabled = true;
+    double stiffness_n_per_m = 0.0;
+    double damping_n_s_per_m = 0.0;
+    std::string check = "encoder";
+};
+
+struct SafetySection {
+    double max_force_n = 10.0;
+    double max_speed_mps = 1.0;
+    double soft_start_ramp_s = 0.5;
+    std::string passivity = "observe";
+};
+
+struct Config {
+    std::string source;       ///< the file name, or "<embedded default>"
+    std::string base_dir;     ///< relative paths (the scene file) resolve against this
+    ServoSection servo;
+    DeviceSection device;
+    CouplingSection coupling;
+    std::string scene_file;   ///< resolved path; empty means the embedded demo scene
+    SafetySection safety;
+};
+
+/// Parses and validates config text. `source` names it in messages; `base_dir` resolves
+/// the scene path. Throws ConfigError.
+Config parse_config(std::string_view toml_text, const std::string& source,
+                    const std::string& base_dir);
+
+/// Reads and parses a config file. Throws ConfigError (also for an unreadable file).
+Config load_config(const std::string& path);
+
+/// The embedded default: the simulated device and the demo wall scene (config/hapticd.toml
+/// and config/scenes/demo-wall.toml, compiled in).
+Config default_config();
+std::string_view default_config_text();
+std::string_view default_scene_text();
+
+}  // namespace hapticd::daemon

@@ -1,0 +1,27 @@
+// The start-up stability check (DESIGN.md, Safety model): hapticd refuses to arm with
+// coupling gains that fail the configured stability model ([coupling] check) for the
+// configured device model ([device.model]) at [servo] rate_hz.
+#pragma once
+
+#include <string>
+
+#include "hapticd/daemon/config.hpp"
+
+namespace hapticd::daemon {
+
+struct StartupCheck {
+    bool passed = false;
+    bool skipped = false;           ///< check = "off": nothing was checked
+    std::string model;              ///< "paper", "encoder" or "exact"
+    double worst_margin = 0.0;
+    double worst_frequency_hz = 0.0;
+    std::string worst_case;         ///< exact model: the operator and environment
+    /// One line for the log: the verdict, the margin and the frequency.
+    std::string describe() const;
+};
+
+/// Runs the check. Throws ConfigError when [device.model] is missing or the gains are
+/// zero, since there is then nothing to check against.
+StartupCheck check_coupling_at_startup(const Config& config);
+
+}  // namespace hapticd::daemon

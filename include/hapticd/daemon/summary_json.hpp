@@ -1,0 +1,35 @@
+// hapticd's --summary: the servo loop's Summary as JSON, with the fields DESIGN.md lists
+// (ticks, overruns, rate_hz, wake_latency_us {p50, p99, p999, max}, tick_compute_us
+// {p50, p99, max}, max_force_n, faults, telemetry_dropped) and the context a lab needs to
+// read it later: what ran, against what, how it ended and what real-time was granted.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "hapticd/daemon/startup_check.hpp"
+#include "hapticd/servo/realtime.hpp"
+#include "hapticd/servo/summary.hpp"
+
+namespace hapticd::daemon {
+
+struct RunContext {
+    std::string config_source;  ///< file name or "<embedded default>"
+    std::string device;         ///< the plugin's name
+    std::string scene;          ///< the scene's name
+    std::string causality;      ///< "impedance" | "admittance"
+    bool lockstep = false;
+    std::string exit;           ///< "stopped" | "duration" | "fault" | "error"
+    double run_time_s = 0.0;    ///< device time covered (virtual time in lockstep)
+    std::uint64_t telemetry_records = 0;  ///< lines in the --log file; 0 without one
+    StartupCheck check;
+    servo::RealtimeReport realtime;
+};
+
+/// The summary as one JSON object (pretty-printed, two-space indent).
+std::string summary_json(const servo::Summary& summary, const RunContext& context);
+
+/// The same, as a few readable lines for the terminal.
+std::string summary_text(const servo::Summary& summary, const RunContext& context);
+
+}  // namespace hapticd::daemon

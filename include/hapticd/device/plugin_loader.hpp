@@ -1,0 +1,69 @@
+// Loading device plugins (plugin_abi.hpp) by name or by path, outside the tick.
+//
+// A name ("sim") is looked up as `libhapticd-device-<name>.so`, then `hapticd-device-<name>.so`,
+// in each directory of plugin_search_path() in order, first match wins:
+//   1. $HAPTICD_PLUGIN_PATH, a colon-separated list (empty entries are skipped);
+//   2. the build tree's plugin directory (<build>/lib/hapticd/plugins);
+//   3. the install directory (<prefix>/<libdir>/hapticd/plugins).
+// A string containing '/' is a path and is opened as given. The built-in plugins (sim) are
+// shared objects found the same way, so a lab's own device needs no rebuild of the daemon.
+//
+// The loader dlopen()s with RTLD_NOW | RTLD_LOCAL, looks up HAPTICD_DEVICE_PLUGIN_ENTRY_SYMBOL,
+// checks abi_version before it reads anything else of the descriptor, then calls create().
+// Every failure is a std::runtime_error that names the plugin and says why.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "hapticd/device/device.hpp"
+
+namespace hapticd::device {
+
+/// Destroys a plugin's device with the plugin's own destroy(), then (when the last device of
+/// that plugin goes) dlclose()s the library: the code outlives every object it made.
+class PluginDeleter {
+public:
+    PluginDeleter() = default;
+    PluginDeleter(void (*destroy)(Device*), std::shared_ptr<void> library)
+        : destroy_(destroy), library_(std::move(library)) {}
+    void operator()(Device* device) const noexcept;
+
+private:
+    void (*destroy_)(Device*) = nullptr;
+    std::shared_ptr<void> library_;  ///< the dlopen handle; dlclose when the last owner goes
+};
+
+/// An unopened device owned together with the library that made it.
+using DeviceHandle = std::unique_ptr<Device, PluginDeleter>;
+
+/// Loads the plugin `name_or_path` (see the file comment) and creates one unopened device.
+/// Throws std::runtime_error: not found (the message lists every file tried), dlopen's own
+/// error text, missing entry symbol, null descriptor, wrong ABI version (both numbers),
+/// create() returning null or throwing.
+DeviceHandle load_device(std::string_view name_or_path);
+
+/// The directories searched for a plugin name, in order (see the file comment).
+std::vector<std::string> plugin_search_path();
+
+/// File names tried in each directory for a plugin name: lib-prefixed first.
+std::vector<std::string> plugin_file_names(std::string_view name);
+
+/// One plugin found on the search path, for `hapticd --list-plugins`.
+struct PluginListing {
+    std::string name;         ///< from the descriptor (or from the file name when unusable)
+    std::string description;  ///< from the descriptor
+    std::string path;         ///< the shared object
+    std::uint32_t abi_version = 0;
+    std::string error;        ///< empty when loadable; else why load_device would refuse it
+    bool shadowed = false;    ///< an earlier directory has a plugin of the same name
+};
+
+/// Every `(lib)hapticd-device-*.so` on the search path, in search order. Never throws for a
+/// bad plugin (it is listed with `error` set); unreadable directories are skipped.
+std::vector<PluginListing> list_plugins();
+
+}  // namespace hapticd::device

@@ -1,0 +1,80 @@
+// Scenes: a TOML file lists the objects of one virtual environment; the loader validates it
+// and builds only what it needs (DESIGN.md "Interfaces"): penalty objects make a
+// PenaltyScene (an ImpedanceEnvironment), constraint objects a GodObject or a VirtualMass
+// (an AdmittanceEnvironment). One scene has one causality.
+//
+// Schema (docs/scenes.md has the full reference with examples). Units SI; a "vector" is an
+// array of exactly `axes` numbers (components beyond the scene's axes are zero); integers
+// are accepted wherever a number is; every key not listed is an error.
+//
+//   [scene]                    required
+//   name = "demo-wall"         required, non-empty string
+//   axes = 1                   required, 1..3
+//
+//   Penalty (impedance) objects, any number of each:
+//   [[wall]]      normal (vector, into free space, non-zero; normalised), offset (m, the
+//                 plane normal·x = offset; default 0), stiffness (N/m, > 0),
+//                 damping (N s/m, >= 0, default 0)
+//   [[spring]]    anchor (vector, default 0), stiffness (N/m, > 0)
+//   [[damper]]    damping (N s/m, > 0)
+//   [[detent]]    axis (vector, non-zero; normalised), center (vector, default 0),
+//                 period (m, > 0), peak_force (N, > 0), periodic (bool, default true)
+//   [[friction]]  normal_force (N, > 0), static_coefficient (> 0),
+//                 kinetic_coefficient (> 0, <= static_coefficient), stiffness (N/m, > 0)
+//
+//   Constraint (admittance) objects: either a god-object ...
+//   [[proxy_plane]]   normal (vector, into free space), offset (m, default 0)
+//   [[proxy_sphere]]  center (vector, default 0), radius (m, > 0),
+//                     side ("outside": a solid ball, default | "inside": a cavity)
+//   ... or one virtual mass:
+//   [virtual_mass]    mass (kg, > 0), stiffness (N/m, >= 0, default 0),
+//                     damping (N s/m, >= 0, default 0), anchor (vector, default 0; must be
+//                     in free space)
+//   [[virtual_mass.plane]]   as [[proxy_plane]]
+//   [[virtual_mass.sphere]]  as [[proxy_sphere]]
+//
+// Upper bounds catch typos: stiffness <= 1e7 N/m, damping <= 1e5 N s/m, forces <= 1e4 N,
+// lengths and coordinates within ±100 m, mass <= 1e3 kg, coefficients <= 10.
+// A scene with no objects is a free-space PenaltyScene.
+//
+// Errors are SceneError, with the file, the line, the table and its 1-based index, the
+// key, the value and the allowed range, e.g.
+//   config/scenes/x.toml:7: [[wall]] #2 stiffness = -5 is out of range: allowed > 0 N/m
+#pragma once
+
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+
+#include "hapticd/env/environment.hpp"
+
+namespace hapticd::env {
+
+enum class Causality { impedance, admittance };
+
+[[nodiscard]] const char* to_string(Causality causality) noexcept;
+
+/// A bad scene file or text; what() names the file, key, value and allowed range.
+class SceneError : public std::runtime_error {
+  public:
+    using std::runtime_error::runtime_error;
+};
+
+/// A built scene. Exactly one of `impedance` and `admittance` is set, per `causality`.
+struct Scene {
+    std::string name;
+    int axes = 0;
+    Causality causality = Causality::impedance;
+    std::unique_ptr<ImpedanceEnvironment> impedance;
+    std::unique_ptr<AdmittanceEnvironment> admittance;
+};
+
+/// Reads and builds the scene in `path`. `axes` is the device's axis count: the scene's
+/// [scene] axes must equal it. Throws SceneError.
+[[nodiscard]] Scene load_scene(const std::string& path, int axes);
+
+/// The same from text; `source_name` stands for the file in messages.
+[[nodiscard]] Scene parse_scene(std::string_view text, const std::string& source_name, int axes);
+
+}  // namespace hapticd::env

@@ -1,0 +1,270 @@
+// The discrete spring-damper virtual coupling of the paper, per axis on a 3-vector.
+//
+//   (16)  Z_c(z) = (b_c + k_c/s) |_{s -> (z-1)/(Tz)}
+//
+// With the device velocity taken by backward difference, v[n] = (x[n] - x[n-1])/T, the
+// integrator k_c T z/(z-1) of (16) acting on (v_d - v_e) is exactly k_c (x_d - x_e), so the
+// coupling force on the virtual tool is
+//
+//   F_c[n] = k_c (x_d[n] - x_e[n]) + b_c (v_d[n] - v_e[n]),   the handle gets -F_c[n].
+//
+// Two connections (Section III):
+//   (17) impedance (penalty) environment: the coupling is in series with f_env, and the
+//        massless tool x_e balances k_c (x_d - x_e) + b_c (v_d - v_e) + f_env(x_e, v_e) = 0.
+//        step() solves this by Newton's method with the Jacobian that PenaltyForce carries.
+//   (22) admittance (constraint) environment: the environment returns x_e for the device
+//        state and gains; the coupling force follows from the same expression.
+//
+// Real-time: step() never allocates, locks or throws; a failed solve is reported in the
+// returned CouplingStep (converged / finite), never by exception.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <glm/matrix.hpp>
+
+#include "hapticd/servo/environment_port.hpp"
+
+namespace hapticd::servo {
+
+/// Newton solve settings for the series connection (17).
+struct SeriesSolverOptions {
+    int max_evaluations = 8;          ///< evaluate() calls per tick, >= 1
+    double force_tolerance_n = 1e-9;  ///< converged when max |residual| <= this
+};
+
+/// What one coupling step produced. Forces in newtons, positions in metres, velocities m/s.
+struct CouplingStep {
+    Vec3 device_velocity_mps{0.0};  ///< v_d, backward difference (16)
+    Vec3 tool_position_m{0.0};      ///< x_e
+    Vec3 tool_velocity_mps{0.0};    ///< v_e, backward difference
+    Vec3 tool_force_n{0.0};         ///< F_c = k_c (x_d - x_e) + b_c (v_d - v_e), on the tool
+    Vec3 handle_force_n{0.0};       ///< -F_c, on the device handle
+    double residual_n = 0.0;        ///< max |balance residual| of (17); 0 for (22)
+    int evaluations = 0;            ///< evaluate() calls used by (17); 0 for (22)
+    bool converged = true;          ///< (17) met force_tolerance_n within max_evaluations
+    bool finite = true;             ///< false: NaN/Inf seen; nothing was committed
+};
+
+inline bool all_finite(const Vec3& v) noexcept {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+inline double max_abs(const Vec3& v) noexcept {
+    return std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)});
+}
+
+class VirtualCoupling {
+  public:
+    VirtualCoupling() = default;
+    explicit VirtualCoupling(const CouplingGains& gains, SeriesSolverOptions options = {})
+        : gains_(gains), options_(options) {}
+
+    const CouplingGains& gains() const noexcept { return gains_; }
+
+    /// Both sides at rest at `device_position_m`: x_d[n-1] = x_e[n-1] = it.
+    void reset(const Vec3& device_position_m) noexcept {
+        previous_device_position_m_ = device_position_m;
+        previous_tool_position_m_ = device_position_m;
+    }
+
+    const Vec3& previous_device_position_m() const noexcept { return previous_device_position_m_; }
+    const Vec3& previous_tool_position_m() const noexcept { return previous_tool_position_m_; }
+
+    /// The device velocity that step() would use: (x_d - x_d[n-1]) / period_s.
+    Vec3 device_velocity_mps(const Vec3& device_position_m, double period_s) const noexcept {
+        return (device_position_m - previous_device_position_m_) / period_s;
+    }
+
+    /// Advances only the device side (no environment), e.g. while a fault is latched.
+    void track_device(const Vec3& device_position_m) noexcept {
+        previous_device_position_m_ = device_position_m;
+        previous_tool_position_m_ = device_position_m;
+    }
+
+    /// (17): series connection to an impedance environment. `period_s` is the time since the
+    /// previous step (T, or a multiple of it after an overrun).
+    ///
+    /// Newton's method on the balance residual, warm-started at the last solution: a wall
+    /// that is not touched costs one evaluation, a piecewise-linear wall 2-3. A residual that
+    /// is discontinuous (a damped wall entered at speed: f jumps by b_w v at the surface) has
+    /// no exact root and makes Newton bounce between the two sides; then the solve falls back
+    /// to false position (Illinois) on the segment between them, which closes in on the
+    /// surface. The iterate with the smallest residual is the one committed.
+    template <ImpedancePort Environment>
+    CouplingStep step(Environment& environment, const Vec3& device_position_m,
+                      double period_s) noexcept {
+        const double k_c = gains_.stiffness_n_per_m;
+        const double b_c = gains_.damping_n_s_per_m;
+        const double inverse_period = 1.0 / period_s;
+        const Vec3& x_d = device_position_m;
+        CouplingStep out;
+        out.device_velocity_mps = (x_d - previous_device_position_m_) * inverse_period;
+        const Vec3& v_d = out.device_velocity_mps;
+
+        // (17): residual of the force balance on the massless tool at a trial x_e.
+        PenaltyForce penalty;
+        auto residual_at = [&](const Vec3& x_e) noexcept {
+            const Vec3 v_e = (x_e - previous_tool_position_m_) * inverse_period;
+            penalty = environment.evaluate(x_e, v_e);
+            ++out.evaluations;
+            return Vec3(k_c * (x_d - x_e) + b_c * (v_d - v_e) + penalty.force_n);
+        };
+
+        Vec3 x_e = previous_tool_position_m_;
+        Vec3 residual = residual_at(x_e);
+        Vec3 best_x_e = x_e;
+        double best_residual_n = max_abs(residual);
+        Vec3 before_x_e = x_e;  // the iterate before x_e, for bounce detection
+        bool finite = all_finite(residual);
+        while (finite && best_residual_n > options_.force_tolerance_n &&
+               out.evaluations < options_.max_evaluations) {
+            // -d(residual)/d(x_e) = (k_c + b_c/T) I + K_env + D_env/T: positive definite for a
+            // passive environment, so the Newton step x_e += A^{-1} residual is well defined.
+            const Mat3 jacobian = Mat3(k_c + b_c * inverse_period) + penalty.stiffness_n_per_m +
+                                  penalty.damping_n_s_per_m * inverse_period;
+            const double det = glm::determinant(jacobian);
+            if (!std::isfinite(det) || det == 0.0) break;  // singular: keep the best iterate
+            const Vec3 next_x_e = x_e + glm::inverse(jacobian) * residual;
+            const Vec3 next_residual = residual_at(next_x_e);
+            finite = all_finite(next_x_e) && all_finite(next_residual);
+            if (!finite) break;
+            keep_best(next_x_e, next_residual, best_x_e, best_residual_n);
+            const bool bounced = out.evaluations > 2 &&
+                                 max_abs(next_x_e - before_x_e) < 0.5 * max_abs(next_x_e - x_e);
+            if (bounced) {
+                finite = false_position(residual_at, x_e, residual, next_x_e, next_residual,
+                                        out.evaluations, best_x_e, best_residual_n);
+                break;
+            }
+            before_x_e = x_e;
+            x_e = next_x_e;
+            residual = next_residual;
+        }
+        out.finite = finite;
+        if (!finite) {
+            out.converged = false;
+            out.tool_position_m = previous_tool_position_m_;
+            return out;
+        }
+        out.residual_n = best_residual_n;
+        out.converged = best_residual_n <= options_.force_tolerance_n;
+        const Vec3 v_e = (best_x_e - previous_tool_position_m_) * inverse_period;
+        environment.commit(best_x_e, v_e);
+        return finish(out, x_d, best_x_e, v_e);
+    }
+
+    /// No coupling at all, the conventional design the paper improves on: the impedance
+    /// environment is evaluated at the device itself (x_e = x_d, v_e = v_d) and its force goes
+    /// straight to the handle. Stable only while the environment meets Colgate and
+    /// Schenkel's wall bound b > K T/2 + |B|; the daemon offers it for experiments.
+    template <ImpedancePort Environment>
+    CouplingStep step_rigid(Environment& environment, const Vec3& device_position_m,
+                            double period_s) noexcept {
+        const Vec3& x_d = device_position_m;
+        CouplingStep out;
+        out.device_velocity_mps = (x_d - previous_device_position_m_) / period_s;
+        const PenaltyForce penalty = environment.evaluate(x_d, out.device_velocity_mps);
+        out.evaluations = 1;
+        out.finite = all_finite(penalty.force_n);
+        if (!out.finite) {
+            out.converged = false;
+            out.tool_position_m = previous_tool_position_m_;
+            return out;
+        }
+        environment.commit(x_d, out.device_velocity_mps);
+        out.tool_position_m = x_d;
+        out.tool_velocity_mps = out.device_velocity_mps;
+        out.tool_force_n = -penalty.force_n;  // what the tool would need to stay put
+        out.handle_force_n = penalty.force_n;
+        previous_device_position_m_ = x_d;
+        previous_tool_position_m_ = x_d;
+        return out;
+    }
+
+    /// (22): coupling to an admittance environment, which returns x_e itself.
+    template <AdmittancePort Environment>
+    CouplingStep step(Environment& environment, const Vec3& device_position_m,
+                      double period_s) noexcept {
+        const double inverse_period = 1.0 / period_s;
+        const Vec3& x_d = device_position_m;
+        CouplingStep out;
+        out.device_velocity_mps = (x_d - previous_device_position_m_) * inverse_period;
+        const Vec3 x_e = environment.step(x_d, out.device_velocity_mps, gains_, period_s);
+        if (!all_finite(x_e)) {
+            out.finite = false;
+            out.converged = false;
+            out.tool_position_m = previous_tool_position_m_;
+            return out;
+        }
+        const Vec3 v_e = (x_e - previous_tool_position_m_) * inverse_period;
+        return finish(out, x_d, x_e, v_e);
+    }
+
+  private:
+    static void keep_best(const Vec3& x_e, const Vec3& residual, Vec3& best_x_e,
+                          double& best_residual_n) noexcept {
+        const double size = max_abs(residual);
+        if (size < best_residual_n) {
+            best_residual_n = size;
+            best_x_e = x_e;
+        }
+    }
+
+    // Illinois false position along the segment a -> b, on phi(t) = d . r(a + t d), d = b - a.
+    // phi is decreasing for a passive environment; it needs phi(0) > 0 > phi(1). Returns false
+    // if a residual was not finite.
+    template <typename Residual>
+    bool false_position(Residual& residual_at, const Vec3& a, const Vec3& residual_a, const Vec3& b,
+                        const Vec3& residual_b, int& evaluations, Vec3& best_x_e,
+                        double& best_residual_n) const noexcept {
+        const Vec3 direction = b - a;
+        double t_low = 0.0, t_high = 1.0;
+        double phi_low = glm::dot(direction, residual_a);
+        double phi_high = glm::dot(direction, residual_b);
+        if (!(phi_low > 0.0 && phi_high < 0.0)) return true;  // no bracket: keep the best
+        int retained_side = 0;  // -1: low kept twice in a row, +1: high
+        while (evaluations < options_.max_evaluations &&
+               best_residual_n > options_.force_tolerance_n) {
+            const double t = t_low + phi_low * (t_high - t_low) / (phi_low - phi_high);
+            const Vec3 x_e = a + t * direction;
+            const Vec3 residual = residual_at(x_e);
+            if (!all_finite(residual)) return false;
+            keep_best(x_e, residual, best_x_e, best_residual_n);
+            const double phi = glm::dot(direction, residual);
+            if (phi > 0.0) {
+                t_low = t;
+                phi_low = phi;
+                if (retained_side == 1) phi_high *= 0.5;  // Illinois: unstick the far end
+                retained_side = 1;
+            } else {
+                t_high = t;
+                phi_high = phi;
+                if (retained_side == -1) phi_low *= 0.5;
+                retained_side = -1;
+            }
+        }
+        return true;
+    }
+
+    CouplingStep finish(CouplingStep& out, const Vec3& x_d, const Vec3& x_e,
+                        const Vec3& v_e) noexcept {
+        out.tool_position_m = x_e;
+        out.tool_velocity_mps = v_e;
+        // (16): F_c = k_c (x_d - x_e) + b_c (v_d - v_e), on the tool; the handle gets -F_c.
+        out.tool_force_n = gains_.stiffness_n_per_m * (x_d - x_e) +
+                           gains_.damping_n_s_per_m * (out.device_velocity_mps - v_e);
+        out.handle_force_n = -out.tool_force_n;
+        out.finite = all_finite(out.tool_force_n);
+        previous_device_position_m_ = x_d;
+        previous_tool_position_m_ = x_e;
+        return out;
+    }
+
+    CouplingGains gains_{};
+    SeriesSolverOptions options_{};
+    Vec3 previous_device_position_m_{0.0};  ///< x_d[n-1]
+    Vec3 previous_tool_position_m_{0.0};    ///< x_e[n-1]
+};
+
+}  // namespace hapticd::servo

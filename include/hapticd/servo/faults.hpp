@@ -1,0 +1,59 @@
+// Latched safety faults (DESIGN.md "Safety model"). A fault zeroes the force in the tick that
+// raises it and stays latched until reset outside the tick. Faults form a bitmask so that
+// several can be latched at once; each bit has a stable snake_case name for the summary's
+// `faults` list and the telemetry's `faults` column (which carries the mask as an integer).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string_view>
+
+namespace hapticd::servo {
+
+enum Fault : std::uint32_t {
+    kFaultDeviceLost = 1u << 0,     ///< read/write reported disconnected, or kStatusDisconnected
+    kFaultReadTimeout = 1u << 1,    ///< more consecutive timeouts/dropped samples than allowed
+    kFaultEncoderJump = 1u << 2,    ///< kStatusJump, or a step larger than encoder_jump_m
+    kFaultOverrunBudget = 1u << 3,  ///< the loop overran its deadline more than allowed
+    kFaultNonFinite = 1u << 4,      ///< NaN/Inf from the environment or in the force
+    kFaultOverspeed = 1u << 5,      ///< |v_d| > max_speed_mps with SpeedAction::fault
+    kFaultDeviceFault = 1u << 6,    ///< the device reported a fault of its own
+    kFaultDeviceIo = 1u << 7,       ///< read or write returned IoResult::error
+};
+
+inline constexpr int kFaultCount = 8;
+
+/// The name of one fault bit ("device_lost", ...); "unknown" for anything else.
+constexpr std::string_view fault_name(std::uint32_t fault_bit) noexcept {
+    switch (fault_bit) {
+        case kFaultDeviceLost:
+            return "device_lost";
+        case kFaultReadTimeout:
+            return "read_timeout";
+        case kFaultEncoderJump:
+            return "encoder_jump";
+        case kFaultOverrunBudget:
+            return "overrun_budget";
+        case kFaultNonFinite:
+            return "non_finite";
+        case kFaultOverspeed:
+            return "overspeed";
+        case kFaultDeviceFault:
+            return "device_fault";
+        case kFaultDeviceIo:
+            return "device_io";
+        default:
+            return "unknown";
+    }
+}
+
+/// Calls `visit(std::string_view name)` for every bit set in `faults`, lowest bit first.
+template <typename Visit>
+constexpr void for_each_fault(std::uint32_t faults, Visit&& visit) {
+    for (int bit = 0; bit < 32; ++bit) {
+        const std::uint32_t mask = 1u << bit;
+        if ((faults & mask) != 0u) visit(fault_name(mask));
+    }
+}
+
+}  // namespace hapticd::servo

@@ -1,0 +1,430 @@
+// The servo loop: one tick exactly as DESIGN.md "One servo tick" says, and the paced loop
+// around it.
+//
+//   sleep to the absolute deadline (LoopPacer), or block in read() when the device paces
+//   read the sample; counts -> metres (counts_per_meter)
+//   v_d = (x_d[n] - x_d[n-1]) / T                       backward difference, (16)
+//   coupling against the environment: (17) impedance, (22) admittance (VirtualCoupling)
+//   safety: fault latch, velocity limit, soft start, passivity, saturation (SafetySupervisor)
+//   write the force (the device holds it: ZOH); push one telemetry record (never blocks)
+//
+// It is a template over the device (anything with noexcept read(Sample&) and
+// write(const Command&) returning IoResult, e.g. device::Device), the environment (an
+// ImpedancePort or an AdmittancePort) and the clock (MonotonicClock; tests inject a virtual
+// one and never sleep).
+//
+// Threads: tick() and run() belong to one thread (the servo thread). arm(), disarm(),
+// request_fault_reset() and status() may be called from any thread (atomics, a seqlock).
+// stats() and summary() are for the servo thread, or for any thread after run() returned.
+//
+// Real-time: nothing reachable from tick() allocates, locks, logs, throws or makes a system
+// call other than the device's I/O and the clock (tests/servo/servo_loop_alloc_test.cpp).
+//
+// Zero force on every exit: run() writes a disabled zero command when it returns (stop,
+// tick limit, fault) and so does the destructor. Destroy the loop before the device.
+#pragma once
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <concepts>
+#include <cstdint>
+#include <glm/geometric.hpp>
+#include <stdexcept>
+#include <thread>
+
+#include "hapticd/servo/coupling.hpp"
+#include "hapticd/servo/environment_port.hpp"
+#include "hapticd/servo/faults.hpp"
+#include "hapticd/servo/io.hpp"
+#include "hapticd/servo/pacing.hpp"
+#include "hapticd/servo/realtime.hpp"
+#include "hapticd/servo/safety.hpp"
+#include "hapticd/servo/seqlock.hpp"
+#include "hapticd/servo/servo_config.hpp"
+#include "hapticd/servo/status.hpp"
+#include "hapticd/servo/summary.hpp"
+#include "hapticd/servo/telemetry.hpp"
+#include "hapticd/servo/telemetry_ring.hpp"
+#include "hapticd/servo/tick_stats.hpp"
+
+namespace hapticd::servo {
+
+template <typename D>
+concept ServoDevice = requires(D& device, Sample& sample, const Command& command) {
+    { device.read(sample) }
+    noexcept->std::same_as<IoResult>;
+    { device.write(command) }
+    noexcept->std::same_as<IoResult>;
+};
+
+template <typename E>
+concept ServoEnvironment = ImpedancePort<E> || AdmittancePort<E>;
+
+/// Why run() returned.
+enum class RunExit { stopped, tick_limit, fault };
+
+template <ServoDevice Device, ServoEnvironment Environment, PacingClock Clock = MonotonicClock>
+class ServoLoop {
+  public:
+    /// Validates `config` (std::invalid_argument). `telemetry` may be null (no records); it
+    /// must outlive the loop, and its consumer runs on another thread.
+    ServoLoop(Device& device, Environment& environment, const ServoConfig& config,
+              TelemetryRing* telemetry = nullptr, Clock clock = Clock{})
+        : device_(device),
+          environment_(environment),
+          config_(validated(config)),
+          period_s_(config.period_s()),
+          counts_to_m_(1.0 / config.counts_per_meter),
+          coupling_(config.coupling, config.solver),
+          safety_(config.safety, config.axes),
+          telemetry_(telemetry),
+          clock_(clock),
+          pacer_(clock_, config.period_ns()),
+          rigid_(!config.coupling_enabled),
+          armed_(config.start_armed),
+          was_armed_(config.start_armed) {}
+
+    ~ServoLoop() { write_zero_force(); }
+
+    ServoLoop(const ServoLoop&) = delete;
+    ServoLoop& operator=(const ServoLoop&) = delete;
+
+    /// One tick now, without sleeping (lockstep, tests, or a caller that paces itself).
+    /// Returns this tick's telemetry record.
+    const TelemetryRecord& tick() noexcept {
+        const std::int64_t now = clock_.now_ns();
+        Wake wake;
+        wake.deadline_ns = now;
+        wake.wake_ns = now;
+        return run_tick(wake, /*paced=*/false);
+    }
+
+    /// Applies the real-time request (throws in enforce mode if refused, after writing zero
+    /// force), then ticks at rate_hz until `stop` is set, `max_ticks` ticks have run (0: no
+    /// limit), or a fault is latched (see ServoConfig::stop_on_fault). Writes zero force on
+    /// return.
+    RunExit run(const std::atomic<bool>& stop, std::uint64_t max_ticks = 0) {
+        try {
+            realtime_.apply(config_.realtime);
+        } catch (...) {
+            write_zero_force();
+            throw;
+        }
+        pacer_.start();
+        RunExit exit = RunExit::stopped;
+        for (std::uint64_t ticks_run = 0;; ++ticks_run) {
+            if (stop.load(std::memory_order_acquire)) break;
+            if (max_ticks != 0 && ticks_run >= max_ticks) {
+                exit = RunExit::tick_limit;
+                break;
+            }
+            if (config_.device_paces_loop) {
+                wait_for_telemetry_room(stop);
+                tick();
+            } else {
+                run_tick(pacer_.wait(), /*paced=*/true);
+            }
+            const std::uint32_t faults = safety_.faults();
+            if ((faults != 0u && config_.stop_on_fault) || (faults & kFaultDeviceLost) != 0u) {
+                exit = RunExit::fault;
+                break;
+            }
+        }
+        write_zero_force();
+        return exit;
+    }
+
+    // --- any thread -------------------------------------------------------------------
+    /// Forces may flow again (after a still handle and the soft-start ramp).
+    void arm() noexcept { armed_.store(true, std::memory_order_release); }
+    /// Zero force, enable = false, from the next tick on.
+    void disarm() noexcept { armed_.store(false, std::memory_order_release); }
+    /// Clears the fault latch at the start of the next tick; soft start begins again.
+    void request_fault_reset() noexcept { reset_requested_.store(true, std::memory_order_release); }
+    /// The latest tick's state, lock-free.
+    StatusSnapshot status() const noexcept { return status_.load(); }
+
+    // --- servo thread, or after run() returned ----------------------------------------
+    const TickStats& stats() const noexcept { return stats_; }
+    std::uint32_t faults() const noexcept { return safety_.faults(); }
+    /// Every fault latched since construction, even if reset since.
+    std::uint32_t faults_seen() const noexcept { return faults_seen_; }
+    const SafetySupervisor& safety() const noexcept { return safety_; }
+    const VirtualCoupling& coupling() const noexcept { return coupling_; }
+    const RealtimeReport& realtime_report() const noexcept { return realtime_.report(); }
+    const ServoConfig& config() const noexcept { return config_; }
+    const TelemetryRecord& last_record() const noexcept { return record_; }
+    Summary summary() const {
+        return make_summary(stats_, config_.rate_hz, faults_seen_,
+                            telemetry_ != nullptr ? telemetry_->dropped() : 0,
+                            safety_.passivity().energy_j());
+    }
+
+    /// A disabled zero-force command, now.
+    void write_zero_force() noexcept { (void)device_.write(Command{}); }
+
+  private:
+    static const ServoConfig& validated(const ServoConfig& config) {
+        config.validate();
+        if (!config.coupling_enabled && !ImpedancePort<Environment>) {
+            throw std::invalid_argument(
+                "servo config: an admittance environment needs the virtual coupling "
+                "(coupling_enabled = false is only for impedance environments)");
+        }
+        return config;
+    }
+
+    CouplingStep couple(const Vec3& x_d, double interval_s) noexcept {
+        if constexpr (ImpedancePort<Environment>) {
+            if (rigid_) return coupling_.step_rigid(environment_, x_d, interval_s);
+        }
+        return coupling_.step(environment_, x_d, interval_s);
+    }
+
+    // Lockstep only (ServoConfig::telemetry_backpressure): between ticks, wait for the
+    // telemetry writer to make room, so that every record of a virtual-time run is logged.
+    void wait_for_telemetry_room(const std::atomic<bool>& stop) const noexcept {
+        if (!config_.telemetry_backpressure || telemetry_ == nullptr) return;
+        while (telemetry_->size() + 1 >= telemetry_->capacity() &&
+               !stop.load(std::memory_order_acquire)) {
+            std::this_thread::yield();
+        }
+    }
+
+    Vec3 to_metres(const Sample& sample) const noexcept {
+        Vec3 position(0.0);
+        for (int axis = 0; axis < config_.axes; ++axis) {
+            position[axis] = static_cast<double>(sample.encoder_counts[axis]) * counts_to_m_;
+        }
+        return position;
+    }
+
+    void account_overrun(const Wake& wake, std::uint32_t& flags) noexcept {
+        if (!wake.overrun) {
+            consecutive_overruns_ = 0;
+            return;
+        }
+        flags |= kFlagOverrun;
+        ++stats_.overruns;
+        stats_.missed_periods += static_cast<std::uint64_t>(wake.missed_periods);
+        ++consecutive_overruns_;
+        if (consecutive_overruns_ > config_.overrun.max_consecutive_overruns ||
+            wake.missed_periods > config_.overrun.max_missed_periods) {
+            safety_.raise(kFaultOverrunBudget);
+        }
+    }
+
+    // Reads one sample; false when there is none this tick. Raises the faults it implies.
+    bool read_sample(Sample& sample, std::uint32_t& flags) noexcept {
+        bool have_sample = false;
+        switch (device_.read(sample)) {
+            case IoResult::ok:
+                have_sample = (sample.status & kStatusDropped) == 0u;
+                break;
+            case IoResult::timeout:
+                break;
+            case IoResult::disconnected:
+                safety_.raise(kFaultDeviceLost);
+                break;
+            case IoResult::error:
+                safety_.raise(kFaultDeviceIo);
+                break;
+        }
+        if ((sample.status & kStatusDisconnected) != 0u) safety_.raise(kFaultDeviceLost);
+        if ((sample.status & kStatusDeviceFault) != 0u) safety_.raise(kFaultDeviceFault);
+        if ((sample.status & kStatusJump) != 0u) safety_.raise(kFaultEncoderJump);
+        if (have_sample) {
+            consecutive_timeouts_ = 0;
+        } else {
+            flags |= kFlagNoSample;
+            ++stats_.read_timeouts;
+            if (++consecutive_timeouts_ > config_.safety.read_timeouts_allowed) {
+                safety_.raise(kFaultReadTimeout);
+            }
+        }
+        return have_sample;
+    }
+
+    // Time since the previous sample used, in periods: from the device's sequence numbers
+    // when it paces the loop, else from the deadlines the pacer scheduled.
+    double sample_interval_s(const Sample& sample) noexcept {
+        std::uint64_t periods = periods_since_sample_;
+        if (config_.device_paces_loop && sample.sequence > last_sequence_) {
+            periods = sample.sequence - last_sequence_;
+        }
+        last_sequence_ = sample.sequence;
+        periods_since_sample_ = 0;
+        return static_cast<double>(std::max<std::uint64_t>(periods, 1)) * period_s_;
+    }
+
+    const TelemetryRecord& run_tick(const Wake& wake, bool paced) noexcept {
+        std::uint32_t flags = 0;
+        if (reset_requested_.exchange(false, std::memory_order_acq_rel)) {
+            safety_.reset();
+            initialised_ = false;
+            consecutive_overruns_ = 0;
+            consecutive_timeouts_ = 0;
+        }
+        const bool armed = armed_.load(std::memory_order_acquire);
+        if (armed && !was_armed_) {
+            safety_.restart_soft_start();
+            initialised_ = false;  // the environment restarts where the handle is
+        }
+        was_armed_ = armed;
+
+        account_overrun(wake, flags);
+        periods_since_sample_ += 1 + static_cast<std::uint64_t>(wake.missed_periods);
+        scheduled_periods_ += 1 + static_cast<std::uint64_t>(wake.missed_periods);
+
+        Sample sample;
+        const bool have_sample = read_sample(sample, flags);
+        const Vec3 x_d = have_sample ? to_metres(sample) : coupling_.previous_device_position_m();
+        double interval_s = period_s_;
+        if (have_sample) {
+            interval_s = sample_interval_s(sample);
+            if (!initialised_) {
+                coupling_.reset(x_d);
+                environment_.reset(x_d);
+                initialised_ = true;
+            } else if (config_.safety.encoder_jump_m > 0.0 &&
+                       max_abs(x_d - coupling_.previous_device_position_m()) >
+                           config_.safety.encoder_jump_m) {
+                safety_.raise(kFaultEncoderJump);
+            }
+        }
+
+        // Coupling against the environment: (17) or (22).
+        Vec3 handle_force_n(0.0);
+        Vec3 v_d(0.0);
+        Vec3 x_e = coupling_.previous_tool_position_m();
+        if (have_sample && armed && !safety_.faulted()) {
+            const CouplingStep step = couple(x_d, interval_s);
+            if (!step.finite) safety_.raise(kFaultNonFinite);
+            if (step.finite && !step.converged) {
+                flags |= kFlagSolverNotConverged;
+                ++stats_.solver_not_converged;
+            }
+            handle_force_n = step.handle_force_n;
+            v_d = step.device_velocity_mps;
+            x_e = step.tool_position_m;
+        } else if (have_sample) {
+            v_d = coupling_.device_velocity_mps(x_d, interval_s);
+            coupling_.track_device(x_d);
+            x_e = x_d;
+        }
+
+        // Safety, then the command. Without a sample (and without a fault) nothing is
+        // written: the device holds the last force (ZOH) for at most read_timeouts_allowed.
+        Command command;
+        SafeForce safe;
+        bool write = true;
+        if (!armed) {
+            flags |= kFlagDisarmed;
+        } else if (have_sample && !safety_.faulted()) {
+            safe = safety_.filter(handle_force_n, v_d, interval_s);
+            for (int axis = 0; axis < config_.axes; ++axis) {
+                command.force_n[static_cast<std::size_t>(axis)] = safe.handle_force_n[axis];
+            }
+            command.enable = safe.enable;
+        } else if (!safety_.faulted()) {
+            write = false;
+        }
+        if (safety_.faulted()) command = Command{};  // zero force in the tick that faulted
+        if (write) write_command(command);
+        if (safe.saturated) {
+            flags |= kFlagSaturated;
+            ++stats_.saturated_ticks;
+        }
+        if (safe.overspeed) {
+            flags |= kFlagOverspeed;
+            ++stats_.overspeed_ticks;
+        }
+        if (command.enable && safe.soft_start_scale < 1.0) flags |= kFlagSoftStart;
+        if (safe.passivity_damping_n_s_per_m > 0.0) {
+            flags |= kFlagPassivityControl;
+            ++stats_.passivity_control_ticks;
+        }
+        faults_seen_ |= safety_.faults();
+
+        // Statistics: compute time from wake to the command written.
+        const std::int64_t compute_ns = clock_.now_ns() - wake.wake_ns;
+        stats_.compute.record(compute_ns);
+        if (paced) stats_.wake_latency.record(wake.latency_ns);
+        const Vec3 commanded(command.force_n[0], command.force_n[1], command.force_n[2]);
+        stats_.max_force_n = std::max(stats_.max_force_n, glm::length(commanded));
+
+        record_.tick = stats_.ticks;
+        record_.t_s = config_.device_paces_loop && have_sample
+                          ? sample.device_time_s
+                          : static_cast<double>(scheduled_periods_ - 1) * period_s_;
+        for (int axis = 0; axis < kMaxAxes; ++axis) {
+            const auto i = static_cast<std::size_t>(axis);
+            record_.x_m[i] = x_d[axis];
+            record_.v_mps[i] = v_d[axis];
+            record_.xe_m[i] = x_e[axis];
+            record_.f_n[i] = command.force_n[i];
+        }
+        record_.status = sample.status;
+        record_.flags = flags;
+        record_.faults = safety_.faults();
+        record_.wake_latency_us = paced ? static_cast<double>(wake.latency_ns) * 1e-3 : 0.0;
+        record_.compute_us = static_cast<double>(compute_ns) * 1e-3;
+        record_.energy_j = safety_.passivity().energy_j();
+        if (telemetry_ != nullptr) telemetry_->try_push(record_);
+        ++stats_.ticks;
+        publish_status(safe.soft_start_scale, armed);
+        return record_;
+    }
+
+    void write_command(const Command& command) noexcept {
+        const IoResult result = device_.write(command);
+        if (result == IoResult::ok) return;
+        safety_.raise(result == IoResult::disconnected ? kFaultDeviceLost : kFaultDeviceIo);
+        if (command.enable) (void)device_.write(Command{});  // one more try at zero force
+    }
+
+    void publish_status(double soft_start_scale, bool armed) noexcept {
+        StatusSnapshot snapshot;
+        snapshot.tick = record_.tick;
+        snapshot.t_s = record_.t_s;
+        snapshot.x_m = record_.x_m;
+        snapshot.xe_m = record_.xe_m;
+        snapshot.f_n = record_.f_n;
+        snapshot.faults = record_.faults;
+        snapshot.flags = record_.flags;
+        snapshot.overruns = stats_.overruns;
+        snapshot.energy_j = record_.energy_j;
+        snapshot.soft_start_scale = soft_start_scale;
+        snapshot.armed = armed;
+        status_.store(snapshot);
+    }
+
+    Device& device_;
+    Environment& environment_;
+    ServoConfig config_;
+    double period_s_;
+    double counts_to_m_;
+    VirtualCoupling coupling_;
+    SafetySupervisor safety_;
+    TelemetryRing* telemetry_;
+    Clock clock_;
+    LoopPacer<Clock> pacer_;
+    bool rigid_;  ///< no virtual coupling (ServoConfig::coupling_enabled = false)
+    RealtimeSession realtime_;
+    TickStats stats_;
+    TelemetryRecord record_;
+    Seqlock<StatusSnapshot> status_;
+    std::atomic<bool> armed_;
+    std::atomic<bool> reset_requested_{false};
+    bool was_armed_;
+    bool initialised_ = false;
+    int consecutive_overruns_ = 0;
+    int consecutive_timeouts_ = 0;
+    std::uint64_t periods_since_sample_ = 0;
+    std::uint64_t scheduled_periods_ = 0;
+    std::uint64_t last_sequence_ = 0;
+    std::uint32_t faults_seen_ = 0;
+};
+
+}  // namespace hapticd::servo

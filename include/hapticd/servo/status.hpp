@@ -1,0 +1,26 @@
+// The latest state of the servo loop, for a status line on another thread (ServoLoop::status(),
+// published through a Seqlock every tick).
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "hapticd/servo/io.hpp"
+
+namespace hapticd::servo {
+
+struct StatusSnapshot {
+    std::uint64_t tick = 0;
+    double t_s = 0.0;
+    std::array<double, kMaxAxes> x_m{};
+    std::array<double, kMaxAxes> xe_m{};
+    std::array<double, kMaxAxes> f_n{};
+    std::uint32_t faults = 0;  ///< latched Fault mask
+    std::uint32_t flags = 0;   ///< TickFlag of the last tick
+    std::uint64_t overruns = 0;
+    double energy_j = 0.0;  ///< passivity observer
+    double soft_start_scale = 0.0;
+    bool armed = false;
+};
+
+}  // namespace hapticd::servo

@@ -1,0 +1,41 @@
+// The servo loop's summary: the fields of hapticd's --summary JSON (DESIGN.md "Public
+// names") plus a few more counters. The daemon serialises it.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "hapticd/servo/tick_stats.hpp"
+
+namespace hapticd::servo {
+
+struct WakeLatencySummaryUs {
+    double p50 = 0.0, p99 = 0.0, p999 = 0.0, max = 0.0;
+};
+
+struct TickComputeSummaryUs {
+    double p50 = 0.0, p99 = 0.0, max = 0.0;
+};
+
+struct Summary {
+    std::uint64_t ticks = 0;
+    std::uint64_t overruns = 0;
+    std::uint64_t missed_periods = 0;
+    double rate_hz = 0.0;
+    WakeLatencySummaryUs wake_latency_us{};  ///< empty (zeros) when the device paces the loop
+    TickComputeSummaryUs tick_compute_us{};
+    double max_force_n = 0.0;
+    std::vector<std::string> faults;  ///< every fault latched during the run, by name
+    std::uint64_t telemetry_dropped = 0;
+    std::uint64_t read_timeouts = 0;
+    std::uint64_t solver_not_converged = 0;
+    std::uint64_t saturated_ticks = 0;
+    double passivity_energy_j = 0.0;
+};
+
+/// `faults_seen` is a Fault mask.
+Summary make_summary(const TickStats& stats, double rate_hz, std::uint32_t faults_seen,
+                     std::uint64_t telemetry_dropped, double passivity_energy_j);
+
+}  // namespace hapticd::servo

@@ -1,0 +1,229 @@
+#include "hapticd/daemon/config.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <toml++/toml.h>
+
+#include "embedded_defaults.hpp"
+
+namespace hapticd::daemon {
+namespace {
+
+/// Reads one table's keys against a fixed list, with errors that name file, key and value.
+class TableReader {
+public:
+    TableReader(const std::string& source, std::string name, const toml::table* table)
+        : source_(source), name_(std::move(name)), table_(table) {}
+
+    /// Unknown keys are errors; `tables` are sub-tables this reader allows.
+    void allow_only(const std::set<std::string>& keys, const std::set<std::string>& tables = {}) const {
+        if (table_ == nullptr) return;
+        for (const auto& [key, node] : *table_) {
+            const std::string k(key.str());
+            if (keys.count(k) != 0 || (node.is_table() && tables.count(k) != 0)) continue;
+            std::string allowed;
+            for (const auto& a : keys) allowed += (allowed.empty() ? "" : ", ") + a;
+            for (const auto& t : tables) allowed += (allowed.empty() ? "[" : ", [") + name_ + "." + t + "]";
+            throw ConfigError(source_ + ": unknown key [" + name_ + "] " + k + " (allowed: " +
+                              allowed + ")");
+        }
+    }
+
+    std::optional<double> number(const std::string& key, double lo, double hi, bool lo_open,
+                                 const char* unit) const {
+        const toml::node* node = find(key);
+        if (node == nullptr) return std::nullopt;
+        const std::optional<double> v = node->is_boolean() ? std::nullopt : node->value<double>();
+        if (!v) throw ConfigError(where(key) + " must be a number (" + unit + ")");
+        const bool ok = std::isfinite(*v) && (lo_open ? *v > lo : *v >= lo) && *v <= hi;
+        if (!ok) {
+            std::ostringstream m;
+            m << where(key) << " = " << *v << " is out of range: allowed " << (lo_open ? "> " : ">= ")
+              << lo;
+            if (std::isfinite(hi)) m << " and <= " << hi;
+            m << " (" << unit << ")";
+            throw ConfigError(m.str());
+        }
+        return v;
+    }
+
+    std::optional<int> integer(const std::string& key, int lo, int hi) const {
+        const toml::node* node = find(key);
+        if (node == nullptr) return std::nullopt;
+        if (!node->is_integer()) throw ConfigError(where(key) + " must be an integer");
+        const std::int64_t v = *node->value<std::int64_t>();
+        if (v < lo || v > hi) {
+            std::ostringstream m;
+            m << where(key) << " = " << v << " is out of range: allowed " << lo << ".." << hi;
+            throw ConfigError(m.str());
+        }
+        return static_cast<int>(v);
+    }
+
+    std::optional<bool> boolean(const std::string& key) const {
+        const toml::node* node = find(key);
+        if (node == nullptr) return std::nullopt;
+        if (!node->is_boolean()) throw ConfigError(where(key) + " must be true or false");
+        return *node->value<bool>();
+    }
+
+    bool has(const std::string& key) const { return find(key) != nullptr; }
+
+    std::optional<std::string> text(const std::string& key,
+                                    const std::set<std::string>& choices = {}) const {
+        const toml::node* node = find(key);
+        if (node == nullptr) return std::nullopt;
+        if (!node->is_string()) throw ConfigError(where(key) + " must be a string");
+        std::string v = *node->value<std::string>();
+        if (!choices.empty() && choices.count(v) == 0) {
+            std::string allowed;
+            for (const auto& c : choices) allowed += (allowed.empty() ? "\"" : ", \"") + c + "\"";
+            throw ConfigError(where(key) + " = \"" + v + "\" is not allowed: use one of " + allowed);
+        }
+        if (choices.empty() && v.empty()) throw ConfigError(where(key) + " must not be empty");
+        return v;
+    }
+
+private:
+    const toml::node* find(const std::string& key) const {
+        return table_ == nullptr ? nullptr : table_->get(key);
+    }
+    std::string where(const std::string& key) const {
+        return source_ + ": [" + name_ + "] " + key;
+    }
+
+    const std::string& source_;
+    std::string name_;
+    const toml::table* table_;
+};
+
+const toml::table* sub_table(const toml::table& parent, const std::string& source,
+                             const std::string& name) {
+    const toml::node* node = parent.get(name);
+    if (node == nullptr) return nullptr;
+    if (!node->is_table()) throw ConfigError(source + ": " + name + " must be a table ([" + name + "])");
+    return node->as_table();
+}
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+}  // namespace
+
+Config parse_config(std::string_view toml_text, const std::string& source,
+                    const std::string& base_dir) {
+    toml::table root;
+    try {
+        root = toml::parse(toml_text, source);
+    } catch (const toml::parse_error& e) {
+        std::ostringstream m;
+        m << source << ":" << e.source().begin.line << ":" << e.source().begin.column << ": "
+          << e.description();
+        throw ConfigError(m.str());
+    }
+    Config config;
+    config.source = source;
+    config.base_dir = base_dir;
+    const std::set<std::string> tables = {"servo", "device", "coupling", "scene", "safety"};
+    for (const auto& [key, node] : root) {
+        const std::string k(key.str());
+        if (!node.is_table()) {
+            throw ConfigError(source + ": top-level key " + k +
+                              " must be inside one of the tables [servo], [device], [coupling], "
+                              "[scene], [safety]");
+        }
+        if (tables.count(k) == 0) {
+            throw ConfigError(source + ": unknown table [" + k +
+                              "] (allowed: [servo], [device], [coupling], [scene], [safety])");
+        }
+    }
+
+    const TableReader servo(source, "servo", sub_table(root, source, "servo"));
+    servo.allow_only({"rate_hz", "realtime", "priority", "cpu"});
+    config.servo.rate_hz = servo.number("rate_hz", 100.0, 20000.0, false, "Hz").value_or(1000.0);
+    config.servo.realtime = servo.text("realtime", {"enforce", "warn", "off"}).value_or("warn");
+    config.servo.priority = servo.integer("priority", 1, 99).value_or(80);
+    config.servo.cpu = servo.integer("cpu", 0, 4095);
+
+    const toml::table* device_table = sub_table(root, source, "device");
+    const TableReader device(source, "device", device_table);
+    config.device.plugin = device.text("plugin").value_or("sim");
+    config.device.axes = device.integer("axes", 1, 3).value_or(1);
+    const std::string plugin_key = std::filesystem::path(config.device.plugin).stem().string();
+    device.allow_only({"plugin", "axes"}, {"model", plugin_key});
+    if (device_table != nullptr) {
+        const TableReader model(source, "device.model", sub_table(*device_table, source, "model"));
+        model.allow_only({"mass", "damping"});
+        config.device.model_mass_kg = model.number("mass", 0.0, kInf, true, "kg");
+        config.device.model_damping_n_s_per_m = model.number("damping", 0.0, kInf, true, "N s/m");
+        if (const toml::table* own = sub_table(*device_table, source, plugin_key)) {
+            std::ostringstream text;
+            text << *own;
+            config.device.plugin_table_toml = text.str();
+        }
+    }
+
+    const TableReader coupling(source, "coupling", sub_table(root, source, "coupling"));
+    coupling.allow_only({"enabled", "stiffness", "damping", "check"});
+    config.coupling.enabled = coupling.boolean("enabled").value_or(true);
+    config.coupling.stiffness_n_per_m =
+        coupling.number("stiffness", 0.0, kInf, false, "N/m").value_or(0.0);
+    config.coupling.damping_n_s_per_m =
+        coupling.number("damping", 0.0, kInf, false, "N s/m").value_or(0.0);
+    config.coupling.check =
+        coupling.text("check", {"paper", "encoder", "exact", "off"}).value_or("encoder");
+    if (!config.coupling.enabled) {
+        // The conventional design, for experiments: the daemon will not pretend to check it.
+        for (const char* key : {"stiffness", "damping"}) {
+            if (coupling.has(key)) {
+                throw ConfigError(source + ": [coupling] " + key +
+                                  " has no effect with enabled = false (no coupling); remove it");
+            }
+        }
+        if (config.coupling.check != "off") {
+            throw ConfigError(source + ": [coupling] check = \"" + config.coupling.check +
+                              "\" cannot check enabled = false (no coupling: the scene acts on "
+                              "the device directly); set check = \"off\" to run it deliberately");
+        }
+    }
+
+    const TableReader scene(source, "scene", sub_table(root, source, "scene"));
+    scene.allow_only({"file"});
+    if (const auto file = scene.text("file")) {
+        const std::filesystem::path p(*file);
+        config.scene_file = p.is_absolute() || base_dir.empty()
+                                ? p.string()
+                                : (std::filesystem::path(base_dir) / p).lexically_normal().string();
+    }
+
+    const TableReader safety(source, "safety", sub_table(root, source, "safety"));
+    safety.allow_only({"max_force", "max_speed", "soft_start_ramp", "passivity"});
+    config.safety.max_force_n = safety.number("max_force", 0.0, kInf, true, "N").value_or(10.0);
+    config.safety.max_speed_mps = safety.number("max_speed", 0.0, kInf, true, "m/s").value_or(1.0);
+    config.safety.soft_start_ramp_s =
+        safety.number("soft_start_ramp", 0.0, 10.0, false, "s").value_or(0.5);
+    config.safety.passivity = safety.text("passivity", {"observe", "control"}).value_or("observe");
+    return config;
+}
+
+Config load_config(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw ConfigError(path + ": cannot read the config file");
+    std::ostringstream text;
+    text << in.rdbuf();
+    const std::string dir = std::filesystem::path(path).parent_path().string();
+    return parse_config(text.str(), path, dir.empty() ? "." : dir);
+}
+
+Config default_config() {
+    Config config = parse_config(default_config_text(), "<embedded default>", "");
+    config.scene_file.clear();  // the demo scene is compiled in as well
+    return config;
+}
+
+std::string_view default_config_text() { return kEmbeddedDefaultConfig; }
+std::string_view default_scene_text() { return kEmbeddedDemoScene; }
+
+}  // namespace hapticd::daemon

@@ -1,0 +1,315 @@
+#include "hapticd/daemon/run.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <exception>
+#include <fstream>
+#include <iomanip>
+#include <memory>
+#include <ostream>
+#include <sstream>
+#include <thread>
+
+#include "hapticd/daemon/config.hpp"
+#include "hapticd/daemon/servo_settings.hpp"
+#include "hapticd/daemon/startup_check.hpp"
+#include "hapticd/daemon/summary_json.hpp"
+#include "hapticd/daemon/telemetry_writer.hpp"
+#include "hapticd/device/plugin_loader.hpp"
+#include "hapticd/env/scene.hpp"
+#include "hapticd/servo/faults.hpp"
+#include "hapticd/servo/servo_loop.hpp"
+
+namespace hapticd::daemon {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Telemetry ring: 65 s of records at 1 kHz in real time, so that a stalled disk loses
+// nothing for a minute; a lockstep run waits for the writer instead (backpressure).
+constexpr std::size_t kRealtimeRingRecords = std::size_t{1} << 16;
+constexpr std::size_t kLockstepRingRecords = std::size_t{1} << 14;
+
+/// Thrown by the set-up steps: the message is final, the code is the exit code.
+struct StartError : std::runtime_error {
+    StartError(int exit_code, const std::string& message)
+        : std::runtime_error(message), code(exit_code) {}
+    int code;
+};
+
+/// Leaves the device at zero force and closes it, whatever path leaves the run.
+struct DeviceCloser {
+    device::Device* device;
+    ~DeviceCloser() {
+        if (device != nullptr) device->close();
+    }
+};
+
+std::string format_vector_mm(const std::array<double, servo::kMaxAxes>& v, int axes, double scale) {
+    std::ostringstream out;
+    out << std::fixed << std::setprecision(2) << "[";
+    for (int i = 0; i < axes; ++i) out << (i == 0 ? "" : " ") << v[static_cast<std::size_t>(i)] * scale;
+    out << "]";
+    return out.str();
+}
+
+std::string status_line(const servo::StatusSnapshot& s, int axes) {
+    std::ostringstream out;
+    out << std::fixed << std::setprecision(2) << "hapticd: t " << s.t_s << " s  x "
+        << format_vector_mm(s.x_m, axes, 1e3) << " mm  xe " << format_vector_mm(s.xe_m, axes, 1e3)
+        << " mm  f " << format_vector_mm(s.f_n, axes, 1.0) << " N  ";
+    if (!s.armed) {
+        out << "disarmed";
+    } else if (s.soft_start_scale < 1.0) {
+        out << "soft start " << std::setprecision(0) << 100.0 * s.soft_start_scale << "%";
+    } else {
+        out << "armed";
+    }
+    out << "  overruns " << s.overruns << "  faults ";
+    if (s.faults == 0u) out << "none";
+    bool first = true;
+    servo::for_each_fault(s.faults, [&](std::string_view name) {
+        out << (first ? "" : ",") << name;
+        first = false;
+    });
+    return out.str();
+}
+
+Config load_any_config(const RunOptions& options) {
+    try {
+        return options.config_path ? load_config(*options.config_path) : default_config();
+    } catch (const ConfigError& e) {
+        throw StartError(kExitBadInput, e.what());
+    }
+}
+
+env::Scene load_any_scene(const Config& config) {
+    try {
+        if (config.scene_file.empty()) {
+            return env::parse_scene(default_scene_text(), "<embedded demo-wall scene>",
+                                    config.device.axes);
+        }
+        return env::load_scene(config.scene_file, config.device.axes);
+    } catch (const env::SceneError& e) {
+        throw StartError(kExitBadInput, e.what());
+    }
+}
+
+StartupCheck run_startup_check(const Config& config, std::ostream& log) {
+    StartupCheck check;
+    try {
+        check = check_coupling_at_startup(config);
+    } catch (const ConfigError& e) {
+        throw StartError(kExitBadInput, e.what());
+    }
+    if (check.skipped) {
+        log << "hapticd: WARNING: " << check.describe() << "\n";
+        return check;
+    }
+    if (!check.passed) {
+        std::ostringstream m;
+        m << config.source << ": refusing to arm: [coupling] stiffness = "
+          << config.coupling.stiffness_n_per_m << " N/m, damping = "
+          << config.coupling.damping_n_s_per_m << " N s/m fail the " << check.model
+          << " model for [device.model] at " << config.servo.rate_hz << " Hz: worst margin "
+          << check.worst_margin << " at " << check.worst_frequency_hz << " Hz";
+        if (!check.worst_case.empty()) m << " (" << check.worst_case << ")";
+        m << "; size them with haptic-tune size --mass " << *config.device.model_mass_kg
+          << " --damping " << *config.device.model_damping_n_s_per_m << " --rate "
+          << config.servo.rate_hz;
+        throw StartError(kExitBadInput, m.str());
+    }
+    log << "hapticd: " << check.describe() << "\n";
+    return check;
+}
+
+device::DeviceHandle open_device(const Config& config, bool lockstep) {
+    device::DeviceHandle device;
+    try {
+        device = device::load_device(config.device.plugin);
+    } catch (const std::exception& e) {
+        throw StartError(kExitBadInput, config.source + ": [device] plugin = \"" +
+                                            config.device.plugin + "\": " + e.what());
+    }
+    device::DeviceConfig device_config;
+    device_config.axes = config.device.axes;
+    device_config.rate_hz = config.servo.rate_hz;
+    device_config.lockstep = lockstep;
+    device_config.plugin_table_toml = config.device.plugin_table_toml;
+    device_config.source = config.source;
+    try {
+        device->open(device_config);
+    } catch (const std::exception& e) {
+        device->close();
+        throw StartError(kExitBadInput, e.what());
+    }
+    return device;
+}
+
+void write_summary(const RunOptions& options, const servo::Summary& summary,
+                   const RunContext& context, std::ostream& out, std::ostream& log) {
+    if (!options.summary_path) {
+        log << summary_text(summary, context);
+        return;
+    }
+    const std::string json = summary_json(summary, context) + "\n";
+    if (*options.summary_path == "-") {
+        out << json << std::flush;
+        return;
+    }
+    std::ofstream file(*options.summary_path);
+    file << json;
+    file.close();
+    if (!file) {
+        log << "hapticd: --summary " << *options.summary_path << ": cannot write the summary\n";
+        log << json;
+    }
+}
+
+/// The servo loop for one scene causality, on its own thread, watched from this one.
+template <typename Environment>
+int run_loop(const RunOptions& options, const Config& config, device::Device& device,
+             Environment& environment, RunContext& context, const std::atomic<bool>& stop,
+             std::ostream& out, std::ostream& log) {
+    const device::DeviceInfo info = device.info();
+    servo::ServoConfig servo_config;
+    try {
+        servo_config = make_servo_config(config, info, options.log_path.has_value());
+    } catch (const ConfigError& e) {
+        throw StartError(kExitBadInput, e.what());
+    }
+
+    std::unique_ptr<servo::TelemetryRing> ring;
+    std::unique_ptr<TelemetryWriter> writer;
+    if (options.log_path) {
+        ring = std::make_unique<servo::TelemetryRing>(info.lockstep ? kLockstepRingRecords
+                                                                    : kRealtimeRingRecords);
+        try {
+            writer = std::make_unique<TelemetryWriter>(*ring, *options.log_path, info.axes);
+        } catch (const std::exception& e) {
+            throw StartError(kExitBadInput, e.what());
+        }
+        writer->start();
+    }
+
+    std::uint64_t max_ticks = 0;
+    if (options.duration_s && info.lockstep) {
+        max_ticks = static_cast<std::uint64_t>(std::llround(*options.duration_s * config.servo.rate_hz));
+    }
+
+    servo::ServoLoop<device::Device, Environment> loop(device, environment, servo_config,
+                                                       ring.get());
+    std::atomic<bool> stop_servo{false};
+    std::atomic<bool> servo_done{false};
+    servo::RunExit run_exit = servo::RunExit::stopped;
+    std::string servo_error;
+    std::thread servo_thread([&] {
+        try {
+            run_exit = loop.run(stop_servo, max_ticks);
+        } catch (const std::exception& e) {
+            servo_error = e.what();
+        }
+        servo_done.store(true, std::memory_order_release);
+    });
+
+    // This thread: signals, the duration and the status line.
+    const auto started = Clock::now();
+    const auto status_every = std::chrono::duration<double>(options.status_interval_s);
+    auto next_status = started + std::chrono::duration_cast<Clock::duration>(status_every);
+    bool duration_ended = false;
+    while (!servo_done.load(std::memory_order_acquire)) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+        const auto now = Clock::now();
+        if (stop.load(std::memory_order_acquire)) stop_servo.store(true, std::memory_order_release);
+        if (options.duration_s && !info.lockstep &&
+            now - started >= std::chrono::duration<double>(*options.duration_s)) {
+            duration_ended = true;
+            stop_servo.store(true, std::memory_order_release);
+        }
+        if (options.status_interval_s > 0.0 && now >= next_status) {
+            log << status_line(loop.status(), info.axes) << "\n" << std::flush;
+            next_status += std::chrono::duration_cast<Clock::duration>(status_every);
+        }
+    }
+    servo_thread.join();
+    loop.write_zero_force();
+
+    if (writer) {
+        try {
+            writer->finish();
+        } catch (const std::exception& e) {
+            log << "hapticd: " << e.what() << "\n";
+        }
+        context.telemetry_records = writer->records_written();
+    }
+
+    const servo::Summary summary = loop.summary();
+    context.realtime = loop.realtime_report();
+    context.run_time_s = info.lockstep ? static_cast<double>(summary.ticks) / config.servo.rate_hz
+                                       : std::chrono::duration<double>(Clock::now() - started).count();
+    int code = kExitOk;
+    if (!servo_error.empty()) {
+        log << "hapticd: the servo loop could not run: " << servo_error << "\n";
+        context.exit = "error";
+        code = kExitFault;
+    } else if (run_exit == servo::RunExit::fault) {
+        context.exit = "fault";
+        code = kExitFault;
+        log << "hapticd: stopped on a fault, force zeroed in the same tick:";
+        for (const std::string& fault : summary.faults) log << " " << fault;
+        log << "\n";
+    } else if (run_exit == servo::RunExit::tick_limit || duration_ended) {
+        context.exit = "duration";
+    } else {
+        context.exit = "stopped";
+    }
+    if (!context.realtime.refused.empty() && servo_error.empty()) {
+        log << "hapticd: " << context.realtime.brief() << "\n";
+    }
+    write_summary(options, summary, context, out, log);
+    return code;
+}
+
+}  // namespace
+
+int run_daemon(const RunOptions& options, const std::atomic<bool>& stop, std::ostream& out,
+               std::ostream& log) {
+    try {
+        const Config config = load_any_config(options);
+        RunContext context;
+        context.config_source = config.source;
+        context.lockstep = options.lockstep;
+        context.check = run_startup_check(config, log);
+        env::Scene scene = load_any_scene(config);
+        context.scene = scene.name;
+        context.causality = env::to_string(scene.causality);
+        if (!config.coupling.enabled && scene.causality == env::Causality::admittance) {
+            throw StartError(kExitBadInput,
+                             config.source + ": [coupling] enabled = false, but scene \"" +
+                                 scene.name +
+                                 "\" is an admittance (constraint) scene, which needs the "
+                                 "coupling (22) to produce any force");
+        }
+        device::DeviceHandle device = open_device(config, options.lockstep);
+        const DeviceCloser closer{device.get()};
+        const device::DeviceInfo info = device->info();
+        context.device = info.name;
+        context.lockstep = info.lockstep;
+        log << "hapticd: " << info.name << " device, " << info.axes << " axis"
+            << (info.axes > 1 ? "es" : "") << ", " << (info.lockstep ? "lockstep" : "real-time")
+            << " clock; scene " << scene.name << " (" << context.causality << "); "
+            << config.servo.rate_hz << " Hz\n";
+        if (scene.causality == env::Causality::impedance) {
+            return run_loop(options, config, *device, *scene.impedance, context, stop, out, log);
+        }
+        return run_loop(options, config, *device, *scene.admittance, context, stop, out, log);
+    } catch (const StartError& e) {
+        log << "hapticd: " << e.what() << "\n";
+        return e.code;
+    } catch (const std::exception& e) {
+        log << "hapticd: " << e.what() << "\n";
+        return kExitFault;
+    }
+}
+
+}  // namespace hapticd::daemon

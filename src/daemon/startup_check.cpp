@@ -1,0 +1,66 @@
+#include "hapticd/daemon/startup_check.hpp"
+
+#include <sstream>
+
+#include "hapticd/theory/coupling_check.hpp"
+#include "hapticd/tune/exact_model.hpp"
+
+namespace hapticd::daemon {
+
+std::string StartupCheck::describe() const {
+    std::ostringstream out;
+    if (skipped) {
+        return "stability check OFF ([coupling] check = \"off\"): these gains are not checked "
+               "against any model";
+    }
+    out << "stability check (" << model << " model): "
+        << (passed ? "unconditionally stable" : "NOT unconditionally stable")
+        << ", worst margin " << worst_margin << " at " << worst_frequency_hz << " Hz";
+    if (!worst_case.empty()) out << " (" << worst_case << ")";
+    return out.str();
+}
+
+StartupCheck check_coupling_at_startup(const Config& config) {
+    if (config.coupling.check == "off") {
+        StartupCheck skipped;
+        skipped.model = "off";
+        skipped.skipped = true;
+        skipped.passed = true;
+        return skipped;
+    }
+    if (!config.device.model_mass_kg || !config.device.model_damping_n_s_per_m) {
+        throw ConfigError(config.source +
+                          ": [device.model] mass and damping are required: the start-up "
+                          "stability check sizes nothing without them (measure them with "
+                          "haptic-tune identify)");
+    }
+    const theory::DeviceModel device{*config.device.model_mass_kg,
+                                     *config.device.model_damping_n_s_per_m};
+    const theory::SpringDamperCoupling coupling{config.coupling.stiffness_n_per_m,
+                                                config.coupling.damping_n_s_per_m};
+    if (coupling.stiffness_n_per_m == 0.0 && coupling.damping_n_s_per_m == 0.0) {
+        throw ConfigError(config.source +
+                          ": [coupling] stiffness and damping are both 0: no coupling to "
+                          "render with (size one with haptic-tune size)");
+    }
+    StartupCheck check;
+    check.model = config.coupling.check;
+    if (check.model == "exact") {
+        const tune::ExactCheck exact = tune::check_exact(device, coupling, config.servo.rate_hz);
+        check.passed = exact.stable;
+        check.worst_margin = exact.worst_margin;
+        check.worst_frequency_hz = exact.worst_frequency_hz;
+        check.worst_case =
+            exact.worst_operator.describe() + " against " + exact.worst_environment.describe();
+        return check;
+    }
+    const theory::HoldModel model = *theory::parse_hold_model(check.model);
+    const theory::CouplingCheck result =
+        theory::check_coupling(device, coupling, model, config.servo.rate_hz);
+    check.passed = result.unconditionally_stable;
+    check.worst_margin = result.worst_margin;
+    check.worst_frequency_hz = result.worst_frequency_hz;
+    return check;
+}
+
+}  // namespace hapticd::daemon

@@ -1,0 +1,76 @@
+#include "hapticd/daemon/summary_json.hpp"
+
+#include <iomanip>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+namespace hapticd::daemon {
+
+std::string summary_json(const servo::Summary& s, const RunContext& c) {
+    nlohmann::ordered_json j;
+    j["ticks"] = s.ticks;
+    j["overruns"] = s.overruns;
+    j["missed_periods"] = s.missed_periods;
+    j["rate_hz"] = s.rate_hz;
+    j["wake_latency_us"] = {{"p50", s.wake_latency_us.p50},
+                            {"p99", s.wake_latency_us.p99},
+                            {"p999", s.wake_latency_us.p999},
+                            {"max", s.wake_latency_us.max}};
+    j["tick_compute_us"] = {{"p50", s.tick_compute_us.p50},
+                            {"p99", s.tick_compute_us.p99},
+                            {"max", s.tick_compute_us.max}};
+    j["max_force_n"] = s.max_force_n;
+    j["faults"] = s.faults;
+    j["telemetry_dropped"] = s.telemetry_dropped;
+    j["telemetry_records"] = c.telemetry_records;
+    j["read_timeouts"] = s.read_timeouts;
+    j["solver_not_converged"] = s.solver_not_converged;
+    j["saturated_ticks"] = s.saturated_ticks;
+    j["passivity_energy_j"] = s.passivity_energy_j;
+    j["exit"] = c.exit;
+    j["run_time_s"] = c.run_time_s;
+    j["lockstep"] = c.lockstep;
+    j["config"] = c.config_source;
+    j["device"] = c.device;
+    j["scene"] = {{"name", c.scene}, {"causality", c.causality}};
+    nlohmann::ordered_json check;
+    check["model"] = c.check.model;
+    if (!c.check.skipped) {
+        check["passed"] = c.check.passed;
+        check["worst_margin"] = c.check.worst_margin;
+        check["worst_frequency_hz"] = c.check.worst_frequency_hz;
+        if (!c.check.worst_case.empty()) check["worst_case"] = c.check.worst_case;
+    }
+    j["stability_check"] = check;
+    j["realtime"] = {{"mode", std::string(servo::to_string(c.realtime.mode))},
+                     {"sched_fifo", c.realtime.scheduler_fifo},
+                     {"priority", c.realtime.priority},
+                     {"memory_locked", c.realtime.memory_locked},
+                     {"cpu", c.realtime.cpu},
+                     {"affinity_set", c.realtime.affinity_set},
+                     {"cpu_dma_latency_held", c.realtime.cpu_dma_latency_held},
+                     {"refused", c.realtime.refused}};
+    return j.dump(2);
+}
+
+std::string summary_text(const servo::Summary& s, const RunContext& c) {
+    std::ostringstream out;
+    out << std::fixed << std::setprecision(1);
+    out << "hapticd summary: " << s.ticks << " ticks at " << s.rate_hz << " Hz over "
+        << std::setprecision(3) << c.run_time_s << " s" << (c.lockstep ? " (lockstep)" : "")
+        << ", exit: " << c.exit << "\n";
+    out << std::setprecision(1) << "  wake latency us: p50 " << s.wake_latency_us.p50 << ", p99 "
+        << s.wake_latency_us.p99 << ", p99.9 " << s.wake_latency_us.p999 << ", max "
+        << s.wake_latency_us.max << "\n";
+    out << std::setprecision(2) << "  tick compute us: p50 " << s.tick_compute_us.p50 << ", p99 "
+        << s.tick_compute_us.p99 << ", max " << s.tick_compute_us.max << "\n";
+    out << "  overruns " << s.overruns << " (" << s.missed_periods << " periods missed), max force "
+        << s.max_force_n << " N, telemetry dropped " << s.telemetry_dropped << "\n";
+    out << "  faults:";
+    if (s.faults.empty()) out << " none";
+    for (const std::string& fault : s.faults) out << " " << fault;
+    out << "\n";
+    return out.str();
+}
+
+}  // namespace hapticd::daemon

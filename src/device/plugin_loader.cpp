@@ -1,0 +1,199 @@
+#include "hapticd/device/plugin_loader.hpp"
+
+#include <dlfcn.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <sstream>
+#include <stdexcept>
+#include <system_error>
+
+#include "hapticd/device/plugin_abi.hpp"
+
+#ifndef HAPTICD_BUILD_PLUGIN_DIR
+#error "HAPTICD_BUILD_PLUGIN_DIR must be defined by the build (src/device/CMakeLists.txt)"
+#endif
+#ifndef HAPTICD_INSTALL_PLUGIN_DIR
+#error "HAPTICD_INSTALL_PLUGIN_DIR must be defined by the build (src/device/CMakeLists.txt)"
+#endif
+
+namespace hapticd::device {
+namespace {
+
+constexpr std::string_view kFilePrefix = "hapticd-device-";
+constexpr std::string_view kFileSuffix = ".so";
+
+std::string dl_error_text() {
+    const char* text = dlerror();
+    return text != nullptr ? text : "unknown dynamic-loader error";
+}
+
+/// A dlopen handle that dlclose()s when its last owner goes.
+std::shared_ptr<void> open_library(const std::string& path, std::string& error) {
+    dlerror();  // clear any stale error
+    void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+    if (handle == nullptr) {
+        error = dl_error_text();
+        return nullptr;
+    }
+    return {handle, [](void* h) { dlclose(h); }};
+}
+
+/// The descriptor of an opened library, after the ABI check; empty `error` on success.
+const hapticd_device_plugin* entry_of(void* library, std::string& error) {
+    dlerror();
+    void* symbol = dlsym(library, HAPTICD_DEVICE_PLUGIN_ENTRY_SYMBOL);
+    if (symbol == nullptr) {
+        error = std::string("it does not export the entry symbol '") +
+                HAPTICD_DEVICE_PLUGIN_ENTRY_SYMBOL + "' (" + dl_error_text() + ")";
+        return nullptr;
+    }
+    using EntryFunction = const hapticd_device_plugin* (*)();
+    const auto entry = reinterpret_cast<EntryFunction>(symbol);
+    const hapticd_device_plugin* plugin = entry();
+    if (plugin == nullptr) {
+        error = std::string("its entry '") + HAPTICD_DEVICE_PLUGIN_ENTRY_SYMBOL +
+                "' returned a null descriptor";
+        return nullptr;
+    }
+    // abi_version is the first member in every ABI version: read it before anything else.
+    if (plugin->abi_version != kDeviceAbiVersion) {
+        error = "it was built for device plugin ABI version " +
+                std::to_string(plugin->abi_version) + ", but this hapticd speaks version " +
+                std::to_string(kDeviceAbiVersion) + "; rebuild the plugin against this hapticd";
+        return nullptr;
+    }
+    if (plugin->create == nullptr || plugin->destroy == nullptr) {
+        error = "its descriptor has a null create or destroy function";
+        return nullptr;
+    }
+    return plugin;
+}
+
+bool is_regular_file(const std::string& path) {
+    std::error_code ec;
+    return std::filesystem::is_regular_file(path, ec);
+}
+
+[[noreturn]] void fail(std::string_view what, const std::string& path, const std::string& why) {
+    throw std::runtime_error("device plugin '" + std::string(what) + "' (" + path +
+                             ") cannot be used: " + why);
+}
+
+DeviceHandle load_from_path(std::string_view what, const std::string& path) {
+    std::string error;
+    std::shared_ptr<void> library = open_library(path, error);
+    if (!library) fail(what, path, "dlopen failed: " + error);
+    const hapticd_device_plugin* plugin = entry_of(library.get(), error);
+    if (plugin == nullptr) fail(what, path, error);
+    Device* device = nullptr;
+    try {
+        device = plugin->create();
+    } catch (const std::exception& e) {
+        fail(what, path, std::string("create() threw: ") + e.what());
+    }
+    if (device == nullptr) fail(what, path, "create() returned a null device");
+    return DeviceHandle(device, PluginDeleter(plugin->destroy, std::move(library)));
+}
+
+}  // namespace
+
+void PluginDeleter::operator()(Device* device) const noexcept {
+    if (device != nullptr && destroy_ != nullptr) destroy_(device);
+    // library_ is released after this, when the unique_ptr's deleter itself is destroyed.
+}
+
+std::vector<std::string> plugin_search_path() {
+    std::vector<std::string> dirs;
+    if (const char* env = std::getenv("HAPTICD_PLUGIN_PATH"); env != nullptr) {
+        std::string_view rest(env);
+        while (true) {
+            const std::size_t colon = rest.find(':');
+            const std::string_view dir = rest.substr(0, colon);
+            if (!dir.empty()) dirs.emplace_back(dir);
+            if (colon == std::string_view::npos) break;
+            rest.remove_prefix(colon + 1);
+        }
+    }
+    dirs.emplace_back(HAPTICD_BUILD_PLUGIN_DIR);
+    dirs.emplace_back(HAPTICD_INSTALL_PLUGIN_DIR);
+    return dirs;
+}
+
+std::vector<std::string> plugin_file_names(std::string_view name) {
+    const std::string base = std::string(kFilePrefix) + std::string(name) + std::string(kFileSuffix);
+    return {"lib" + base, base};
+}
+
+DeviceHandle load_device(std::string_view name_or_path) {
+    if (name_or_path.empty()) throw std::runtime_error("device plugin name is empty");
+    if (name_or_path.find('/') != std::string_view::npos) {
+        const std::string path(name_or_path);
+        return load_from_path(name_or_path, path);
+    }
+    std::vector<std::string> tried;
+    for (const std::string& dir : plugin_search_path()) {
+        for (const std::string& file : plugin_file_names(name_or_path)) {
+            const std::string path = dir + "/" + file;
+            if (is_regular_file(path)) return load_from_path(name_or_path, path);
+            tried.push_back(path);
+        }
+    }
+    std::ostringstream message;
+    message << "device plugin '" << name_or_path << "' not found; looked for:";
+    for (const std::string& path : tried) message << "\n  " << path;
+    message << "\n(set HAPTICD_PLUGIN_PATH to a colon-separated list of directories, or give "
+               "a path containing '/')";
+    throw std::runtime_error(message.str());
+}
+
+std::vector<PluginListing> list_plugins() {
+    std::vector<PluginListing> listings;
+    std::vector<std::string> seen_names;
+    for (const std::string& dir : plugin_search_path()) {
+        std::error_code ec;
+        std::vector<std::string> files;
+        for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+            const std::string file = entry.path().filename().string();
+            std::string_view stem(file);
+            if (stem.starts_with("lib")) stem.remove_prefix(3);
+            if (!stem.starts_with(kFilePrefix) || !stem.ends_with(kFileSuffix)) continue;
+            files.push_back(file);
+        }
+        std::sort(files.begin(), files.end());
+        for (const std::string& file : files) {
+            PluginListing listing;
+            listing.path = dir + "/" + file;
+            std::string_view stem(file);
+            if (stem.starts_with("lib")) stem.remove_prefix(3);
+            stem.remove_prefix(kFilePrefix.size());
+            stem.remove_suffix(kFileSuffix.size());
+            listing.name = std::string(stem);
+            std::string error;
+            if (std::shared_ptr<void> library = open_library(listing.path, error)) {
+                if (const hapticd_device_plugin* plugin = entry_of(library.get(), error)) {
+                    if (plugin->name != nullptr) listing.name = plugin->name;
+                    if (plugin->description != nullptr) listing.description = plugin->description;
+                }
+                // The version is reported even when it is the wrong one.
+                if (void* symbol = dlsym(library.get(), HAPTICD_DEVICE_PLUGIN_ENTRY_SYMBOL)) {
+                    using EntryFunction = const hapticd_device_plugin* (*)();
+                    if (const auto* p = reinterpret_cast<EntryFunction>(symbol)(); p != nullptr) {
+                        listing.abi_version = p->abi_version;
+                    }
+                }
+            } else {
+                error = "dlopen failed: " + error;
+            }
+            listing.error = error;
+            listing.shadowed = std::find(seen_names.begin(), seen_names.end(), listing.name) !=
+                               seen_names.end();
+            seen_names.push_back(listing.name);
+            listings.push_back(std::move(listing));
+        }
+    }
+    return listings;
+}
+
+}  // namespace hapticd::device

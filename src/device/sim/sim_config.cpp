@@ -1,0 +1,313 @@
+// Reads and validates the [device.sim] table (schema: docs/sim-device.md).
+#include "hapticd/device/sim/sim_config.hpp"
+
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <toml++/toml.h>
+
+namespace hapticd::device::sim {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+/// A numeric range with open or closed ends, printed in error messages.
+struct Range {
+    double lo = -kInf;
+    double hi = kInf;
+    bool lo_open = false;
+    const char* unit = "";
+
+    bool contains(double x) const {
+        return std::isfinite(x) && (lo_open ? x > lo : x >= lo) && x <= hi;
+    }
+    std::string describe() const {
+        std::ostringstream s;
+        s << "a number " << (lo_open ? "> " : ">= ") << lo;
+        if (hi < kInf) s << " and <= " << hi;
+        if (*unit != '\0') s << " (" << unit << ")";
+        return s.str();
+    }
+};
+
+std::string printed(const toml::node& node) {
+    std::ostringstream s;
+    if (const auto* str = node.as_string()) {
+        s << '"' << str->get() << '"';
+    } else {
+        node.visit([&s](const auto& value) { s << value; });
+    }
+    std::string text = s.str();
+    for (char& c : text) {
+        if (c == '\n') c = ' ';
+    }
+    return text;
+}
+
+/// One TOML table: typed getters that remember which keys were read, and finish() that
+/// rejects the rest. Every error names the source file and the full key.
+class TableReader {
+public:
+    TableReader(const toml::table& table, std::string prefix, const std::string& source)
+        : table_(table), prefix_(std::move(prefix)), source_(source) {}
+
+    [[noreturn]] void fail(std::string_view key, const std::string& what) const {
+        throw std::runtime_error(source_ + ": " + prefix_ + std::string(key) + " " + what);
+    }
+    [[noreturn]] void fail_value(std::string_view key, const toml::node& node,
+                                 const std::string& allowed) const {
+        fail(key, "= " + printed(node) + " is not allowed: must be " + allowed);
+    }
+
+    const toml::node* get(std::string_view key) {
+        used_.insert(std::string(key));
+        return table_.get(key);
+    }
+    bool has(std::string_view key) const { return table_.contains(key); }
+
+    double number(const toml::node& node, std::string_view key, const Range& range) const {
+        std::optional<double> value;
+        if (const auto* f = node.as_floating_point()) value = f->get();
+        if (const auto* i = node.as_integer()) value = static_cast<double>(i->get());
+        if (!value || !range.contains(*value)) fail_value(key, node, range.describe());
+        return *value;
+    }
+    double number(std::string_view key, double fallback, const Range& range) {
+        const toml::node* node = get(key);
+        return node == nullptr ? fallback : number(*node, key, range);
+    }
+    std::int64_t integer(std::string_view key, std::int64_t fallback, std::int64_t lo,
+                         std::int64_t hi) {
+        const toml::node* node = get(key);
+        if (node == nullptr) return fallback;
+        const auto* i = node->as_integer();
+        if (i == nullptr || i->get() < lo || i->get() > hi) {
+            fail_value(key, *node,
+                       "an integer from " + std::to_string(lo) + " to " + std::to_string(hi));
+        }
+        return i->get();
+    }
+    std::string choice(std::string_view key, std::string fallback,
+                       std::initializer_list<const char*> allowed) {
+        const toml::node* node = get(key);
+        if (node == nullptr) return fallback;
+        std::string options;
+        for (const char* a : allowed) {
+            options += options.empty() ? "" : " | ";
+            options += std::string("\"") + a + "\"";
+            if (const auto* s = node->as_string(); s != nullptr && s->get() == a) return a;
+        }
+        fail_value(key, *node, "one of " + options);
+    }
+    /// A list of times, s, each >= 0.
+    std::vector<double> times(std::string_view key) {
+        const toml::node* node = get(key);
+        std::vector<double> values;
+        if (node == nullptr) return values;
+        const auto* array = node->as_array();
+        if (array == nullptr) fail_value(key, *node, "an array of times >= 0 (s)");
+        for (const toml::node& element : *array) {
+            values.push_back(number(element, key, Range{0.0, kInf, false, "s"}));
+        }
+        return values;
+    }
+    const toml::table* subtable(std::string_view key) {
+        const toml::node* node = get(key);
+        if (node == nullptr) return nullptr;
+        if (const auto* t = node->as_table()) return t;
+        fail_value(key, *node, "a table");
+    }
+    /// Rejects every key not read.
+    void finish() const {
+        for (const auto& [key, node] : table_) {
+            if (!used_.contains(std::string(key.str()))) {
+                fail(key.str(), "is not a known key (= " + printed(node) + "); see docs/sim-device.md");
+            }
+        }
+    }
+    const std::string& prefix() const { return prefix_; }
+
+private:
+    const toml::table& table_;
+    std::string prefix_;  ///< e.g. "device.sim.human."
+    const std::string& source_;
+    std::set<std::string> used_;
+};
+
+constexpr Range kMass{0.0, 1e3, true, "kg"};
+constexpr Range kDamping{0.0, 1e6, false, "N s/m"};
+constexpr Range kStiffness{0.0, 1e9, false, "N/m"};
+constexpr Range kPosition{-10.0, 10.0, false, "m"};
+constexpr Range kDuration{0.0, 1e6, false, "s"};
+
+std::optional<HumanFamily> family_named(std::string_view name) {
+    if (name == "hands-off") return HumanFamily::hands_off;
+    if (name == "heavy-hand") return HumanFamily::heavy_hand;
+    if (name == "stiff-grasp") return HumanFamily::stiff_grasp;
+    if (name == "two-mass-grasp") return HumanFamily::two_mass_grasp;
+    return std::nullopt;
+}
+
+/// A key that the chosen model does not use is an error, so a typo in the model name or a
+/// parameter meant for another model is never silently ignored.
+void require_unused(TableReader& r, std::string_view key, std::string_view model) {
+    if (r.has(key)) {
+        r.get(key);
+        r.fail(key, "is not used by model = \"" + std::string(model) + "\"; remove it");
+    }
+}
+
+HumanModel read_human(const toml::table& table, std::string prefix, const std::string& source,
+                      double initial_position_m) {
+    TableReader r(table, std::move(prefix), source);
+    const std::string model = r.choice("model", "hands-off",
+                                       {"hands-off", "heavy-hand", "stiff-grasp", "two-mass-grasp"});
+    HumanModel h;
+    h.family = *family_named(model);
+    const bool rigid_hand = h.family == HumanFamily::heavy_hand || h.family == HumanFamily::stiff_grasp;
+    const bool two_mass = h.family == HumanFamily::two_mass_grasp;
+    const bool set_point = h.family == HumanFamily::stiff_grasp || two_mass;
+
+    auto param = [&](std::string_view key, bool used, double fallback, const Range& range) {
+        if (!used) {
+            require_unused(r, key, model);
+            return 0.0;
+        }
+        return r.number(key, fallback, range);
+    };
+    h.hand_mass_kg = two_mass ? r.number("hand_mass", 0.5, kMass)
+                              : param("hand_mass", rigid_hand, 0.5, Range{0.0, 1e3, false, "kg"});
+    h.hand_damping_n_s_per_m = param("hand_damping", rigid_hand, 0.0, kDamping);
+    h.hand_stiffness_n_per_m =
+        param("hand_stiffness", h.family == HumanFamily::stiff_grasp, 1000.0, kStiffness);
+    h.skin_stiffness_n_per_m = param("skin_stiffness", two_mass, 1000.0, kStiffness);
+    h.skin_damping_n_s_per_m = param("skin_damping", two_mass, 1.0, kDamping);
+    h.arm_stiffness_n_per_m = param("arm_stiffness", two_mass, 100.0, kStiffness);
+    h.arm_damping_n_s_per_m = param("arm_damping", two_mass, 10.0, kDamping);
+
+    h.push.from_m = initial_position_m;
+    h.push.to_m = initial_position_m;
+    if (!set_point) {
+        require_unused(r, "set_point", model);
+        require_unused(r, "push", model);
+    } else {
+        h.push.from_m = h.push.to_m = r.number("set_point", initial_position_m, kPosition);
+        if (const toml::table* push = r.subtable("push")) {
+            TableReader p(*push, r.prefix() + "push.", source);
+            h.push.to_m = p.number("to", h.push.from_m, kPosition);
+            h.push.start_s = p.number("start", 0.0, kDuration);
+            h.push.ramp_s = p.number("ramp", 0.0, kDuration);
+            h.push.hold_s = p.number("hold", 0.0, kDuration);
+            p.finish();
+        }
+    }
+    r.finish();
+    return h;
+}
+
+FaultConfig read_faults(const toml::table& table, const std::string& source, int axes) {
+    TableReader r(table, "device.sim.faults.", source);
+    FaultConfig f;
+    const Range time{0.0, 1e9, false, "s"};
+    f.disconnect_at_s = r.number("disconnect_at", -1.0, time);
+    f.stale_at_s = r.number("stale_at", -1.0, time);
+    f.stale_for_s = r.number("stale_for", -1.0, Range{0.0, 1e9, true, "s"});
+    f.jump_at_s = r.number("jump_at", -1.0, time);
+    f.jump_counts = r.integer("jump_counts", 0, -(std::int64_t{1} << 40), std::int64_t{1} << 40);
+    f.jump_axis = static_cast<int>(r.integer("jump_axis", 0, 0, axes - 1));
+    f.drop_at_s = r.times("drop_at");
+    f.drop_probability = r.number("drop_probability", 0.0, Range{0.0, 1.0, false, ""});
+    f.late_at_s = r.times("late_at");
+    f.late_probability = r.number("late_probability", 0.0, Range{0.0, 1.0, false, ""});
+    f.late_by_s = r.number("late_by", 0.0, Range{0.0, 1.0, false, "s"});
+    f.seed = static_cast<std::uint64_t>(
+        r.integer("seed", 1, 0, std::numeric_limits<std::int64_t>::max()));
+    r.finish();
+    return f;
+}
+
+}  // namespace
+
+SimConfig parse_sim_config(const DeviceConfig& config) {
+    const std::string& source = config.source;
+    SimConfig c;
+    if (config.axes < 1 || config.axes > kMaxAxes) {
+        throw std::runtime_error(source + ": device.axes = " + std::to_string(config.axes) +
+                                 " is not allowed: the sim device has 1 to " +
+                                 std::to_string(kMaxAxes) + " axes");
+    }
+    if (!std::isfinite(config.rate_hz) || config.rate_hz <= 0.0 || config.rate_hz > 1e6) {
+        std::ostringstream s;
+        s << source << ": servo.rate_hz = " << config.rate_hz
+          << " is not allowed: the sim device needs a rate > 0 and <= 1e6 Hz";
+        throw std::runtime_error(s.str());
+    }
+    c.axes = config.axes;
+    c.rate_hz = config.rate_hz;
+
+    toml::table table;
+    try {
+        table = toml::parse(config.plugin_table_toml, source);
+    } catch (const toml::parse_error& e) {
+        std::ostringstream s;
+        s << source << ": [device.sim] is not valid TOML: " << e.description();
+        throw std::runtime_error(s.str());
+    }
+    TableReader r(table, "device.sim.", source);
+    c.mass_kg = r.number("mass", c.mass_kg, kMass);
+    c.damping_n_s_per_m = r.number("damping", c.damping_n_s_per_m, kDamping);
+    c.counts_per_meter = r.number("counts_per_meter", c.counts_per_meter,
+                                  Range{0.0, 1e10, true, "counts/m"});
+    c.force_limit_n = r.number("force_limit", c.force_limit_n, Range{0.0, 1e4, true, "N"});
+    c.coulomb_n = r.number("coulomb", c.coulomb_n, Range{0.0, 1e3, false, "N"});
+    c.clock = r.choice("clock", "realtime", {"lockstep", "realtime"}) == "lockstep"
+                  ? SimClock::lockstep
+                  : SimClock::realtime;
+    if (config.lockstep) c.clock = SimClock::lockstep;
+
+    if (const toml::node* node = r.get("initial_position")) {
+        const std::string allowed = "a position or an array of " + std::to_string(c.axes) +
+                                    " positions, each " + kPosition.describe();
+        if (const auto* array = node->as_array()) {
+            if (static_cast<int>(array->size()) != c.axes) {
+                r.fail_value("initial_position", *node, allowed);
+            }
+            for (int i = 0; i < c.axes; ++i) {
+                c.initial_position_m[i] = r.number(*array->get(i), "initial_position", kPosition);
+            }
+        } else {
+            const double x = r.number(*node, "initial_position", kPosition);
+            c.initial_position_m.fill(x);
+        }
+    }
+
+    for (int i = 0; i < c.axes; ++i) c.human[i].push.from_m = c.human[i].push.to_m = c.initial_position_m[i];
+    if (const toml::node* node = r.get("human")) {
+        if (const auto* one = node->as_table()) {
+            for (int i = 0; i < c.axes; ++i) {
+                c.human[i] = read_human(*one, "device.sim.human.", source, c.initial_position_m[i]);
+            }
+        } else if (const auto* each = node->as_array();
+                   each != nullptr && each->is_array_of_tables() &&
+                   static_cast<int>(each->size()) == c.axes) {
+            for (int i = 0; i < c.axes; ++i) {
+                c.human[i] = read_human(*each->get(i)->as_table(),
+                                        "device.sim.human[" + std::to_string(i) + "].", source,
+                                        c.initial_position_m[i]);
+            }
+        } else {
+            r.fail_value("human", *node,
+                         "a table [device.sim.human] (every axis) or " + std::to_string(c.axes) +
+                             " tables [[device.sim.human]] (one per axis)");
+        }
+    }
+    if (const toml::table* faults = r.subtable("faults")) c.faults = read_faults(*faults, source, c.axes);
+    r.finish();
+    return c;
+}
+
+}  // namespace hapticd::device::sim

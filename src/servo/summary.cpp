@@ -1,0 +1,29 @@
+#include "hapticd/servo/summary.hpp"
+
+#include "hapticd/servo/faults.hpp"
+
+namespace hapticd::servo {
+
+Summary make_summary(const TickStats& stats, double rate_hz, std::uint32_t faults_seen,
+                     std::uint64_t telemetry_dropped, double passivity_energy_j) {
+    Summary summary;
+    summary.ticks = stats.ticks;
+    summary.overruns = stats.overruns;
+    summary.missed_periods = stats.missed_periods;
+    summary.rate_hz = rate_hz;
+    summary.wake_latency_us = {stats.wake_latency.quantile_us(0.50),
+                               stats.wake_latency.quantile_us(0.99),
+                               stats.wake_latency.quantile_us(0.999), stats.wake_latency.max_us()};
+    summary.tick_compute_us = {stats.compute.quantile_us(0.50), stats.compute.quantile_us(0.99),
+                               stats.compute.max_us()};
+    summary.max_force_n = stats.max_force_n;
+    for_each_fault(faults_seen, [&](std::string_view name) { summary.faults.emplace_back(name); });
+    summary.telemetry_dropped = telemetry_dropped;
+    summary.read_timeouts = stats.read_timeouts;
+    summary.solver_not_converged = stats.solver_not_converged;
+    summary.saturated_ticks = stats.saturated_ticks;
+    summary.passivity_energy_j = passivity_energy_j;
+    return summary;
+}
+
+}  // namespace hapticd::servo

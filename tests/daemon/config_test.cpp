@@ -1,0 +1,135 @@
+// hapticd's config file: every key DESIGN.md names, checked for type and range.
+#include "hapticd/daemon/config.hpp"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+namespace hapticd::daemon {
+namespace {
+
+std::string error_of(const std::string& text) {
+    try {
+        parse_config(text, "lab.toml", "/etc/hapticd");
+    } catch (const ConfigError& e) {
+        return e.what();
+    }
+    return "no error";
+}
+
+TEST(DaemonConfig, ReadsEveryKey) {
+    const Config c = parse_config(R"(
+[servo]
+rate_hz = 2000
+realtime = "enforce"
+priority = 90
+cpu = 1
+[device]
+plugin = "sim"
+axes = 3
+[device.model]
+mass = 0.2
+damping = 3.5
+[device.sim]
+mass = 0.25
+[coupling]
+stiffness = 5000
+damping = 0.5
+check = "exact"
+[scene]
+file = "scenes/box.toml"
+[safety]
+max_force = 12
+max_speed = 0.5
+soft_start_ramp = 0.25
+passivity = "control"
+)",
+                                  "lab.toml", "/etc/hapticd");
+    EXPECT_EQ(c.servo.rate_hz, 2000.0);
+    EXPECT_EQ(c.servo.realtime, "enforce");
+    EXPECT_EQ(c.servo.priority, 90);
+    EXPECT_EQ(c.servo.cpu, 1);
+    EXPECT_EQ(c.device.plugin, "sim");
+    EXPECT_EQ(c.device.axes, 3);
+    EXPECT_EQ(c.device.model_mass_kg, 0.2);
+    EXPECT_EQ(c.device.model_damping_n_s_per_m, 3.5);
+    EXPECT_NE(c.device.plugin_table_toml.find("mass = 0.25"), std::string::npos);
+    EXPECT_EQ(c.coupling.stiffness_n_per_m, 5000.0);
+    EXPECT_EQ(c.coupling.damping_n_s_per_m, 0.5);
+    EXPECT_EQ(c.coupling.check, "exact");
+    EXPECT_EQ(c.scene_file, "/etc/hapticd/scenes/box.toml");
+    EXPECT_EQ(c.safety.max_force_n, 12.0);
+    EXPECT_EQ(c.safety.max_speed_mps, 0.5);
+    EXPECT_EQ(c.safety.soft_start_ramp_s, 0.25);
+    EXPECT_EQ(c.safety.passivity, "control");
+    EXPECT_TRUE(c.coupling.enabled);
+}
+
+TEST(DaemonConfig, NoCouplingMustBeDeliberate) {
+    const Config c = parse_config("[coupling]\nenabled = false\ncheck = \"off\"\n", "lab.toml", "");
+    EXPECT_FALSE(c.coupling.enabled);
+    EXPECT_EQ(c.coupling.check, "off");
+}
+
+TEST(DaemonConfig, DefaultsFillWhatIsMissing) {
+    const Config c = parse_config("", "empty.toml", "");
+    EXPECT_EQ(c.servo.rate_hz, 1000.0);
+    EXPECT_EQ(c.servo.realtime, "warn");
+    EXPECT_FALSE(c.servo.cpu.has_value());
+    EXPECT_EQ(c.device.plugin, "sim");
+    EXPECT_EQ(c.coupling.check, "encoder");
+    EXPECT_TRUE(c.scene_file.empty());
+}
+
+struct Bad {
+    std::string text;
+    std::string must_contain;
+};
+class DaemonConfigRejects : public ::testing::TestWithParam<Bad> {};
+void PrintTo(const Bad& b, std::ostream* os) { *os << b.text; }
+
+TEST_P(DaemonConfigRejects, NamingTheFileTheKeyTheValueAndTheRange) {
+    const std::string message = error_of(GetParam().text);
+    EXPECT_NE(message.find("lab.toml"), std::string::npos) << message;
+    EXPECT_NE(message.find(GetParam().must_contain), std::string::npos) << message;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Cases, DaemonConfigRejects,
+    ::testing::Values(
+        Bad{"[servo]\nrate_hz = 50\n", "[servo] rate_hz = 50 is out of range: allowed >= 100 and <= 20000 (Hz)"},
+        Bad{"[servo]\nrate_hz = \"fast\"\n", "[servo] rate_hz must be a number"},
+        Bad{"[servo]\nrealtime = \"always\"\n", "[servo] realtime = \"always\" is not allowed"},
+        Bad{"[servo]\npriority = 0\n", "[servo] priority = 0 is out of range: allowed 1..99"},
+        Bad{"[servo]\nrate = 1000\n", "unknown key [servo] rate"},
+        Bad{"[device]\naxes = 4\n", "[device] axes = 4 is out of range: allowed 1..3"},
+        Bad{"[device]\nplugin = \"sim\"\n[device.usb]\nvid = 1\n", "unknown key [device] usb"},
+        Bad{"[device.model]\nmass = -1\n", "[device.model] mass = -1 is out of range: allowed > 0 (kg)"},
+        Bad{"[device.model]\ndamping = nan\n", "[device.model] damping = nan"},
+        Bad{"[device.model]\ninertia = 1\n", "unknown key [device.model] inertia"},
+        Bad{"[coupling]\nstiffness = -3\n", "[coupling] stiffness = -3 is out of range: allowed >= 0 (N/m)"},
+        Bad{"[coupling]\ncheck = \"none\"\n", "[coupling] check = \"none\" is not allowed"},
+        Bad{"[safety]\nmax_force = 0\n", "[safety] max_force = 0 is out of range: allowed > 0 (N)"},
+        Bad{"[safety]\nmax_torque = 1\n", "unknown key [safety] max_torque"},
+        Bad{"[telemetry]\nfile = \"x\"\n", "unknown table [telemetry]"},
+        Bad{"rate_hz = 1000\n", "top-level key rate_hz"},
+        Bad{"[servo\n", "lab.toml:1"},
+        Bad{"[coupling]\nenabled = false\n", "set check = \"off\" to run it deliberately"},
+        Bad{"[coupling]\nenabled = false\ncheck = \"off\"\nstiffness = 100\n",
+            "[coupling] stiffness has no effect with enabled = false"},
+        Bad{"[coupling]\nenabled = 1\n", "[coupling] enabled must be true or false"},
+        Bad{"[safety]\nsoft_start_ramp = 20\n",
+            "[safety] soft_start_ramp = 20 is out of range: allowed >= 0 and <= 10 (s)"},
+        Bad{"[safety]\npassivity = \"on\"\n", "[safety] passivity = \"on\" is not allowed"}));
+
+TEST(DaemonConfig, EmbeddedDefaultIsTheSimulatedDeviceAndTheDemoWall) {
+    const Config c = default_config();
+    EXPECT_EQ(c.source, "<embedded default>");
+    EXPECT_EQ(c.device.plugin, "sim");
+    EXPECT_TRUE(c.scene_file.empty());  // the compiled-in demo scene
+    EXPECT_GT(c.coupling.stiffness_n_per_m, 0.0);
+    EXPECT_FALSE(default_scene_text().empty());
+}
+
+}  // namespace
+}  // namespace hapticd::daemon

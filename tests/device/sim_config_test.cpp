@@ -1,0 +1,259 @@
+// The [device.sim] table: defaults, every key read, and errors that name the file, the key,
+// the value and the allowed range.
+#include <gtest/gtest.h>
+
+#include <stdexcept>
+#include <string>
+
+#include "hapticd/device/sim/sim_config.hpp"
+#include "hapticd/device/sim/sim_device.hpp"
+
+namespace hapticd::device::sim {
+namespace {
+
+DeviceConfig config(const std::string& toml, int axes = 1) {
+    DeviceConfig c;
+    c.axes = axes;
+    c.rate_hz = 2000.0;
+    c.plugin_table_toml = toml;
+    c.source = "lab.toml";
+    return c;
+}
+
+/// The message of the runtime_error parse_sim_config throws; fails the test if none.
+std::string error_of(const std::string& toml, int axes = 1) {
+    try {
+        parse_sim_config(config(toml, axes));
+    } catch (const std::runtime_error& e) {
+        return e.what();
+    }
+    ADD_FAILURE() << "no error for:\n" << toml;
+    return {};
+}
+
+TEST(SimConfig, EmptyTableGivesTheDefaults) {
+    const SimConfig c = parse_sim_config(config(""));
+    EXPECT_EQ(c.axes, 1);
+    EXPECT_EQ(c.rate_hz, 2000.0);
+    EXPECT_EQ(c.mass_kg, 0.1);
+    EXPECT_EQ(c.damping_n_s_per_m, 2.0);
+    EXPECT_EQ(c.counts_per_meter, 1e5);
+    EXPECT_EQ(c.force_limit_n, 20.0);
+    EXPECT_EQ(c.coulomb_n, 0.0);
+    EXPECT_EQ(c.clock, SimClock::realtime);
+    EXPECT_EQ(c.human[0].family, HumanFamily::hands_off);
+    EXPECT_FALSE(c.faults.any());
+}
+
+TEST(SimConfig, EveryKeyIsRead) {
+    const SimConfig c = parse_sim_config(config(R"(
+mass = 0.25
+damping = 3
+counts_per_meter = 40000.0
+force_limit = 8.0
+coulomb = 0.1
+clock = "lockstep"
+initial_position = [0.01, -0.02]
+[human]
+model = "two-mass-grasp"
+hand_mass = 0.4
+skin_stiffness = 5000.0
+skin_damping = 2.0
+arm_stiffness = 300.0
+arm_damping = 6.0
+set_point = 0.005
+push = { to = 0.015, start = 0.5, ramp = 0.25, hold = 1.0 }
+[faults]
+disconnect_at = 9.0
+stale_at = 1.0
+stale_for = 0.1
+jump_at = 2.0
+jump_counts = -300
+jump_axis = 1
+drop_at = [0.5, 0.75]
+drop_probability = 0.01
+late_at = [0.3]
+late_probability = 0.02
+late_by = 0.002
+seed = 99
+)",
+                                                    2));
+    EXPECT_EQ(c.mass_kg, 0.25);
+    EXPECT_EQ(c.damping_n_s_per_m, 3.0);
+    EXPECT_EQ(c.counts_per_meter, 40000.0);
+    EXPECT_EQ(c.force_limit_n, 8.0);
+    EXPECT_EQ(c.coulomb_n, 0.1);
+    EXPECT_EQ(c.clock, SimClock::lockstep);
+    EXPECT_EQ(c.initial_position_m[0], 0.01);
+    EXPECT_EQ(c.initial_position_m[1], -0.02);
+    for (int i = 0; i < 2; ++i) {
+        const HumanModel& h = c.human[i];
+        EXPECT_EQ(h.family, HumanFamily::two_mass_grasp);
+        EXPECT_EQ(h.hand_mass_kg, 0.4);
+        EXPECT_EQ(h.skin_stiffness_n_per_m, 5000.0);
+        EXPECT_EQ(h.skin_damping_n_s_per_m, 2.0);
+        EXPECT_EQ(h.arm_stiffness_n_per_m, 300.0);
+        EXPECT_EQ(h.arm_damping_n_s_per_m, 6.0);
+        EXPECT_EQ(h.push.from_m, 0.005);
+        EXPECT_EQ(h.push.to_m, 0.015);
+        EXPECT_EQ(h.push.start_s, 0.5);
+        EXPECT_EQ(h.push.ramp_s, 0.25);
+        EXPECT_EQ(h.push.hold_s, 1.0);
+    }
+    EXPECT_EQ(c.faults.disconnect_at_s, 9.0);
+    EXPECT_EQ(c.faults.stale_at_s, 1.0);
+    EXPECT_EQ(c.faults.stale_for_s, 0.1);
+    EXPECT_EQ(c.faults.jump_at_s, 2.0);
+    EXPECT_EQ(c.faults.jump_counts, -300);
+    EXPECT_EQ(c.faults.jump_axis, 1);
+    EXPECT_EQ(c.faults.drop_at_s, (std::vector<double>{0.5, 0.75}));
+    EXPECT_EQ(c.faults.drop_probability, 0.01);
+    EXPECT_EQ(c.faults.late_at_s, (std::vector<double>{0.3}));
+    EXPECT_EQ(c.faults.late_probability, 0.02);
+    EXPECT_EQ(c.faults.late_by_s, 0.002);
+    EXPECT_EQ(c.faults.seed, 99u);
+}
+
+TEST(SimConfig, HumanPerAxisAndSetPointDefaultsToTheInitialPosition) {
+    const SimConfig c = parse_sim_config(config(R"(
+initial_position = 0.03
+[[human]]
+model = "heavy-hand"
+hand_mass = 1.0
+hand_damping = 2.0
+[[human]]
+model = "stiff-grasp"
+hand_mass = 0.0
+hand_stiffness = 700
+[[human]]
+)",
+                                                    3));
+    EXPECT_EQ(c.human[0].family, HumanFamily::heavy_hand);
+    EXPECT_EQ(c.human[0].hand_mass_kg, 1.0);
+    EXPECT_EQ(c.human[0].hand_damping_n_s_per_m, 2.0);
+    EXPECT_EQ(c.human[1].family, HumanFamily::stiff_grasp);
+    EXPECT_EQ(c.human[1].hand_stiffness_n_per_m, 700.0);
+    EXPECT_EQ(c.human[1].hand_mass_kg, 0.0);
+    EXPECT_EQ(c.human[1].push.set_point_m(0.0), 0.03);
+    EXPECT_TRUE(c.human[1].push.is_fixed());
+    EXPECT_EQ(c.human[2].family, HumanFamily::hands_off);
+    EXPECT_EQ(c.initial_position_m[2], 0.03);
+}
+
+TEST(SimConfig, LockstepFlagOverridesTheClock) {
+    DeviceConfig d = config("clock = \"realtime\"");
+    d.lockstep = true;
+    EXPECT_EQ(parse_sim_config(d).clock, SimClock::lockstep);
+}
+
+TEST(SimConfig, OutOfRangeValuesNameFileKeyValueAndRange) {
+    const std::string e = error_of("mass = -0.5");
+    EXPECT_NE(e.find("lab.toml"), std::string::npos) << e;
+    EXPECT_NE(e.find("device.sim.mass"), std::string::npos) << e;
+    EXPECT_NE(e.find("-0.5"), std::string::npos) << e;
+    EXPECT_NE(e.find("> 0"), std::string::npos) << e;
+    EXPECT_NE(e.find("kg"), std::string::npos) << e;
+
+    EXPECT_NE(error_of("damping = -1").find("device.sim.damping = -1 is not allowed: must be a number >= 0"),
+              std::string::npos);
+    EXPECT_NE(error_of("counts_per_meter = 0").find("device.sim.counts_per_meter = 0"),
+              std::string::npos);
+    EXPECT_NE(error_of("force_limit = \"lots\"").find("device.sim.force_limit = \"lots\""),
+              std::string::npos);
+    EXPECT_NE(error_of("coulomb = nan").find("device.sim.coulomb = nan"), std::string::npos);
+    const std::string clock = error_of("clock = \"wall\"");
+    EXPECT_NE(clock.find("device.sim.clock = \"wall\""), std::string::npos) << clock;
+    EXPECT_NE(clock.find("\"lockstep\" | \"realtime\""), std::string::npos) << clock;
+    EXPECT_NE(error_of("initial_position = [0.0]", 2).find("an array of 2 positions"),
+              std::string::npos);
+    EXPECT_NE(error_of("[human]\nmodel = \"stiff-grasp\"\nhand_stiffness = -5")
+                  .find("device.sim.human.hand_stiffness = -5"),
+              std::string::npos);
+    EXPECT_NE(error_of("[faults]\ndrop_probability = 1.5").find("device.sim.faults.drop_probability = 1.5"),
+              std::string::npos);
+    EXPECT_NE(error_of("[faults]\njump_axis = 1").find("an integer from 0 to 0"), std::string::npos);
+    EXPECT_NE(error_of("[faults]\ndrop_at = [0.1, -2]").find("device.sim.faults.drop_at = -2"),
+              std::string::npos);
+    const std::string model = error_of("[human]\nmodel = \"firm-grip\"");
+    EXPECT_NE(model.find("device.sim.human.model = \"firm-grip\""), std::string::npos) << model;
+    EXPECT_NE(model.find("\"two-mass-grasp\""), std::string::npos) << model;
+}
+
+TEST(SimConfig, UnknownKeysAreErrors) {
+    const std::string e = error_of("mass = 0.1\nmas = 0.2");
+    EXPECT_NE(e.find("lab.toml: device.sim.mas is not a known key"), std::string::npos) << e;
+    EXPECT_NE(error_of("[human]\nmodel = \"heavy-hand\"\nhand_mas = 1").find("device.sim.human.hand_mas"),
+              std::string::npos);
+    EXPECT_NE(error_of("[faults]\ndisconnect = 1.0").find("device.sim.faults.disconnect"),
+              std::string::npos);
+    EXPECT_NE(error_of("[human]\nmodel = \"stiff-grasp\"\npush = { too = 1 }").find("device.sim.human.push.too"),
+              std::string::npos);
+    EXPECT_NE(error_of("[[human]]\n[[human]]\n[[human]]\nmodel = \"heavy-hand\"\nfoo = 1", 3)
+                  .find("device.sim.human[2].foo"),
+              std::string::npos);
+}
+
+TEST(SimConfig, KeysTheModelDoesNotUseAreErrors) {
+    const std::string e = error_of("[human]\nmodel = \"heavy-hand\"\nhand_stiffness = 100");
+    EXPECT_NE(e.find("device.sim.human.hand_stiffness is not used by model = \"heavy-hand\""),
+              std::string::npos)
+        << e;
+    EXPECT_NE(error_of("[human]\nhand_mass = 1").find("not used by model = \"hands-off\""),
+              std::string::npos);
+    EXPECT_NE(error_of("[human]\nmodel = \"heavy-hand\"\nset_point = 0.1").find("set_point"),
+              std::string::npos);
+    EXPECT_NE(error_of("[human]\nmodel = \"two-mass-grasp\"\nhand_mass = 0").find("> 0"),
+              std::string::npos);
+}
+
+TEST(SimConfig, BadDeviceSettingsAndBadTomlAreErrors) {
+    EXPECT_NE(error_of("", 4).find("lab.toml: device.axes = 4"), std::string::npos);
+    EXPECT_NE(error_of("mass = ").find("lab.toml: [device.sim] is not valid TOML"), std::string::npos);
+    EXPECT_NE(error_of("human = 3").find("device.sim.human = 3"), std::string::npos);
+    EXPECT_NE(error_of("[[human]]\n[[human]]", 3).find("3 tables [[device.sim.human]]"),
+              std::string::npos);
+    DeviceConfig d = config("");
+    d.rate_hz = 0.0;
+    SimDevice dev;
+    try {
+        dev.open(d);
+        ADD_FAILURE() << "rate 0 accepted";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("servo.rate_hz = 0"), std::string::npos) << e.what();
+    }
+    dev.close();  // safe after a failed open
+}
+
+}  // namespace
+}  // namespace hapticd::device::sim
+
+namespace hapticd::device::sim {
+namespace {
+
+// The example of docs/sim-device.md, as the daemon passes it (the table's contents).
+TEST(SimConfig, TheDocumentedExampleParses) {
+    const SimConfig c = parse_sim_config(config(R"(
+mass = 0.1
+damping = 2.0
+counts_per_meter = 1e5
+clock = "lockstep"
+initial_position = -0.01
+
+[human]
+model = "stiff-grasp"
+hand_mass = 0.3
+hand_stiffness = 500.0
+hand_damping = 5.0
+push = { to = 0.01, start = 0.5, ramp = 1.0, hold = 2.0 }
+
+[faults]
+drop_probability = 0.001
+seed = 7
+)"));
+    EXPECT_EQ(c.human[0].push.set_point_m(0.0), -0.01);
+    EXPECT_EQ(c.human[0].push.set_point_m(2.0), 0.01);
+    EXPECT_EQ(c.faults.seed, 7u);
+}
+
+}  // namespace
+}  // namespace hapticd::device::sim

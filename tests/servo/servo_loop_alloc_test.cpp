@@ -1,0 +1,113 @@
+// Real-time rule, checked: thousands of ticks of the servo loop, against a penalty wall (17)
+// and an admittance proxy (22), with telemetry, make no allocation on the servo thread.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "alloc_guard.hpp"
+#include "hapticd/servo/servo_loop.hpp"
+#include "servo_fakes.hpp"
+
+namespace hapticd::servo {
+namespace {
+
+using fakes::FakeClock;
+using fakes::FakeDevice;
+using fakes::VirtualTime;
+
+// A device that sweeps sinusoidally through the wall at x = 0 (so contact comes and goes).
+struct SweepingDevice {
+    FakeDevice inner;
+    std::int64_t n = 0;
+    IoResult read(Sample& sample) noexcept {
+        const double x_m = 0.004 * std::sin(2.0 * M_PI * 3.0 * static_cast<double>(n++) * 1e-3);
+        inner.set_position_counts(std::llround(x_m * 1e6));
+        return inner.read(sample);
+    }
+    IoResult write(const Command& command) noexcept { return inner.write(command); }
+};
+
+ServoConfig alloc_config() {
+    ServoConfig config;
+    config.axes = 3;
+    config.counts_per_meter = 1e6;
+    config.coupling = {.stiffness_n_per_m = 2000.0, .damping_n_s_per_m = 2.0};
+    config.safety.max_force_n = 5.0;  // the sweep saturates sometimes
+    config.safety.soft_start = {.still_speed_mps = 1.0, .still_time_s = 0.01, .ramp_time_s = 0.05};
+    config.safety.passivity.mode = PassivityMode::control;
+    config.realtime.mode = RealtimeMode::off;
+    config.stop_on_fault = false;
+    return config;
+}
+
+TEST(ServoAllocationGuard, SeesAnAllocation) {
+    static std::vector<int>* volatile sink = nullptr;
+    hapticd::testing::AllocationGuard guard;
+    sink = new std::vector<int>(100);
+    delete sink;
+    EXPECT_EQ(guard.allocations(), 2u);  // the vector object and its buffer
+    EXPECT_EQ(guard.deallocations(), 2u);
+    const hapticd::testing::AllocationGuard fresh;
+    std::string long_text(1000, 'x');
+    EXPECT_GE(fresh.allocations(), 1u);
+}
+
+template <typename Environment>
+void expect_ticks_do_not_allocate(Environment& environment, int ticks) {
+    VirtualTime time;
+    SweepingDevice device;
+    TelemetryRing ring(64);  // small: it overflows, and dropping must not allocate either
+    ServoLoop<SweepingDevice, Environment, FakeClock> loop(device, environment, alloc_config(),
+                                                           &ring, FakeClock{&time});
+    hapticd::testing::AllocationGuard guard;  // from the very first tick (environment reset)
+    double max_force = 0.0;
+    for (int n = 0; n < ticks; ++n) {
+        const TelemetryRecord& record = loop.tick();
+        max_force = std::max(max_force, std::abs(record.f_n[0]));
+        if (n % 100 == 0) {
+            TelemetryRecord popped;
+            while (ring.try_pop(popped)) {
+            }
+            (void)loop.status();
+        }
+        if (n == ticks / 2) {
+            loop.disarm();
+            loop.tick();
+            loop.arm();
+        }
+    }
+    const std::uint64_t allocations = guard.allocations();
+    EXPECT_EQ(allocations, 0u);
+    EXPECT_EQ(loop.faults(), 0u);
+    EXPECT_GT(max_force, 1.0);  // the ticks really rendered the wall
+    EXPECT_GT(ring.dropped(), 0u);
+}
+
+TEST(ServoAllocation, ImpedanceWallTicksDoNotAllocate) {
+    fakes::PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 8000.0, .damping_n_s_per_m = 5.0};
+    expect_ticks_do_not_allocate(wall, 10'000);
+}
+
+TEST(ServoAllocation, AdmittanceProxyTicksDoNotAllocate) {
+    fakes::ProxyPlane proxy{.wall_m = 0.0};
+    expect_ticks_do_not_allocate(proxy, 10'000);
+}
+
+TEST(ServoAllocation, FaultPathDoesNotAllocate) {
+    VirtualTime time;
+    SweepingDevice device;
+    fakes::NanAfter environment{.after_evaluations = 100};
+    ServoLoop<SweepingDevice, fakes::NanAfter, FakeClock> loop(device, environment, alloc_config(),
+                                                               nullptr, FakeClock{&time});
+    hapticd::testing::AllocationGuard guard;
+    for (int n = 0; n < 1000; ++n) loop.tick();
+    loop.request_fault_reset();
+    for (int n = 0; n < 10; ++n) loop.tick();
+    EXPECT_EQ(guard.allocations(), 0u);
+    EXPECT_NE(loop.faults_seen(), 0u);
+}
+
+}  // namespace
+}  // namespace hapticd::servo

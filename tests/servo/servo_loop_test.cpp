@@ -1,0 +1,488 @@
+// The servo tick and loop against a fake device and small environments, on virtual time.
+#include "hapticd/servo/servo_loop.hpp"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <thread>
+
+#include "servo_fakes.hpp"
+
+namespace hapticd::servo {
+namespace {
+
+using fakes::FakeClock;
+using fakes::FakeDevice;
+using fakes::PlaneWall;
+using fakes::VirtualTime;
+
+constexpr double kCountsPerMeter = 1e6;  // 1 um per count
+
+ServoConfig test_config() {
+    ServoConfig config;
+    config.rate_hz = 1000.0;
+    config.axes = 1;
+    config.counts_per_meter = kCountsPerMeter;
+    config.coupling = {.stiffness_n_per_m = 2000.0, .damping_n_s_per_m = 0.0};
+    config.safety.max_force_n = 10.0;
+    config.safety.soft_start = {.still_speed_mps = 1.0, .still_time_s = 0.0, .ramp_time_s = 0.0};
+    config.safety.passivity.mode = PassivityMode::observe;
+    config.realtime.mode = RealtimeMode::off;
+    return config;
+}
+
+template <typename Environment>
+using TestLoop = ServoLoop<FakeDevice, Environment, FakeClock>;
+
+TEST(ServoLoop, WallTickCommandsTheSeriesSpringForce) {
+    VirtualTime time;
+    FakeDevice device;
+    device.set_position_counts(-2000);  // 2 mm inside the wall
+    PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 6000.0};
+    TelemetryRing ring(16);
+    TestLoop<PlaneWall> loop(device, wall, test_config(), &ring, FakeClock{&time});
+
+    const TelemetryRecord& record = loop.tick();
+    // k_c k_w / (k_c + k_w) = 1500 N/m, 2 mm: 3 N out of the wall (+x).
+    EXPECT_NEAR(device.last_command.force_n[0], 3.0, 1e-12);
+    EXPECT_TRUE(device.last_command.enable);
+    EXPECT_EQ(device.last_command.force_n[1], 0.0);
+    EXPECT_EQ(wall.resets, 1);
+    EXPECT_EQ(wall.commits, 1);
+    EXPECT_EQ(record.tick, 0u);
+    EXPECT_DOUBLE_EQ(record.x_m[0], -0.002);
+    EXPECT_NEAR(record.xe_m[0], -0.0005, 1e-15);
+    EXPECT_NEAR(record.f_n[0], 3.0, 1e-12);
+
+    TelemetryRecord popped;
+    ASSERT_TRUE(ring.try_pop(popped));
+    EXPECT_EQ(popped.tick, 0u);
+    EXPECT_NEAR(popped.f_n[0], 3.0, 1e-12);
+    EXPECT_EQ(loop.status().tick, 0u);
+    EXPECT_NEAR(loop.status().f_n[0], 3.0, 1e-12);
+}
+
+TEST(ServoLoop, VelocityIsTheBackwardDifference) {
+    VirtualTime time;
+    FakeDevice device;
+    device.set_position_counts(10'000);  // free space, 1 cm out
+    device.counts_per_read[0] = 50;      // 50 um per 1 ms tick = 0.05 m/s
+    PlaneWall wall{.wall_m = 0.0};
+    TestLoop<PlaneWall> loop(device, wall, test_config(), nullptr, FakeClock{&time});
+    EXPECT_EQ(loop.tick().v_mps[0], 0.0);  // the first tick has no previous sample
+    for (int n = 0; n < 5; ++n) EXPECT_NEAR(loop.tick().v_mps[0], 0.05, 1e-12);
+}
+
+TEST(ServoLoop, NonFiniteEnvironmentZeroesForceInTheSameTick) {
+    VirtualTime time;
+    FakeDevice device;
+    device.set_position_counts(1000);
+    fakes::NanAfter environment{.after_evaluations = 3};
+    ServoConfig config = test_config();
+    config.stop_on_fault = false;
+    TestLoop<fakes::NanAfter> loop(device, environment, config, nullptr, FakeClock{&time});
+
+    // Free space converges in one evaluation per tick: ticks 0-2 are fine, tick 3 sees NaN.
+    for (int n = 0; n < 3; ++n) {
+        loop.tick();
+        EXPECT_TRUE(device.last_command.enable) << n;
+    }
+    const std::int64_t writes_before = device.writes;
+    const TelemetryRecord& record = loop.tick();
+    EXPECT_EQ(device.writes, writes_before + 1);  // this tick wrote...
+    EXPECT_FALSE(device.last_command.enable);     // ...a disabled zero command
+    EXPECT_EQ(device.last_command.force_n[0], 0.0);
+    EXPECT_EQ(record.faults, kFaultNonFinite);
+    EXPECT_EQ(record.f_n[0], 0.0);
+    EXPECT_EQ(loop.faults(), kFaultNonFinite);
+    // Latched.
+    environment.after_evaluations = 1'000'000;
+    loop.tick();
+    EXPECT_FALSE(device.last_command.enable);
+    // Reset from another thread takes effect at the next tick.
+    std::thread([&] { loop.request_fault_reset(); }).join();
+    loop.tick();
+    EXPECT_EQ(loop.faults(), 0u);
+    EXPECT_TRUE(device.last_command.enable);
+    ASSERT_EQ(loop.summary().faults.size(), 1u);
+    EXPECT_EQ(loop.summary().faults[0], "non_finite");
+}
+
+TEST(ServoLoop, EncoderJumpStatusFaultsInTheSameTick) {
+    VirtualTime time;
+    FakeDevice device;
+    device.set_position_counts(-2000);
+    PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 6000.0};
+    TestLoop<PlaneWall> loop(device, wall, test_config(), nullptr, FakeClock{&time});
+    loop.tick();
+    ASSERT_GT(device.last_command.force_n[0], 2.9);
+    device.next.status = kStatusJump;
+    loop.tick();
+    EXPECT_FALSE(device.last_command.enable);
+    EXPECT_EQ(device.last_command.force_n[0], 0.0);
+    EXPECT_EQ(loop.faults(), kFaultEncoderJump);
+}
+
+TEST(ServoLoop, ServoSideJumpCheckFaults) {
+    VirtualTime time;
+    FakeDevice device;
+    device.set_position_counts(5000);
+    PlaneWall wall{.wall_m = 0.0};
+    ServoConfig config = test_config();
+    config.safety.encoder_jump_m = 0.001;  // 1 mm per tick
+    TestLoop<PlaneWall> loop(device, wall, config, nullptr, FakeClock{&time});
+    loop.tick();
+    device.set_position_counts(5900);  // 0.9 mm: allowed
+    loop.tick();
+    EXPECT_EQ(loop.faults(), 0u);
+    device.set_position_counts(7000);  // 1.1 mm: a jump
+    loop.tick();
+    EXPECT_EQ(loop.faults(), kFaultEncoderJump);
+    EXPECT_FALSE(device.last_command.enable);
+}
+
+TEST(ServoLoop, DisconnectEndsTheRunAtZeroForce) {
+    VirtualTime time;
+    FakeDevice device;
+    device.set_position_counts(-2000);
+    PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 6000.0};
+    ServoConfig config = test_config();
+    config.stop_on_fault = false;  // a lost device ends the run anyway
+    TestLoop<PlaneWall> loop(device, wall, config, nullptr, FakeClock{&time});
+    loop.tick();
+    device.read_result = IoResult::disconnected;
+    const std::atomic<bool> stop{false};
+    EXPECT_EQ(loop.run(stop, 100), RunExit::fault);
+    EXPECT_EQ(loop.stats().ticks, 2u);
+    EXPECT_EQ(loop.faults(), kFaultDeviceLost);
+    EXPECT_FALSE(device.last_command.enable);
+    EXPECT_EQ(device.last_command.force_n[0], 0.0);
+}
+
+TEST(ServoLoop, ReadTimeoutsAreToleratedUpToTheBudget) {
+    VirtualTime time;
+    FakeDevice device;
+    device.set_position_counts(-2000);
+    PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 6000.0};
+    ServoConfig config = test_config();
+    config.safety.read_timeouts_allowed = 2;
+    TestLoop<PlaneWall> loop(device, wall, config, nullptr, FakeClock{&time});
+    loop.tick();
+    device.read_result = IoResult::timeout;
+    const std::int64_t writes = device.writes;
+    loop.tick();
+    loop.tick();
+    EXPECT_EQ(loop.faults(), 0u);
+    EXPECT_EQ(device.writes, writes);  // nothing written: the device holds its force
+    EXPECT_TRUE(loop.last_record().flags & kFlagNoSample);
+    loop.tick();
+    EXPECT_EQ(loop.faults(), kFaultReadTimeout);
+    EXPECT_EQ(device.writes, writes + 1);
+    EXPECT_FALSE(device.last_command.enable);
+    EXPECT_EQ(loop.stats().read_timeouts, 3u);
+}
+
+TEST(ServoLoop, OverrunBudgetFaultsAndIsCounted) {
+    VirtualTime time;
+    FakeDevice device;
+    device.time = &time;
+    device.read_cost_ns = 3'000'000;  // every tick takes 3 periods
+    device.set_position_counts(5000);
+    PlaneWall wall{.wall_m = 0.0};
+    ServoConfig config = test_config();
+    config.overrun.max_consecutive_overruns = 3;
+    TestLoop<PlaneWall> loop(device, wall, config, nullptr, FakeClock{&time});
+    const std::atomic<bool> stop{false};
+    EXPECT_EQ(loop.run(stop, 100), RunExit::fault);
+    // Tick 0 is on time; ticks 1..4 overrun, each missing 2 periods; the 4th in a row faults.
+    EXPECT_EQ(loop.stats().ticks, 5u);
+    EXPECT_EQ(loop.stats().overruns, 4u);
+    EXPECT_EQ(loop.stats().missed_periods, 8u);
+    EXPECT_EQ(loop.faults(), kFaultOverrunBudget);
+    EXPECT_FALSE(device.last_command.enable);
+    // Time in the record follows the schedule: tick 4 belongs to period 12 (0, 3, 6, 9, 12).
+    EXPECT_NEAR(loop.last_record().t_s, 0.012, 1e-12);
+    EXPECT_EQ(loop.summary().overruns, 4u);
+}
+
+TEST(ServoLoop, RunStopsOnTickLimitWithStatsAndZeroForce) {
+    VirtualTime time{.wake_latency_ns = 12'000};
+    FakeDevice device;
+    device.time = &time;
+    device.read_cost_ns = 400;
+    device.set_position_counts(-2000);
+    PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 6000.0};
+    TelemetryRing ring(1024);
+    TestLoop<PlaneWall> loop(device, wall, test_config(), &ring, FakeClock{&time});
+    const std::atomic<bool> stop{false};
+    EXPECT_EQ(loop.run(stop, 500), RunExit::tick_limit);
+    EXPECT_FALSE(device.last_command.enable);  // zero force on exit
+    const Summary summary = loop.summary();
+    EXPECT_EQ(summary.ticks, 500u);
+    EXPECT_EQ(summary.overruns, 0u);
+    EXPECT_EQ(summary.rate_hz, 1000.0);
+    EXPECT_NEAR(summary.wake_latency_us.p50, 12.0, 12.0 / 64.0);
+    EXPECT_NEAR(summary.wake_latency_us.max, 12.0, 1e-9);
+    EXPECT_NEAR(summary.tick_compute_us.p50, 0.4, 0.01);
+    EXPECT_NEAR(summary.max_force_n, 3.0, 1e-9);
+    EXPECT_TRUE(summary.faults.empty());
+    EXPECT_EQ(summary.telemetry_dropped, 0u);
+    EXPECT_EQ(ring.size(), 500u);
+    // Virtual time advanced by 500 periods plus latency: the loop really paced itself.
+    EXPECT_GE(time.now_ns, 500 * 1'000'000);
+}
+
+TEST(ServoLoop, StopFlagEndsTheRun) {
+    VirtualTime time;
+    FakeDevice device;
+    PlaneWall wall;
+    TestLoop<PlaneWall> loop(device, wall, test_config(), nullptr, FakeClock{&time});
+    const std::atomic<bool> stop{true};
+    EXPECT_EQ(loop.run(stop), RunExit::stopped);
+    EXPECT_EQ(loop.stats().ticks, 0u);
+    EXPECT_EQ(device.writes, 1);  // the zero command on exit
+}
+
+TEST(ServoLoop, DestructorWritesZeroForce) {
+    VirtualTime time;
+    FakeDevice device;
+    device.set_position_counts(-2000);
+    PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 6000.0};
+    {
+        TestLoop<PlaneWall> loop(device, wall, test_config(), nullptr, FakeClock{&time});
+        loop.tick();
+        ASSERT_TRUE(device.last_command.enable);
+    }
+    EXPECT_FALSE(device.last_command.enable);
+    EXPECT_EQ(device.last_command.force_n[0], 0.0);
+}
+
+TEST(ServoLoop, DisarmZeroesAndArmSoftStartsAgain) {
+    VirtualTime time;
+    FakeDevice device;
+    device.set_position_counts(-2000);
+    PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 6000.0};
+    ServoConfig config = test_config();
+    config.safety.soft_start = {
+        .still_speed_mps = 0.01, .still_time_s = 0.002, .ramp_time_s = 0.002};
+    TestLoop<PlaneWall> loop(device, wall, config, nullptr, FakeClock{&time});
+    for (int n = 0; n < 5; ++n) loop.tick();
+    EXPECT_NEAR(device.last_command.force_n[0], 3.0, 1e-12);
+    loop.disarm();
+    loop.tick();
+    EXPECT_FALSE(device.last_command.enable);
+    EXPECT_TRUE(loop.last_record().flags & kFlagDisarmed);
+    loop.arm();
+    loop.tick();  // still for 1 ms: zero
+    EXPECT_EQ(device.last_command.force_n[0], 0.0);
+    loop.tick();  // still for 2 ms: the ramp starts next tick
+    loop.tick();
+    EXPECT_NEAR(device.last_command.force_n[0], 1.5, 1e-12);
+    EXPECT_TRUE(loop.last_record().flags & kFlagSoftStart);
+    loop.tick();
+    EXPECT_NEAR(device.last_command.force_n[0], 3.0, 1e-12);
+}
+
+TEST(ServoLoop, AdmittanceProxyGivesTheCouplingSpringForce) {
+    VirtualTime time;
+    FakeDevice device;
+    device.set_position_counts(-2000);
+    fakes::ProxyPlane proxy{.wall_m = 0.0};
+    TestLoop<fakes::ProxyPlane> loop(device, proxy, test_config(), nullptr, FakeClock{&time});
+    loop.tick();
+    loop.tick();  // the tool has settled on the surface: v_e = 0
+    // (22): the tool sits on the surface, x_e = 0; handle force -k_c (x_d - x_e) = 4 N.
+    EXPECT_NEAR(device.last_command.force_n[0], 4.0, 1e-12);
+    EXPECT_EQ(loop.last_record().xe_m[0], 0.0);
+}
+
+TEST(ServoLoop, WithoutCouplingTheWallActsOnTheDeviceDirectly) {
+    // The conventional design: no coupling, so the handle gets the wall's own force,
+    // k_w * 1 mm = 6 N, and the tool is the device: x_e = x_d.
+    VirtualTime time;
+    FakeDevice device;
+    device.set_position_counts(-1000);
+    PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 6000.0};
+    ServoConfig config = test_config();
+    config.coupling_enabled = false;
+    config.coupling = {};
+    TestLoop<PlaneWall> loop(device, wall, config, nullptr, FakeClock{&time});
+    loop.tick();
+    EXPECT_NEAR(device.last_command.force_n[0], 6.0, 1e-12);
+    EXPECT_EQ(loop.last_record().xe_m[0], loop.last_record().x_m[0]);
+    EXPECT_EQ(wall.commits, 1);
+}
+
+TEST(ServoLoop, AdmittanceEnvironmentNeedsTheCoupling) {
+    VirtualTime time;
+    FakeDevice device;
+    fakes::ProxyPlane proxy{.wall_m = 0.0};
+    ServoConfig config = test_config();
+    config.coupling_enabled = false;
+    EXPECT_THROW((TestLoop<fakes::ProxyPlane>(device, proxy, config, nullptr, FakeClock{&time})),
+                 std::invalid_argument);
+}
+
+TEST(ServoLoop, LockstepBackpressureLogsEveryTick) {
+    // A lockstep device paces the loop; with backpressure the run waits for the consumer
+    // between ticks, so a ring of 8 carries all 5000 records and nothing is dropped.
+    VirtualTime time;
+    FakeDevice device;
+    device.set_position_counts(-2000);
+    PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 6000.0};
+    ServoConfig config = test_config();
+    config.device_paces_loop = true;
+    config.telemetry_backpressure = true;
+    TelemetryRing ring(8);
+    TestLoop<PlaneWall> loop(device, wall, config, &ring, FakeClock{&time});
+    std::atomic<bool> stop{false};
+    std::uint64_t popped = 0;
+    std::uint64_t next_tick = 0;
+    bool in_order = true;
+    std::thread consumer([&] {
+        TelemetryRecord record;
+        while (popped < 5000) {
+            if (ring.try_pop(record)) {
+                in_order = in_order && record.tick == next_tick;
+                ++next_tick;
+                ++popped;
+            } else {
+                std::this_thread::yield();
+            }
+        }
+    });
+    EXPECT_EQ(loop.run(stop, 5000), RunExit::tick_limit);
+    consumer.join();
+    EXPECT_EQ(popped, 5000u);
+    EXPECT_TRUE(in_order);
+    EXPECT_EQ(ring.dropped(), 0u);
+
+    ServoConfig wall_clock = test_config();
+    wall_clock.telemetry_backpressure = true;  // without a pacing device: refused
+    EXPECT_THROW((TestLoop<PlaneWall>(device, wall, wall_clock, &ring, FakeClock{&time})),
+                 std::invalid_argument);
+}
+
+TEST(ServoLoop, SaturationLimitsTheCommandedForce) {
+    VirtualTime time;
+    FakeDevice device;
+    device.set_position_counts(-20'000);  // 2 cm deep: 30 N unsaturated
+    PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 6000.0};
+    TestLoop<PlaneWall> loop(device, wall, test_config(), nullptr, FakeClock{&time});
+    loop.tick();
+    EXPECT_DOUBLE_EQ(device.last_command.force_n[0], 10.0);
+    EXPECT_TRUE(loop.last_record().flags & kFlagSaturated);
+    EXPECT_EQ(loop.summary().max_force_n, 10.0);
+}
+
+TEST(ServoLoop, PassivityControllerTamesAnActiveEnvironment) {
+    // The handle moves at a constant 0.05 m/s against a negative damper: the coupling's
+    // steady state pushes the handle along its motion (F = c v), generating energy.
+    auto run_with = [](PassivityMode mode) {
+        VirtualTime time;
+        FakeDevice device;
+        device.counts_per_read[0] = 50;
+        fakes::ActiveDamper environment{.gain_n_s_per_m = 5.0};
+        ServoConfig config = test_config();
+        config.coupling = {.stiffness_n_per_m = 2000.0, .damping_n_s_per_m = 10.0};
+        config.safety.passivity = {.mode = mode, .max_damping_n_s_per_m = 1000.0};
+        TestLoop<fakes::ActiveDamper> loop(device, environment, config, nullptr, FakeClock{&time});
+        double min_energy = 0.0;
+        for (int n = 0; n < 1000; ++n) min_energy = std::min(min_energy, loop.tick().energy_j);
+        return std::pair{min_energy, loop.stats().passivity_control_ticks};
+    };
+    const auto [observed_min, observed_control] = run_with(PassivityMode::observe);
+    EXPECT_LT(observed_min, -1e-3);  // ~ -c v^2 t = -5 * 0.0025 * 1 s
+    EXPECT_EQ(observed_control, 0u);
+    const auto [controlled_min, control_ticks] = run_with(PassivityMode::control);
+    EXPECT_GE(controlled_min, -1e-12);
+    EXPECT_GT(control_ticks, 900u);
+}
+
+TEST(ServoLoop, RejectsBadConfigNamingTheField) {
+    VirtualTime time;
+    FakeDevice device;
+    PlaneWall wall;
+    ServoConfig config = test_config();
+    config.counts_per_meter = 0.0;
+    try {
+        TestLoop<PlaneWall> loop(device, wall, config, nullptr, FakeClock{&time});
+        FAIL() << "no exception";
+    } catch (const std::invalid_argument& error) {
+        EXPECT_NE(std::string(error.what()).find("counts_per_meter"), std::string::npos);
+    }
+    config = test_config();
+    config.axes = 4;
+    EXPECT_THROW(TestLoop<PlaneWall>(device, wall, config, nullptr, FakeClock{&time}),
+                 std::invalid_argument);
+}
+
+// The daemon instantiates the loop with an abstract device class (virtual read/write).
+class AbstractDevice {
+  public:
+    virtual ~AbstractDevice() = default;
+    virtual IoResult read(Sample& sample) noexcept = 0;
+    virtual IoResult write(const Command& command) noexcept = 0;
+};
+class ConcreteDevice final : public AbstractDevice {
+  public:
+    FakeDevice fake;
+    IoResult read(Sample& sample) noexcept override { return fake.read(sample); }
+    IoResult write(const Command& command) noexcept override { return fake.write(command); }
+};
+static_assert(ServoDevice<AbstractDevice>);
+
+TEST(ServoLoop, RealClockRunThroughAnAbstractDevice) {
+    // No assertion on timing: only that the real pacer runs, records and stops.
+    ConcreteDevice concrete;
+    concrete.fake.set_position_counts(-1000);
+    AbstractDevice& device = concrete;
+    PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 6000.0};
+    ServoConfig config = test_config();
+    config.rate_hz = 2000.0;
+    ServoLoop<AbstractDevice, PlaneWall> loop(device, wall, config);
+    const std::atomic<bool> stop{false};
+    loop.run(stop, 20);
+    EXPECT_EQ(loop.stats().ticks, 20u);
+    EXPECT_EQ(loop.stats().wake_latency.count(), 20u);  // every paced tick records one
+    EXPECT_FALSE(concrete.fake.last_command.enable);
+    EXPECT_NEAR(concrete.fake.max_abs_force_n, 1.5, 1e-9);
+}
+
+TEST(ServoSeqlock, ReaderNeverSeesATornSnapshot) {
+    Seqlock<StatusSnapshot> seqlock;
+    std::atomic<bool> done{false};
+    std::thread writer([&] {
+        StatusSnapshot snapshot;
+        for (std::uint64_t i = 1; i <= 200'000; ++i) {
+            snapshot.tick = i;
+            snapshot.t_s = static_cast<double>(i);
+            snapshot.x_m = {static_cast<double>(i), static_cast<double>(i), static_cast<double>(i)};
+            snapshot.overruns = i;
+            seqlock.store(snapshot);
+        }
+        done.store(true, std::memory_order_release);
+    });
+    std::uint64_t reads = 0;
+    bool consistent = true;
+    std::uint64_t last = 0;
+    bool monotonic = true;
+    while (!done.load(std::memory_order_acquire)) {
+        const StatusSnapshot snapshot = seqlock.load();
+        const auto i = static_cast<double>(snapshot.tick);
+        if (snapshot.t_s != i || snapshot.x_m[2] != i || snapshot.overruns != snapshot.tick) {
+            consistent = false;
+        }
+        if (snapshot.tick < last) monotonic = false;
+        last = snapshot.tick;
+        ++reads;
+    }
+    writer.join();
+    EXPECT_TRUE(consistent);
+    EXPECT_TRUE(monotonic);
+    EXPECT_GT(reads, 0u);
+    EXPECT_EQ(seqlock.load().tick, 200'000u);
+}
+
+}  // namespace
+}  // namespace hapticd::servo
