@@ -199,7 +199,7 @@ int run_loop(const RunOptions& options, const Config& config, device::Device& de
 
     servo::ServoLoop<device::Device, Environment> loop(device, environment, servo_config,
                                                        ring.get());
-    std::atomic<bool> stop_servo{false};
+    std::atomic<bool> stop_servo{stop.load(std::memory_order_acquire)};
     std::atomic<bool> servo_done{false};
     servo::RunExit run_exit = servo::RunExit::stopped;
     std::string servo_error;

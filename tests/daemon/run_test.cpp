@@ -1,0 +1,285 @@
+// hapticd's run, in process and in lockstep: how it starts, what it refuses, how it ends.
+// (tests/hil drives the real binary; these cover the glue's paths one by one.)
+#include "hapticd/daemon/run.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+namespace hapticd::daemon {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Outcome {
+    int exit_code = -1;
+    std::string out;
+    std::string log;
+    nlohmann::json summary() const { return nlohmann::json::parse(out); }
+};
+
+class DaemonRun : public ::testing::Test {
+  protected:
+    void SetUp() override {
+        dir_ = fs::temp_directory_path() /
+               ("hapticd-run-" + std::to_string(::getpid()) + "-" +
+                ::testing::UnitTest::GetInstance()->current_test_info()->name());
+        fs::create_directories(dir_);
+    }
+    void TearDown() override { fs::remove_all(dir_); }
+
+    std::string write(const std::string& name, const std::string& text) const {
+        std::ofstream(dir_ / name) << text;
+        return (dir_ / name).string();
+    }
+
+    static Outcome run(RunOptions options, bool stop_now = false) {
+        options.status_interval_s = 0.0;
+        const std::atomic<bool> stop{stop_now};
+        std::ostringstream out, log;
+        Outcome outcome;
+        outcome.exit_code = run_daemon(options, stop, out, log);
+        outcome.out = out.str();
+        outcome.log = log.str();
+        return outcome;
+    }
+
+    /// A lockstep pen display pressing into the demo wall, with `extra` appended.
+    std::string config(const std::string& coupling, const std::string& extra = "") const {
+        write("wall.toml",
+              "[scene]\nname = \"wall\"\naxes = 1\n[[wall]]\nnormal = [-1.0]\nstiffness = 2e4\n");
+        return write("lab.toml", R"(
+[device]
+plugin = "sim"
+axes = 1
+[device.model]
+mass = 0.1
+damping = 2.0
+[device.sim]
+mass = 0.1
+damping = 2.0
+clock = "lockstep"
+initial_position = -0.005
+[device.sim.human]
+model = "stiff-grasp"
+hand_mass = 0.3
+hand_stiffness = 500.0
+hand_damping = 5.0
+push = { to = 0.005, start = 0.5, ramp = 0.5, hold = 5.0 }
+[scene]
+file = "wall.toml"
+)" + coupling + "\n" + extra);
+    }
+
+    fs::path dir_;
+};
+
+constexpr const char* kEncoderGains = "[coupling]\nstiffness = 3600\ndamping = 0\n";
+
+TEST_F(DaemonRun, LockstepRunOfTheEmbeddedDefaultGivesTheSummary) {
+    RunOptions options;
+    options.lockstep = true;
+    options.duration_s = 2.5;
+    options.summary_path = "-";
+    const Outcome outcome = run(options);
+    ASSERT_EQ(outcome.exit_code, kExitOk) << outcome.log;
+    const nlohmann::json s = outcome.summary();
+    EXPECT_EQ(s["ticks"], 2500);
+    EXPECT_EQ(s["rate_hz"], 1000.0);
+    EXPECT_EQ(s["overruns"], 0);
+    EXPECT_EQ(s["exit"], "duration");
+    EXPECT_EQ(s["config"], "<embedded default>");
+    EXPECT_EQ(s["device"], "sim");
+    EXPECT_EQ(s["scene"]["name"], "demo-wall");
+    EXPECT_TRUE(s["lockstep"].get<bool>());
+    EXPECT_TRUE(s["faults"].empty());
+    EXPECT_EQ(s["realtime"]["mode"], "off");  // virtual time has no deadlines
+    EXPECT_EQ(s["stability_check"]["model"], "encoder");
+    EXPECT_TRUE(s["stability_check"]["passed"].get<bool>());
+    // The default's grasp pushes 5 mm past the wall from t = 1 s: the wall pushes back.
+    EXPECT_GT(s["max_force_n"].get<double>(), 1.0);
+    EXPECT_LT(s["max_force_n"].get<double>(), 20.0);
+    for (const char* key : {"p50", "p99", "p999", "max"}) EXPECT_TRUE(s["wake_latency_us"].contains(key));
+    for (const char* key : {"p50", "p99", "max"}) EXPECT_GT(s["tick_compute_us"][key].get<double>(), 0.0);
+}
+
+TEST_F(DaemonRun, RefusesGainsThatFailTheCheckNamingMarginAndFrequency) {
+    // 16000 N/m is what the paper's model allows for this device (8b/T); the encoder model
+    // allows 2b/T = 4000 N/m, so the default check refuses it.
+    RunOptions options;
+    options.config_path = config("[coupling]\nstiffness = 16000\n");
+    const Outcome outcome = run(options);
+    EXPECT_EQ(outcome.exit_code, kExitBadInput);
+    EXPECT_NE(outcome.log.find("lab.toml: refusing to arm: [coupling] stiffness = 16000 N/m"),
+              std::string::npos)
+        << outcome.log;
+    EXPECT_NE(outcome.log.find("fail the encoder model"), std::string::npos) << outcome.log;
+    EXPECT_NE(outcome.log.find("worst margin -"), std::string::npos) << outcome.log;
+    EXPECT_NE(outcome.log.find(" Hz"), std::string::npos) << outcome.log;
+    EXPECT_NE(outcome.log.find("haptic-tune size --mass 0.1 --damping 2 --rate 1000"),
+              std::string::npos)
+        << outcome.log;
+    EXPECT_TRUE(outcome.out.empty());
+}
+
+TEST_F(DaemonRun, ThePaperModelCheckLetsThePaperGainsRun) {
+    RunOptions options;
+    options.config_path = config("[coupling]\nstiffness = 16000\ncheck = \"paper\"\n");
+    options.duration_s = 0.1;
+    options.lockstep = true;
+    EXPECT_EQ(run(options).exit_code, kExitOk);
+}
+
+TEST_F(DaemonRun, LogIsCompleteInLockstep) {
+    RunOptions options;
+    options.config_path = config(kEncoderGains);
+    options.duration_s = 3.0;
+    options.summary_path = "-";
+    options.log_path = (dir_ / "run.csv").string();
+    const Outcome outcome = run(options);
+    ASSERT_EQ(outcome.exit_code, kExitOk) << outcome.log;
+    const nlohmann::json s = outcome.summary();
+    EXPECT_EQ(s["ticks"], 3000);
+    EXPECT_EQ(s["telemetry_records"], 3000);
+    EXPECT_EQ(s["telemetry_dropped"], 0);
+    std::ifstream csv(*options.log_path);
+    std::string line;
+    std::getline(csv, line);
+    EXPECT_EQ(line.rfind("tick,t_s,x0_m,v0_mps,xe0_m,f0_n,", 0), 0u) << line;
+    std::size_t rows = 0;
+    while (std::getline(csv, line)) {
+        EXPECT_EQ(line.substr(0, line.find(',')), std::to_string(rows));
+        ++rows;
+    }
+    EXPECT_EQ(rows, 3000u);
+}
+
+TEST_F(DaemonRun, DisconnectEndsTheRunOnAFaultAtZeroForce) {
+    RunOptions options;
+    options.config_path = config(kEncoderGains, "[device.sim.faults]\ndisconnect_at = 1.5\n");
+    options.duration_s = 5.0;
+    options.summary_path = "-";
+    const Outcome outcome = run(options);
+    EXPECT_EQ(outcome.exit_code, kExitFault);
+    const nlohmann::json s = outcome.summary();
+    EXPECT_EQ(s["exit"], "fault");
+    EXPECT_EQ(s["faults"], nlohmann::json::array({"device_lost"}));
+    EXPECT_NEAR(s["ticks"].get<double>(), 1500.0, 2.0);
+    EXPECT_NE(outcome.log.find("stopped on a fault"), std::string::npos) << outcome.log;
+}
+
+TEST_F(DaemonRun, AStopRequestEndsTheRunCleanly) {
+    RunOptions options;
+    options.config_path = config(kEncoderGains);
+    options.summary_path = "-";
+    const Outcome outcome = run(options, /*stop_now=*/true);
+    EXPECT_EQ(outcome.exit_code, kExitOk);
+    EXPECT_EQ(outcome.summary()["exit"], "stopped");
+    EXPECT_EQ(outcome.summary()["ticks"], 0);
+}
+
+TEST_F(DaemonRun, SummaryGoesToAFile) {
+    RunOptions options;
+    options.config_path = config(kEncoderGains);
+    options.duration_s = 0.2;
+    options.summary_path = (dir_ / "summary.json").string();
+    ASSERT_EQ(run(options).exit_code, kExitOk);
+    std::ifstream in(*options.summary_path);
+    EXPECT_EQ(nlohmann::json::parse(in)["ticks"], 200);
+}
+
+struct BadStart {
+    std::string what;
+    std::string coupling;
+    std::string extra;
+    std::string message;
+};
+
+class DaemonRunRefuses : public DaemonRun, public ::testing::WithParamInterface<BadStart> {};
+
+TEST_P(DaemonRunRefuses, WithExitTwoAndAMessageNamingTheProblem) {
+    RunOptions options;
+    options.config_path = config(GetParam().coupling, GetParam().extra);
+    options.duration_s = 0.1;
+    const Outcome outcome = run(options);
+    EXPECT_EQ(outcome.exit_code, kExitBadInput) << outcome.log;
+    EXPECT_NE(outcome.log.find(GetParam().message), std::string::npos) << outcome.log;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Cases, DaemonRunRefuses,
+    ::testing::Values(
+        BadStart{"unknown key", kEncoderGains, "[safety]\nmax_torque = 3\n",
+                 "lab.toml: unknown key [safety] max_torque"},
+        BadStart{"sim table", kEncoderGains, "[device.sim.faults]\nseed = -1\n",
+                 "device.sim.faults.seed"},
+        BadStart{"no gains", "[coupling]\ncheck = \"encoder\"\n", "",
+                 "[coupling] stiffness and damping are both 0"}),
+    [](const ::testing::TestParamInfo<BadStart>& param_info) {
+        std::string name = param_info.param.what;
+        for (char& c : name) c = std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+        return name;
+    });
+
+TEST_F(DaemonRun, NoCouplingIsRefusedForAnAdmittanceScene) {
+    write("sphere.toml",
+          "[scene]\nname = \"ball\"\naxes = 1\n[[proxy_plane]]\nnormal = [-1.0]\n");
+    std::string text = config("[coupling]\nenabled = false\ncheck = \"off\"\n");
+    std::ifstream in(text);
+    std::stringstream body;
+    body << in.rdbuf();
+    std::string replaced = body.str();
+    replaced.replace(replaced.find("wall.toml"), 9, "sphere.toml");
+    RunOptions options;
+    options.config_path = write("lab.toml", replaced);
+    const Outcome outcome = run(options);
+    EXPECT_EQ(outcome.exit_code, kExitBadInput);
+    EXPECT_NE(outcome.log.find("is an admittance (constraint) scene, which needs the coupling"),
+              std::string::npos)
+        << outcome.log;
+}
+
+TEST_F(DaemonRun, AnUnknownPluginIsNamed) {
+    std::string text = config(kEncoderGains);
+    std::ifstream in(text);
+    std::stringstream body;
+    body << in.rdbuf();
+    std::string replaced = body.str();
+    replaced.replace(replaced.find("plugin = \"sim\""), 14, "plugin = \"nosuchdevice\"");
+    replaced.replace(replaced.find("[device.sim]"), 12, "[device.nosuchdevice]");
+    replaced.replace(replaced.find("[device.sim.human]"), 18, "[device.nosuchdevice.human]");
+    RunOptions options;
+    options.config_path = write("lab.toml", replaced);
+    const Outcome outcome = run(options);
+    EXPECT_EQ(outcome.exit_code, kExitBadInput);
+    EXPECT_NE(outcome.log.find("[device] plugin = \"nosuchdevice\""), std::string::npos)
+        << outcome.log;
+}
+
+TEST_F(DaemonRun, ABadSceneIsNamed) {
+    RunOptions options;
+    options.config_path = config(kEncoderGains);
+    write("wall.toml", "[scene]\nname = \"wall\"\naxes = 1\n[[wall]]\nnormal = [-1.0]\nstiffness = -5\n");
+    const Outcome outcome = run(options);
+    EXPECT_EQ(outcome.exit_code, kExitBadInput);
+    EXPECT_NE(outcome.log.find("wall.toml"), std::string::npos) << outcome.log;
+    EXPECT_NE(outcome.log.find("stiffness = -5"), std::string::npos) << outcome.log;
+}
+
+TEST_F(DaemonRun, AMissingConfigFileIsNamed) {
+    RunOptions options;
+    options.config_path = (dir_ / "absent.toml").string();
+    const Outcome outcome = run(options);
+    EXPECT_EQ(outcome.exit_code, kExitBadInput);
+    EXPECT_NE(outcome.log.find("absent.toml: cannot read the config file"), std::string::npos)
+        << outcome.log;
+}
+
+}  // namespace
+}  // namespace hapticd::daemon

@@ -1,0 +1,109 @@
+// The telemetry writer drains the ring into CSV; on a clean stop the file is complete.
+#include "hapticd/daemon/telemetry_writer.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "hapticd/servo/telemetry_csv.hpp"
+
+namespace hapticd::daemon {
+namespace {
+
+std::vector<std::string> lines_of(const std::string& path) {
+    std::ifstream in(path);
+    std::vector<std::string> lines;
+    for (std::string line; std::getline(in, line);) lines.push_back(line);
+    return lines;
+}
+
+std::string temp_path(const std::string& name) {
+    return (std::filesystem::temp_directory_path() /
+            ("hapticd-writer-" + std::to_string(::getpid()) + "-" + name))
+        .string();
+}
+
+TEST(DaemonTelemetryWriter, EveryPushedRecordIsInTheFileInOrder) {
+    // A producer pushing faster than a small ring drains, without backpressure: every record
+    // the ring accepted is in the file, and accepted + dropped = pushed.
+    servo::TelemetryRing ring(64);
+    const std::string path = temp_path("order.csv");
+    TelemetryWriter writer(ring, path, 2);
+    writer.start();
+    constexpr std::uint64_t kRecords = 200'000;
+    std::uint64_t accepted = 0;
+    for (std::uint64_t n = 0; n < kRecords; ++n) {
+        servo::TelemetryRecord record;
+        record.tick = n;
+        record.t_s = static_cast<double>(n) * 1e-3;
+        record.x_m[1] = -0.25 * static_cast<double>(n);
+        if (ring.try_push(record)) ++accepted;
+    }
+    writer.finish();
+    const std::vector<std::string> lines = lines_of(path);
+    ASSERT_EQ(lines.size(), accepted + 1);
+    EXPECT_EQ(lines.front(), servo::csv_header(2));
+    EXPECT_EQ(writer.records_written(), accepted);
+    EXPECT_EQ(accepted + ring.dropped(), kRecords);
+    std::uint64_t previous_tick = 0;
+    for (std::size_t i = 1; i < lines.size(); ++i) {
+        const std::uint64_t tick = std::stoull(lines[i].substr(0, lines[i].find(',')));
+        if (i > 1) {
+            EXPECT_GT(tick, previous_tick);
+        }
+        previous_tick = tick;
+    }
+    std::filesystem::remove(path);
+}
+
+TEST(DaemonTelemetryWriter, RecordsLeftInTheRingAtStopAreWritten) {
+    servo::TelemetryRing ring(1024);
+    const std::string path = temp_path("drain.csv");
+    TelemetryWriter writer(ring, path, 1);  // never started: finish() drains alone
+    for (std::uint64_t n = 0; n < 700; ++n) {
+        servo::TelemetryRecord record;
+        record.tick = n;
+        ASSERT_TRUE(ring.try_push(record));
+    }
+    writer.finish();
+    const std::vector<std::string> lines = lines_of(path);
+    ASSERT_EQ(lines.size(), 701u);
+    EXPECT_EQ(lines[700].substr(0, 4), "699,");
+    std::filesystem::remove(path);
+}
+
+TEST(DaemonTelemetryWriter, AnUncreatableFileIsNamed) {
+    servo::TelemetryRing ring(16);
+    try {
+        TelemetryWriter writer(ring, "/nonexistent-dir/run.csv", 1);
+        FAIL() << "expected an error";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("--log /nonexistent-dir/run.csv: cannot create"),
+                  std::string::npos)
+            << e.what();
+    }
+}
+
+TEST(DaemonTelemetryWriter, AFullDiskIsReported) {
+    if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
+    servo::TelemetryRing ring(16);
+    TelemetryWriter writer(ring, "/dev/full", 1);
+    servo::TelemetryRecord record;
+    ASSERT_TRUE(ring.try_push(record));
+    try {
+        writer.finish();
+        FAIL() << "expected an error";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("--log /dev/full: writing telemetry failed"),
+                  std::string::npos)
+            << e.what();
+    }
+}
+
+}  // namespace
+}  // namespace hapticd::daemon
