@@ -1,11 +1,12 @@
 #include "hapticd/daemon/config.hpp"
 
+#include <toml++/toml.h>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
-#include <toml++/toml.h>
 
 #include "embedded_defaults.hpp"
 
@@ -14,21 +15,23 @@ namespace {
 
 /// Reads one table's keys against a fixed list, with errors that name file, key and value.
 class TableReader {
-public:
+  public:
     TableReader(const std::string& source, std::string name, const toml::table* table)
         : source_(source), name_(std::move(name)), table_(table) {}
 
     /// Unknown keys are errors; `tables` are sub-tables this reader allows.
-    void allow_only(const std::set<std::string>& keys, const std::set<std::string>& tables = {}) const {
+    void allow_only(const std::set<std::string>& keys,
+                    const std::set<std::string>& tables = {}) const {
         if (table_ == nullptr) return;
         for (const auto& [key, node] : *table_) {
             const std::string k(key.str());
             if (keys.count(k) != 0 || (node.is_table() && tables.count(k) != 0)) continue;
             std::string allowed;
             for (const auto& a : keys) allowed += (allowed.empty() ? "" : ", ") + a;
-            for (const auto& t : tables) allowed += (allowed.empty() ? "[" : ", [") + name_ + "." + t + "]";
-            throw ConfigError(source_ + ": unknown key [" + name_ + "] " + k + " (allowed: " +
-                              allowed + ")");
+            for (const auto& t : tables)
+                allowed += (allowed.empty() ? "[" : ", [") + name_ + "." + t + "]";
+            throw ConfigError(source_ + ": unknown key [" + name_ + "] " + k +
+                              " (allowed: " + allowed + ")");
         }
     }
 
@@ -41,8 +44,8 @@ public:
         const bool ok = std::isfinite(*v) && (lo_open ? *v > lo : *v >= lo) && *v <= hi;
         if (!ok) {
             std::ostringstream m;
-            m << where(key) << " = " << *v << " is out of range: allowed " << (lo_open ? "> " : ">= ")
-              << lo;
+            m << where(key) << " = " << *v << " is out of range: allowed "
+              << (lo_open ? "> " : ">= ") << lo;
             if (std::isfinite(hi)) m << " and <= " << hi;
             m << " (" << unit << ")";
             throw ConfigError(m.str());
@@ -81,19 +84,18 @@ public:
         if (!choices.empty() && choices.count(v) == 0) {
             std::string allowed;
             for (const auto& c : choices) allowed += (allowed.empty() ? "\"" : ", \"") + c + "\"";
-            throw ConfigError(where(key) + " = \"" + v + "\" is not allowed: use one of " + allowed);
+            throw ConfigError(where(key) + " = \"" + v + "\" is not allowed: use one of " +
+                              allowed);
         }
         if (choices.empty() && v.empty()) throw ConfigError(where(key) + " must not be empty");
         return v;
     }
 
-private:
+  private:
     const toml::node* find(const std::string& key) const {
         return table_ == nullptr ? nullptr : table_->get(key);
     }
-    std::string where(const std::string& key) const {
-        return source_ + ": [" + name_ + "] " + key;
-    }
+    std::string where(const std::string& key) const { return source_ + ": [" + name_ + "] " + key; }
 
     const std::string& source_;
     std::string name_;
@@ -104,7 +106,8 @@ const toml::table* sub_table(const toml::table& parent, const std::string& sourc
                              const std::string& name) {
     const toml::node* node = parent.get(name);
     if (node == nullptr) return nullptr;
-    if (!node->is_table()) throw ConfigError(source + ": " + name + " must be a table ([" + name + "])");
+    if (!node->is_table())
+        throw ConfigError(source + ": " + name + " must be a table ([" + name + "])");
     return node->as_table();
 }
 

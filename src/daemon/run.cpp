@@ -48,7 +48,8 @@ struct DeviceCloser {
 std::string format_vector_mm(const std::array<double, servo::kMaxAxes>& v, int axes, double scale) {
     std::ostringstream out;
     out << std::fixed << std::setprecision(2) << "[";
-    for (int i = 0; i < axes; ++i) out << (i == 0 ? "" : " ") << v[static_cast<std::size_t>(i)] * scale;
+    for (int i = 0; i < axes; ++i)
+        out << (i == 0 ? "" : " ") << v[static_cast<std::size_t>(i)] * scale;
     out << "]";
     return out.str();
 }
@@ -108,11 +109,12 @@ StartupCheck run_startup_check(const Config& config, std::ostream& log) {
     }
     if (!check.passed) {
         std::ostringstream m;
-        m << config.source << ": refusing to arm: [coupling] stiffness = "
-          << config.coupling.stiffness_n_per_m << " N/m, damping = "
-          << config.coupling.damping_n_s_per_m << " N s/m fail the " << check.model
-          << " model for [device.model] at " << config.servo.rate_hz << " Hz: worst margin "
-          << check.worst_margin << " at " << check.worst_frequency_hz << " Hz";
+        m << config.source
+          << ": refusing to arm: [coupling] stiffness = " << config.coupling.stiffness_n_per_m
+          << " N/m, damping = " << config.coupling.damping_n_s_per_m << " N s/m fail the "
+          << check.model << " model for [device.model] at " << config.servo.rate_hz
+          << " Hz: worst margin " << check.worst_margin << " at " << check.worst_frequency_hz
+          << " Hz";
         if (!check.worst_case.empty()) m << " (" << check.worst_case << ")";
         m << "; size them with haptic-tune size --mass " << *config.device.model_mass_kg
           << " --damping " << *config.device.model_damping_n_s_per_m << " --rate "
@@ -194,7 +196,8 @@ int run_loop(const RunOptions& options, const Config& config, device::Device& de
 
     std::uint64_t max_ticks = 0;
     if (options.duration_s && info.lockstep) {
-        max_ticks = static_cast<std::uint64_t>(std::llround(*options.duration_s * config.servo.rate_hz));
+        max_ticks =
+            static_cast<std::uint64_t>(std::llround(*options.duration_s * config.servo.rate_hz));
     }
 
     servo::ServoLoop<device::Device, Environment> loop(device, environment, servo_config,
@@ -245,8 +248,9 @@ int run_loop(const RunOptions& options, const Config& config, device::Device& de
 
     const servo::Summary summary = loop.summary();
     context.realtime = loop.realtime_report();
-    context.run_time_s = info.lockstep ? static_cast<double>(summary.ticks) / config.servo.rate_hz
-                                       : std::chrono::duration<double>(Clock::now() - started).count();
+    context.run_time_s = info.lockstep
+                             ? static_cast<double>(summary.ticks) / config.servo.rate_hz
+                             : std::chrono::duration<double>(Clock::now() - started).count();
     int code = kExitOk;
     if (!servo_error.empty()) {
         log << "hapticd: the servo loop could not run: " << servo_error << "\n";

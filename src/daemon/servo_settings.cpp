@@ -8,8 +8,9 @@ namespace hapticd::daemon {
 servo::ServoConfig make_servo_config(const Config& config, const device::DeviceInfo& info,
                                      bool lossless_log) {
     if (info.axes != config.device.axes) {
-        throw ConfigError(config.source + ": [device] axes = " + std::to_string(config.device.axes) +
-                          " but the " + info.name + " device has " + std::to_string(info.axes));
+        throw ConfigError(config.source +
+                          ": [device] axes = " + std::to_string(config.device.axes) + " but the " +
+                          info.name + " device has " + std::to_string(info.axes));
     }
     servo::ServoConfig servo;
     servo.rate_hz = config.servo.rate_hz;
@@ -27,8 +28,8 @@ servo::ServoConfig make_servo_config(const Config& config, const device::DeviceI
     servo.safety.passivity.mode = config.safety.passivity == "control"
                                       ? servo::PassivityMode::control
                                       : servo::PassivityMode::observe;
-    servo.realtime.mode =
-        info.lockstep ? servo::RealtimeMode::off : servo::parse_realtime_mode(config.servo.realtime);
+    servo.realtime.mode = info.lockstep ? servo::RealtimeMode::off
+                                        : servo::parse_realtime_mode(config.servo.realtime);
     servo.realtime.priority = config.servo.priority;
     servo.realtime.cpu = config.servo.cpu.value_or(-1);
     servo.device_paces_loop = info.paces_loop;

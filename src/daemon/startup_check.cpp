@@ -13,8 +13,8 @@ std::string StartupCheck::describe() const {
         return "stability check OFF ([coupling] check = \"off\"): these gains are not checked "
                "against any model";
     }
-    out << "stability check (" << model << " model): "
-        << (passed ? "unconditionally stable" : "NOT unconditionally stable")
+    out << "stability check (" << model
+        << " model): " << (passed ? "unconditionally stable" : "NOT unconditionally stable")
         << ", worst margin " << worst_margin << " at " << worst_frequency_hz << " Hz";
     if (!worst_case.empty()) out << " (" << worst_case << ")";
     return out.str();

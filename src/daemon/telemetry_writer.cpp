@@ -22,8 +22,8 @@ TelemetryWriter::TelemetryWriter(servo::TelemetryRing& ring, const std::string& 
     : ring_(ring), path_(path), axes_(axes), buffer_(kBufferBytes) {
     file_ = std::fopen(path.c_str(), "w");
     if (file_ == nullptr) {
-        throw std::runtime_error("--log " + path + ": cannot create the telemetry file: " +
-                                 std::strerror(errno));
+        throw std::runtime_error("--log " + path +
+                                 ": cannot create the telemetry file: " + std::strerror(errno));
     }
     const std::string header = servo::csv_header(axes) + "\n";
     std::memcpy(buffer_.data(), header.data(), header.size());
@@ -51,8 +51,8 @@ void TelemetryWriter::finish() {
     if (std::fclose(file_) != 0 && write_errno_ == 0) write_errno_ = errno;
     file_ = nullptr;
     if (write_errno_ != 0) {
-        throw std::runtime_error("--log " + path_ + ": writing telemetry failed: " +
-                                 std::strerror(write_errno_));
+        throw std::runtime_error("--log " + path_ +
+                                 ": writing telemetry failed: " + std::strerror(write_errno_));
     }
 }
 

@@ -105,8 +105,10 @@ TEST_F(DaemonRun, LockstepRunOfTheEmbeddedDefaultGivesTheSummary) {
     // The default's grasp pushes 5 mm past the wall from t = 1 s: the wall pushes back.
     EXPECT_GT(s["max_force_n"].get<double>(), 1.0);
     EXPECT_LT(s["max_force_n"].get<double>(), 20.0);
-    for (const char* key : {"p50", "p99", "p999", "max"}) EXPECT_TRUE(s["wake_latency_us"].contains(key));
-    for (const char* key : {"p50", "p99", "max"}) EXPECT_GT(s["tick_compute_us"][key].get<double>(), 0.0);
+    for (const char* key : {"p50", "p99", "p999", "max"})
+        EXPECT_TRUE(s["wake_latency_us"].contains(key));
+    for (const char* key : {"p50", "p99", "max"})
+        EXPECT_GT(s["tick_compute_us"][key].get<double>(), 0.0);
 }
 
 TEST_F(DaemonRun, RefusesGainsThatFailTheCheckNamingMarginAndFrequency) {
@@ -214,13 +216,12 @@ TEST_P(DaemonRunRefuses, WithExitTwoAndAMessageNamingTheProblem) {
 
 INSTANTIATE_TEST_SUITE_P(
     Cases, DaemonRunRefuses,
-    ::testing::Values(
-        BadStart{"unknown key", kEncoderGains, "[safety]\nmax_torque = 3\n",
-                 "lab.toml: unknown key [safety] max_torque"},
-        BadStart{"sim table", kEncoderGains, "[device.sim.faults]\nseed = -1\n",
-                 "device.sim.faults.seed"},
-        BadStart{"no gains", "[coupling]\ncheck = \"encoder\"\n", "",
-                 "[coupling] stiffness and damping are both 0"}),
+    ::testing::Values(BadStart{"unknown key", kEncoderGains, "[safety]\nmax_torque = 3\n",
+                               "lab.toml: unknown key [safety] max_torque"},
+                      BadStart{"sim table", kEncoderGains, "[device.sim.faults]\nseed = -1\n",
+                               "device.sim.faults.seed"},
+                      BadStart{"no gains", "[coupling]\ncheck = \"encoder\"\n", "",
+                               "[coupling] stiffness and damping are both 0"}),
     [](const ::testing::TestParamInfo<BadStart>& param_info) {
         std::string name = param_info.param.what;
         for (char& c : name) c = std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
@@ -228,8 +229,7 @@ INSTANTIATE_TEST_SUITE_P(
     });
 
 TEST_F(DaemonRun, NoCouplingIsRefusedForAnAdmittanceScene) {
-    write("sphere.toml",
-          "[scene]\nname = \"ball\"\naxes = 1\n[[proxy_plane]]\nnormal = [-1.0]\n");
+    write("sphere.toml", "[scene]\nname = \"ball\"\naxes = 1\n[[proxy_plane]]\nnormal = [-1.0]\n");
     std::string text = config("[coupling]\nenabled = false\ncheck = \"off\"\n");
     std::ifstream in(text);
     std::stringstream body;
@@ -265,7 +265,8 @@ TEST_F(DaemonRun, AnUnknownPluginIsNamed) {
 TEST_F(DaemonRun, ABadSceneIsNamed) {
     RunOptions options;
     options.config_path = config(kEncoderGains);
-    write("wall.toml", "[scene]\nname = \"wall\"\naxes = 1\n[[wall]]\nnormal = [-1.0]\nstiffness = -5\n");
+    write("wall.toml",
+          "[scene]\nname = \"wall\"\naxes = 1\n[[wall]]\nnormal = [-1.0]\nstiffness = -5\n");
     const Outcome outcome = run(options);
     EXPECT_EQ(outcome.exit_code, kExitBadInput);
     EXPECT_NE(outcome.log.find("wall.toml"), std::string::npos) << outcome.log;

@@ -59,8 +59,9 @@ TEST(DaemonServoSettings, MaxForceIsTheSmallerOfConfigAndDevice) {
 
 TEST(DaemonServoSettings, EncoderJumpIsTenTimesMaxSpeedPerPeriod) {
     // 0.5 m/s at 2 kHz is 0.25 mm per period; a jump is ten times that.
-    EXPECT_DOUBLE_EQ(make_servo_config(lab_config(), pen_display(false), false).safety.encoder_jump_m,
-                     10.0 * 0.5 / 2000.0);
+    EXPECT_DOUBLE_EQ(
+        make_servo_config(lab_config(), pen_display(false), false).safety.encoder_jump_m,
+        10.0 * 0.5 / 2000.0);
 }
 
 TEST(DaemonServoSettings, RealtimeRequestOnTheWallClock) {
@@ -95,8 +96,9 @@ TEST(DaemonServoSettings, AxesMustMatchTheDevice) {
         make_servo_config(lab_config(), three, false);
         FAIL() << "expected a ConfigError";
     } catch (const ConfigError& e) {
-        EXPECT_NE(std::string(e.what()).find("lab.toml: [device] axes = 1 but the sim device has 3"),
-                  std::string::npos)
+        EXPECT_NE(
+            std::string(e.what()).find("lab.toml: [device] axes = 1 but the sim device has 3"),
+            std::string::npos)
             << e.what();
     }
 }

@@ -17,7 +17,7 @@ namespace {
 // SIGINT and SIGTERM are blocked in every thread (they inherit the mask) and taken here
 // synchronously, so no signal ever interrupts the servo thread or runs a handler in it.
 class SignalWatcher {
-public:
+  public:
     SignalWatcher() {
         sigemptyset(&signals_);
         sigaddset(&signals_, SIGINT);
@@ -34,7 +34,7 @@ public:
 
     const std::atomic<bool>& stop() const { return stop_; }
 
-private:
+  private:
     void watch() {
         const timespec poll{0, 100'000'000};
         while (!done_.load()) {

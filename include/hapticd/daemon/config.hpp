@@ -28,7 +28,7 @@
 namespace hapticd::daemon {
 
 class ConfigError : public std::runtime_error {
-public:
+  public:
     using std::runtime_error::runtime_error;
 };
 
@@ -63,12 +63,12 @@ struct SafetySection {
 };
 
 struct Config {
-    std::string source;       ///< the file name, or "<embedded default>"
-    std::string base_dir;     ///< relative paths (the scene file) resolve against this
+    std::string source;    ///< the file name, or "<embedded default>"
+    std::string base_dir;  ///< relative paths (the scene file) resolve against this
     ServoSection servo;
     DeviceSection device;
     CouplingSection coupling;
-    std::string scene_file;   ///< resolved path; empty means the embedded demo scene
+    std::string scene_file;  ///< resolved path; empty means the embedded demo scene
     SafetySection safety;
 };
 

@@ -11,11 +11,11 @@ namespace hapticd::daemon {
 
 struct StartupCheck {
     bool passed = false;
-    bool skipped = false;           ///< check = "off": nothing was checked
-    std::string model;              ///< "paper", "encoder" or "exact"
+    bool skipped = false;  ///< check = "off": nothing was checked
+    std::string model;     ///< "paper", "encoder" or "exact"
     double worst_margin = 0.0;
     double worst_frequency_hz = 0.0;
-    std::string worst_case;         ///< exact model: the operator and environment
+    std::string worst_case;  ///< exact model: the operator and environment
     /// One line for the log: the verdict, the margin and the frequency.
     std::string describe() const;
 };

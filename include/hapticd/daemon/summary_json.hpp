@@ -19,8 +19,8 @@ struct RunContext {
     std::string scene;          ///< the scene's name
     std::string causality;      ///< "impedance" | "admittance"
     bool lockstep = false;
-    std::string exit;           ///< "stopped" | "duration" | "fault" | "error"
-    double run_time_s = 0.0;    ///< device time covered (virtual time in lockstep)
+    std::string exit;                     ///< "stopped" | "duration" | "fault" | "error"
+    double run_time_s = 0.0;              ///< device time covered (virtual time in lockstep)
     std::uint64_t telemetry_records = 0;  ///< lines in the --log file; 0 without one
     StartupCheck check;
     servo::RealtimeReport realtime;

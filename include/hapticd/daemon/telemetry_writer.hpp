@@ -21,7 +21,7 @@
 namespace hapticd::daemon {
 
 class TelemetryWriter {
-public:
+  public:
     /// Opens `path` for writing and writes the header row. Throws std::runtime_error naming
     /// the path and the system's reason when the file cannot be created.
     TelemetryWriter(servo::TelemetryRing& ring, const std::string& path, int axes);
@@ -40,7 +40,7 @@ public:
     }
     const std::string& path() const noexcept { return path_; }
 
-private:
+  private:
     void run() noexcept;
     void drain() noexcept;
     void flush_buffer() noexcept;
