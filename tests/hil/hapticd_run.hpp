@@ -1,0 +1,78 @@
+// Runs the real hapticd executable on a config and a scene in a scratch directory and
+// collects what it leaves behind: the exit code, its messages, the JSON summary and the
+// telemetry CSV. Lockstep by default: virtual time, deterministic, about 1 us per tick.
+#pragma once
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "../cli/run_command.hpp"
+#include "scratch_dir.hpp"
+#include "telemetry_csv.hpp"
+
+namespace hapticd::testing {
+
+struct DaemonRun {
+    int exit_code = -1;
+    std::string out;         ///< hapticd's standard output
+    std::string err;         ///< its messages (standard error)
+    nlohmann::json summary;  ///< summary.json; null if hapticd wrote none
+    TelemetryLog log;        ///< run.csv; empty if hapticd wrote none
+    std::string log_header;  ///< the CSV's first line, verbatim
+};
+
+struct RunRequest {
+    std::string config_toml;  ///< written to cfg.toml
+    std::string scene_toml;   ///< written to scene.toml (the config names it); empty: none
+    double duration_s = 1.0;  ///< --duration: virtual seconds in lockstep
+    bool lockstep = true;     ///< --lockstep
+};
+
+inline std::string shell_quote(const std::string& word) {
+    std::string quoted = "'";
+    for (const char c : word) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return quoted + "'";
+}
+
+inline DaemonRun run_hapticd(const ScratchDir& dir, const RunRequest& request) {
+    const std::string config = dir.write("cfg.toml", request.config_toml);
+    if (!request.scene_toml.empty()) dir.write("scene.toml", request.scene_toml);
+    const std::string log = dir.file("run.csv");
+    const std::string summary = dir.file("summary.json");
+    std::ostringstream command;
+    command.precision(17);
+    command << shell_quote(HAPTICD_BIN) << (request.lockstep ? " --lockstep" : "")
+            << " --no-status --duration " << request.duration_s << " --config "
+            << shell_quote(config) << " --log " << shell_quote(log) << " --summary "
+            << shell_quote(summary);
+    const CommandResult result = run_command(command.str());
+    DaemonRun run;
+    run.exit_code = result.exit_code;
+    run.out = result.out;
+    run.err = result.err;
+    if (std::filesystem::exists(summary)) {
+        std::ifstream in(summary);
+        run.summary = nlohmann::json::parse(in);
+    }
+    if (std::filesystem::exists(log)) {
+        std::ifstream in(log);
+        std::getline(in, run.log_header);
+        run.log = read_telemetry(log);
+    }
+    return run;
+}
+
+/// The summary's fault names, joined for messages ("" when none).
+inline std::string fault_list(const DaemonRun& run) {
+    std::string names;
+    if (!run.summary.contains("faults")) return "<no summary>";
+    for (const auto& name : run.summary.at("faults")) {
+        names += (names.empty() ? "" : ",") + name.get<std::string>();
+    }
+    return names;
+}
+
+}  // namespace hapticd::testing
