@@ -1,0 +1,179 @@
+// A reference device: the firmware side of the protocol, playing the simulated device's
+// physics (docs/protocol.md section 7). It answers host frames exactly as section 5 asks a
+// firmware to, so that the USB, HID and serial plugins can be tested against it end to end,
+// and so that a firmware author has a working model to compare with.
+//
+// Time is the simulated device's lockstep clock: virtual, advanced one period by each command
+// (the command is held for that period, ZOH) and by advance_period() (a period in which no
+// command arrived; the last force is still held). The watchdog counts in that time base.
+//
+// There is no I/O inside: handle() takes one request frame and writes the reply frames into a
+// buffer, so the same object serves
+//   - a thread behind a pseudo-terminal (handle_stream(): bytes in, COBS bytes out),
+//   - a umockdev ioctl handler answering USB URBs (handle(): one frame per transfer),
+//   - a hidraw emulation (handle_hid_report(): 64-byte reports in and out).
+// One thread at a time; instances are independent. handle(), advance_period() and the
+// adapters do not allocate or throw.
+//
+// Fault knobs (faults()) make it misbehave in the ways a host must survive; each knob counts
+// down as it fires. The simulated device's own faults (SimConfig::faults) also show through:
+// stale and jumping encoders as status bits, dropped samples as missing replies, late samples
+// as delayed replies, a disconnect as a device that answers nothing any more.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+
+#include "hapticd/device/protocol/messages.hpp"
+#include "hapticd/device/protocol/stream_framer.hpp"
+#include "hapticd/device/sim/sim_config.hpp"
+#include "hapticd/device/sim/sim_device.hpp"
+
+namespace hapticd::device::protocol {
+
+struct EmulatorConfig {
+    /// The physics; the clock is forced to lockstep. force_limit_n must fit the wire
+    /// (<= 2147.48 N) and 1e6 / rate_hz must be a whole number of microseconds.
+    sim::SimConfig sim;
+    std::string serial_number = "EMU-0001";  ///< 1..16 printable ASCII characters
+    std::uint32_t firmware_version = 0x00010000;
+    std::uint8_t min_version = kMinVersion;  ///< versions it speaks (tests may narrow them)
+    std::uint8_t max_version = kMaxVersion;
+    std::uint32_t default_watchdog_timeout_us = kDefaultWatchdogTimeoutUs;  ///< section 5.4
+    std::uint32_t max_watchdog_timeout_us = kMaxWatchdogTimeoutUs;          ///< <= 1 s
+};
+
+/// One-shot misbehaviour, for tests. Every counter is decremented as it fires.
+struct EmulatorFaults {
+    std::uint32_t corrupt_crc = 0;    ///< next n replies: last CRC byte flipped -> bad_crc
+    std::uint32_t truncate = 0;       ///< next n replies: cut to half -> truncated
+    std::uint32_t drop = 0;           ///< next n replies: processed but not sent -> timeout
+    std::uint32_t wrong_session = 0;  ///< next n replies: another session id -> wrong_session
+    std::uint32_t sequence_gap = 0;   ///< next sample skips this many sample_sequence values
+    std::uint32_t delay = 0;          ///< next n replies: held back, sent before the next one
+    std::uint32_t stall = 0;          ///< next n requests: ignored (a period passes for each)
+    std::uint16_t device_faults = 0;  ///< fault bits raised (latched) at the next request
+};
+
+class DeviceEmulator {
+  public:
+    /// Room for what one handle() can write: a delayed reply, then the current one.
+    static constexpr std::size_t kMaxReplyFrames = 2;
+    static constexpr std::size_t kMaxReplySize = kMaxReplyFrames * kMaxFrameSize;
+
+    /// The frames one request produced, back to back in the caller's buffer.
+    struct Reply {
+        std::size_t size = 0;  ///< total bytes
+        std::size_t frames = 0;
+        std::array<std::size_t, kMaxReplyFrames> frame_sizes{};
+    };
+
+    struct Counters {
+        std::uint64_t requests = 0;          ///< frames handed to handle()
+        std::uint64_t dropped_requests = 0;  ///< frame-level errors: no reply (section 3.4)
+        std::uint64_t errors_sent = 0;       ///< error messages
+        std::uint64_t commands_applied = 0;
+        std::uint64_t samples_sent = 0;
+        std::uint64_t watchdog_trips = 0;
+    };
+
+    /// Opens the simulated device. Throws std::invalid_argument naming the field on a bad
+    /// configuration.
+    explicit DeviceEmulator(const EmulatorConfig& config);
+
+    /// One request frame (exactly one, as a transport delimited it) in; the replies out.
+    /// `out` should hold kMaxReplySize bytes; a reply that does not fit is not sent.
+    Reply handle(std::span<const std::byte> request, std::span<std::byte> out) noexcept;
+
+    /// One period passes with no request: the device holds its force (ZOH) and its watchdog
+    /// counts. A transport server calls it when a period goes by without a command.
+    void advance_period() noexcept;
+
+    /// Serial: any bytes in (partial frames are kept for the next call); the COBS-encoded
+    /// replies out. Returns the bytes written; replies that do not fit are not sent.
+    std::size_t handle_stream(std::span<const std::byte> bytes, std::span<std::byte> out) noexcept;
+
+    /// HID: one output report (report ID first) in; input reports of hid::kReportSize bytes
+    /// out. Returns the bytes written (a multiple of hid::kReportSize).
+    std::size_t handle_hid_report(std::span<const std::byte> report,
+                                  std::span<std::byte> out) noexcept;
+
+    EmulatorFaults& faults() noexcept { return faults_; }
+
+    // Inspection.
+    const sim::SimDevice& sim() const noexcept { return sim_; }
+    const Identity& identity() const noexcept { return identity_; }
+    std::uint64_t time_us() const noexcept;
+    bool session_open() const noexcept { return session_open_; }
+    std::uint32_t session() const noexcept { return session_; }
+    std::uint32_t watchdog_timeout_us() const noexcept { return watchdog_timeout_us_; }
+    std::uint16_t latched_faults() const noexcept { return latched_faults_; }
+    /// The force the device holds from now on, N per axis (zero when disabled or faulted).
+    std::array<double, kMaxProtocolAxes> output_force_n() const noexcept;
+    /// True while a reply held back by the `delay` knob (or a late simulated sample) waits to
+    /// go out in front of the next reply.
+    bool delayed_reply_pending() const noexcept { return delayed_size_ > 0; }
+    /// True once the simulated device has disconnected: nothing is answered any more.
+    bool gone() const noexcept { return gone_; }
+    const Counters& counters() const noexcept { return counters_; }
+
+  private:
+    /// Where the current request's replies go.
+    struct Outbox {
+        std::span<std::byte> out;
+        Reply reply;
+    };
+
+    void dispatch(std::span<const std::byte> request, Outbox& outbox) noexcept;
+    void on_hello(const FrameView& frame, const Hello& hello, Outbox& outbox) noexcept;
+    void on_configure(const Configure& configure, Outbox& outbox) noexcept;
+    void on_command(const ForceCommand& command, Outbox& outbox) noexcept;
+    void on_poll(Outbox& outbox) noexcept;
+    void on_bye(const Bye& bye, Outbox& outbox) noexcept;
+    void send_error(const FrameHeader& request, ErrorCode code, std::uint32_t detail,
+                    Outbox& outbox) noexcept;
+    /// Reads the simulated device and sends a sample with these extra status bits.
+    void send_sample(std::uint16_t status, Outbox& outbox) noexcept;
+    /// Encodes a reply, applies the knobs, and puts it in the outbox.
+    template <typename M>
+    void send(M message, Outbox& outbox) noexcept;
+    void emit(std::span<const std::byte> frame, Outbox& outbox) noexcept;
+
+    /// One period of the simulated device under held_, then the watchdog check.
+    void step_period() noexcept;
+    void check_watchdog() noexcept;
+    void zero_force() noexcept;
+    void close_session() noexcept;
+
+    sim::SimDevice sim_;
+    Identity identity_;
+    std::uint8_t min_version_;
+    std::uint8_t max_version_;
+    std::uint32_t default_watchdog_timeout_us_;
+    std::uint32_t max_watchdog_timeout_us_;
+    std::int32_t force_limit_un_;
+
+    bool session_open_ = false;
+    std::uint32_t session_ = 0;
+    std::uint32_t watchdog_timeout_us_ = 0;
+    servo::Command held_;        ///< what the device outputs (ZOH)
+    bool command_seen_ = false;  ///< a command arrived in this session
+    std::uint32_t last_command_sequence_ = 0;
+    std::uint64_t last_command_us_ = 0;  ///< device time the last command arrived
+    std::uint32_t periods_since_command_ = 0;
+    bool last_clamped_ = false;
+    std::uint16_t latched_faults_ = 0;
+    std::uint32_t sample_sequence_ = 0;
+    bool gone_ = false;
+
+    EmulatorFaults faults_;
+    std::array<std::byte, kMaxFrameSize> delayed_{};
+    std::size_t delayed_size_ = 0;
+    StreamDecoder stream_;
+    Counters counters_;
+};
+
+}  // namespace hapticd::device::protocol

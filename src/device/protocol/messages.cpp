@@ -1,0 +1,432 @@
+// Encoders and decoders of the ten messages (docs/protocol.md section 4). Offsets below are
+// payload offsets; the document's tables give frame offsets (payload offset + 8).
+#include "hapticd/device/protocol/messages.hpp"
+
+#include <cmath>
+#include <type_traits>
+#include <utility>
+
+#include "hapticd/device/protocol/wire.hpp"
+
+namespace hapticd::device::protocol {
+namespace {
+
+using Payload = std::span<const std::byte>;
+using PayloadOut = std::span<std::byte>;
+
+constexpr bool valid_axes(std::uint8_t axes) noexcept {
+    return axes >= 1 && axes <= kMaxProtocolAxes;
+}
+
+constexpr bool printable(char c) noexcept { return c >= 0x20 && c <= 0x7E; }
+
+/// Section 4.2: printable ASCII, at least one character, NUL-padded.
+bool valid_serial(const std::array<char, kSerialSize>& serial) noexcept {
+    if (serial[0] == '\0') return false;
+    bool ended = false;
+    for (const char c : serial) {
+        if (c == '\0') {
+            ended = true;
+        } else if (ended || !printable(c)) {
+            return false;
+        }
+    }
+    return true;
+}
+
+/// Unused axes must be zero, so that the struct and the frame say the same thing.
+template <typename T>
+bool unused_axes_zero(const std::array<T, kMaxProtocolAxes>& values, std::uint8_t axes) noexcept {
+    for (std::size_t i = axes; i < values.size(); ++i) {
+        if (values[i] != 0) return false;
+    }
+    return true;
+}
+
+// Per message: check() (the encoder refuses what the decoder would refuse), payload_size(),
+// write() and read(). read() checks the payload size first, then the fields.
+
+// ---- 4.1 hello ----
+Error check(const Hello& m) noexcept {
+    if (m.session == 0 || m.min_version == 0 || m.max_version < m.min_version) {
+        return Error::bad_field;
+    }
+    return Error::none;
+}
+std::size_t payload_size(const Hello&) noexcept { return kHelloPayloadSize; }
+void write(const Hello& m, PayloadOut p) noexcept {
+    wire::store_u8(p, 0, m.min_version);
+    wire::store_u8(p, 1, m.max_version);
+    wire::store_u16(p, 2, 0);
+}
+Error read(Payload p, Hello& m) noexcept {
+    if (p.size() != kHelloPayloadSize) return Error::bad_payload_size;
+    if (wire::load_u16(p, 2) != 0) return Error::bad_field;
+    m.min_version = wire::load_u8(p, 0);
+    m.max_version = wire::load_u8(p, 1);
+    return check(m);
+}
+
+// ---- 4.2 identity ----
+Error check(const Identity& m) noexcept {
+    if (!valid_axes(m.axes) || m.force_limit_un <= 0 || !std::isfinite(m.counts_per_meter) ||
+        !(m.counts_per_meter > 0.0) || m.period_us == 0 || m.watchdog_timeout_us == 0 ||
+        !valid_serial(m.serial)) {
+        return Error::bad_field;
+    }
+    return Error::none;
+}
+std::size_t payload_size(const Identity&) noexcept { return kIdentityPayloadSize; }
+void write(const Identity& m, PayloadOut p) noexcept {
+    wire::store_u8(p, 0, m.axes);
+    wire::store_u8(p, 1, 0);
+    wire::store_u16(p, 2, 0);
+    wire::store_i32(p, 4, m.force_limit_un);
+    wire::store_f64(p, 8, m.counts_per_meter);
+    wire::store_u32(p, 16, m.period_us);
+    wire::store_u32(p, 20, m.watchdog_timeout_us);
+    wire::store_u32(p, 24, m.firmware_version);
+    for (std::size_t i = 0; i < kSerialSize; ++i) {
+        wire::store_u8(p, 28 + i, static_cast<std::uint8_t>(m.serial[i]));
+    }
+}
+Error read(Payload p, Identity& m) noexcept {
+    if (p.size() != kIdentityPayloadSize) return Error::bad_payload_size;
+    if (wire::load_u8(p, 1) != 0 || wire::load_u16(p, 2) != 0) return Error::bad_field;
+    m.axes = wire::load_u8(p, 0);
+    m.force_limit_un = wire::load_i32(p, 4);
+    m.counts_per_meter = wire::load_f64(p, 8);
+    m.period_us = wire::load_u32(p, 16);
+    m.watchdog_timeout_us = wire::load_u32(p, 20);
+    m.firmware_version = wire::load_u32(p, 24);
+    for (std::size_t i = 0; i < kSerialSize; ++i) {
+        m.serial[i] = static_cast<char>(wire::load_u8(p, 28 + i));
+    }
+    return check(m);
+}
+
+// ---- 4.3 configure, 4.4 configure_ack (same layout) ----
+template <typename M>
+Error check_configure(const M& m) noexcept {
+    return m.watchdog_timeout_us == 0 ? Error::bad_field : Error::none;
+}
+template <typename M>
+void write_configure(const M& m, PayloadOut p) noexcept {
+    wire::store_u32(p, 0, m.watchdog_timeout_us);
+}
+template <typename M>
+Error read_configure(Payload p, M& m) noexcept {
+    if (p.size() != kConfigurePayloadSize) return Error::bad_payload_size;
+    m.watchdog_timeout_us = wire::load_u32(p, 0);
+    return check_configure(m);
+}
+Error check(const Configure& m) noexcept { return check_configure(m); }
+std::size_t payload_size(const Configure&) noexcept { return kConfigurePayloadSize; }
+void write(const Configure& m, PayloadOut p) noexcept { write_configure(m, p); }
+Error read(Payload p, Configure& m) noexcept { return read_configure(p, m); }
+Error check(const ConfigureAck& m) noexcept { return check_configure(m); }
+std::size_t payload_size(const ConfigureAck&) noexcept { return kConfigurePayloadSize; }
+void write(const ConfigureAck& m, PayloadOut p) noexcept { write_configure(m, p); }
+Error read(Payload p, ConfigureAck& m) noexcept { return read_configure(p, m); }
+
+// ---- 4.5 command ----
+Error check(const ForceCommand& m) noexcept {
+    if ((m.flags & ~kCommandFlagsMask) != 0u || !valid_axes(m.axes) ||
+        !unused_axes_zero(m.force_un, m.axes)) {
+        return Error::bad_field;
+    }
+    return Error::none;
+}
+std::size_t payload_size(const ForceCommand& m) noexcept { return command_payload_size(m.axes); }
+void write(const ForceCommand& m, PayloadOut p) noexcept {
+    wire::store_u32(p, 0, m.sequence);
+    wire::store_u8(p, 4, m.flags);
+    wire::store_u8(p, 5, m.axes);
+    wire::store_u16(p, 6, 0);
+    for (std::size_t i = 0; i < m.axes; ++i) wire::store_i32(p, 8 + 4 * i, m.force_un[i]);
+}
+Error read(Payload p, ForceCommand& m) noexcept {
+    if (p.size() != command_payload_size(1) && p.size() != command_payload_size(2) &&
+        p.size() != command_payload_size(3)) {
+        return Error::bad_payload_size;
+    }
+    m.sequence = wire::load_u32(p, 0);
+    m.flags = wire::load_u8(p, 4);
+    m.axes = wire::load_u8(p, 5);
+    if (wire::load_u16(p, 6) != 0 || !valid_axes(m.axes) ||
+        p.size() != command_payload_size(m.axes)) {
+        return Error::bad_field;
+    }
+    m.force_un.fill(0);
+    for (std::size_t i = 0; i < m.axes; ++i) m.force_un[i] = wire::load_i32(p, 8 + 4 * i);
+    return check(m);
+}
+
+// ---- 4.6 sample ----
+Error check(const EncoderSample& m) noexcept {
+    if ((m.status & ~kSampleStatusMask) != 0u || (m.faults & ~kDeviceFaultAllowedMask) != 0u ||
+        !valid_axes(m.axes) || !unused_axes_zero(m.counts, m.axes)) {
+        return Error::bad_field;
+    }
+    return Error::none;
+}
+std::size_t payload_size(const EncoderSample& m) noexcept { return sample_payload_size(m.axes); }
+void write(const EncoderSample& m, PayloadOut p) noexcept {
+    wire::store_u32(p, 0, m.command_sequence);
+    wire::store_u32(p, 4, m.sample_sequence);
+    wire::store_u64(p, 8, m.time_us);
+    wire::store_u16(p, 16, m.status);
+    wire::store_u16(p, 18, m.faults);
+    wire::store_u8(p, 20, m.axes);
+    wire::store_u8(p, 21, 0);
+    wire::store_u16(p, 22, 0);
+    for (std::size_t i = 0; i < m.axes; ++i) wire::store_i64(p, 24 + 8 * i, m.counts[i]);
+}
+Error read(Payload p, EncoderSample& m) noexcept {
+    if (p.size() != sample_payload_size(1) && p.size() != sample_payload_size(2) &&
+        p.size() != sample_payload_size(3)) {
+        return Error::bad_payload_size;
+    }
+    m.command_sequence = wire::load_u32(p, 0);
+    m.sample_sequence = wire::load_u32(p, 4);
+    m.time_us = wire::load_u64(p, 8);
+    m.status = wire::load_u16(p, 16);
+    m.faults = wire::load_u16(p, 18);
+    m.axes = wire::load_u8(p, 20);
+    if (wire::load_u8(p, 21) != 0 || wire::load_u16(p, 22) != 0 || !valid_axes(m.axes) ||
+        p.size() != sample_payload_size(m.axes)) {
+        return Error::bad_field;
+    }
+    m.counts.fill(0);
+    for (std::size_t i = 0; i < m.axes; ++i) m.counts[i] = wire::load_i64(p, 24 + 8 * i);
+    return check(m);
+}
+
+// ---- 4.7 poll, 4.8 bye, 4.9 bye_ack: empty payloads ----
+template <typename M>
+Error read_empty(Payload p, M&) noexcept {
+    return p.empty() ? Error::none : Error::bad_payload_size;
+}
+Error check(const Poll&) noexcept { return Error::none; }
+std::size_t payload_size(const Poll&) noexcept { return 0; }
+void write(const Poll&, PayloadOut) noexcept {}
+Error read(Payload p, Poll& m) noexcept { return read_empty(p, m); }
+Error check(const Bye&) noexcept { return Error::none; }
+std::size_t payload_size(const Bye&) noexcept { return 0; }
+void write(const Bye&, PayloadOut) noexcept {}
+Error read(Payload p, Bye& m) noexcept { return read_empty(p, m); }
+Error check(const ByeAck&) noexcept { return Error::none; }
+std::size_t payload_size(const ByeAck&) noexcept { return 0; }
+void write(const ByeAck&, PayloadOut) noexcept {}
+Error read(Payload p, ByeAck& m) noexcept { return read_empty(p, m); }
+
+// ---- 4.10 error ----
+Error check(const ErrorReport& m) noexcept {
+    return static_cast<std::uint8_t>(m.code) == 0 ? Error::bad_field : Error::none;
+}
+std::size_t payload_size(const ErrorReport&) noexcept { return kErrorPayloadSize; }
+void write(const ErrorReport& m, PayloadOut p) noexcept {
+    wire::store_u8(p, 0, static_cast<std::uint8_t>(m.code));
+    wire::store_u8(p, 1, m.request_type);
+    wire::store_u16(p, 2, 0);
+    wire::store_u32(p, 4, m.detail);
+}
+Error read(Payload p, ErrorReport& m) noexcept {
+    if (p.size() != kErrorPayloadSize) return Error::bad_payload_size;
+    if (wire::load_u16(p, 2) != 0) return Error::bad_field;
+    m.code = static_cast<ErrorCode>(wire::load_u8(p, 0));
+    m.request_type = wire::load_u8(p, 1);
+    m.detail = wire::load_u32(p, 4);
+    return check(m);
+}
+
+// ---- the type of each struct ----
+template <typename M>
+struct TypeOf;
+template <>
+struct TypeOf<Hello> {
+    static constexpr MessageType value = MessageType::hello;
+};
+template <>
+struct TypeOf<Identity> {
+    static constexpr MessageType value = MessageType::identity;
+};
+template <>
+struct TypeOf<Configure> {
+    static constexpr MessageType value = MessageType::configure;
+};
+template <>
+struct TypeOf<ConfigureAck> {
+    static constexpr MessageType value = MessageType::configure_ack;
+};
+template <>
+struct TypeOf<ForceCommand> {
+    static constexpr MessageType value = MessageType::command;
+};
+template <>
+struct TypeOf<EncoderSample> {
+    static constexpr MessageType value = MessageType::sample;
+};
+template <>
+struct TypeOf<Poll> {
+    static constexpr MessageType value = MessageType::poll;
+};
+template <>
+struct TypeOf<Bye> {
+    static constexpr MessageType value = MessageType::bye;
+};
+template <>
+struct TypeOf<ByeAck> {
+    static constexpr MessageType value = MessageType::bye_ack;
+};
+template <>
+struct TypeOf<ErrorReport> {
+    static constexpr MessageType value = MessageType::error;
+};
+
+template <typename M>
+Encoded encode_message(const M& m, std::span<std::byte> out) noexcept {
+    if (const Error error = check(m); error != Error::none) return {0, error};
+    const std::size_t size = payload_size(m);
+    if (out.size() < kMinFrameSize + size) return {0, Error::no_space};
+    write(m, out.subspan(kHeaderSize, size));
+    FrameHeader header;
+    header.type = TypeOf<M>::value;
+    header.version = is_frozen_type(header.type) ? kFrozenVersion : kProtocolVersion;
+    header.payload_size = static_cast<std::uint8_t>(size);
+    header.session = m.session;
+    return finish_frame(header, out);
+}
+
+template <typename M>
+Error read_message(const FrameView& frame, M& m) noexcept {
+    m = M{};
+    m.session = frame.header.session;
+    return read(frame.payload, m);
+}
+
+template <typename M>
+Error decode_typed(std::span<const std::byte> bytes, M& m) noexcept {
+    FrameView frame;
+    if (const Error error = decode_frame(bytes, frame); error != Error::none) return error;
+    if (frame.header.type != TypeOf<M>::value) return Error::wrong_type;
+    return read_message(frame, m);
+}
+
+template <typename M>
+Error emplace_and_read(const FrameView& frame, Message& message) noexcept {
+    return read_message(frame, message.emplace<M>());
+}
+
+/// std::visit without its bad_variant_access path: a Message is never valueless, because its
+/// alternatives are trivially copyable (construction and assignment cannot throw).
+template <std::size_t I = 0, typename Visitor>
+auto visit_message(const Message& message, Visitor&& visitor) noexcept {
+    static_assert(std::is_trivially_copyable_v<std::variant_alternative_t<I, Message>>);
+    if constexpr (I + 1 < std::variant_size_v<Message>) {
+        if (message.index() != I) {
+            return visit_message<I + 1>(message, std::forward<Visitor>(visitor));
+        }
+    }
+    return visitor(*std::get_if<I>(&message));
+}
+
+}  // namespace
+
+std::string_view Identity::serial_number() const noexcept {
+    std::size_t length = 0;
+    while (length < serial.size() && serial[length] != '\0') ++length;
+    return {serial.data(), length};
+}
+
+bool Identity::set_serial_number(std::string_view text) noexcept {
+    if (text.empty() || text.size() > kSerialSize) return false;
+    for (const char c : text) {
+        if (!printable(c)) return false;
+    }
+    serial.fill('\0');
+    for (std::size_t i = 0; i < text.size(); ++i) serial[i] = text[i];
+    return true;
+}
+
+MessageType type_of(const Message& message) noexcept {
+    return visit_message(message,
+                         [](const auto& m) { return TypeOf<std::decay_t<decltype(m)>>::value; });
+}
+
+std::uint32_t session_of(const Message& message) noexcept {
+    return visit_message(message, [](const auto& m) { return m.session; });
+}
+
+Encoded encode(const Hello& m, std::span<std::byte> out) noexcept { return encode_message(m, out); }
+Encoded encode(const Identity& m, std::span<std::byte> out) noexcept {
+    return encode_message(m, out);
+}
+Encoded encode(const Configure& m, std::span<std::byte> out) noexcept {
+    return encode_message(m, out);
+}
+Encoded encode(const ConfigureAck& m, std::span<std::byte> out) noexcept {
+    return encode_message(m, out);
+}
+Encoded encode(const ForceCommand& m, std::span<std::byte> out) noexcept {
+    return encode_message(m, out);
+}
+Encoded encode(const EncoderSample& m, std::span<std::byte> out) noexcept {
+    return encode_message(m, out);
+}
+Encoded encode(const Poll& m, std::span<std::byte> out) noexcept { return encode_message(m, out); }
+Encoded encode(const Bye& m, std::span<std::byte> out) noexcept { return encode_message(m, out); }
+Encoded encode(const ByeAck& m, std::span<std::byte> out) noexcept {
+    return encode_message(m, out);
+}
+Encoded encode(const ErrorReport& m, std::span<std::byte> out) noexcept {
+    return encode_message(m, out);
+}
+Encoded encode(const Message& message, std::span<std::byte> out) noexcept {
+    return visit_message(message, [out](const auto& m) { return encode_message(m, out); });
+}
+
+Error decode_payload(const FrameView& frame, Message& message) noexcept {
+    switch (frame.header.type) {
+        case MessageType::hello:
+            return emplace_and_read<Hello>(frame, message);
+        case MessageType::identity:
+            return emplace_and_read<Identity>(frame, message);
+        case MessageType::configure:
+            return emplace_and_read<Configure>(frame, message);
+        case MessageType::configure_ack:
+            return emplace_and_read<ConfigureAck>(frame, message);
+        case MessageType::command:
+            return emplace_and_read<ForceCommand>(frame, message);
+        case MessageType::sample:
+            return emplace_and_read<EncoderSample>(frame, message);
+        case MessageType::poll:
+            return emplace_and_read<Poll>(frame, message);
+        case MessageType::bye:
+            return emplace_and_read<Bye>(frame, message);
+        case MessageType::bye_ack:
+            return emplace_and_read<ByeAck>(frame, message);
+        case MessageType::error:
+            return emplace_and_read<ErrorReport>(frame, message);
+    }
+    return Error::unknown_type;  // decode_frame() lets no other type through
+}
+
+Error decode(std::span<const std::byte> bytes, Message& message) noexcept {
+    FrameView frame;
+    if (const Error error = decode_frame(bytes, frame); error != Error::none) return error;
+    return decode_payload(frame, message);
+}
+
+Error decode(std::span<const std::byte> b, Hello& m) noexcept { return decode_typed(b, m); }
+Error decode(std::span<const std::byte> b, Identity& m) noexcept { return decode_typed(b, m); }
+Error decode(std::span<const std::byte> b, Configure& m) noexcept { return decode_typed(b, m); }
+Error decode(std::span<const std::byte> b, ConfigureAck& m) noexcept { return decode_typed(b, m); }
+Error decode(std::span<const std::byte> b, ForceCommand& m) noexcept { return decode_typed(b, m); }
+Error decode(std::span<const std::byte> b, EncoderSample& m) noexcept { return decode_typed(b, m); }
+Error decode(std::span<const std::byte> b, Poll& m) noexcept { return decode_typed(b, m); }
+Error decode(std::span<const std::byte> b, Bye& m) noexcept { return decode_typed(b, m); }
+Error decode(std::span<const std::byte> b, ByeAck& m) noexcept { return decode_typed(b, m); }
+Error decode(std::span<const std::byte> b, ErrorReport& m) noexcept { return decode_typed(b, m); }
+
+}  // namespace hapticd::device::protocol

@@ -1,0 +1,469 @@
+// Every message: round trips with boundary values, the exact byte layout of section 4, every
+// payload-level decode error, typed decoding, and encode/decode without allocation.
+#include "hapticd/device/protocol/messages.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "alloc_guard.hpp"
+#include "hapticd/device/protocol/crc32c.hpp"
+#include "hapticd/device/protocol/wire.hpp"
+#include "protocol_test_util.hpp"
+
+namespace hapticd::device::protocol {
+namespace {
+
+using testing::Bytes;
+using testing::encoded;
+
+constexpr std::uint32_t kU32Max = std::numeric_limits<std::uint32_t>::max();
+constexpr std::int32_t kI32Max = std::numeric_limits<std::int32_t>::max();
+constexpr std::int32_t kI32Min = std::numeric_limits<std::int32_t>::min();
+constexpr std::int64_t kI64Max = std::numeric_limits<std::int64_t>::max();
+constexpr std::int64_t kI64Min = std::numeric_limits<std::int64_t>::min();
+
+void fix_crc(Bytes& frame) {
+    const std::size_t crc_at = frame.size() - kCrcSize;
+    wire::store_u32(frame, crc_at, crc32c(std::span<const std::byte>(frame).first(crc_at)));
+}
+
+/// encode -> typed decode and variant decode -> equal; returns the frame.
+template <typename M>
+Bytes round_trip(const M& message, std::size_t expected_size) {
+    const Bytes frame = encoded(message);
+    EXPECT_EQ(frame.size(), expected_size);
+    M typed;
+    EXPECT_EQ(decode(frame, typed), Error::none);
+    EXPECT_TRUE(typed == message);
+    Message any;
+    EXPECT_EQ(decode(frame, any), Error::none);
+    EXPECT_TRUE(std::holds_alternative<M>(any));
+    if (std::holds_alternative<M>(any)) {
+        EXPECT_TRUE(std::get<M>(any) == message);
+    }
+    EXPECT_EQ(session_of(any), message.session);
+    // And the variant encoder gives the same bytes.
+    std::array<std::byte, kMaxFrameSize> again{};
+    const Encoded e = encode(Message{message}, again);
+    EXPECT_TRUE(e.ok());
+    EXPECT_EQ(Bytes(again.begin(), again.begin() + static_cast<std::ptrdiff_t>(e.size)), frame);
+    return frame;
+}
+
+Identity an_identity() {
+    Identity m;
+    m.session = 0xDEADBEEF;
+    m.axes = 3;
+    m.force_limit_un = 20'000'000;
+    m.counts_per_meter = 1e5;
+    m.period_us = 1000;
+    m.watchdog_timeout_us = 20'000;
+    m.firmware_version = 0x01020304;
+    EXPECT_TRUE(m.set_serial_number("SN-1"));
+    return m;
+}
+
+ForceCommand a_command(int axes) {
+    ForceCommand m;
+    m.session = 1;
+    m.sequence = 5;
+    m.flags = kCommandEnable;
+    m.axes = static_cast<std::uint8_t>(axes);
+    for (int i = 0; i < axes; ++i) m.force_un[i] = 1000 * (i + 1);
+    return m;
+}
+
+EncoderSample a_sample(int axes) {
+    EncoderSample m;
+    m.session = 1;
+    m.command_sequence = 5;
+    m.sample_sequence = 6;
+    m.time_us = 123456;
+    m.status = kSampleForceActive;
+    m.axes = static_cast<std::uint8_t>(axes);
+    for (int i = 0; i < axes; ++i) m.counts[i] = -100 * (i + 1);
+    return m;
+}
+
+// ---- round trips ----
+
+TEST(ProtocolMessages, HelloRoundTrip) {
+    Hello m;
+    for (const std::uint32_t session : {1u, 0x80000000u, kU32Max}) {
+        m.session = session;
+        m.min_version = 1;
+        m.max_version = 255;
+        const Bytes frame = round_trip(m, 16);
+        EXPECT_EQ(frame[8], std::byte{1});
+        EXPECT_EQ(frame[9], std::byte{255});
+    }
+}
+
+TEST(ProtocolMessages, IdentityRoundTripAndLayout) {
+    Identity m = an_identity();
+    const Bytes frame = round_trip(m, 56);
+    EXPECT_EQ(wire::load_u8(frame, 8), 3);
+    EXPECT_EQ(wire::load_i32(frame, 12), 20'000'000);
+    EXPECT_EQ(wire::load_f64(frame, 16), 1e5);
+    EXPECT_EQ(wire::load_u32(frame, 24), 1000u);
+    EXPECT_EQ(wire::load_u32(frame, 28), 20'000u);
+    EXPECT_EQ(wire::load_u32(frame, 32), 0x01020304u);
+    EXPECT_EQ(frame[36], std::byte{'S'});
+    EXPECT_EQ(frame[40], std::byte{0});
+
+    // Boundaries: 1 axis, the smallest and largest positive values, a 16-character serial.
+    m.axes = 1;
+    m.force_limit_un = kI32Max;
+    m.counts_per_meter = std::numeric_limits<double>::denorm_min();
+    m.period_us = kU32Max;
+    m.watchdog_timeout_us = 1;
+    m.firmware_version = kU32Max;
+    ASSERT_TRUE(m.set_serial_number("0123456789ABCDEF"));
+    round_trip(m, 56);
+    m.force_limit_un = 1;
+    m.counts_per_meter = std::numeric_limits<double>::max();
+    ASSERT_TRUE(m.set_serial_number(" ~"));
+    round_trip(m, 56);
+    EXPECT_EQ(m.serial_number(), " ~");
+}
+
+TEST(ProtocolMessages, SerialNumberRules) {
+    Identity m;
+    EXPECT_FALSE(m.set_serial_number(""));
+    EXPECT_FALSE(m.set_serial_number("0123456789ABCDEFG"));  // 17
+    EXPECT_FALSE(m.set_serial_number("tab\there"));
+    EXPECT_FALSE(m.set_serial_number("\x7f"));
+    EXPECT_TRUE(m.set_serial_number("A"));
+    EXPECT_EQ(m.serial_number(), "A");
+}
+
+TEST(ProtocolMessages, ConfigureAndAckRoundTrip) {
+    for (const std::uint32_t timeout : {1u, 20'000u, kU32Max}) {
+        Configure c;
+        c.session = 3;
+        c.watchdog_timeout_us = timeout;
+        const Bytes frame = round_trip(c, 16);
+        EXPECT_EQ(wire::load_u32(frame, 8), timeout);
+        ConfigureAck a;
+        a.session = 3;
+        a.watchdog_timeout_us = timeout;
+        EXPECT_EQ(round_trip(a, 16)[2], std::byte{0x82});
+    }
+}
+
+TEST(ProtocolMessages, CommandRoundTripEveryAxisCount) {
+    for (int axes = 1; axes <= 3; ++axes) {
+        ForceCommand m = a_command(axes);
+        m.sequence = kU32Max;
+        m.flags = kCommandEnable | kCommandClearFaults;
+        for (int i = 0; i < axes; ++i) m.force_un[i] = i % 2 == 0 ? kI32Min : kI32Max;
+        const Bytes frame = round_trip(m, 8 + command_payload_size(axes) + 4);
+        EXPECT_EQ(wire::load_u32(frame, 8), kU32Max);
+        EXPECT_EQ(wire::load_u8(frame, 12), 3);
+        EXPECT_EQ(wire::load_u8(frame, 13), axes);
+        EXPECT_EQ(wire::load_i32(frame, 16), kI32Min);
+        m.flags = 0;
+        m.force_un.fill(0);
+        m.sequence = 0;
+        round_trip(m, 8 + command_payload_size(axes) + 4);
+    }
+    EXPECT_EQ(encoded(a_command(3)).size(), 32u);
+}
+
+TEST(ProtocolMessages, SampleRoundTripEveryAxisCount) {
+    for (int axes = 1; axes <= 3; ++axes) {
+        EncoderSample m = a_sample(axes);
+        m.command_sequence = kU32Max;
+        m.sample_sequence = kU32Max;
+        m.time_us = std::numeric_limits<std::uint64_t>::max();
+        m.status = kSampleStatusMask;
+        m.faults = kDeviceFaultAllowedMask;
+        for (int i = 0; i < axes; ++i) m.counts[i] = i % 2 == 0 ? kI64Min : kI64Max;
+        const Bytes frame = round_trip(m, 8 + sample_payload_size(axes) + 4);
+        EXPECT_EQ(wire::load_u64(frame, 16), std::numeric_limits<std::uint64_t>::max());
+        EXPECT_EQ(wire::load_u16(frame, 24), kSampleStatusMask);
+        EXPECT_EQ(wire::load_u16(frame, 26), kDeviceFaultAllowedMask);
+        EXPECT_EQ(wire::load_u8(frame, 28), axes);
+        EXPECT_EQ(wire::load_i64(frame, 32), kI64Min);
+        m = a_sample(axes);
+        m.time_us = 0;
+        m.status = 0;
+        round_trip(m, 8 + sample_payload_size(axes) + 4);
+    }
+    EXPECT_EQ(encoded(a_sample(3)).size(), 60u);  // the largest frame
+}
+
+TEST(ProtocolMessages, EmptyMessagesRoundTrip) {
+    Poll p;
+    p.session = 77;
+    EXPECT_EQ(round_trip(p, 12)[2], std::byte{0x04});
+    Bye b;
+    b.session = 77;
+    EXPECT_EQ(round_trip(b, 12)[2], std::byte{0x05});
+    ByeAck a;
+    a.session = 77;
+    EXPECT_EQ(round_trip(a, 12)[2], std::byte{0x85});
+}
+
+TEST(ProtocolMessages, ErrorRoundTripIncludingFutureCodes) {
+    ErrorReport m;
+    m.session = 0;  // an error may answer a frame that carried no session
+    m.code = ErrorCode::unsupported_version;
+    m.request_type = 0x01;
+    m.detail = 0x0302;
+    const Bytes frame = round_trip(m, 20);
+    EXPECT_EQ(frame[1], std::byte{1});  // frozen version
+    EXPECT_EQ(frame[8], std::byte{6});
+    EXPECT_EQ(frame[9], std::byte{0x01});
+    EXPECT_EQ(wire::load_u32(frame, 12), 0x0302u);
+    m.code = static_cast<ErrorCode>(200);  // a newer device's code passes through
+    m.request_type = 0xEE;
+    m.detail = kU32Max;
+    round_trip(m, 20);
+}
+
+// ---- encoder refusals ----
+
+TEST(ProtocolMessages, EncoderRefusesWhatTheDecoderWouldRefuse) {
+    std::array<std::byte, kMaxFrameSize> out{};
+    Hello hello;
+    EXPECT_EQ(encode(hello, out).error, Error::bad_field);  // session 0
+    hello.session = 1;
+    hello.min_version = 2;
+    hello.max_version = 1;
+    EXPECT_EQ(encode(hello, out).error, Error::bad_field);
+    hello.min_version = 0;
+    hello.max_version = 0;
+    EXPECT_EQ(encode(hello, out).error, Error::bad_field);
+
+    Identity identity = an_identity();
+    identity.axes = 4;
+    EXPECT_EQ(encode(identity, out).error, Error::bad_field);
+    identity = an_identity();
+    identity.counts_per_meter = std::nan("");
+    EXPECT_EQ(encode(identity, out).error, Error::bad_field);
+    identity.counts_per_meter = -1.0;
+    EXPECT_EQ(encode(identity, out).error, Error::bad_field);
+    identity.counts_per_meter = std::numeric_limits<double>::infinity();
+    EXPECT_EQ(encode(identity, out).error, Error::bad_field);
+    identity = an_identity();
+    identity.force_limit_un = 0;
+    EXPECT_EQ(encode(identity, out).error, Error::bad_field);
+    identity = an_identity();
+    identity.serial.fill('\0');
+    EXPECT_EQ(encode(identity, out).error, Error::bad_field);
+    identity = an_identity();
+    identity.serial[5] = 'x';  // text after the NUL padding
+    EXPECT_EQ(encode(identity, out).error, Error::bad_field);
+
+    ForceCommand command = a_command(1);
+    command.force_un[2] = 1;  // an unused axis must be zero
+    EXPECT_EQ(encode(command, out).error, Error::bad_field);
+    command = a_command(1);
+    command.flags = 0x04;
+    EXPECT_EQ(encode(command, out).error, Error::bad_field);
+    command = a_command(1);
+    command.axes = 0;
+    EXPECT_EQ(encode(command, out).error, Error::bad_field);
+
+    EncoderSample sample = a_sample(2);
+    sample.counts[2] = 1;
+    EXPECT_EQ(encode(sample, out).error, Error::bad_field);
+    sample = a_sample(2);
+    sample.status = 0x0040;
+    EXPECT_EQ(encode(sample, out).error, Error::bad_field);
+    sample = a_sample(2);
+    sample.faults = 0x0100;  // reserved
+    EXPECT_EQ(encode(sample, out).error, Error::bad_field);
+
+    Configure configure;
+    configure.watchdog_timeout_us = 0;
+    EXPECT_EQ(encode(configure, out).error, Error::bad_field);
+    ErrorReport report;
+    report.code = static_cast<ErrorCode>(0);
+    EXPECT_EQ(encode(report, out).error, Error::bad_field);
+}
+
+TEST(ProtocolMessages, EncoderNeedsRoomForTheWholeFrame) {
+    std::array<std::byte, kMaxFrameSize> out{};
+    const EncoderSample sample = a_sample(3);
+    EXPECT_EQ(encode(sample, std::span<std::byte>(out).first(59)).error, Error::no_space);
+    EXPECT_EQ(encode(sample, std::span<std::byte>(out).first(59)).size, 0u);
+    EXPECT_EQ(encode(sample, out).size, 60u);
+    Poll poll;
+    EXPECT_EQ(encode(poll, std::span<std::byte>(out).first(11)).error, Error::no_space);
+}
+
+// ---- decoder errors in the payload ----
+
+/// Edits a frame's byte and fixes the CRC, so that the payload check is what fails.
+Bytes edited(Bytes frame, std::size_t offset, int value) {
+    frame[offset] = static_cast<std::byte>(value);
+    fix_crc(frame);
+    return frame;
+}
+
+/// Changes the payload size of a frame (re-framing it), keeping the type.
+Bytes resized(const Bytes& frame, std::size_t payload_size) {
+    Bytes out(frame.begin(), frame.begin() + 8);
+    for (std::size_t i = 0; i < payload_size; ++i) {
+        out.push_back(8 + i < frame.size() - 4 ? frame[8 + i] : std::byte{0});
+    }
+    out[3] = static_cast<std::byte>(payload_size);
+    out.resize(out.size() + 4);
+    fix_crc(out);
+    return out;
+}
+
+TEST(ProtocolMessages, BadPayloadSizeForEveryType) {
+    Hello hello;
+    hello.session = 1;
+    Configure configure;
+    configure.session = 1;
+    ConfigureAck ack;
+    ack.session = 1;
+    ack.watchdog_timeout_us = 5;
+    ErrorReport report;
+    Poll poll;
+    Bye bye;
+    ByeAck bye_ack;
+    struct Case {
+        Bytes frame;
+        std::vector<std::size_t> wrong_sizes;
+    };
+    const std::vector<Case> cases = {
+        {encoded(hello), {0, 3, 5, 48}},
+        {encoded(an_identity()), {0, 43, 45}},
+        {encoded(configure), {0, 3, 8}},
+        {encoded(ack), {0, 5}},
+        {encoded(a_command(1)), {0, 8, 11, 13, 24}},
+        {encoded(a_sample(1)), {0, 24, 31, 33, 39, 41, 47}},
+        {encoded(poll), {1, 4}},
+        {encoded(bye), {1}},
+        {encoded(bye_ack), {48}},
+        {encoded(report), {0, 7, 9}},
+    };
+    for (const Case& c : cases) {
+        for (const std::size_t size : c.wrong_sizes) {
+            Message m;
+            EXPECT_EQ(decode(resized(c.frame, size), m), Error::bad_payload_size)
+                << "type " << static_cast<int>(c.frame[2]) << " size " << size;
+        }
+    }
+}
+
+TEST(ProtocolMessages, BadFieldForEveryFieldRule) {
+    Hello hello;
+    hello.session = 1;
+    const Bytes hello_frame = encoded(hello);
+    Message m;
+    EXPECT_EQ(decode(edited(hello_frame, 8, 0), m), Error::bad_field);   // min_version 0
+    EXPECT_EQ(decode(edited(hello_frame, 8, 2), m), Error::bad_field);   // min > max
+    EXPECT_EQ(decode(edited(hello_frame, 10, 1), m), Error::bad_field);  // reserved
+    Bytes zero_session = hello_frame;
+    wire::store_u32(zero_session, 4, 0);
+    fix_crc(zero_session);
+    EXPECT_EQ(decode(zero_session, m), Error::bad_field);
+
+    const Bytes identity = encoded(an_identity());
+    EXPECT_EQ(decode(edited(identity, 8, 0), m), Error::bad_field);      // axes 0
+    EXPECT_EQ(decode(edited(identity, 8, 4), m), Error::bad_field);      // axes 4
+    EXPECT_EQ(decode(edited(identity, 9, 1), m), Error::bad_field);      // reserved
+    EXPECT_EQ(decode(edited(identity, 11, 1), m), Error::bad_field);     // reserved
+    EXPECT_EQ(decode(edited(identity, 15, 0x80), m), Error::bad_field);  // force limit < 0
+    EXPECT_EQ(decode(edited(identity, 23, 0xFF), m), Error::bad_field);  // cpm NaN/negative
+    EXPECT_EQ(decode(edited(identity, 36, 0), m), Error::bad_field);     // empty serial
+    EXPECT_EQ(decode(edited(identity, 37, 0x01), m), Error::bad_field);  // control character
+    EXPECT_EQ(decode(edited(identity, 51, 'x'), m), Error::bad_field);   // text after NUL
+    Bytes zero_period = identity;
+    wire::store_u32(zero_period, 24, 0);
+    fix_crc(zero_period);
+    EXPECT_EQ(decode(zero_period, m), Error::bad_field);
+    Bytes zero_watchdog = identity;
+    wire::store_u32(zero_watchdog, 28, 0);
+    fix_crc(zero_watchdog);
+    EXPECT_EQ(decode(zero_watchdog, m), Error::bad_field);
+
+    Configure configure;
+    configure.session = 1;
+    Bytes zero_timeout = encoded(configure);
+    wire::store_u32(zero_timeout, 8, 0);
+    fix_crc(zero_timeout);
+    EXPECT_EQ(decode(zero_timeout, m), Error::bad_field);
+
+    const Bytes command = encoded(a_command(2));                        // payload 16
+    EXPECT_EQ(decode(edited(command, 12, 0x04), m), Error::bad_field);  // unknown flag
+    EXPECT_EQ(decode(edited(command, 13, 3), m), Error::bad_field);     // axes vs payload size
+    EXPECT_EQ(decode(edited(command, 13, 0), m), Error::bad_field);
+    EXPECT_EQ(decode(edited(command, 13, 9), m), Error::bad_field);
+    EXPECT_EQ(decode(edited(command, 15, 1), m), Error::bad_field);  // reserved
+
+    const Bytes sample = encoded(a_sample(2));                         // payload 40
+    EXPECT_EQ(decode(edited(sample, 24, 0x40), m), Error::bad_field);  // reserved status bit
+    EXPECT_EQ(decode(edited(sample, 27, 0x01), m), Error::bad_field);  // reserved fault bit 8
+    EXPECT_EQ(decode(edited(sample, 27, 0x10), m), Error::none);       // vendor bit 12: fine
+    EXPECT_EQ(decode(edited(sample, 28, 1), m), Error::bad_field);     // axes vs payload size
+    EXPECT_EQ(decode(edited(sample, 29, 1), m), Error::bad_field);     // reserved
+    EXPECT_EQ(decode(edited(sample, 31, 1), m), Error::bad_field);     // reserved
+
+    ErrorReport report;
+    report.session = 1;
+    const Bytes error = encoded(report);
+    EXPECT_EQ(decode(edited(error, 8, 0), m), Error::bad_field);   // code 0
+    EXPECT_EQ(decode(edited(error, 11, 1), m), Error::bad_field);  // reserved
+}
+
+TEST(ProtocolMessages, TypedDecodeRejectsOtherTypes) {
+    const Bytes sample = encoded(a_sample(1));
+    ForceCommand command;
+    EXPECT_EQ(decode(sample, command), Error::wrong_type);
+    Identity identity;
+    EXPECT_EQ(decode(sample, identity), Error::wrong_type);
+    EncoderSample ok;
+    EXPECT_EQ(decode(sample, ok), Error::none);
+    // Frame errors come before the type check.
+    EXPECT_EQ(decode(std::span<const std::byte>(sample).first(20), command), Error::truncated);
+}
+
+TEST(ProtocolMessages, TypeOfEveryAlternative) {
+    EXPECT_EQ(type_of(Message{Hello{}}), MessageType::hello);
+    EXPECT_EQ(type_of(Message{Identity{}}), MessageType::identity);
+    EXPECT_EQ(type_of(Message{Configure{}}), MessageType::configure);
+    EXPECT_EQ(type_of(Message{ConfigureAck{}}), MessageType::configure_ack);
+    EXPECT_EQ(type_of(Message{ForceCommand{}}), MessageType::command);
+    EXPECT_EQ(type_of(Message{EncoderSample{}}), MessageType::sample);
+    EXPECT_EQ(type_of(Message{Poll{}}), MessageType::poll);
+    EXPECT_EQ(type_of(Message{Bye{}}), MessageType::bye);
+    EXPECT_EQ(type_of(Message{ByeAck{}}), MessageType::bye_ack);
+    EXPECT_EQ(type_of(Message{ErrorReport{}}), MessageType::error);
+}
+
+TEST(ProtocolMessages, EncodeAndDecodeAllocateNothing) {
+    const Identity identity = an_identity();
+    const ForceCommand command = a_command(3);
+    const EncoderSample sample = a_sample(3);
+    std::array<std::byte, kMaxFrameSize> buffer{};
+    hapticd::testing::AllocationGuard guard;
+    for (int i = 0; i < 1000; ++i) {
+        Encoded e = encode(command, buffer);
+        ForceCommand c;
+        EXPECT_EQ(decode(std::span<const std::byte>(buffer).first(e.size), c), Error::none);
+        e = encode(sample, buffer);
+        EncoderSample s;
+        EXPECT_EQ(decode(std::span<const std::byte>(buffer).first(e.size), s), Error::none);
+        Message any;
+        EXPECT_EQ(decode(std::span<const std::byte>(buffer).first(e.size), any), Error::none);
+        e = encode(identity, buffer);
+        EXPECT_EQ(decode(std::span<const std::byte>(buffer).first(e.size), any), Error::none);
+        EXPECT_EQ(decode(std::span<const std::byte>(buffer).first(e.size - 1), any),
+                  Error::truncated);
+        e = encode(Message{command}, buffer);
+        EXPECT_TRUE(e.ok());
+    }
+    EXPECT_EQ(guard.allocations(), 0u);
+}
+
+}  // namespace
+}  // namespace hapticd::device::protocol
