@@ -10,133 +10,14 @@
 #include <string>
 #include <toml++/toml.h>
 
+#include "hapticd/device/table_reader.hpp"
+
 namespace hapticd::device::sim {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
-
-/// A numeric range with open or closed ends, printed in error messages.
-struct Range {
-    double lo = -kInf;
-    double hi = kInf;
-    bool lo_open = false;
-    const char* unit = "";
-
-    bool contains(double x) const {
-        return std::isfinite(x) && (lo_open ? x > lo : x >= lo) && x <= hi;
-    }
-    std::string describe() const {
-        std::ostringstream s;
-        s << "a number " << (lo_open ? "> " : ">= ") << lo;
-        if (hi < kInf) s << " and <= " << hi;
-        if (*unit != '\0') s << " (" << unit << ")";
-        return s.str();
-    }
-};
-
-std::string printed(const toml::node& node) {
-    std::ostringstream s;
-    if (const auto* str = node.as_string()) {
-        s << '"' << str->get() << '"';
-    } else {
-        node.visit([&s](const auto& value) { s << value; });
-    }
-    std::string text = s.str();
-    for (char& c : text) {
-        if (c == '\n') c = ' ';
-    }
-    return text;
-}
-
-/// One TOML table: typed getters that remember which keys were read, and finish() that
-/// rejects the rest. Every error names the source file and the full key.
-class TableReader {
-public:
-    TableReader(const toml::table& table, std::string prefix, const std::string& source)
-        : table_(table), prefix_(std::move(prefix)), source_(source) {}
-
-    [[noreturn]] void fail(std::string_view key, const std::string& what) const {
-        throw std::runtime_error(source_ + ": " + prefix_ + std::string(key) + " " + what);
-    }
-    [[noreturn]] void fail_value(std::string_view key, const toml::node& node,
-                                 const std::string& allowed) const {
-        fail(key, "= " + printed(node) + " is not allowed: must be " + allowed);
-    }
-
-    const toml::node* get(std::string_view key) {
-        used_.insert(std::string(key));
-        return table_.get(key);
-    }
-    bool has(std::string_view key) const { return table_.contains(key); }
-
-    double number(const toml::node& node, std::string_view key, const Range& range) const {
-        std::optional<double> value;
-        if (const auto* f = node.as_floating_point()) value = f->get();
-        if (const auto* i = node.as_integer()) value = static_cast<double>(i->get());
-        if (!value || !range.contains(*value)) fail_value(key, node, range.describe());
-        return *value;
-    }
-    double number(std::string_view key, double fallback, const Range& range) {
-        const toml::node* node = get(key);
-        return node == nullptr ? fallback : number(*node, key, range);
-    }
-    std::int64_t integer(std::string_view key, std::int64_t fallback, std::int64_t lo,
-                         std::int64_t hi) {
-        const toml::node* node = get(key);
-        if (node == nullptr) return fallback;
-        const auto* i = node->as_integer();
-        if (i == nullptr || i->get() < lo || i->get() > hi) {
-            fail_value(key, *node,
-                       "an integer from " + std::to_string(lo) + " to " + std::to_string(hi));
-        }
-        return i->get();
-    }
-    std::string choice(std::string_view key, std::string fallback,
-                       std::initializer_list<const char*> allowed) {
-        const toml::node* node = get(key);
-        if (node == nullptr) return fallback;
-        std::string options;
-        for (const char* a : allowed) {
-            options += options.empty() ? "" : " | ";
-            options += std::string("\"") + a + "\"";
-            if (const auto* s = node->as_string(); s != nullptr && s->get() == a) return a;
-        }
-        fail_value(key, *node, "one of " + options);
-    }
-    /// A list of times, s, each >= 0.
-    std::vector<double> times(std::string_view key) {
-        const toml::node* node = get(key);
-        std::vector<double> values;
-        if (node == nullptr) return values;
-        const auto* array = node->as_array();
-        if (array == nullptr) fail_value(key, *node, "an array of times >= 0 (s)");
-        for (const toml::node& element : *array) {
-            values.push_back(number(element, key, Range{0.0, kInf, false, "s"}));
-        }
-        return values;
-    }
-    const toml::table* subtable(std::string_view key) {
-        const toml::node* node = get(key);
-        if (node == nullptr) return nullptr;
-        if (const auto* t = node->as_table()) return t;
-        fail_value(key, *node, "a table");
-    }
-    /// Rejects every key not read.
-    void finish() const {
-        for (const auto& [key, node] : table_) {
-            if (!used_.contains(std::string(key.str()))) {
-                fail(key.str(), "is not a known key (= " + printed(node) + "); see docs/sim-device.md");
-            }
-        }
-    }
-    const std::string& prefix() const { return prefix_; }
-
-private:
-    const toml::table& table_;
-    std::string prefix_;  ///< e.g. "device.sim.human."
-    const std::string& source_;
-    std::set<std::string> used_;
-};
+using device::kInf;
+using device::Range;
+using device::TableReader;
 
 constexpr Range kMass{0.0, 1e3, true, "kg"};
 constexpr Range kDamping{0.0, 1e6, false, "N s/m"};
@@ -163,7 +44,7 @@ void require_unused(TableReader& r, std::string_view key, std::string_view model
 
 HumanModel read_human(const toml::table& table, std::string prefix, const std::string& source,
                       double initial_position_m) {
-    TableReader r(table, std::move(prefix), source);
+    TableReader r(table, std::move(prefix), source, "docs/sim-device.md");
     const std::string model = r.choice("model", "hands-off",
                                        {"hands-off", "heavy-hand", "stiff-grasp", "two-mass-grasp"});
     HumanModel h;
@@ -197,7 +78,7 @@ HumanModel read_human(const toml::table& table, std::string prefix, const std::s
     } else {
         h.push.from_m = h.push.to_m = r.number("set_point", initial_position_m, kPosition);
         if (const toml::table* push = r.subtable("push")) {
-            TableReader p(*push, r.prefix() + "push.", source);
+            TableReader p(*push, r.prefix() + "push.", source, "docs/sim-device.md");
             h.push.to_m = p.number("to", h.push.from_m, kPosition);
             h.push.start_s = p.number("start", 0.0, kDuration);
             h.push.ramp_s = p.number("ramp", 0.0, kDuration);
@@ -210,7 +91,7 @@ HumanModel read_human(const toml::table& table, std::string prefix, const std::s
 }
 
 FaultConfig read_faults(const toml::table& table, const std::string& source, int axes) {
-    TableReader r(table, "device.sim.faults.", source);
+    TableReader r(table, "device.sim.faults.", source, "docs/sim-device.md");
     FaultConfig f;
     const Range time{0.0, 1e9, false, "s"};
     f.disconnect_at_s = r.number("disconnect_at", -1.0, time);
@@ -257,7 +138,7 @@ SimConfig parse_sim_config(const DeviceConfig& config) {
         s << source << ": [device.sim] is not valid TOML: " << e.description();
         throw std::runtime_error(s.str());
     }
-    TableReader r(table, "device.sim.", source);
+    TableReader r(table, "device.sim.", source, "docs/sim-device.md");
     c.mass_kg = r.number("mass", c.mass_kg, kMass);
     c.damping_n_s_per_m = r.number("damping", c.damping_n_s_per_m, kDamping);
     c.counts_per_meter = r.number("counts_per_meter", c.counts_per_meter,

@@ -1,0 +1,91 @@
+// A FrameLink straight into a DeviceEmulator on the calling thread: ProtocolDevice's logic
+// without an OS transport, deterministic. The emulator answers each sent frame at once, so
+// receive() never has to wait: an empty queue is a timeout (a dropped reply), and a link
+// whose device is absent reports disconnected, as a transport would after ENODEV.
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <cstring>
+#include <memory>
+#include <stdexcept>
+
+#include "hapticd/device/link/frame_link.hpp"
+#include "hapticd/device/protocol/device_emulator.hpp"
+
+namespace hapticd::testing {
+
+namespace proto = hapticd::device::protocol;
+
+/// What the test and the link share: the device behind the link, and whether it is plugged in.
+struct LoopbackBench {
+    std::unique_ptr<proto::DeviceEmulator> device;
+    std::atomic<bool> present{true};
+    std::atomic<int> opens{0};
+};
+
+class LoopbackLink final : public device::link::FrameLink {
+  public:
+    explicit LoopbackLink(LoopbackBench& bench) : bench_(bench) {}
+
+    void open() override {
+        if (!bench_.present.load()) throw std::runtime_error("loopback: no device plugged in");
+        queued_ = 0;
+        head_ = 0;
+        bench_.opens.fetch_add(1);
+    }
+    void close() noexcept override { queued_ = 0; }
+
+    device::link::LinkResult send(std::span<const std::byte> frame) noexcept override {
+        using device::link::LinkResult;
+        if (!bench_.present.load()) return LinkResult::disconnected;
+        std::array<std::byte, proto::DeviceEmulator::kMaxReplySize> out{};
+        const proto::DeviceEmulator::Reply reply = bench_.device->handle(frame, out);
+        std::size_t offset = 0;
+        for (std::size_t i = 0; i < reply.frames; ++i) {
+            push(std::span<const std::byte>(out.data() + offset, reply.frame_sizes[i]));
+            offset += reply.frame_sizes[i];
+        }
+        ++counters_.frames_sent;
+        return LinkResult::ok;
+    }
+
+    device::link::LinkResult receive(std::span<std::byte> frame, std::size_t& size,
+                                     std::int64_t /*deadline_ns*/) noexcept override {
+        using device::link::LinkResult;
+        if (!bench_.present.load()) return LinkResult::disconnected;
+        if (queued_ == 0) return LinkResult::timeout;
+        const Slot& slot = slots_[head_];
+        std::memcpy(frame.data(), slot.bytes.data(), slot.size);
+        size = slot.size;
+        head_ = (head_ + 1) % slots_.size();
+        --queued_;
+        ++counters_.frames_received;
+        return LinkResult::ok;
+    }
+
+    void discard_input() noexcept override { queued_ = 0; }
+    std::string describe() const override { return "loopback"; }
+    device::link::LinkCounters counters() const noexcept override { return counters_; }
+
+  private:
+    struct Slot {
+        std::array<std::byte, proto::kMaxFrameSize> bytes{};
+        std::size_t size = 0;
+    };
+    void push(std::span<const std::byte> frame) noexcept {
+        if (queued_ == slots_.size()) return;  // full: a real transport would drop too
+        Slot& slot = slots_[(head_ + queued_) % slots_.size()];
+        std::memcpy(slot.bytes.data(), frame.data(), frame.size());
+        slot.size = frame.size();
+        ++queued_;
+    }
+
+    LoopbackBench& bench_;
+    std::array<Slot, 8> slots_{};
+    std::size_t head_ = 0;
+    std::size_t queued_ = 0;
+    device::link::LinkCounters counters_;
+};
+
+}  // namespace hapticd::testing

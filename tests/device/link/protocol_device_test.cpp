@@ -1,0 +1,348 @@
+// ProtocolDevice (link/protocol_device.hpp) over a loopback link into the reference device:
+// the handshake and its refusals, the tick's exchange, every reply fault of section 5.3,
+// device faults (5.5), disconnect and reconnect, and zero force on close.
+#include "hapticd/device/link/protocol_device.hpp"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <string>
+#include <thread>
+
+#include "alloc_guard.hpp"
+#include "loopback_link.hpp"
+
+namespace hapticd::testing {
+namespace {
+
+using device::DeviceConfig;
+using device::link::LinkContext;
+using device::link::ProtocolDevice;
+using servo::Command;
+using servo::IoResult;
+using servo::Sample;
+
+proto::EmulatorConfig emulator_config(std::string serial = "EMU-0001", int axes = 1) {
+    proto::EmulatorConfig c;
+    c.sim.axes = axes;
+    c.sim.rate_hz = 1000.0;
+    c.sim.mass_kg = 0.1;
+    c.sim.damping_n_s_per_m = 2.0;
+    c.sim.counts_per_meter = 1e5;
+    c.sim.force_limit_n = 10.0;
+    c.serial_number = std::move(serial);
+    return c;
+}
+
+DeviceConfig device_config(std::string table = "", int axes = 1, double rate_hz = 1000.0) {
+    DeviceConfig c;
+    c.axes = axes;
+    c.rate_hz = rate_hz;
+    c.lockstep = true;
+    c.plugin_table_toml = std::move(table);
+    c.source = "cfg.toml";
+    return c;
+}
+
+class ProtocolDeviceTest : public ::testing::Test {
+  protected:
+    void SetUp() override {
+        bench_.device = std::make_unique<proto::DeviceEmulator>(emulator_config());
+    }
+
+    std::unique_ptr<ProtocolDevice> make_device() {
+        return std::make_unique<ProtocolDevice>("loop",
+                                                [this](device::TableReader&, const LinkContext&) {
+                                                    return std::make_unique<LoopbackLink>(bench_);
+                                                });
+    }
+
+    /// Opens with a fast reconnect so that the reconnect tests do not wait long.
+    std::unique_ptr<ProtocolDevice> open_device(const std::string& extra = "") {
+        auto d = make_device();
+        d->open(device_config("reconnect_interval_ms = 10\n" + extra));
+        return d;
+    }
+
+    /// Ticks like the servo until `done(sample)` or `limit` reads; returns the reads made.
+    template <typename Done>
+    int tick_until(ProtocolDevice& d, Done done, int limit, Command command = Command{}) {
+        for (int i = 1; i <= limit; ++i) {
+            Sample s;
+            const IoResult r = d.read(s);
+            if (done(r, s)) return i;
+            (void)d.write(command);
+            std::this_thread::sleep_for(std::chrono::microseconds(200));
+        }
+        return -1;
+    }
+
+    LoopbackBench bench_;
+};
+
+TEST_F(ProtocolDeviceTest, HandshakeReportsTheDevicesIdentity) {
+    auto d = open_device();
+    const device::DeviceInfo info = d->info();
+    EXPECT_EQ(info.axes, 1);
+    EXPECT_DOUBLE_EQ(info.counts_per_meter, 1e5);
+    EXPECT_DOUBLE_EQ(info.force_limit_n, 10.0);
+    EXPECT_EQ(info.serial, "EMU-0001");
+    EXPECT_EQ(info.name, "loop");
+    EXPECT_TRUE(info.paces_loop);  // lockstep: one command = one virtual period
+    EXPECT_TRUE(bench_.device->session_open());
+    EXPECT_EQ(bench_.device->watchdog_timeout_us(), 20'000u);  // watchdog_ms default
+}
+
+TEST_F(ProtocolDeviceTest, EachCommandIsAnsweredByTheNextRead) {
+    auto d = open_device();
+    Sample s;
+    ASSERT_EQ(d->read(s), IoResult::ok);  // a poll: no command yet
+    const std::uint64_t first = s.sequence;
+    Command push;
+    push.enable = true;
+    push.force_n[0] = 1.0;
+    for (int tick = 1; tick <= 100; ++tick) {
+        ASSERT_EQ(d->write(push), IoResult::ok);
+        ASSERT_EQ(d->read(s), IoResult::ok);
+        EXPECT_EQ(s.sequence, first + static_cast<std::uint64_t>(tick));
+        EXPECT_EQ(s.status, 0u);
+    }
+    // 1 N held on m = 0.1 kg, b = 2 N s/m from rest for t = 0.1 s, (10) in closed form:
+    // x = F/b (t - tau (1 - exp(-t/tau))), tau = m/b; counts = floor(x * 1e5).
+    const double tau = 0.1 / 2.0;
+    const double x = 1.0 / 2.0 * (0.1 - tau * (1.0 - std::exp(-0.1 / tau)));
+    EXPECT_NEAR(static_cast<double>(s.encoder_counts[0]), std::floor(x * 1e5), 1.0);
+    EXPECT_NEAR(s.device_time_s, 0.1, 1e-9);
+    EXPECT_DOUBLE_EQ(bench_.device->output_force_n()[0], 1.0);
+    EXPECT_EQ(d->counters().commands_sent, 100u);
+    EXPECT_EQ(d->counters().polls_sent, 1u);
+}
+
+TEST_F(ProtocolDeviceTest, TicksDoNotAllocate) {
+    auto d = open_device();
+    Sample s;
+    Command push;
+    push.enable = true;
+    push.force_n[0] = 0.2;
+    AllocationGuard guard;
+    for (int tick = 0; tick < 5000; ++tick) {
+        (void)d->read(s);
+        (void)d->write(push);
+    }
+    EXPECT_EQ(guard.allocations(), 0u);
+    EXPECT_EQ(d->counters().samples_accepted, 5000u);
+}
+
+TEST_F(ProtocolDeviceTest, RefusesAnotherSerialNumberNamingTheKey) {
+    auto d = make_device();
+    try {
+        d->open(device_config("serial_number = \"HX-0002\"\n"));
+        FAIL() << "opened the wrong device";
+    } catch (const std::runtime_error& e) {
+        const std::string message = e.what();
+        EXPECT_NE(message.find("wrong device"), std::string::npos) << message;
+        EXPECT_NE(message.find("device.loop.serial_number = \"HX-0002\""), std::string::npos)
+            << message;
+        EXPECT_NE(message.find("\"EMU-0001\""), std::string::npos) << message;
+    }
+    EXPECT_FALSE(bench_.device->session_open() && bench_.device->output_force_n()[0] != 0.0);
+}
+
+TEST_F(ProtocolDeviceTest, RefusesAxesAndRateThatDoNotMatchTheDevice) {
+    auto d = make_device();
+    try {
+        d->open(device_config("", 2));
+        FAIL() << "opened a 1-axis device as 2 axes";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("device.axes = 2"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("reports 1 axes"), std::string::npos) << e.what();
+    }
+    try {
+        d->open(device_config("", 1, 500.0));
+        FAIL() << "opened a 1 kHz device at 500 Hz";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("servo.rate_hz = 500"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("1000 us"), std::string::npos) << e.what();
+    }
+}
+
+TEST_F(ProtocolDeviceTest, BadKeysAreNamedWithTheirRange) {
+    auto d = make_device();
+    auto message_for = [&](const std::string& table) {
+        try {
+            d->open(device_config(table));
+        } catch (const std::runtime_error& e) {
+            return std::string(e.what());
+        }
+        return std::string("(opened)");
+    };
+    EXPECT_NE(message_for("watchdog_ms = 1\n").find("device.loop.watchdog_ms = 1 is not allowed"),
+              std::string::npos);
+    EXPECT_NE(message_for("watchdog_ms = 1\n").find(">= 2"), std::string::npos);
+    EXPECT_NE(message_for("baud = 9600\n").find("device.loop.baud is not a known key"),
+              std::string::npos);
+    EXPECT_NE(message_for("serial_number = \"\"\n").find("1 to 16 printable ASCII"),
+              std::string::npos);
+    EXPECT_NE(message_for("reconnect = 1\n").find("true or false"), std::string::npos);
+}
+
+TEST_F(ProtocolDeviceTest, ConfiguresTheWatchdog) {
+    auto d = open_device("watchdog_ms = 5\n");
+    EXPECT_EQ(bench_.device->watchdog_timeout_us(), 5000u);
+}
+
+TEST_F(ProtocolDeviceTest, CorruptAndTruncatedRepliesAreDroppedSamples) {
+    auto d = open_device();
+    Sample s;
+    ASSERT_EQ(d->read(s), IoResult::ok);
+    ASSERT_EQ(d->write(Command{}), IoResult::ok);
+    bench_.device->faults().corrupt_crc = 1;
+    ASSERT_EQ(d->read(s), IoResult::ok);  // this reply was sent before the knob
+    ASSERT_EQ(d->write(Command{}), IoResult::ok);
+    EXPECT_EQ(d->read(s), IoResult::timeout);
+    EXPECT_EQ(s.status, servo::kStatusDropped);
+    bench_.device->faults().truncate = 1;
+    ASSERT_EQ(d->write(Command{}), IoResult::ok);
+    EXPECT_EQ(d->read(s), IoResult::timeout);
+    EXPECT_EQ(d->counters().bad_frames, 2u);
+    EXPECT_EQ(d->counters().reply_timeouts, 2u);
+    ASSERT_EQ(d->write(Command{}), IoResult::ok);
+    EXPECT_EQ(d->read(s), IoResult::ok);  // and the link goes on
+}
+
+TEST_F(ProtocolDeviceTest, ReplyOfAnotherSessionIsIgnored) {
+    auto d = open_device();
+    Sample s;
+    ASSERT_EQ(d->read(s), IoResult::ok);
+    bench_.device->faults().wrong_session = 1;
+    ASSERT_EQ(d->write(Command{}), IoResult::ok);
+    EXPECT_EQ(d->read(s), IoResult::timeout);
+    EXPECT_EQ(d->counters().wrong_session, 1u);
+}
+
+TEST_F(ProtocolDeviceTest, SequenceGapAdvancesTheSampleSequence) {
+    auto d = open_device();
+    Sample s;
+    ASSERT_EQ(d->read(s), IoResult::ok);
+    const std::uint64_t before = s.sequence;
+    bench_.device->faults().sequence_gap = 4;
+    ASSERT_EQ(d->write(Command{}), IoResult::ok);
+    ASSERT_EQ(d->read(s), IoResult::ok);
+    EXPECT_EQ(s.sequence, before + 5);  // one period + 4 lost samples
+    EXPECT_EQ(d->counters().missed_samples, 4u);
+}
+
+TEST_F(ProtocolDeviceTest, ADelayedReplyIsLateAndFlagged) {
+    auto d = open_device();
+    Sample s;
+    ASSERT_EQ(d->read(s), IoResult::ok);
+    bench_.device->faults().delay = 1;
+    ASSERT_EQ(d->write(Command{}), IoResult::ok);
+    EXPECT_EQ(d->read(s), IoResult::timeout);  // held back by the device
+    ASSERT_EQ(d->write(Command{}), IoResult::ok);
+    ASSERT_EQ(d->read(s), IoResult::ok);  // the old reply is discarded, this one is used
+    EXPECT_NE(s.status & servo::kStatusLate, 0u);
+    EXPECT_EQ(d->counters().late, 1u);
+}
+
+TEST_F(ProtocolDeviceTest, DeviceFaultsAreReportedAndClearedOnlyWhenForceIsWantedAgain) {
+    auto d = open_device();
+    Sample s;
+    ASSERT_EQ(d->read(s), IoResult::ok);
+    bench_.device->faults().device_faults = proto::kDeviceFaultAmplifier;
+    Command push;
+    push.enable = true;
+    push.force_n[0] = 1.0;
+    ASSERT_EQ(d->write(push), IoResult::ok);
+    ASSERT_EQ(d->read(s), IoResult::ok);
+    EXPECT_NE(s.status & servo::kStatusDeviceFault, 0u);
+    EXPECT_EQ(bench_.device->output_force_n()[0], 0.0);
+    // The servo's latch now sends disabled commands: the device stays faulted.
+    ASSERT_EQ(d->write(Command{}), IoResult::ok);
+    ASSERT_EQ(d->read(s), IoResult::ok);
+    EXPECT_NE(bench_.device->latched_faults(), 0u);
+    // The operator reset the servo; it asks for force: one period clears, at zero force...
+    ASSERT_EQ(d->write(push), IoResult::ok);
+    EXPECT_EQ(bench_.device->latched_faults(), 0u);
+    EXPECT_EQ(bench_.device->output_force_n()[0], 0.0);
+    ASSERT_EQ(d->read(s), IoResult::ok);
+    EXPECT_EQ(s.status & servo::kStatusDeviceFault, 0u);
+    // ...and the next command applies it.
+    ASSERT_EQ(d->write(push), IoResult::ok);
+    EXPECT_DOUBLE_EQ(bench_.device->output_force_n()[0], 1.0);
+}
+
+TEST_F(ProtocolDeviceTest, ReconnectsToTheSameDeviceWhenItReturns) {
+    auto d = open_device();
+    Sample s;
+    ASSERT_EQ(d->read(s), IoResult::ok);
+    bench_.present = false;
+    Command push;
+    push.enable = true;
+    push.force_n[0] = 1.0;
+    EXPECT_EQ(d->write(push), IoResult::disconnected);
+    EXPECT_EQ(d->read(s), IoResult::disconnected);
+    EXPECT_NE(s.status & servo::kStatusDisconnected, 0u);
+    EXPECT_EQ(d->counters().disconnects, 1u);
+
+    // The same device comes back (restarted: a fresh emulator with the same serial).
+    bench_.device = std::make_unique<proto::DeviceEmulator>(emulator_config());
+    bench_.present = true;
+    const int reads = tick_until(
+        *d, [](IoResult r, const Sample&) { return r == IoResult::ok; }, 5000);
+    ASSERT_GT(reads, 0) << "never reconnected";
+    EXPECT_EQ(d->counters().reconnects, 1u);
+    EXPECT_TRUE(bench_.device->session_open());
+    ASSERT_EQ(d->write(push), IoResult::ok);
+    EXPECT_DOUBLE_EQ(bench_.device->output_force_n()[0], 1.0);
+}
+
+TEST_F(ProtocolDeviceTest, RefusesAnotherDeviceOnReconnect) {
+    auto d = open_device();
+    Sample s;
+    ASSERT_EQ(d->read(s), IoResult::ok);
+    bench_.present = false;
+    EXPECT_EQ(d->read(s), IoResult::disconnected);
+    bench_.device = std::make_unique<proto::DeviceEmulator>(emulator_config("EMU-OTHER"));
+    bench_.present = true;
+    const int reads = tick_until(
+        *d, [&](IoResult, const Sample&) { return d->counters().refused_devices >= 2; }, 5000);
+    ASSERT_GT(reads, 0) << "the other device was never tried";
+    EXPECT_EQ(d->read(s), IoResult::disconnected);
+    EXPECT_EQ(d->counters().reconnects, 0u);
+    EXPECT_EQ(bench_.device->output_force_n()[0], 0.0);
+}
+
+TEST_F(ProtocolDeviceTest, AReplyFromADeviceThatLostTheSessionStartsANewHandshake) {
+    auto d = open_device();
+    Sample s;
+    ASSERT_EQ(d->read(s), IoResult::ok);
+    // The device restarts behind the link's back: it no longer knows the session.
+    bench_.device = std::make_unique<proto::DeviceEmulator>(emulator_config());
+    ASSERT_EQ(d->write(Command{}), IoResult::ok);
+    EXPECT_EQ(d->read(s), IoResult::disconnected);
+    const int reads = tick_until(
+        *d, [](IoResult r, const Sample&) { return r == IoResult::ok; }, 5000);
+    EXPECT_GT(reads, 0);
+    EXPECT_EQ(d->counters().device_errors, 1u);
+}
+
+TEST_F(ProtocolDeviceTest, CloseLeavesZeroForceAndEndsTheSession) {
+    auto d = open_device();
+    Command push;
+    push.enable = true;
+    push.force_n[0] = 2.0;
+    Sample s;
+    ASSERT_EQ(d->read(s), IoResult::ok);
+    ASSERT_EQ(d->write(push), IoResult::ok);
+    ASSERT_DOUBLE_EQ(bench_.device->output_force_n()[0], 2.0);
+    d->close();
+    EXPECT_EQ(bench_.device->output_force_n()[0], 0.0);
+    EXPECT_FALSE(bench_.device->session_open());
+    d->close();  // twice is fine
+}
+
+}  // namespace
+}  // namespace hapticd::testing
