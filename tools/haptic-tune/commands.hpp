@@ -12,5 +12,6 @@ void add_size_command(CLI::App& app, Invocation& invocation);
 void add_check_command(CLI::App& app, Invocation& invocation);
 void add_plot_command(CLI::App& app, Invocation& invocation);
 void add_zwidth_command(CLI::App& app, Invocation& invocation);
+void add_diag_command(CLI::App& app, Invocation& invocation);
 
 }  // namespace hapticd::tools

@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
     add_check_command(app, invocation);
     add_plot_command(app, invocation);
     add_zwidth_command(app, invocation);
+    add_diag_command(app, invocation);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& help) {

@@ -1,0 +1,67 @@
+// haptic-tune diag: the first command a lab runs on new hardware. Drives the configured
+// device at zero force and reports round-trip times, lost and late frames, and the device
+// clock's drift (hapticd/daemon/link_diag.hpp, docs/link-diagnostics.md).
+#include <iostream>
+#include <memory>
+
+#include "commands.hpp"
+#include "hapticd/daemon/config.hpp"
+#include "hapticd/daemon/link_diag.hpp"
+
+namespace hapticd::tools {
+namespace {
+
+struct DiagCommandOptions {
+    std::string config_path;
+    double duration_s = 5.0;
+    bool json = false;
+    bool lockstep = false;
+};
+
+int run_diag(const DiagCommandOptions& o) {
+    daemon::Config config;
+    try {
+        config = daemon::load_config(o.config_path);
+    } catch (const daemon::ConfigError& e) {
+        throw UsageError(e.what());
+    }
+    daemon::DiagOptions options;
+    options.duration_s = o.duration_s;
+    options.lockstep = o.lockstep;
+    daemon::DiagReport report;
+    try {
+        report = daemon::run_link_diag(config, options, std::cerr);
+    } catch (const std::invalid_argument& e) {
+        throw UsageError(e.what());
+    } catch (const std::exception& e) {
+        std::cerr << "haptic-tune: device error: " << e.what() << '\n';
+        return kExitUsage;
+    }
+    const std::string text = daemon::diag_text(report);
+    std::cout << (o.json ? daemon::diag_json(report) + "\n" : text) << std::flush;
+    const bool ok = text.find("\nverdict: ok") != std::string::npos;
+    return ok ? kExitOk : kExitVerdictNo;
+}
+
+}  // namespace
+
+void add_diag_command(CLI::App& app, Invocation& invocation) {
+    auto options = std::make_shared<DiagCommandOptions>();
+    CLI::App* command = app.add_subcommand(
+        "diag",
+        "Diagnose the device link: run the configured device at zero force and report the "
+        "round-trip time histogram, lost and late frames, and the device clock's drift. "
+        "Exit 0 if the link keeps up with [servo] rate_hz, 1 if not, 2 on bad input");
+    command->add_option("--config", options->config_path, "hapticd config file (TOML)")
+        ->required()
+        ->check(CLI::ExistingFile);
+    command->add_option("--duration", options->duration_s, "seconds to run (default 5)")
+        ->check(CLI::Range(0.001, 3600.0));
+    command->add_flag("--json", options->json, "print the report as JSON");
+    command->add_flag("--lockstep", options->lockstep,
+                      "virtual time (tests; round trips and drift are then not physical)");
+    command->callback(
+        [options, &invocation] { invocation.run = [options] { return run_diag(*options); }; });
+}
+
+}  // namespace hapticd::tools
