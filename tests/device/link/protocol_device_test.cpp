@@ -312,6 +312,7 @@ TEST_F(ProtocolDeviceTest, RefusesAnotherDeviceOnReconnect) {
     ASSERT_GT(reads, 0) << "the other device was never tried";
     EXPECT_EQ(d->read(s), IoResult::disconnected);
     EXPECT_EQ(d->counters().reconnects, 0u);
+    d->close();  // stops the reconnect thread before the test looks at the device
     EXPECT_EQ(bench_.device->output_force_n()[0], 0.0);
 }
 
