@@ -202,12 +202,35 @@ Config parse_config(std::string_view toml_text, const std::string& source,
     }
 
     const TableReader safety(source, "safety", sub_table(root, source, "safety"));
-    safety.allow_only({"max_force", "max_speed", "soft_start_ramp", "passivity"});
+    safety.allow_only({"max_force", "max_speed", "soft_start_ramp", "passivity", "reconnect",
+                       "reconnect_settle", "reconnect_timeout"});
     config.safety.max_force_n = safety.number("max_force", 0.0, kInf, true, "N").value_or(10.0);
     config.safety.max_speed_mps = safety.number("max_speed", 0.0, kInf, true, "m/s").value_or(1.0);
     config.safety.soft_start_ramp_s =
         safety.number("soft_start_ramp", 0.0, 10.0, false, "s").value_or(0.5);
     config.safety.passivity = safety.text("passivity", {"observe", "control"}).value_or("observe");
+    config.safety.reconnect = safety.boolean("reconnect").value_or(true);
+    config.safety.reconnect_settle_s =
+        safety.number("reconnect_settle", 0.0, 60.0, true, "s").value_or(0.5);
+    config.safety.reconnect_timeout_s =
+        safety.number("reconnect_timeout", 0.0, 3600.0, false, "s; 0: wait for ever").value_or(5.0);
+    if (!config.safety.reconnect) {
+        for (const char* key : {"reconnect_settle", "reconnect_timeout"}) {
+            if (safety.has(key)) {
+                throw ConfigError(source + ": [safety] " + key +
+                                  " has no effect with reconnect = false (every fault ends the "
+                                  "run); remove it");
+            }
+        }
+    }
+    if (config.safety.reconnect_timeout_s != 0.0 &&
+        config.safety.reconnect_timeout_s <= config.safety.reconnect_settle_s) {
+        std::ostringstream m;
+        m << source << ": [safety] reconnect_timeout = " << config.safety.reconnect_timeout_s
+          << " is out of range: allowed > reconnect_settle = " << config.safety.reconnect_settle_s
+          << " (s: the device must be back and settled within it), or 0 to wait for ever";
+        throw ConfigError(m.str());
+    }
     return config;
 }
 

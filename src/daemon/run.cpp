@@ -76,6 +76,42 @@ std::string status_line(const servo::StatusSnapshot& s, int axes) {
     return out.str();
 }
 
+std::string fault_names(std::uint32_t faults) {
+    std::string names;
+    servo::for_each_fault(faults, [&](std::string_view name) {
+        names += (names.empty() ? "" : ",") + std::string(name);
+    });
+    return names;
+}
+
+/// One line when the latched faults change (seen from the watcher: a change shorter than
+/// its poll may go unlogged; the summary counts every one).
+std::string fault_change_line(std::uint32_t before, const servo::StatusSnapshot& now,
+                              const Config& config) {
+    std::ostringstream out;
+    out << std::fixed << std::setprecision(3) << "hapticd: t " << now.t_s
+        << " s: " << std::defaultfloat;
+    if (now.faults == 0u && !servo::only_link_faults(before)) {
+        out << "fault latch cleared, force returns through the soft start";
+        return out.str();
+    }
+    if (now.faults == 0u) {
+        out << "link recovered (the device sent good samples for "
+            << config.safety.reconnect_settle_s
+            << " s): fault latch cleared, force returns through the soft start";
+        return out.str();
+    }
+    out << "fault " << fault_names(now.faults & ~before) << ", force zeroed";
+    if (config.safety.reconnect && servo::only_link_faults(now.faults)) {
+        out << "; waiting for the device to come back";
+        if (config.safety.reconnect_timeout_s > 0.0) {
+            out << " (at most " << config.safety.reconnect_timeout_s
+                << " s, [safety] reconnect_timeout)";
+        }
+    }
+    return out.str();
+}
+
 Config load_any_config(const RunOptions& options) {
     try {
         return options.config_path ? load_config(*options.config_path) : default_config();
@@ -220,9 +256,16 @@ int run_loop(const RunOptions& options, const Config& config, device::Device& de
     const auto status_every = std::chrono::duration<double>(options.status_interval_s);
     auto next_status = started + std::chrono::duration_cast<Clock::duration>(status_every);
     bool duration_ended = false;
+    std::uint32_t logged_faults = 0;
     while (!servo_done.load(std::memory_order_acquire)) {
         std::this_thread::sleep_for(std::chrono::milliseconds(10));
         const auto now = Clock::now();
+        if (const servo::StatusSnapshot status = loop.status(); status.faults != logged_faults) {
+            if ((status.faults & ~logged_faults) != 0u || status.faults == 0u) {
+                log << fault_change_line(logged_faults, status, config) << "\n" << std::flush;
+            }
+            logged_faults = status.faults;
+        }
         if (stop.load(std::memory_order_acquire)) stop_servo.store(true, std::memory_order_release);
         if (options.duration_s && !info.lockstep &&
             now - started >= std::chrono::duration<double>(*options.duration_s)) {
@@ -259,9 +302,21 @@ int run_loop(const RunOptions& options, const Config& config, device::Device& de
     } else if (run_exit == servo::RunExit::fault) {
         context.exit = "fault";
         code = kExitFault;
-        log << "hapticd: stopped on a fault, force zeroed in the same tick:";
+        if (loop.link_recovery().gave_up()) {
+            log << "hapticd: the device did not come back within [safety] reconnect_timeout = "
+                << config.safety.reconnect_timeout_s << " s; stopped on the fault, force zero "
+                << "since the tick that saw it:";
+        } else {
+            log << "hapticd: stopped on a fault, force zeroed in the same tick:";
+        }
         for (const std::string& fault : summary.faults) log << " " << fault;
         log << "\n";
+    } else if (loop.faults() != 0u) {
+        // Stopped (duration or signal) while waiting for the device to come back.
+        context.exit = "fault";
+        code = kExitFault;
+        log << "hapticd: the run ended with the link down (" << fault_names(loop.faults())
+            << "), force zero since the tick that saw it\n";
     } else if (run_exit == servo::RunExit::tick_limit || duration_ended) {
         context.exit = "duration";
     } else {

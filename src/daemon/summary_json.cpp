@@ -21,6 +21,7 @@ std::string summary_json(const servo::Summary& s, const RunContext& c) {
                             {"max", s.tick_compute_us.max}};
     j["max_force_n"] = s.max_force_n;
     j["faults"] = s.faults;
+    j["link_recoveries"] = s.link_recoveries;
     j["telemetry_dropped"] = s.telemetry_dropped;
     j["telemetry_records"] = c.telemetry_records;
     j["read_timeouts"] = s.read_timeouts;
@@ -69,6 +70,7 @@ std::string summary_text(const servo::Summary& s, const RunContext& c) {
     out << "  faults:";
     if (s.faults.empty()) out << " none";
     for (const std::string& fault : s.faults) out << " " << fault;
+    if (s.link_recoveries > 0) out << " (link recoveries: " << s.link_recoveries << ")";
     out << "\n";
     return out.str();
 }

@@ -53,6 +53,7 @@ void ServoConfig::validate() const {
             "servo config: telemetry_backpressure needs a device that paces the loop "
             "(lockstep); a wall-clock loop must never wait for its logger");
     }
+    link_recovery.validate();
     // The safety limits and the realtime request validate themselves where they are used
     // (SafetySupervisor's constructor, RealtimeSession::apply).
 }

@@ -22,6 +22,7 @@ Summary make_summary(const TickStats& stats, double rate_hz, std::uint32_t fault
     summary.read_timeouts = stats.read_timeouts;
     summary.solver_not_converged = stats.solver_not_converged;
     summary.saturated_ticks = stats.saturated_ticks;
+    summary.link_recoveries = stats.link_recoveries;
     summary.passivity_energy_j = passivity_energy_j;
     return summary;
 }

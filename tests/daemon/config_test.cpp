@@ -43,6 +43,9 @@ max_force = 12
 max_speed = 0.5
 soft_start_ramp = 0.25
 passivity = "control"
+reconnect = true
+reconnect_settle = 1.5
+reconnect_timeout = 30
 )",
                                   "lab.toml", "/etc/hapticd");
     EXPECT_EQ(c.servo.rate_hz, 2000.0);
@@ -62,7 +65,25 @@ passivity = "control"
     EXPECT_EQ(c.safety.max_speed_mps, 0.5);
     EXPECT_EQ(c.safety.soft_start_ramp_s, 0.25);
     EXPECT_EQ(c.safety.passivity, "control");
+    EXPECT_TRUE(c.safety.reconnect);
+    EXPECT_EQ(c.safety.reconnect_settle_s, 1.5);
+    EXPECT_EQ(c.safety.reconnect_timeout_s, 30.0);
     EXPECT_TRUE(c.coupling.enabled);
+}
+
+TEST(DaemonConfig, ReconnectIsOnByDefaultAndCanBeTurnedOffOrMadePatient) {
+    const Config defaults = parse_config("", "lab.toml", "");
+    EXPECT_TRUE(defaults.safety.reconnect);
+    EXPECT_EQ(defaults.safety.reconnect_settle_s, 0.5);
+    EXPECT_EQ(defaults.safety.reconnect_timeout_s, 5.0);
+    EXPECT_FALSE(parse_config("[safety]\nreconnect = false\n", "lab.toml", "").safety.reconnect);
+    EXPECT_EQ(parse_config("[safety]\nreconnect_timeout = 0\n", "lab.toml", "")
+                  .safety.reconnect_timeout_s,
+              0.0);  // wait for ever
+    EXPECT_EQ(
+        parse_config("[safety]\nreconnect_settle = 60\nreconnect_timeout = 61\n", "lab.toml", "")
+            .safety.reconnect_settle_s,
+        60.0);
 }
 
 TEST(DaemonConfig, NoCouplingMustBeDeliberate) {
@@ -122,7 +143,23 @@ INSTANTIATE_TEST_SUITE_P(
         Bad{"[coupling]\nenabled = 1\n", "[coupling] enabled must be true or false"},
         Bad{"[safety]\nsoft_start_ramp = 20\n",
             "[safety] soft_start_ramp = 20 is out of range: allowed >= 0 and <= 10 (s)"},
-        Bad{"[safety]\npassivity = \"on\"\n", "[safety] passivity = \"on\" is not allowed"}));
+        Bad{"[safety]\npassivity = \"on\"\n", "[safety] passivity = \"on\" is not allowed"},
+        Bad{"[safety]\nreconnect = \"yes\"\n", "[safety] reconnect must be true or false"},
+        Bad{"[safety]\nreconnect_settle = 0\n",
+            "[safety] reconnect_settle = 0 is out of range: allowed > 0 and <= 60 (s)"},
+        Bad{"[safety]\nreconnect_settle = 61\n",
+            "[safety] reconnect_settle = 61 is out of range: allowed > 0 and <= 60 (s)"},
+        Bad{"[safety]\nreconnect_timeout = -1\n",
+            "[safety] reconnect_timeout = -1 is out of range: allowed >= 0 and <= 3600 (s; 0: "
+            "wait for ever)"},
+        Bad{"[safety]\nreconnect_timeout = 0.5\n",
+            "[safety] reconnect_timeout = 0.5 is out of range: allowed > reconnect_settle = 0.5"},
+        Bad{"[safety]\nreconnect_settle = 2\nreconnect_timeout = 1\n",
+            "[safety] reconnect_timeout = 1 is out of range: allowed > reconnect_settle = 2"},
+        Bad{"[safety]\nreconnect = false\nreconnect_timeout = 10\n",
+            "[safety] reconnect_timeout has no effect with reconnect = false"},
+        Bad{"[safety]\nreconnect = false\nreconnect_settle = 1\n",
+            "[safety] reconnect_settle has no effect with reconnect = false"}));
 
 TEST(DaemonConfig, EmbeddedDefaultIsTheSimulatedDeviceAndTheDemoWall) {
     const Config c = default_config();

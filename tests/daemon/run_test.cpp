@@ -162,9 +162,10 @@ TEST_F(DaemonRun, LogIsCompleteInLockstep) {
     EXPECT_EQ(rows, 3000u);
 }
 
-TEST_F(DaemonRun, DisconnectEndsTheRunOnAFaultAtZeroForce) {
+TEST_F(DaemonRun, WithoutReconnectADisconnectEndsTheRunOnAFaultAtZeroForce) {
     RunOptions options;
-    options.config_path = config(kEncoderGains, "[device.sim.faults]\ndisconnect_at = 1.5\n");
+    options.config_path = config(
+        kEncoderGains, "[safety]\nreconnect = false\n[device.sim.faults]\ndisconnect_at = 1.5\n");
     options.duration_s = 5.0;
     options.summary_path = "-";
     const Outcome outcome = run(options);
@@ -174,6 +175,66 @@ TEST_F(DaemonRun, DisconnectEndsTheRunOnAFaultAtZeroForce) {
     EXPECT_EQ(s["faults"], nlohmann::json::array({"device_lost"}));
     EXPECT_NEAR(s["ticks"].get<double>(), 1500.0, 2.0);
     EXPECT_NE(outcome.log.find("stopped on a fault"), std::string::npos) << outcome.log;
+}
+
+// The sim's disconnect never comes back: with [safety] reconnect (the default) the loop
+// keeps ticking at zero force, waiting, and ends the run reconnect_timeout after the fault.
+TEST_F(DaemonRun, ADeviceThatDoesNotComeBackEndsTheRunAfterTheReconnectTimeout) {
+    RunOptions options;
+    options.config_path = config(kEncoderGains,
+                                 "[safety]\nreconnect_timeout = 0.6\n"
+                                 "[device.sim.faults]\ndisconnect_at = 1.5\n");
+    options.duration_s = 5.0;
+    options.summary_path = "-";
+    const Outcome outcome = run(options);
+    EXPECT_EQ(outcome.exit_code, kExitFault) << outcome.log;
+    const nlohmann::json s = outcome.summary();
+    EXPECT_EQ(s["exit"], "fault");
+    EXPECT_EQ(s["faults"], nlohmann::json::array({"device_lost"}));
+    EXPECT_EQ(s["link_recoveries"], 0);
+    EXPECT_EQ(s["ticks"], 1500 + 600);  // the fault's tick at 1.5 s, and 0.6 s of waiting
+    EXPECT_NE(outcome.log.find("fault device_lost, force zeroed; waiting for the device to come "
+                               "back (at most 0.6 s, [safety] reconnect_timeout)"),
+              std::string::npos)
+        << outcome.log;
+    EXPECT_NE(outcome.log.find("the device did not come back within [safety] reconnect_timeout "
+                               "= 0.6 s"),
+              std::string::npos)
+        << outcome.log;
+}
+
+TEST_F(DaemonRun, ARunThatEndsWhileTheDeviceIsGoneIsAFault) {
+    RunOptions options;
+    options.config_path = config(kEncoderGains, "[device.sim.faults]\ndisconnect_at = 1.5\n");
+    options.duration_s = 1.8;  // ends 0.3 s into the default 5 s reconnect_timeout
+    options.summary_path = "-";
+    const Outcome outcome = run(options);
+    EXPECT_EQ(outcome.exit_code, kExitFault) << outcome.log;
+    const nlohmann::json s = outcome.summary();
+    EXPECT_EQ(s["exit"], "fault");
+    EXPECT_EQ(s["faults"], nlohmann::json::array({"device_lost"}));
+    EXPECT_EQ(s["ticks"], 1800);
+    EXPECT_NE(outcome.log.find("the run ended with the link down (device_lost)"), std::string::npos)
+        << outcome.log;
+}
+
+// Dropped replies (corrupted or missing frames) latch read_timeout; the device answers again
+// and, 0.5 s later, the latch clears by itself: the run goes on to its end with exit 0.
+TEST_F(DaemonRun, ALinkFaultRecoversWithoutARestart) {
+    RunOptions options;
+    options.config_path =
+        config(kEncoderGains, "[device.sim.faults]\ndrop_at = [1.0, 1.001, 1.002, 1.003]\n");
+    options.duration_s = 3.0;
+    options.summary_path = "-";
+    options.log_path = (dir_ / "run.csv").string();
+    const Outcome outcome = run(options);
+    ASSERT_EQ(outcome.exit_code, kExitOk) << outcome.log;
+    const nlohmann::json s = outcome.summary();
+    EXPECT_EQ(s["exit"], "duration");
+    EXPECT_EQ(s["ticks"], 3000);
+    EXPECT_EQ(s["faults"], nlohmann::json::array({"read_timeout"}));
+    EXPECT_EQ(s["link_recoveries"], 1);
+    EXPECT_GT(s["max_force_n"].get<double>(), 1.0);  // pressing into the wall again after it
 }
 
 TEST_F(DaemonRun, AStopRequestEndsTheRunCleanly) {

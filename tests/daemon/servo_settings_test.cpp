@@ -89,6 +89,28 @@ TEST(DaemonServoSettings, NoCouplingIsPassedThrough) {
     EXPECT_NO_THROW(s.validate());
 }
 
+TEST(DaemonServoSettings, LinkFaultsRecoverByDefaultEveryOtherFaultStopsTheRun) {
+    const servo::ServoConfig s = make_servo_config(lab_config(), pen_display(false), false);
+    EXPECT_TRUE(s.stop_on_fault);
+    EXPECT_TRUE(s.link_recovery.enabled);
+    EXPECT_EQ(s.link_recovery.settle_s, 0.5);
+    EXPECT_EQ(s.link_recovery.timeout_s, 5.0);
+
+    const Config patient = parse_config(
+        "[coupling]\nstiffness = 3000\n[safety]\nreconnect_settle = 2\nreconnect_timeout = 0\n",
+        "lab.toml", "");
+    const servo::ServoConfig p = make_servo_config(patient, pen_display(true), false);
+    EXPECT_TRUE(p.link_recovery.enabled);
+    EXPECT_EQ(p.link_recovery.settle_s, 2.0);
+    EXPECT_EQ(p.link_recovery.timeout_s, 0.0);
+    EXPECT_NO_THROW(p.validate());
+
+    const Config strict = parse_config("[safety]\nreconnect = false\n", "lab.toml", "");
+    const servo::ServoConfig off = make_servo_config(strict, pen_display(false), false);
+    EXPECT_FALSE(off.link_recovery.enabled);
+    EXPECT_TRUE(off.stop_on_fault);
+}
+
 TEST(DaemonServoSettings, AxesMustMatchTheDevice) {
     device::DeviceInfo three = pen_display(false);
     three.axes = 3;

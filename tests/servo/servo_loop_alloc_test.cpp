@@ -2,6 +2,7 @@
 // and an admittance proxy (22), with telemetry, make no allocation on the servo thread.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -107,6 +108,44 @@ TEST(ServoAllocation, FaultPathDoesNotAllocate) {
     for (int n = 0; n < 10; ++n) loop.tick();
     EXPECT_EQ(guard.allocations(), 0u);
     EXPECT_NE(loop.faults_seen(), 0u);
+}
+
+// The sweep, unplugged for 40 ticks of every 200 (and answering with dropped samples for
+// a few more): link faults latch and clear by themselves again and again.
+struct FlakyDevice {
+    SweepingDevice sweep;
+    std::int64_t n = 0;
+    IoResult read(Sample& sample) noexcept {
+        const std::int64_t phase = n++ % 200;
+        const IoResult result = sweep.read(sample);
+        if (phase >= 100 && phase < 140) {
+            sample.status = kStatusDisconnected;
+            return IoResult::disconnected;
+        }
+        if (phase >= 140 && phase < 145) sample.status = kStatusDropped;
+        return result;
+    }
+    IoResult write(const Command& command) noexcept { return sweep.write(command); }
+};
+
+TEST(ServoAllocation, LinkRecoveryDoesNotAllocate) {
+    VirtualTime time;
+    FlakyDevice device;
+    fakes::PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 8000.0, .damping_n_s_per_m = 5.0};
+    ServoConfig config = alloc_config();
+    config.stop_on_fault = true;
+    config.link_recovery = {.enabled = true, .settle_s = 0.02, .timeout_s = 1.0};
+    TelemetryRing ring(64);
+    ServoLoop<FlakyDevice, fakes::PlaneWall, FakeClock> loop(device, wall, config, &ring,
+                                                             FakeClock{&time});
+    const std::atomic<bool> stop{false};
+    hapticd::testing::AllocationGuard guard;
+    const RunExit exit = loop.run(stop, 10'000);
+    const std::uint64_t allocations = guard.allocations();
+    EXPECT_EQ(allocations, 0u);
+    EXPECT_EQ(exit, RunExit::tick_limit);
+    EXPECT_EQ(loop.stats().link_recoveries, 50u);
+    EXPECT_EQ(loop.faults_seen(), kFaultDeviceLost | kFaultReadTimeout);
 }
 
 }  // namespace

@@ -14,7 +14,12 @@
 //   [safety]       max_force (N, > 0), max_speed (m/s, > 0),
 //                  soft_start_ramp (s, 0..10, default 0.5: force ramp after a still handle),
 //                  passivity ("observe" | "control": Hannaford and Ryu's time-domain
-//                  passivity controller adds damping when the observed energy goes negative)
+//                  passivity controller adds damping when the observed energy goes negative),
+//                  reconnect (default true: a latch of link faults only, device_lost,
+//                  read_timeout, device_io, clears by itself once the device has sent good
+//                  samples for reconnect_settle s, (0, 60], default 0.5; if it has not within
+//                  reconnect_timeout s of the fault, 0 (wait for ever) or (settle, 3600],
+//                  default 5, the run ends on the fault; false: any fault ends the run)
 //
 // Every key is checked for type and range, and unknown keys and tables are errors. Each
 // message names the file, the key, the value and the allowed range.
@@ -60,6 +65,9 @@ struct SafetySection {
     double max_speed_mps = 1.0;
     double soft_start_ramp_s = 0.5;
     std::string passivity = "observe";
+    bool reconnect = true;
+    double reconnect_settle_s = 0.5;
+    double reconnect_timeout_s = 5.0;  ///< 0: wait for ever
 };
 
 struct Config {

@@ -15,7 +15,10 @@ namespace hapticd::daemon {
 /// - real-time from [servo], but off on a lockstep clock (virtual time has no deadlines, and
 ///   SCHED_FIFO busy-running would starve the telemetry writer);
 /// - the loop is paced by the device when it says so; a lockstep run waits for the
-///   telemetry writer between ticks (`lossless_log`) so that its log is complete.
+///   telemetry writer between ticks (`lossless_log`) so that its log is complete;
+/// - any fault ends the run (stop_on_fault), except link faults with [safety] reconnect:
+///   those clear by themselves after reconnect_settle, or end the run after
+///   reconnect_timeout (ServoConfig::link_recovery).
 /// Throws ConfigError if the device's axes differ from [device] axes.
 servo::ServoConfig make_servo_config(const Config& config, const device::DeviceInfo& info,
                                      bool lossless_log);

@@ -1,7 +1,9 @@
 // Latched safety faults (DESIGN.md "Safety model"). A fault zeroes the force in the tick that
-// raises it and stays latched until reset outside the tick. Faults form a bitmask so that
-// several can be latched at once; each bit has a stable snake_case name for the summary's
-// `faults` list and the telemetry's `faults` column (which carries the mask as an integer).
+// raises it and stays latched until reset outside the tick (request_fault_reset), or, for a
+// link fault only (kLinkFaults), until the device has been back for a while (LinkRecovery). Faults
+// form a bitmask so that several can be latched at once; each bit has a stable snake_case name for
+// the summary's `faults` list and the telemetry's `faults` column (which carries the mask as an
+// integer).
 #pragma once
 
 #include <array>
@@ -22,6 +24,21 @@ enum Fault : std::uint32_t {
 };
 
 inline constexpr int kFaultCount = 8;
+
+/// Link faults: the device or the wire between it and the host failed, not the device's
+/// mechanics, the encoder or this host. They are the only faults that LinkRecovery
+/// (link_recovery.hpp) may clear by itself, once the device has sent good samples again for
+/// a while: a lost device (unplugged, ENODEV), reads that gave no sample (timeouts, dropped,
+/// corrupted frames), I/O errors. Every other fault needs an operator (request_fault_reset):
+/// encoder_jump (the position may be wrong), device_fault (the device says so itself),
+/// overspeed, non_finite (the environment is broken) and overrun_budget (this host cannot
+/// keep the rate).
+inline constexpr std::uint32_t kLinkFaults = kFaultDeviceLost | kFaultReadTimeout | kFaultDeviceIo;
+
+/// True when `faults` is not empty and holds link faults only.
+constexpr bool only_link_faults(std::uint32_t faults) noexcept {
+    return faults != 0u && (faults & ~kLinkFaults) == 0u;
+}
 
 /// The name of one fault bit ("device_lost", ...); "unknown" for anything else.
 constexpr std::string_view fault_name(std::uint32_t fault_bit) noexcept {

@@ -8,6 +8,7 @@
 #include "hapticd/servo/coupling.hpp"
 #include "hapticd/servo/environment_port.hpp"
 #include "hapticd/servo/io.hpp"
+#include "hapticd/servo/link_recovery.hpp"
 #include "hapticd/servo/realtime.hpp"
 #include "hapticd/servo/safety.hpp"
 
@@ -27,16 +28,21 @@ struct ServoConfig {
     /// false: no virtual coupling; an impedance environment acts on the device directly
     /// (VirtualCoupling::step_rigid). The gains are then unused. Not for admittance scenes.
     bool coupling_enabled = true;
-    SeriesSolverOptions solver{};   ///< Newton solve of (17)
-    SafetyLimits safety{};          ///< [safety]; max_force_n also capped at the device's limit
-    RealtimeRequest realtime{};     ///< [servo] realtime, priority, cpu
+    SeriesSolverOptions solver{};  ///< Newton solve of (17)
+    SafetyLimits safety{};         ///< [safety]; max_force_n also capped at the device's limit
+    RealtimeRequest realtime{};    ///< [servo] realtime, priority, cpu
     /// The device's read() blocks until its next period (DeviceInfo::paces_loop): the loop
     /// does not sleep to a deadline of its own.
     bool device_paces_loop = false;
     OverrunBudget overrun{};
     /// run() returns after the tick that latches a fault. Otherwise it keeps ticking at zero
-    /// force until request_fault_reset() (a lost device always ends the run).
+    /// force until request_fault_reset() (a lost device always ends the run). With
+    /// link_recovery enabled, a latch of link faults only (kLinkFaults) never stops the run:
+    /// it keeps ticking at zero force until the device is back and the latch clears, or
+    /// until link_recovery.timeout_s.
     bool stop_on_fault = true;
+    /// Clears a latch of link faults only by itself once the device is back (LinkRecovery).
+    LinkRecoverySettings link_recovery{};
     bool start_armed = true;  ///< false: zero force until arm()
     /// Virtual time only (a lockstep device that paces the loop): before each tick run()
     /// waits, outside the tick, until the telemetry ring has room, so that a log of a

@@ -7,6 +7,7 @@
 //   coupling against the environment: (17) impedance, (22) admittance (VirtualCoupling)
 //   safety: fault latch, velocity limit, soft start, passivity, saturation (SafetySupervisor)
 //   write the force (the device holds it: ZOH); push one telemetry record (never blocks)
+//   link recovery: a latch of link faults only clears once the device is back (LinkRecovery)
 //
 // It is a template over the device (anything with noexcept read(Sample&) and
 // write(const Command&) returning IoResult, e.g. device::Device), the environment (an
@@ -37,6 +38,7 @@
 #include "hapticd/servo/environment_port.hpp"
 #include "hapticd/servo/faults.hpp"
 #include "hapticd/servo/io.hpp"
+#include "hapticd/servo/link_recovery.hpp"
 #include "hapticd/servo/pacing.hpp"
 #include "hapticd/servo/realtime.hpp"
 #include "hapticd/servo/safety.hpp"
@@ -78,6 +80,7 @@ class ServoLoop {
           counts_to_m_(1.0 / config.counts_per_meter),
           coupling_(config.coupling, config.solver),
           safety_(config.safety, config.axes),
+          link_recovery_(config.link_recovery, config.rate_hz),
           telemetry_(telemetry),
           clock_(clock),
           pacer_(clock_, config.period_ns()),
@@ -102,8 +105,14 @@ class ServoLoop {
 
     /// Applies the real-time request (throws in enforce mode if refused, after writing zero
     /// force), then ticks at rate_hz until `stop` is set, `max_ticks` ticks have run (0: no
-    /// limit), or a fault is latched (see ServoConfig::stop_on_fault). Writes zero force on
-    /// return.
+    /// limit), or a fault is latched (see ServoConfig::stop_on_fault; with link recovery, a
+    /// latch of link faults only ends the run when link_recovery.timeout_s runs out). Writes
+    /// zero force on return.
+    ///
+    /// When the device paces the loop, read() blocks until its next sample; but a device that
+    /// gave no sample (gone, or a timeout that returned at once) paces nothing, so before
+    /// the next tick run() sleeps to one period after the start of the one that had none:
+    /// a lost device never spins the servo thread.
     RunExit run(const std::atomic<bool>& stop, std::uint64_t max_ticks = 0) {
         try {
             realtime_.apply(config_.realtime);
@@ -113,6 +122,8 @@ class ServoLoop {
         }
         pacer_.start();
         RunExit exit = RunExit::stopped;
+        bool idle = false;  // the device paces the loop but gave no sample last tick
+        std::int64_t idle_deadline_ns = 0;
         for (std::uint64_t ticks_run = 0;; ++ticks_run) {
             if (stop.load(std::memory_order_acquire)) break;
             if (max_ticks != 0 && ticks_run >= max_ticks) {
@@ -121,12 +132,19 @@ class ServoLoop {
             }
             if (config_.device_paces_loop) {
                 wait_for_telemetry_room(stop);
-                tick();
+                if (idle) clock_.sleep_until_ns(idle_deadline_ns);  // at once if it has passed
+                idle_deadline_ns = clock_.now_ns() + pacer_.period_ns();
+                idle = (tick().flags & kFlagNoSample) != 0u;
             } else {
                 run_tick(pacer_.wait(), /*paced=*/true);
             }
+            if (link_recovery_.gave_up()) {
+                exit = RunExit::fault;
+                break;
+            }
             const std::uint32_t faults = safety_.faults();
-            if ((faults != 0u && config_.stop_on_fault) || (faults & kFaultDeviceLost) != 0u) {
+            if (faults != 0u && !link_recovery_.recoverable(faults) &&
+                (config_.stop_on_fault || (faults & kFaultDeviceLost) != 0u)) {
                 exit = RunExit::fault;
                 break;
             }
@@ -151,6 +169,9 @@ class ServoLoop {
     /// Every fault latched since construction, even if reset since.
     std::uint32_t faults_seen() const noexcept { return faults_seen_; }
     const SafetySupervisor& safety() const noexcept { return safety_; }
+    /// Progress of link-fault recovery; gave_up() after run() returned: the device did not
+    /// come back within link_recovery.timeout_s.
+    const LinkRecovery& link_recovery() const noexcept { return link_recovery_; }
     const VirtualCoupling& coupling() const noexcept { return coupling_; }
     const RealtimeReport& realtime_report() const noexcept { return realtime_.report(); }
     const ServoConfig& config() const noexcept { return config_; }
@@ -211,11 +232,19 @@ class ServoLoop {
         ++consecutive_overruns_;
         if (consecutive_overruns_ > config_.overrun.max_consecutive_overruns ||
             wake.missed_periods > config_.overrun.max_missed_periods) {
-            safety_.raise(kFaultOverrunBudget);
+            raise(kFaultOverrunBudget);
         }
     }
 
+    // Latches `faults` and remembers them as raised in this tick.
+    void raise(std::uint32_t faults) noexcept {
+        safety_.raise(faults);
+        raised_this_tick_ |= faults;
+    }
+
     // Reads one sample; false when there is none this tick. Raises the faults it implies.
+    // A read that says the device is gone (or failed) raises device_lost (device_io) and
+    // does not also count towards read_timeout, which is for timeouts and dropped samples.
     bool read_sample(Sample& sample, std::uint32_t& flags) noexcept {
         bool have_sample = false;
         switch (device_.read(sample)) {
@@ -225,25 +254,42 @@ class ServoLoop {
             case IoResult::timeout:
                 break;
             case IoResult::disconnected:
-                safety_.raise(kFaultDeviceLost);
+                raise(kFaultDeviceLost);
                 break;
             case IoResult::error:
-                safety_.raise(kFaultDeviceIo);
+                raise(kFaultDeviceIo);
                 break;
         }
-        if ((sample.status & kStatusDisconnected) != 0u) safety_.raise(kFaultDeviceLost);
-        if ((sample.status & kStatusDeviceFault) != 0u) safety_.raise(kFaultDeviceFault);
-        if ((sample.status & kStatusJump) != 0u) safety_.raise(kFaultEncoderJump);
+        if ((sample.status & kStatusDisconnected) != 0u) {
+            raise(kFaultDeviceLost);
+            have_sample = false;
+        }
+        if ((sample.status & kStatusDeviceFault) != 0u) raise(kFaultDeviceFault);
+        if ((sample.status & kStatusJump) != 0u) raise(kFaultEncoderJump);
         if (have_sample) {
             consecutive_timeouts_ = 0;
         } else {
             flags |= kFlagNoSample;
             ++stats_.read_timeouts;
-            if (++consecutive_timeouts_ > config_.safety.read_timeouts_allowed) {
-                safety_.raise(kFaultReadTimeout);
+            const bool link_failed =
+                (raised_this_tick_ & (kFaultDeviceLost | kFaultDeviceIo)) != 0u;
+            if (!link_failed && ++consecutive_timeouts_ > config_.safety.read_timeouts_allowed) {
+                raise(kFaultReadTimeout);
             }
         }
         return have_sample;
+    }
+
+    // What request_fault_reset() does, at the start of a tick; also what LinkRecovery does
+    // at the end of the tick that completed the settle. The next sample re-initialises the
+    // coupling and the environment where the handle is; the soft start waits for a still
+    // handle again.
+    void clear_fault_latch() noexcept {
+        safety_.reset();
+        link_recovery_.reset();
+        initialised_ = false;
+        consecutive_overruns_ = 0;
+        consecutive_timeouts_ = 0;
     }
 
     // Time since the previous sample used, in periods: from the device's sequence numbers
@@ -260,12 +306,8 @@ class ServoLoop {
 
     const TelemetryRecord& run_tick(const Wake& wake, bool paced) noexcept {
         std::uint32_t flags = 0;
-        if (reset_requested_.exchange(false, std::memory_order_acq_rel)) {
-            safety_.reset();
-            initialised_ = false;
-            consecutive_overruns_ = 0;
-            consecutive_timeouts_ = 0;
-        }
+        raised_this_tick_ = 0;
+        if (reset_requested_.exchange(false, std::memory_order_acq_rel)) clear_fault_latch();
         const bool armed = armed_.load(std::memory_order_acquire);
         if (armed && !was_armed_) {
             safety_.restart_soft_start();
@@ -279,6 +321,10 @@ class ServoLoop {
 
         Sample sample;
         const bool have_sample = read_sample(sample, flags);
+        // A gap in the samples under a link fault breaks the position history: a device that
+        // comes back may have moved or restarted its encoder, so its first sample starts the
+        // history again (no jump check against the last position before the gap).
+        if (!have_sample && (safety_.faults() & kLinkFaults) != 0u) initialised_ = false;
         const Vec3 x_d = have_sample ? to_metres(sample) : coupling_.previous_device_position_m();
         double interval_s = period_s_;
         if (have_sample) {
@@ -290,7 +336,7 @@ class ServoLoop {
             } else if (config_.safety.encoder_jump_m > 0.0 &&
                        max_abs(x_d - coupling_.previous_device_position_m()) >
                            config_.safety.encoder_jump_m) {
-                safety_.raise(kFaultEncoderJump);
+                raise(kFaultEncoderJump);
             }
         }
 
@@ -300,7 +346,7 @@ class ServoLoop {
         Vec3 x_e = coupling_.previous_tool_position_m();
         if (have_sample && armed && !safety_.faulted()) {
             const CouplingStep step = couple(x_d, interval_s);
-            if (!step.finite) safety_.raise(kFaultNonFinite);
+            if (!step.finite) raise(kFaultNonFinite);
             if (step.finite && !step.converged) {
                 flags |= kFlagSolverNotConverged;
                 ++stats_.solver_not_converged;
@@ -347,6 +393,13 @@ class ServoLoop {
         }
         faults_seen_ |= safety_.faults();
 
+        // Link recovery: count this tick; the latch clears after the record of this tick
+        // (which still carries the faults that held the force at zero).
+        const bool good_tick = have_sample && (raised_this_tick_ & kLinkFaults) == 0u;
+        const LinkAction link_action = link_recovery_.update(
+            safety_.faults(), good_tick, 1 + static_cast<std::uint64_t>(wake.missed_periods));
+        if (link_action == LinkAction::recover) flags |= kFlagLinkRecovered;
+
         // Statistics: compute time from wake to the command written.
         const std::int64_t compute_ns = clock_.now_ns() - wake.wake_ns;
         stats_.compute.record(compute_ns);
@@ -373,6 +426,10 @@ class ServoLoop {
         record_.energy_j = safety_.passivity().energy_j();
         if (telemetry_ != nullptr) telemetry_->try_push(record_);
         ++stats_.ticks;
+        if (link_action == LinkAction::recover) {
+            clear_fault_latch();
+            ++stats_.link_recoveries;
+        }
         publish_status(safe.soft_start_scale, armed);
         return record_;
     }
@@ -380,7 +437,7 @@ class ServoLoop {
     void write_command(const Command& command) noexcept {
         const IoResult result = device_.write(command);
         if (result == IoResult::ok) return;
-        safety_.raise(result == IoResult::disconnected ? kFaultDeviceLost : kFaultDeviceIo);
+        raise(result == IoResult::disconnected ? kFaultDeviceLost : kFaultDeviceIo);
         if (command.enable) (void)device_.write(Command{});  // one more try at zero force
     }
 
@@ -407,6 +464,7 @@ class ServoLoop {
     double counts_to_m_;
     VirtualCoupling coupling_;
     SafetySupervisor safety_;
+    LinkRecovery link_recovery_;
     TelemetryRing* telemetry_;
     Clock clock_;
     LoopPacer<Clock> pacer_;
@@ -425,6 +483,7 @@ class ServoLoop {
     std::uint64_t scheduled_periods_ = 0;
     std::uint64_t last_sequence_ = 0;
     std::uint32_t faults_seen_ = 0;
+    std::uint32_t raised_this_tick_ = 0;  ///< Fault bits raised in the current tick
 };
 
 }  // namespace hapticd::servo

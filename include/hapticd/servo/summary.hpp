@@ -31,6 +31,7 @@ struct Summary {
     std::uint64_t read_timeouts = 0;
     std::uint64_t solver_not_converged = 0;
     std::uint64_t saturated_ticks = 0;
+    std::uint64_t link_recoveries = 0;  ///< link faults cleared once the device came back
     double passivity_energy_j = 0.0;
 };
 

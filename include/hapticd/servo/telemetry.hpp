@@ -20,6 +20,7 @@ enum TickFlag : std::uint32_t {
     kFlagSolverNotConverged = 1u << 5,  ///< (17) did not meet its tolerance
     kFlagNoSample = 1u << 6,            ///< read() gave no sample (timeout, dropped)
     kFlagDisarmed = 1u << 7,            ///< the loop is disarmed: zero force by request
+    kFlagLinkRecovered = 1u << 8,       ///< the link-fault latch clears after this tick
 };
 
 struct TelemetryRecord {

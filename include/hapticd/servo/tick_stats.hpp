@@ -49,9 +49,10 @@ struct TickStats {
     std::uint64_t saturated_ticks = 0;
     std::uint64_t overspeed_ticks = 0;
     std::uint64_t passivity_control_ticks = 0;
-    double max_force_n = 0.0;        ///< largest |F| commanded (vector norm)
-    DurationHistogram wake_latency;  ///< actual wake - deadline
-    DurationHistogram compute;       ///< wake to command written
+    std::uint64_t link_recoveries = 0;  ///< link-fault latches cleared by LinkRecovery
+    double max_force_n = 0.0;           ///< largest |F| commanded (vector norm)
+    DurationHistogram wake_latency;     ///< actual wake - deadline
+    DurationHistogram compute;          ///< wake to command written
 
     void clear() noexcept { *this = TickStats{}; }
 };
