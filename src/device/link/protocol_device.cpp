@@ -186,7 +186,7 @@ void ProtocolDevice::handshake() {
         throw std::runtime_error(
             "no identity from " + where + " after " + std::to_string(kHelloAttempts) +
             " hello messages " + std::to_string(settings_.handshake_timeout_us / 1000) +
-            " ms apart: is it a hapticd protocol device, at the right baud rate? "
+            " ms apart: is it a hapticd protocol device (on a serial line: at the right baud rate)? "
             "(docs/protocol.md 5.1)");
     }
     check_identity(pending_identity_);  // 5.1 step 4
@@ -374,10 +374,14 @@ void ProtocolDevice::reconnect_loop() {
 void ProtocolDevice::close() noexcept {
     stop_.store(true);
     if (reconnect_thread_.joinable()) reconnect_thread_.join();
-    const LinkState state = state_.exchange(LinkState::closed);
-    if (link_ == nullptr) return;
+    const LinkState state = state_.load();
+    if (link_ == nullptr) {
+        state_.store(LinkState::closed);
+        return;
+    }
     if (state == LinkState::connected || state == LinkState::ready) {
         // Zero force, then end the session (5.1); the device's watchdog covers a lost bye.
+        state_.store(LinkState::connected);
         (void)write(Command{});
         state_.store(LinkState::closed);
         const proto::Encoded bye = proto::encode(proto::Bye{session_}, tx_);
@@ -393,6 +397,7 @@ void ProtocolDevice::close() noexcept {
             }
         }
     }
+    state_.store(LinkState::closed);
     link_->close();
 }
 

@@ -339,7 +339,9 @@ TEST_F(ProtocolDeviceTest, CloseLeavesZeroForceAndEndsTheSession) {
     ASSERT_EQ(d->read(s), IoResult::ok);
     ASSERT_EQ(d->write(push), IoResult::ok);
     ASSERT_DOUBLE_EQ(bench_.device->output_force_n()[0], 2.0);
+    const std::uint64_t commands = d->counters().commands_sent;
     d->close();
+    EXPECT_EQ(d->counters().commands_sent, commands + 1);  // a zero-force command, then bye
     EXPECT_EQ(bench_.device->output_force_n()[0], 0.0);
     EXPECT_FALSE(bench_.device->session_open());
     d->close();  // twice is fine

@@ -1,0 +1,50 @@
+// The [device.serial] keys (serial_settings.hpp, docs/transport-serial.md).
+#include "hapticd/device/serial/serial_settings.hpp"
+
+#include <algorithm>
+
+namespace hapticd::device::serial {
+
+std::string baud_rates_text() {
+    std::string text;
+    for (const std::uint32_t rate : kStandardBaudRates) {
+        if (!text.empty()) text += ", ";
+        text += std::to_string(rate);
+    }
+    return text;
+}
+
+bool is_standard_baud(std::int64_t baud) noexcept {
+    return std::find(kStandardBaudRates.begin(), kStandardBaudRates.end(), baud) !=
+           kStandardBaudRates.end();
+}
+
+SerialSettings read_serial_settings(TableReader& table) {
+    SerialSettings settings;
+    settings.source = table.source();
+
+    settings.port = table.string("port", "");
+    if (settings.port.empty()) {
+        table.fail("port", table.has("port")
+                               ? "is empty: it must be the serial port's path"
+                               : "is required: the serial port's path, e.g. "
+                                 "\"/dev/serial/by-id/usb-...-if00\" (stable across replugging) or "
+                                 "\"/dev/ttyACM0\"");
+    }
+
+    if (const toml::node* baud = table.get("baud")) {
+        const auto* value = baud->as_integer();
+        if (value == nullptr || !is_standard_baud(value->get())) {
+            table.fail_value("baud", *baud, "one of the standard rates " + baud_rates_text());
+        }
+        settings.baud = static_cast<std::uint32_t>(value->get());
+    }
+
+    settings.reset_on_open = table.boolean("reset_on_open", settings.reset_on_open);
+    settings.reset_wait_ms = static_cast<std::uint32_t>(
+        table.integer("reset_wait_ms", settings.reset_wait_ms, 0, 10'000));
+    settings.exclusive = table.boolean("exclusive", settings.exclusive);
+    return settings;
+}
+
+}  // namespace hapticd::device::serial
