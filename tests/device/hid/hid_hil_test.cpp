@@ -1,0 +1,150 @@
+// HidClosedLoop: the real hapticd executable with `[device] plugin = "hid"`, its servo loop
+// closed through hidapi's hidraw backend and an emulated hidraw node to the reference device
+// playing the pen display's physics in lockstep (emulated_hid_device.hpp), against the HIL
+// tests' stiff wall (tests/hil/wall_contact.hpp) with the coupling the `encoder` model sizes.
+// The contact must be as stable as it is on the sim plugin (HilEncoderGains). Also: a user
+// who may not open the hidraw node is told about the udev rule.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <string>
+
+#include "emulated_hid_device.hpp"
+#include "hapticd_run.hpp"
+#include "pen_display.hpp"
+#include "tuned_gains.hpp"
+#include "wall_contact.hpp"
+
+namespace hapticd::testing {
+namespace {
+
+constexpr double kWallStiffnessNPerM = 1e5;
+constexpr double kStartM = -0.001;  ///< 1 mm in front of the wall
+constexpr double kDurationS = 4.0;
+constexpr double kSettleS = 2.0;
+
+/// hapticd's config for the pen display on the `hid` plugin (cf. DaemonConfig::toml()).
+std::string hid_daemon_config(const EmulatedHidDevice& device, const CouplingGains& gains) {
+    return "[servo]\nrate_hz = " + toml_number(kRateHz) + "\nrealtime = \"off\"\n" +
+           "[device]\nplugin = \"hid\"\naxes = 1\n" +
+           "[device.model]\nmass = " + toml_number(kPenMassKg) +
+           "\ndamping = " + toml_number(kPenDampingNsPerM) + "\n" +
+           coupling_table(gains, "encoder") + "[scene]\nfile = \"scene.toml\"\n" +
+           "[safety]\nmax_force = " + toml_number(kForceLimitN) +
+           "\nmax_speed = 1.0\nsoft_start_ramp = 0.5\npassivity = \"observe\"\n" +
+           "[device.hid]\n" + device.table_toml();
+}
+
+device::protocol::EmulatorConfig pen_display_at_start() {
+    device::protocol::EmulatorConfig c = pen_display_emulator();
+    c.sim.initial_position_m[0] = kStartM;  // hands-off: the scene's preload brings it in
+    return c;
+}
+
+TEST(HidClosedLoop, TheDaemonHoldsAStiffWallStablyThroughHid) {
+    const CouplingGains gains = size_coupling("encoder");
+    ASSERT_GT(gains.stiffness_n_per_m, 0.0);
+    EmulatedHidDevice device(pen_display_at_start());
+    const ScratchDir dir;
+    const DaemonRun run = run_hapticd(dir, {.config_toml = hid_daemon_config(device, gains),
+                                            .scene_toml = wall_contact_scene(kWallStiffnessNPerM),
+                                            .duration_s = kDurationS});
+
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    EXPECT_EQ(run.summary.at("exit"), "duration");
+    EXPECT_EQ(fault_list(run), "");
+    EXPECT_EQ(run.summary.at("ticks").get<double>(), kDurationS * kRateHz);
+    ASSERT_EQ(run.log.rows(), static_cast<std::size_t>(kDurationS * kRateHz));
+    // Every tick went through the node: one command report per tick (and the handshake's).
+    EXPECT_GE(device.server().output_reports(), static_cast<std::uint64_t>(kDurationS * kRateHz));
+
+    const ContactJudgement judged = judge_wall_contact(run.log, kSettleS);
+    std::cout << "[hid] closed loop through hidapi: " << describe(judged) << "\n";
+    EXPECT_GE(judged.transient_peak_m, 2.0 * kCountM) << "the contact was never excited";
+    EXPECT_LE(judged.trend.growth_per_s, 0.1);
+    EXPECT_LE(judged.trend.last_amplitude_m, 8.0 * kCountM);
+    EXPECT_TRUE(judged.contact_kept()) << "left the wall at " << judged.contact_lost_at_s << " s";
+    EXPECT_GT(judged.min_tool_depth_m, 0.0);
+    EXPECT_LT(judged.max_abs_force_n, 0.5 * kForceLimitN);
+    // The handle rests where the preload and the wall balance: 0.5 N / K inside the wall.
+    const auto& x = run.log.column("x0_m");
+    EXPECT_NEAR(x.back(), 0.5 / kWallStiffnessNPerM, 3.0 * kCountM);
+
+    // The same run on the sim plugin: the same physics with no transport in between. The
+    // trajectories are the same tick for tick until the contact (lockstep: deterministic);
+    // there the wire's whole micronewtons tip an encoder count the other way now and then,
+    // and the two dither apart by no more than the dither itself.
+    DaemonConfig sim;
+    sim.coupling = coupling_table(gains, "encoder");
+    sim.initial_position = toml_number(kStartM);
+    const ScratchDir sim_dir;
+    const DaemonRun direct =
+        run_hapticd(sim_dir, {.config_toml = sim.toml(),
+                              .scene_toml = wall_contact_scene(kWallStiffnessNPerM),
+                              .duration_s = kDurationS});
+    ASSERT_EQ(direct.exit_code, 0) << direct.err;
+    const auto& x_sim = direct.log.column("x0_m");
+    ASSERT_EQ(x_sim.size(), x.size());
+    std::size_t first_difference = x.size();
+    double worst_m = 0.0;
+    for (std::size_t i = 0; i < x.size(); ++i) {
+        const double difference_m = std::abs(x[i] - x_sim[i]);
+        if (difference_m > 0.0 && first_difference == x.size()) first_difference = i;
+        worst_m = std::max(worst_m, difference_m);
+    }
+    std::cout << "[hid] against the sim plugin: the same until tick " << first_difference
+              << ", then at most " << worst_m / kCountM << " counts apart\n";
+    EXPECT_GE(first_difference, static_cast<std::size_t>(kRateHz));  // contact: about 1.2 s
+    EXPECT_LE(worst_m, 4.0 * kCountM);
+}
+
+TEST(HidClosedLoop, AUserWhoMayNotOpenTheNodeIsToldAboutTheUdevRule) {
+    EmulatedHidDevice device;
+    const std::string node = device.testbed().root_dir() + device.devnode();
+    const std::string pty = std::filesystem::read_symlink(node).string();
+    ScratchDir dir;
+    std::string prefix;
+    if (geteuid() == 0) {
+        // root opens anything: run hapticd as nobody, who may read the testbed and reach its
+        // ioctl socket (libumockdev-preload connects to it in open()), but not open the pty
+        // behind the node (root's, mode 0620).
+        const std::string root = device.testbed().root_dir();
+        ASSERT_EQ(chmod(root.c_str(), 0755), 0);
+        ASSERT_EQ(chmod((root + "/ioctl" + device.devnode()).c_str(), 0777), 0);
+        ASSERT_EQ(chmod(dir.path().c_str(), 0777), 0);
+        prefix = "setpriv --reuid=65534 --regid=65534 --clear-groups ";
+    } else {
+        ASSERT_EQ(chmod(pty.c_str(), 0), 0);
+    }
+    const std::string config =
+        dir.write("cfg.toml",
+                  "[servo]\nrate_hz = 1000.0\nrealtime = \"off\"\n[device]\nplugin = \"hid\"\n"
+                  "axes = 1\n[device.model]\nmass = 0.1\ndamping = 2.0\n" +
+                      no_coupling_table() + "[device.hid]\n" + device.table_toml());
+    const CommandResult result = run_command(prefix + shell_quote(HAPTICD_BIN) +
+                                             " --lockstep --no-status --duration 0.1 "
+                                             "--config " +
+                                             shell_quote(config));
+    if (!prefix.empty() && result.err.rfind("setpriv:", 0) == 0) {
+        GTEST_SKIP() << "cannot run as nobody here: " << result.err;
+    }
+    std::cout << "[hid] as a user without access, hapticd says:\n" << result.err;
+    EXPECT_NE(result.exit_code, 0);
+    EXPECT_NE(result.err.find("hid: permission denied opening /dev/hidraw0 1209:4841"),
+              std::string::npos)
+        << result.err;
+    EXPECT_NE(result.err.find("config/udev/70-hapticd.rules"), std::string::npos) << result.err;
+    EXPECT_NE(result.err.find("KERNEL==\"hidraw*\", SUBSYSTEM==\"hidraw\", "
+                              "ATTRS{idVendor}==\"1209\", ATTRS{idProduct}==\"4841\", "
+                              "MODE=\"0660\", GROUP=\"plugdev\", TAG+=\"uaccess\""),
+              std::string::npos)
+        << result.err;
+}
+
+}  // namespace
+}  // namespace hapticd::testing
