@@ -19,8 +19,9 @@ namespace hapticd::device::link {
 enum class LinkResult : std::uint8_t {
     ok,
     timeout,       ///< nothing (whole) arrived before the deadline
-    disconnected,  ///< the device is gone (ENODEV, EIO on a tty, hangup): reopen to go on
-    error,         ///< this transfer failed (stall, overflow, ...); the link stays usable
+    disconnected,  ///< gone (ENODEV, EIO on a tty, hangup) or unusable until reopened (a
+                   ///< halted USB endpoint: clearing it is a blocking control request)
+    error,         ///< this transfer failed (overflow, protocol error); the link stays usable
 };
 
 /// What the transport itself saw; ProtocolDevice adds the protocol-level counts.
@@ -31,7 +32,7 @@ struct LinkCounters {
     std::uint64_t receive_errors = 0;  ///< failed transfers and reads
     std::uint64_t framing_errors = 0;  ///< transport-level garbage dropped (bad COBS, wrong
                                        ///< report ID, oversize frame)
-    std::uint64_t stalls = 0;          ///< USB: endpoint halts cleared
+    std::uint64_t stalls = 0;          ///< USB: endpoint halts seen (cleared by reopening)
     std::uint64_t reopens = 0;         ///< successful open() calls after the first
 };
 

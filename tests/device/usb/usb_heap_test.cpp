@@ -1,0 +1,106 @@
+// UsbHeapTest: what the heap sees per servo tick on the `usb` plugin, counted by a malloc
+// interposer on the ticking thread. Our own code allocates nothing (the AllocationGuard of
+// usb_device_test proves that for operator new); this measures what libusb does below it, for
+// docs/transport-usb.md ("Allocation"): its Linux backend calloc()s the URB of every submitted
+// transfer (linux_usbfs.c, submit_bulk_transfer) and frees it when the transfer is reaped.
+#include <gtest/gtest.h>
+#include <libusb.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <iostream>
+
+#include "hapticd/device/link/protocol_device.hpp"
+#include "hapticd/device/usb/make_usb_link.hpp"
+#include "usb_testbed.hpp"
+
+extern "C" {
+void* __libc_malloc(std::size_t size);
+void* __libc_calloc(std::size_t count, std::size_t size);
+void* __libc_realloc(void* pointer, std::size_t size);
+void __libc_free(void* pointer);
+}
+
+namespace {
+
+struct HeapCounts {
+    std::uint64_t malloc = 0;
+    std::uint64_t calloc = 0;
+    std::uint64_t realloc = 0;
+    std::uint64_t free = 0;
+};
+
+// Trivial types only: thread_local access must not allocate (static TLS, no init guard).
+thread_local bool t_counting = false;
+thread_local HeapCounts t_counts;
+
+}  // namespace
+
+// The executable's definitions come first in symbol lookup, so these see every call made by
+// libusb, libstdc++ and the rest, from any library.
+extern "C" void* malloc(std::size_t size) {
+    if (t_counting) ++t_counts.malloc;
+    return __libc_malloc(size);
+}
+extern "C" void* calloc(std::size_t count, std::size_t size) {
+    if (t_counting) ++t_counts.calloc;
+    return __libc_calloc(count, size);
+}
+extern "C" void* realloc(void* pointer, std::size_t size) {
+    if (t_counting) ++t_counts.realloc;
+    return __libc_realloc(pointer, size);
+}
+extern "C" void free(void* pointer) {
+    if (t_counting && pointer != nullptr) ++t_counts.free;
+    __libc_free(pointer);
+}
+
+namespace hapticd::device::usb {
+namespace {
+
+TEST(UsbHeapTest, LibusbCallocsOneUrbPerSubmittedTransfer) {
+    testing::UsbTestbed testbed;
+    testing::UsbDeviceSpec spec;
+    spec.emulator = testing::pen_display_emulator("EMU-0001");
+    testbed.add(spec);
+    link::ProtocolDevice device("usb", make_usb_link);
+    DeviceConfig config;
+    config.lockstep = true;
+    config.plugin_table_toml = "serial_number = \"EMU-0001\"\n";
+    device.open(config);
+
+    auto tick = [&device] {
+        Sample sample;
+        Command command;
+        command.force_n[0] = 0.5;
+        command.enable = true;
+        return device.read(sample) == IoResult::ok && device.write(command) == IoResult::ok;
+    };
+    for (int i = 0; i < 10; ++i) ASSERT_TRUE(tick());  // the first read polls: one more OUT
+
+    constexpr int kTicks = 2000;
+    int ok = 0;
+    t_counts = HeapCounts{};
+    t_counting = true;
+    for (int i = 0; i < kTicks; ++i) ok += tick() ? 1 : 0;
+    t_counting = false;
+    const HeapCounts counts = t_counts;
+    device.close();
+    ASSERT_EQ(ok, kTicks);
+
+    std::cout << "[usb] heap calls per tick on the servo thread (libusb "
+              << "1.0." << libusb_get_version()->micro << "): malloc "
+              << static_cast<double>(counts.malloc) / kTicks << ", calloc "
+              << static_cast<double>(counts.calloc) / kTicks << ", realloc "
+              << static_cast<double>(counts.realloc) / kTicks << ", free "
+              << static_cast<double>(counts.free) / kTicks << "\n";
+    // Per tick one OUT transfer (the command) and one IN transfer (resubmitted after the
+    // sample) are submitted: one calloc each, freed when reaped. Nothing else.
+    EXPECT_EQ(counts.calloc, 2u * kTicks);
+    EXPECT_EQ(counts.malloc, 0u);
+    EXPECT_EQ(counts.realloc, 0u);
+    EXPECT_EQ(counts.free, 2u * kTicks);
+}
+
+}  // namespace
+}  // namespace hapticd::device::usb
