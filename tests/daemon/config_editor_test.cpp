@@ -1,0 +1,117 @@
+// Editing a config's values as text (daemon/config_editor.hpp): only the edited values
+// change; comments, order and alignment stay; what cannot be edited safely is refused.
+#include "hapticd/daemon/config_editor.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace hapticd::daemon {
+namespace {
+
+std::string read_file(const std::string& path) {
+    std::ifstream in(path);
+    std::stringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+const char* kConfig = R"(# lab config
+[servo]
+rate_hz = 1000.0        # Hz
+
+[device.model]          # what the check assumes
+mass = 0.1              # kg
+damping = 2.0           # N s/m
+
+[coupling]
+stiffness = 3600.0      # N/m
+check = "encoder"
+)";
+
+TEST(DaemonConfigEditor, ReplacesValuesInPlaceKeepingCommentsAndAlignment) {
+    const EditedConfig r = edit_config_text(kConfig,
+                                            {{"device.model", "mass", 0.0987},
+                                             {"device.model", "damping", 2.5},
+                                             {"coupling", "stiffness", 4500.0},
+                                             {"coupling", "check", std::string("exact")}},
+                                            "lab.toml");
+    EXPECT_EQ(r.text, R"(# lab config
+[servo]
+rate_hz = 1000.0        # Hz
+
+[device.model]          # what the check assumes
+mass = 0.0987           # kg
+damping = 2.5           # N s/m
+
+[coupling]
+stiffness = 4500.0      # N/m
+check = "exact"
+)");
+    ASSERT_EQ(r.changes.size(), 4u);
+    EXPECT_EQ(r.changes[0].old_text, "0.1");
+    EXPECT_EQ(r.changes[0].new_text, "0.0987");
+    EXPECT_EQ(r.changes[3].old_text, "\"encoder\"");
+}
+
+TEST(DaemonConfigEditor, AddsMissingKeysAfterTheTableAndMissingTablesAtTheEnd) {
+    const EditedConfig r = edit_config_text(
+        kConfig, {{"coupling", "damping", 0.25}, {"safety", "max_force", 5.0}}, "lab.toml");
+    EXPECT_NE(r.text.find("check = \"encoder\"\ndamping = 0.25\n"), std::string::npos) << r.text;
+    EXPECT_NE(r.text.find("\n[safety]\nmax_force = 5.0\n"), std::string::npos) << r.text;
+    EXPECT_EQ(r.text.rfind("# lab config", 0), 0u);
+    EXPECT_TRUE(r.changes[0].old_text.empty());
+}
+
+TEST(DaemonConfigEditor, AValueLongerThanItsPaddingKeepsOneSpaceBeforeTheComment) {
+    const EditedConfig r =
+        edit_config_text(kConfig, {{"device.model", "mass", 0.012345678912345}}, "lab.toml");
+    EXPECT_NE(r.text.find("mass = 0.012345678912345 # kg"), std::string::npos) << r.text;
+}
+
+TEST(DaemonConfigEditor, RefusesFormsItCannotRewrite) {
+    const char* dotted = "[device]\nmodel.mass = 0.1\n";
+    EXPECT_THROW(edit_config_text(dotted, {{"device.model", "mass", 0.2}}, "d.toml"),
+                 ConfigEditError);
+    const char* inline_table = "[device]\nmodel = { mass = 0.1 }\n";
+    try {
+        edit_config_text(inline_table, {{"device.model", "mass", 0.2}}, "i.toml");
+        FAIL();
+    } catch (const ConfigEditError& e) {
+        EXPECT_NE(std::string(e.what()).find("i.toml: could not set device.model.mass"),
+                  std::string::npos)
+            << e.what();
+    }
+    EXPECT_THROW(edit_config_text("[broken\n", {{"a", "b", 1.0}}, "b.toml"), ConfigEditError);
+}
+
+TEST(DaemonConfigEditor, NumbersReadBackExactlyAndStayFloats) {
+    EXPECT_EQ(format_config_number(3600.0), "3600.0");
+    EXPECT_EQ(format_config_number(0.1), "0.1");
+    for (const double x : {1e-7, 123456.789, 2.0 / 3.0, 6.02e23}) {
+        EXPECT_EQ(std::stod(format_config_number(x)), x);
+    }
+}
+
+TEST(DaemonConfigEditor, WritesAtomicallyAfterABackup) {
+    const std::filesystem::path dir =
+        std::filesystem::temp_directory_path() / ("hapticd-editor-" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    const std::string path = (dir / "lab.toml").string();
+    { std::ofstream(path) << kConfig; }
+    std::filesystem::permissions(
+        path, std::filesystem::perms::owner_read | std::filesystem::perms::owner_write);
+    const EditedConfig r = edit_config_text(kConfig, {{"coupling", "stiffness", 1.0}}, path);
+    write_config_with_backup(path, r.text, path + ".bak");
+    EXPECT_EQ(read_file(path + ".bak"), kConfig);
+    EXPECT_EQ(read_file(path), r.text);
+    EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
+    EXPECT_EQ(std::filesystem::status(path).permissions() & std::filesystem::perms::all,
+              std::filesystem::perms::owner_read | std::filesystem::perms::owner_write);
+    std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace hapticd::daemon
