@@ -82,7 +82,14 @@ TEST(DaemonLinkDiag, RealtimeSimHasNoDriftAndAFastRoundTrip) {
     EXPECT_LT(std::abs(r.clock_drift_ppm), 2000.0);
     EXPECT_LT(r.rtt_p50_us, 200.0);  // no transport: the call itself
     EXPECT_NEAR(r.duration_s, 1.0, 0.25);
-    EXPECT_NE(diag_text(r).find("verdict: ok"), std::string::npos) << diag_text(r);
+    // On a quiet machine the verdict is ok; a loaded one may preempt the host between the
+    // write and the read, which the verdict rightly calls a slow round trip.
+    if (r.rtt_p99_us < 300.0) {
+        EXPECT_NE(diag_text(r).find("verdict: ok"), std::string::npos) << diag_text(r);
+    } else {
+        EXPECT_NE(diag_text(r).find("verdict: WARN: p99 round trip"), std::string::npos)
+            << diag_text(r);
+    }
 }
 
 TEST(DaemonLinkDiag, JsonCarriesEveryFigure) {

@@ -175,6 +175,9 @@ TEST(ServoLoop, ReadTimeoutsAreToleratedUpToTheBudget) {
     EXPECT_EQ(loop.faults(), 0u);
     EXPECT_EQ(device.writes, writes);  // nothing written: the device holds its force
     EXPECT_TRUE(loop.last_record().flags & kFlagNoSample);
+    // ...and the telemetry logs the force the device holds, not a zero it never received.
+    EXPECT_EQ(loop.last_record().f_n[0], device.last_command.force_n[0]);
+    EXPECT_NE(loop.last_record().f_n[0], 0.0);
     loop.tick();
     EXPECT_EQ(loop.faults(), kFaultReadTimeout);
     EXPECT_EQ(device.writes, writes + 1);

@@ -26,6 +26,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <concepts>
@@ -183,7 +184,10 @@ class ServoLoop {
     }
 
     /// A disabled zero-force command, now.
-    void write_zero_force() noexcept { (void)device_.write(Command{}); }
+    void write_zero_force() noexcept {
+        (void)device_.write(Command{});
+        held_force_n_ = {};
+    }
 
   private:
     static const ServoConfig& validated(const ServoConfig& config) {
@@ -377,7 +381,10 @@ class ServoLoop {
             write = false;
         }
         if (safety_.faulted()) command = Command{};  // zero force in the tick that faulted
-        if (write) write_command(command);
+        if (write) {
+            write_command(command);
+            held_force_n_ = command.force_n;
+        }
         if (safe.saturated) {
             flags |= kFlagSaturated;
             ++stats_.saturated_ticks;
@@ -404,7 +411,9 @@ class ServoLoop {
         const std::int64_t compute_ns = clock_.now_ns() - wake.wake_ns;
         stats_.compute.record(compute_ns);
         if (paced) stats_.wake_latency.record(wake.latency_ns);
-        const Vec3 commanded(command.force_n[0], command.force_n[1], command.force_n[2]);
+        // The force the device holds from this tick on (ZOH): this tick's command, or the
+        // last one when nothing was written. The telemetry's f{i}_n is this force.
+        const Vec3 commanded(held_force_n_[0], held_force_n_[1], held_force_n_[2]);
         stats_.max_force_n = std::max(stats_.max_force_n, glm::length(commanded));
 
         record_.tick = stats_.ticks;
@@ -416,7 +425,7 @@ class ServoLoop {
             record_.x_m[i] = x_d[axis];
             record_.v_mps[i] = v_d[axis];
             record_.xe_m[i] = x_e[axis];
-            record_.f_n[i] = command.force_n[i];
+            record_.f_n[i] = held_force_n_[i];
         }
         record_.status = sample.status;
         record_.flags = flags;
@@ -484,6 +493,7 @@ class ServoLoop {
     std::uint64_t last_sequence_ = 0;
     std::uint32_t faults_seen_ = 0;
     std::uint32_t raised_this_tick_ = 0;  ///< Fault bits raised in the current tick
+    std::array<double, kMaxAxes> held_force_n_{};  ///< what the device holds (last written)
 };
 
 }  // namespace hapticd::servo
