@@ -81,7 +81,12 @@ TEST(DaemonLinkDiag, RealtimeSimHasNoDriftAndAFastRoundTrip) {
     // The sim's clock is the host's: the fit says so within the VM's noise.
     EXPECT_LT(std::abs(r.clock_drift_ppm), 2000.0);
     EXPECT_LT(r.rtt_p50_us, 200.0);  // no transport: the call itself
-    EXPECT_NEAR(r.duration_s, 1.0, 0.25);
+    // Paced on absolute deadlines: never faster than the rate; slower only by the periods
+    // a loaded machine made it miss, and those are counted.
+    EXPECT_GE(r.duration_s, 0.999);
+    if (r.duration_s > 1.1) {
+        EXPECT_GT(r.overruns, 0u);
+    }
     // On a quiet machine the verdict is ok; a loaded one may preempt the host between the
     // write and the read, which the verdict rightly calls a slow round trip.
     if (r.rtt_p99_us < 300.0) {
