@@ -113,6 +113,41 @@ const toml::table* sub_table(const toml::table& parent, const std::string& sourc
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
+// [identify], after [servo] and [safety], which bound it.
+void parse_identify(const toml::table& root, const std::string& source, Config& config) {
+    const TableReader identify(source, "identify", sub_table(root, source, "identify"));
+    identify.allow_only({"force_amplitude", "workspace", "band_low", "band_high",
+                         "lines_per_decade", "period", "periods", "fade"});
+    IdentifySection& out = config.identify;
+    // The band stays well below Nyquist: at least ten samples a cycle.
+    const double band_limit_hz = config.servo.rate_hz / 10.0;
+    out.force_amplitude_n = identify.number("force_amplitude", 0.0, 1e4, true, "N");
+    out.workspace_m = identify.number("workspace", 0.0, 1.0, true, "m").value_or(0.03);
+    out.band_low_hz =
+        identify.number("band_low", 0.0, band_limit_hz, true, "Hz, rate_hz/10 at most");
+    out.band_high_hz =
+        identify.number("band_high", 0.0, band_limit_hz, true, "Hz, rate_hz/10 at most");
+    out.lines_per_decade =
+        identify.number("lines_per_decade", 1.0, 50.0, false, "lines per decade per axis")
+            .value_or(10.0);
+    out.period_s = identify.number("period", 0.0, 60.0, true, "s");
+    out.periods = identify.integer("periods", 1, 1000);
+    out.fade_s = identify.number("fade", 0.0, 60.0, false, "s");
+    if (out.force_amplitude_n && *out.force_amplitude_n > config.safety.max_force_n) {
+        std::ostringstream m;
+        m << source << ": [identify] force_amplitude = " << *out.force_amplitude_n
+          << " is out of range: allowed <= [safety] max_force = " << config.safety.max_force_n
+          << " (N: the excitation would only be clipped)";
+        throw ConfigError(m.str());
+    }
+    if (out.band_low_hz && out.band_high_hz && !(*out.band_high_hz > *out.band_low_hz)) {
+        std::ostringstream m;
+        m << source << ": [identify] band_high = " << *out.band_high_hz
+          << " is out of range: allowed > band_low = " << *out.band_low_hz << " (Hz)";
+        throw ConfigError(m.str());
+    }
+}
+
 }  // namespace
 
 Config parse_config(std::string_view toml_text, const std::string& source,
@@ -129,17 +164,19 @@ Config parse_config(std::string_view toml_text, const std::string& source,
     Config config;
     config.source = source;
     config.base_dir = base_dir;
-    const std::set<std::string> tables = {"servo", "device", "coupling", "scene", "safety"};
+    const std::set<std::string> tables = {"servo", "device", "coupling",
+                                          "scene", "safety", "identify"};
     for (const auto& [key, node] : root) {
         const std::string k(key.str());
         if (!node.is_table()) {
             throw ConfigError(source + ": top-level key " + k +
                               " must be inside one of the tables [servo], [device], [coupling], "
-                              "[scene], [safety]");
+                              "[scene], [safety], [identify]");
         }
         if (tables.count(k) == 0) {
             throw ConfigError(source + ": unknown table [" + k +
-                              "] (allowed: [servo], [device], [coupling], [scene], [safety])");
+                              "] (allowed: [servo], [device], [coupling], [scene], [safety], "
+                              "[identify])");
         }
     }
 
@@ -231,6 +268,7 @@ Config parse_config(std::string_view toml_text, const std::string& source,
           << " (s: the device must be back and settled within it), or 0 to wait for ever";
         throw ConfigError(m.str());
     }
+    parse_identify(root, source, config);
     return config;
 }
 

@@ -16,6 +16,7 @@
 #include "hapticd/daemon/summary_json.hpp"
 #include "hapticd/daemon/telemetry_writer.hpp"
 #include "hapticd/device/plugin_loader.hpp"
+#include "hapticd/env/excitation.hpp"
 #include "hapticd/env/scene.hpp"
 #include "hapticd/servo/faults.hpp"
 #include "hapticd/servo/servo_loop.hpp"
@@ -204,18 +205,30 @@ void write_summary(const RunOptions& options, const servo::Summary& summary,
     }
 }
 
-/// The servo loop for one scene causality, on its own thread, watched from this one.
-template <typename Environment>
-int run_loop(const RunOptions& options, const Config& config, device::Device& device,
-             Environment& environment, RunContext& context, const std::atomic<bool>& stop,
-             std::ostream& out, std::ostream& log) {
-    const device::DeviceInfo info = device.info();
-    servo::ServoConfig servo_config;
+/// make_servo_config() or make_identify_servo_config(), with config errors as exit 2.
+template <typename MakeServoConfig>
+servo::ServoConfig servo_config_or_exit(MakeServoConfig make) {
     try {
-        servo_config = make_servo_config(config, info, options.log_path.has_value());
+        return make();
     } catch (const ConfigError& e) {
         throw StartError(kExitBadInput, e.what());
     }
+}
+
+/// Nothing to add after the run.
+struct NoAfterRun {
+    void operator()(int& /*code*/, RunContext& /*context*/) const {}
+};
+
+/// The servo loop for one environment, on its own thread, watched from this one.
+/// `after_run(code, context)` may amend the exit code and the context once the loop has
+/// stopped, before the summary is written.
+template <typename Environment, typename AfterRun = NoAfterRun>
+int run_loop(const RunOptions& options, const Config& config,
+             const servo::ServoConfig& servo_config, device::Device& device,
+             Environment& environment, RunContext& context, const std::atomic<bool>& stop,
+             std::ostream& out, std::ostream& log, AfterRun after_run = {}) {
+    const device::DeviceInfo info = device.info();
 
     std::unique_ptr<servo::TelemetryRing> ring;
     std::unique_ptr<TelemetryWriter> writer;
@@ -325,8 +338,138 @@ int run_loop(const RunOptions& options, const Config& config, device::Device& de
     if (!context.realtime.refused.empty() && servo_error.empty()) {
         log << "hapticd: " << context.realtime.brief() << "\n";
     }
+    after_run(code, context);
     write_summary(options, summary, context, out, log);
     return code;
+}
+
+std::string millimetres(const env::Vec3& v, int axes) {
+    std::array<double, servo::kMaxAxes> values{};
+    for (int i = 0; i < servo::kMaxAxes; ++i) values[static_cast<std::size_t>(i)] = v[i];
+    return format_vector_mm(values, axes, 1e3);
+}
+
+/// What the identify run says before it starts: what it does not do, what still applies,
+/// and the signal with the values that were chosen for it.
+void describe_identify(const Config& config, const IdentifyPlan& plan,
+                       const env::ExcitationEnvironment& excitation, const RunOptions& options,
+                       std::ostream& log) {
+    const env::ExcitationSettings& s = plan.excitation;
+    const env::Multisine& signal = excitation.signal();
+    log << "hapticd: identify: open loop, the excitation straight to the handle: no coupling, "
+           "[scene] and [coupling] not used, so the start-up stability check does not apply; "
+        << "the force limit " << s.force_limit_n << " N ([safety] max_force, capped at the "
+        << "device's) and [safety] max_speed = " << config.safety.max_speed_mps
+        << " m/s apply; the soft start is the excitation's own (a still handle, then a " << s.fade_s
+        << " s fade-in); passivity is only observed; any fault ends the run\n";
+    log << "hapticd: identify: multisine, lines per axis";
+    for (int axis = 0; axis < signal.axes(); ++axis) {
+        log << (axis == 0 ? " " : ", ") << signal.lines(axis).size() << " ("
+            << signal.lines(axis).front().frequency_hz << ".."
+            << signal.lines(axis).back().frequency_hz << " Hz, crest factor "
+            << std::setprecision(3) << signal.crest_factor(axis) << std::setprecision(6) << ")";
+    }
+    log << "; period " << signal.period_s() << " s x " << s.periods << ", fade " << s.fade_s
+        << " s in and out; each axis peaks at " << s.signal.peak_force_n << " N; workspace +-"
+        << 1e3 * s.workspace_half_width_m << " mm about the start";
+    if (plan.predicted_excursion_m) {
+        log << "; [device.model] predicts a swing of +-" << 1e3 * *plan.predicted_excursion_m
+            << " mm";
+    }
+    log << "; " << *options.duration_s << " s\n";
+    for (const std::string& chosen : plan.chosen)
+        log << "hapticd: identify: chose " << chosen << "\n";
+    if (plan.predicted_excursion_m && *plan.predicted_excursion_m > s.workspace_half_width_m) {
+        log << "hapticd: identify: WARNING: [device.model] predicts a swing of +-"
+            << 1e3 * *plan.predicted_excursion_m
+            << " mm, beyond [identify] workspace = " << s.workspace_half_width_m
+            << " m: the excitation will likely stop at its edge (lower force_amplitude or "
+               "raise band_low)\n";
+    }
+}
+
+/// `hapticd --identify`: the excitation instead of the scene, open loop, logged.
+int run_identify(const RunOptions& options, const std::atomic<bool>& stop, std::ostream& out,
+                 std::ostream& log) {
+    if (!options.log_path) {
+        throw StartError(kExitBadInput,
+                         "--identify needs --log FILE: the run exists to write the telemetry "
+                         "CSV that haptic-tune identify reads");
+    }
+    const Config config = load_any_config(options);
+    RunContext context;
+    context.config_source = config.source;
+    context.lockstep = options.lockstep;
+    context.check.skipped = true;
+    context.check.model = "none (identify: open loop, nothing coupled)";
+    context.scene = "identify-multisine";
+    context.causality = env::to_string(env::Causality::impedance);
+    device::DeviceHandle device = open_device(config, options.lockstep);
+    const DeviceCloser closer{device.get()};
+    const device::DeviceInfo info = device->info();
+    context.device = info.name;
+    context.lockstep = info.lockstep;
+    const servo::ServoConfig servo_config = servo_config_or_exit(
+        [&] { return make_identify_servo_config(config, info, options.log_path.has_value()); });
+    IdentifyPlan plan;
+    try {
+        plan = make_identify_plan(config, info);
+    } catch (const ConfigError& e) {
+        throw StartError(kExitBadInput, e.what());
+    }
+    std::unique_ptr<env::ExcitationEnvironment> excitation;
+    try {
+        excitation = std::make_unique<env::ExcitationEnvironment>(plan.excitation);
+    } catch (const std::invalid_argument& e) {
+        throw StartError(kExitBadInput, config.source + ": [identify]: " + e.what());
+    }
+    RunOptions run_options = options;
+    if (!run_options.duration_s) run_options.duration_s = plan.duration_s;
+    log << "hapticd: " << info.name << " device, " << info.axes << " axis"
+        << (info.axes > 1 ? "es" : "") << ", " << (info.lockstep ? "lockstep" : "real-time")
+        << " clock; identify; " << config.servo.rate_hz << " Hz\n";
+    describe_identify(config, plan, *excitation, run_options, log);
+
+    const double rate_hz = config.servo.rate_hz;
+    const int axes = info.axes;
+    auto report = [&](int& code, RunContext& ctx) {
+        const env::ExcitationEnvironment& e = *excitation;
+        const double start_s = static_cast<double>(e.start_tick()) / rate_hz;
+        const double played_s = static_cast<double>(e.samples_played()) / rate_hz;
+        const double whole_s = static_cast<double>(e.samples()) / rate_hz;
+        log << std::defaultfloat << "hapticd: identify: ";
+        switch (e.phase()) {
+            case env::ExcitationEnvironment::Phase::finished:
+                log << "the excitation ran to its end: " << whole_s << " s from tick "
+                    << e.start_tick() << " (t = " << start_s << " s); the log is "
+                    << *options.log_path << "\n";
+                break;
+            case env::ExcitationEnvironment::Phase::left_workspace:
+                log << "the handle left the workspace at tick "
+                    << e.start_tick() + e.samples_played() << " (t = " << start_s + played_s
+                    << " s): x = " << millimetres(e.exit_position_m(), axes) << " mm, outside +-"
+                    << 1e3 * e.settings().workspace_half_width_m << " mm about "
+                    << millimetres(e.center_m(), axes)
+                    << " mm; force zero from that tick on, after " << played_s << " of " << whole_s
+                    << " s of excitation (lower [identify] force_amplitude, raise "
+                    << "band_low or widen workspace)\n";
+                ctx.exit = "workspace";
+                if (code == kExitOk) code = kExitFault;
+                break;
+            case env::ExcitationEnvironment::Phase::waiting_for_still:
+                log << "WARNING: the handle was never still (|v| < " << e.settings().still_speed_mps
+                    << " m/s for " << e.settings().still_time_s << " s), so no excitation ran\n";
+                break;
+            case env::ExcitationEnvironment::Phase::running:
+            case env::ExcitationEnvironment::Phase::interrupted:
+                log << "WARNING: the run ended " << played_s << " s into the " << whole_s
+                    << " s excitation (from t = " << start_s << " s); the log is "
+                    << *options.log_path << "\n";
+                break;
+        }
+    };
+    return run_loop(run_options, config, servo_config, *device, *excitation, context, stop, out,
+                    log, report);
 }
 
 }  // namespace
@@ -334,6 +477,7 @@ int run_loop(const RunOptions& options, const Config& config, device::Device& de
 int run_daemon(const RunOptions& options, const std::atomic<bool>& stop, std::ostream& out,
                std::ostream& log) {
     try {
+        if (options.identify) return run_identify(options, stop, out, log);
         const Config config = load_any_config(options);
         RunContext context;
         context.config_source = config.source;
@@ -358,10 +502,14 @@ int run_daemon(const RunOptions& options, const std::atomic<bool>& stop, std::os
             << (info.axes > 1 ? "es" : "") << ", " << (info.lockstep ? "lockstep" : "real-time")
             << " clock; scene " << scene.name << " (" << context.causality << "); "
             << config.servo.rate_hz << " Hz\n";
+        const servo::ServoConfig servo_config = servo_config_or_exit(
+            [&] { return make_servo_config(config, info, options.log_path.has_value()); });
         if (scene.causality == env::Causality::impedance) {
-            return run_loop(options, config, *device, *scene.impedance, context, stop, out, log);
+            return run_loop(options, config, servo_config, *device, *scene.impedance, context, stop,
+                            out, log);
         }
-        return run_loop(options, config, *device, *scene.admittance, context, stop, out, log);
+        return run_loop(options, config, servo_config, *device, *scene.admittance, context, stop,
+                        out, log);
     } catch (const StartError& e) {
         log << "hapticd: " << e.what() << "\n";
         return e.code;

@@ -161,6 +161,78 @@ INSTANTIATE_TEST_SUITE_P(
         Bad{"[safety]\nreconnect = false\nreconnect_settle = 1\n",
             "[safety] reconnect_settle has no effect with reconnect = false"}));
 
+// [identify]: the excitation of hapticd --identify; every key is checked like the others.
+TEST(DaemonConfig, ReadsTheIdentifyTable) {
+    const Config c = parse_config(R"(
+[servo]
+rate_hz = 2000
+[safety]
+max_force = 8
+[identify]
+force_amplitude = 1.5
+workspace = 0.04
+band_low = 2
+band_high = 40
+lines_per_decade = 12
+period = 3
+periods = 5
+fade = 0.75
+)",
+                                  "lab.toml", "");
+    EXPECT_EQ(c.identify.force_amplitude_n, 1.5);
+    EXPECT_EQ(c.identify.workspace_m, 0.04);
+    EXPECT_EQ(c.identify.band_low_hz, 2.0);
+    EXPECT_EQ(c.identify.band_high_hz, 40.0);
+    EXPECT_EQ(c.identify.lines_per_decade, 12.0);
+    EXPECT_EQ(c.identify.period_s, 3.0);
+    EXPECT_EQ(c.identify.periods, 5);
+    EXPECT_EQ(c.identify.fade_s, 0.75);
+}
+
+TEST(DaemonConfig, IdentifyLeavesUnsetValuesToTheStartUp) {
+    const Config c = parse_config("", "empty.toml", "");
+    EXPECT_FALSE(c.identify.force_amplitude_n.has_value());
+    EXPECT_EQ(c.identify.workspace_m, 0.03);
+    EXPECT_FALSE(c.identify.band_low_hz.has_value());
+    EXPECT_FALSE(c.identify.band_high_hz.has_value());
+    EXPECT_EQ(c.identify.lines_per_decade, 10.0);
+    EXPECT_FALSE(c.identify.period_s.has_value());
+    EXPECT_FALSE(c.identify.periods.has_value());
+    EXPECT_FALSE(c.identify.fade_s.has_value());
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Identify, DaemonConfigRejects,
+    ::testing::Values(
+        Bad{"[identify]\nforce_amplitud = 1\n", "unknown key [identify] force_amplitud"},
+        Bad{"[identify]\nseed = 3\n", "unknown key [identify] seed"},
+        Bad{"[identify]\nforce_amplitude = 0\n",
+            "[identify] force_amplitude = 0 is out of range: allowed > 0"},
+        Bad{"[identify]\nforce_amplitude = \"big\"\n",
+            "[identify] force_amplitude must be a number (N)"},
+        Bad{"[safety]\nmax_force = 5\n[identify]\nforce_amplitude = 6\n",
+            "[identify] force_amplitude = 6 is out of range: allowed <= [safety] max_force = 5"},
+        Bad{"[identify]\nworkspace = 0\n",
+            "[identify] workspace = 0 is out of range: allowed > 0 and <= 1 (m)"},
+        Bad{"[identify]\nworkspace = 2\n", "[identify] workspace = 2 is out of range"},
+        Bad{"[identify]\nband_low = -1\n", "[identify] band_low = -1 is out of range"},
+        Bad{"[identify]\nband_high = 200\n",
+            "[identify] band_high = 200 is out of range: allowed > 0 and <= 100 (Hz, rate_hz/10 "
+            "at most)"},
+        Bad{"[servo]\nrate_hz = 500\n[identify]\nband_high = 60\n",
+            "[identify] band_high = 60 is out of range: allowed > 0 and <= 50"},
+        Bad{"[identify]\nband_low = 10\nband_high = 5\n",
+            "[identify] band_high = 5 is out of range: allowed > band_low = 10 (Hz)"},
+        Bad{"[identify]\nlines_per_decade = 0.5\n",
+            "[identify] lines_per_decade = 0.5 is out of range: allowed >= 1 and <= 50"},
+        Bad{"[identify]\nperiod = 0\n", "[identify] period = 0 is out of range"},
+        Bad{"[identify]\nperiod = 100\n", "[identify] period = 100 is out of range"},
+        Bad{"[identify]\nperiods = 2.5\n", "[identify] periods must be an integer"},
+        Bad{"[identify]\nperiods = 0\n", "[identify] periods = 0 is out of range: allowed 1..1000"},
+        Bad{"[identify]\nfade = -1\n", "[identify] fade = -1 is out of range"},
+        Bad{"[identify]\nfade = true\n", "[identify] fade must be a number (s)"},
+        Bad{"identify = 1\n", "top-level key identify"}));
+
 TEST(DaemonConfig, EmbeddedDefaultIsTheSimulatedDeviceAndTheDemoWall) {
     const Config c = default_config();
     EXPECT_EQ(c.source, "<embedded default>");

@@ -3,6 +3,10 @@
 
 #include <gtest/gtest.h>
 
+#include <iostream>
+#include <numbers>
+#include <string>
+
 namespace hapticd::daemon {
 namespace {
 
@@ -123,6 +127,165 @@ TEST(DaemonServoSettings, AxesMustMatchTheDevice) {
             std::string::npos)
             << e.what();
     }
+}
+
+// --- hapticd --identify --------------------------------------------------------------
+
+TEST(DaemonServoSettings, IdentifyRunsOpenLoopWithTheSafetyLimitsButNoSoftStartOrRecovery) {
+    const servo::ServoConfig s = make_identify_servo_config(lab_config(), pen_display(true), true);
+    EXPECT_FALSE(s.coupling_enabled);
+    EXPECT_EQ(s.safety.soft_start.still_time_s, 0.0);  // the excitation waits and fades itself
+    EXPECT_EQ(s.safety.soft_start.ramp_time_s, 0.0);
+    EXPECT_EQ(s.safety.passivity.mode, servo::PassivityMode::observe);  // was "control"
+    EXPECT_FALSE(s.link_recovery.enabled);
+    EXPECT_TRUE(s.stop_on_fault);
+    EXPECT_EQ(s.safety.max_force_n, 8.0);  // still the smaller of config and device
+    EXPECT_EQ(s.safety.max_speed_mps, 0.5);
+    EXPECT_TRUE(s.telemetry_backpressure);
+    EXPECT_NO_THROW(s.validate());
+}
+
+Config pen_config(const std::string& identify = "") {
+    return parse_config(R"(
+[device.model]
+mass = 0.1
+damping = 2.0
+[safety]
+max_force = 20
+[identify]
+)" + identify,
+                        "pen.toml", "");
+}
+
+device::DeviceInfo strong_pen(int axes = 1) {
+    device::DeviceInfo info = pen_display(true);
+    info.force_limit_n = 20.0;
+    info.axes = axes;
+    return info;
+}
+
+TEST(DaemonServoSettings, IdentifyChoosesTheBandAndAmplitudeFromTheDeviceModel) {
+    const IdentifyPlan plan = make_identify_plan(pen_config(), strong_pen());
+    const env::ExcitationSettings& s = plan.excitation;
+    const double corner_hz = 2.0 / (2.0 * std::numbers::pi * 0.1);  // 3.18 Hz
+    EXPECT_DOUBLE_EQ(s.signal.band_low_hz, corner_hz / 2.0);
+    EXPECT_DOUBLE_EQ(s.signal.band_high_hz, 10.0 * corner_hz);
+    EXPECT_DOUBLE_EQ(s.signal.period_s, 4.0 / s.signal.band_low_hz);
+    EXPECT_EQ(s.signal.sample_rate_hz, 1000.0);
+    EXPECT_EQ(s.signal.lines_per_decade, 10.0);
+    EXPECT_EQ(s.periods, 4);  // 4 x 2.513 s: about 10 s of whole periods
+    EXPECT_NEAR(s.fade_s, 0.5 * 2.513, 1e-12);
+    EXPECT_EQ(s.workspace_half_width_m, 0.03);
+    EXPECT_EQ(s.force_limit_n, 20.0);
+    EXPECT_EQ(s.still_time_s, 0.2);
+    // The amplitude is the one for which the model swings half the workspace.
+    ASSERT_TRUE(plan.predicted_excursion_m.has_value());
+    EXPECT_NEAR(*plan.predicted_excursion_m, 0.015, 1e-12);
+    const env::Multisine signal(s.signal);
+    EXPECT_NEAR(signal.steady_state_excursion_m(0.1, 2.0), 0.015, 1e-12);
+    std::cout << "[identify] pen display: force_amplitude " << s.signal.peak_force_n
+              << " N, duration " << plan.duration_s << " s\n";
+    EXPECT_GT(s.signal.peak_force_n, 0.5);
+    EXPECT_LT(s.signal.peak_force_n, 1.0);
+    // Still wait + 2 fades (1256.5 ticks, rounded up) + 4 periods + 0.5 s.
+    EXPECT_NEAR(plan.duration_s, 0.2 + 2 * 1.257 + 4 * 2.513 + 0.5, 1e-9);
+    EXPECT_EQ(plan.chosen.size(), 6u);
+    EXPECT_NE(plan.chosen.front().find("band_low = 1.59 Hz (half the corner"), std::string::npos)
+        << plan.chosen.front();
+}
+
+TEST(DaemonServoSettings, IdentifyTakesWhatTheConfigSays) {
+    const IdentifyPlan plan = make_identify_plan(
+        pen_config("force_amplitude = 1.5\nworkspace = 0.05\nband_low = 2\nband_high = 40\n"
+                   "lines_per_decade = 6\nperiod = 3\nperiods = 2\nfade = 0.25\n"),
+        strong_pen());
+    const env::ExcitationSettings& s = plan.excitation;
+    EXPECT_EQ(s.signal.peak_force_n, 1.5);
+    EXPECT_EQ(s.workspace_half_width_m, 0.05);
+    EXPECT_EQ(s.signal.band_low_hz, 2.0);
+    EXPECT_EQ(s.signal.band_high_hz, 40.0);
+    EXPECT_EQ(s.signal.lines_per_decade, 6.0);
+    EXPECT_EQ(s.signal.period_s, 3.0);
+    EXPECT_EQ(s.periods, 2);
+    EXPECT_EQ(s.fade_s, 0.25);
+    EXPECT_TRUE(plan.chosen.empty());
+    EXPECT_NEAR(plan.duration_s, 0.2 + 0.5 + 6.0 + 0.5, 1e-9);
+}
+
+std::string plan_error(const Config& config, const device::DeviceInfo& info) {
+    try {
+        (void)make_identify_plan(config, info);
+    } catch (const ConfigError& e) {
+        return e.what();
+    }
+    return "no error";
+}
+
+TEST(DaemonServoSettings, IdentifyRefusesWhatMakesNoSafeSignal) {
+    // No model: nothing to size the force from.
+    const Config no_model = parse_config("[identify]\nworkspace = 0.02\n", "lab.toml", "");
+    EXPECT_NE(plan_error(no_model, strong_pen())
+                  .find("lab.toml: [identify] force_amplitude is "
+                        "required without [device.model]"),
+              std::string::npos)
+        << plan_error(no_model, strong_pen());
+    // With the force given it uses generic bands: 1 Hz to 30 Hz.
+    const Config given = parse_config("[identify]\nforce_amplitude = 0.5\n", "lab.toml", "");
+    const IdentifyPlan generic = make_identify_plan(given, strong_pen());
+    EXPECT_EQ(generic.excitation.signal.band_low_hz, 1.0);
+    EXPECT_EQ(generic.excitation.signal.band_high_hz, 30.0);
+    EXPECT_FALSE(generic.predicted_excursion_m.has_value());
+    // A band that gives an axis too few lines.
+    EXPECT_NE(plan_error(pen_config("band_low = 10\nband_high = 11\n"), strong_pen())
+                  .find("pen.toml: [identify] band_low = 10 Hz, band_high = 11 Hz"),
+              std::string::npos)
+        << plan_error(pen_config("band_low = 10\nband_high = 11\n"), strong_pen());
+    // A default band_low above the given band_high.
+    EXPECT_NE(plan_error(pen_config("band_high = 1\n"), strong_pen())
+                  .find("[identify] band_high = 1 Hz is not above band_low = 1.59 Hz"),
+              std::string::npos)
+        << plan_error(pen_config("band_high = 1\n"), strong_pen());
+    // Three axes at 8 N each would ask more than 20 N of the vector.
+    const Config three = parse_config(R"(
+[device]
+axes = 3
+[device.model]
+mass = 0.1
+damping = 2.0
+[safety]
+max_force = 20
+[identify]
+force_amplitude = 15
+)",
+                                      "lab.toml", "");
+    const std::string too_strong = plan_error(three, strong_pen(3));
+    EXPECT_NE(too_strong.find("lab.toml: [identify] force_amplitude = 15 N makes a peak force of"),
+              std::string::npos)
+        << too_strong;
+    EXPECT_NE(too_strong.find("above the force limit 20 N"), std::string::npos) << too_strong;
+    // The device's own limit counts as well: 8 N < 10 N asked.
+    const std::string weak = plan_error(pen_config("force_amplitude = 10\n"), pen_display(true));
+    EXPECT_NE(weak.find("above the force limit 8 N"), std::string::npos) << weak;
+}
+
+TEST(DaemonServoSettings, IdentifyDefaultAmplitudeRespectsTheForceLimitOnEveryAxis) {
+    // A wide workspace: the workspace rule would allow more than half the force limit.
+    const Config three = parse_config(R"(
+[device]
+axes = 3
+[device.model]
+mass = 0.1
+damping = 2.0
+[safety]
+max_force = 2
+[identify]
+workspace = 1.0
+)",
+                                      "lab.toml", "");
+    const IdentifyPlan plan = make_identify_plan(three, strong_pen(3));
+    const env::Multisine signal(plan.excitation.signal);
+    EXPECT_NEAR(signal.peak_vector_norm_n(), 1.0, 1e-12);  // half of 2 N
+    EXPECT_NE(plan.chosen.back().find("half a period"), std::string::npos);
 }
 
 }  // namespace

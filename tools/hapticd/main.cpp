@@ -66,10 +66,12 @@ int main(int argc, char** argv) {
         "hapticd: the haptic servo daemon. Reads the device's encoders at a fixed rate, renders "
         "the scene through the virtual coupling (16) of Adams & Hannaford and writes "
         "zero-order-hold force commands. Without --config it runs the embedded default: the "
-        "simulated device and a demo wall.\n\nExit status: 0 stopped by a signal or at the end "
-        "of --duration; 1 stopped on a fault (the force was zeroed in the same tick) or the "
-        "loop could not run; 2 bad usage, config, scene, device table, or coupling gains that "
-        "fail the start-up stability check.",
+        "simulated device and a demo wall. With --identify it drives the device open loop with "
+        "the [identify] multisine instead and logs the run for haptic-tune identify.\n\nExit "
+        "status: 0 stopped by a signal or at the end of --duration; 1 stopped on a fault (the "
+        "force was zeroed in the same tick), the loop could not run, or (--identify) the "
+        "handle left the workspace; 2 bad usage, config, scene, device table, or coupling "
+        "gains that fail the start-up stability check.",
         "hapticd"};
     hapticd::daemon::RunOptions options;
     std::string config_path, summary_path, log_path;
@@ -83,6 +85,10 @@ int main(int argc, char** argv) {
     app.add_option("--summary", summary_path,
                    "write the JSON summary to FILE at the end, or to standard output with -");
     app.add_option("--log", log_path, "write telemetry, one CSV line per tick, to FILE");
+    app.add_flag("--identify", options.identify,
+                 "the excitation run: drive the device open loop with the [identify] multisine "
+                 "(no scene, no coupling) and log it; needs --log; without --duration it runs "
+                 "for the whole excitation (docs/daemon.md)");
     app.add_flag("--lockstep", options.lockstep,
                  "run the device on virtual time, as fast as the CPU goes (the sim plugin)");
     app.add_flag("--no-status", no_status, "do not print the status line each second");

@@ -20,6 +20,14 @@
 //                  samples for reconnect_settle s, (0, 60], default 0.5; if it has not within
 //                  reconnect_timeout s of the fault, 0 (wait for ever) or (settle, 3600],
 //                  default 5, the run ends on the fault; false: any fault ends the run)
+//   [identify]     the excitation of `hapticd --identify` (docs/daemon.md; ignored otherwise):
+//                  force_amplitude (N, > 0, <= [safety] max_force: each axis's peak),
+//                  workspace (m, (0, 1], default 0.03: half-width of the box about the
+//                  start), band_low, band_high (Hz, > 0, <= rate_hz/10, low < high),
+//                  lines_per_decade (1..50, default 10), period (s, (0, 60]),
+//                  periods (1..1000), fade (s, 0..60). Unset values are chosen at start-up
+//                  from [device.model] (make_identify_plan, daemon/servo_settings.hpp);
+//                  without [device.model], force_amplitude is required
 //
 // Every key is checked for type and range, and unknown keys and tables are errors. Each
 // message names the file, the key, the value and the allowed range.
@@ -70,6 +78,18 @@ struct SafetySection {
     double reconnect_timeout_s = 5.0;  ///< 0: wait for ever
 };
 
+/// [identify]: what the config says; make_identify_plan() fills what it leaves unset.
+struct IdentifySection {
+    std::optional<double> force_amplitude_n;  ///< each axis's peak force, N
+    double workspace_m = 0.03;                ///< half-width of the box about the start, m
+    std::optional<double> band_low_hz;
+    std::optional<double> band_high_hz;
+    double lines_per_decade = 10.0;  ///< per axis
+    std::optional<double> period_s;
+    std::optional<int> periods;
+    std::optional<double> fade_s;
+};
+
 struct Config {
     std::string source;    ///< the file name, or "<embedded default>"
     std::string base_dir;  ///< relative paths (the scene file) resolve against this
@@ -78,6 +98,7 @@ struct Config {
     CouplingSection coupling;
     std::string scene_file;  ///< resolved path; empty means the embedded demo scene
     SafetySection safety;
+    IdentifySection identify;
 };
 
 /// Parses and validates config text. `source` names it in messages; `base_dir` resolves

@@ -1,7 +1,8 @@
 // hapticd's run: config -> start-up stability check -> scene -> device plugin -> the servo
 // loop on its own thread, the telemetry writer on another, a status line each second on
-// this one, and the summary at the end. Glue only (DESIGN.md): every piece it wires is
-// a library of its own layer.
+// this one, and the summary at the end. With --identify: config -> device plugin -> the
+// excitation (env/excitation.hpp) open loop in place of the scene, logged. Glue only (DESIGN.md):
+// every piece it wires is a library of its own layer.
 #pragma once
 
 #include <atomic>
@@ -14,7 +15,8 @@ namespace hapticd::daemon {
 /// Exit codes of hapticd.
 enum ExitCode : int {
     kExitOk = 0,        ///< stopped by a signal or at the end of --duration, no fault
-    kExitFault = 1,     ///< the run ended on a latched fault, or the loop could not run
+    kExitFault = 1,     ///< the run ended on a latched fault, or the loop could not run;
+                        ///< --identify: also when the handle left the workspace
     kExitBadInput = 2,  ///< usage, config, scene or device-table errors; gains refused
 };
 
@@ -24,7 +26,11 @@ struct RunOptions {
     std::optional<std::string> summary_path;  ///< --summary FILE, or "-" for standard output
     std::optional<std::string> log_path;      ///< --log FILE: telemetry CSV
     bool lockstep = false;                    ///< --lockstep: virtual time, as fast as it goes
-    double status_interval_s = 1.0;           ///< the live status line; 0: none
+    /// --identify: the excitation run (docs/daemon.md): the [identify] multisine on the
+    /// handle, open loop, instead of the scene; needs log_path. Without duration_s it runs
+    /// for the excitation (IdentifyPlan::duration_s).
+    bool identify = false;
+    double status_interval_s = 1.0;  ///< the live status line; 0: none
 };
 
 /// Runs the daemon until `stop` is set (the signal handler's flag), the duration ends or a
