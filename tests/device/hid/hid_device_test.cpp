@@ -30,12 +30,16 @@ using servo::Sample;
 
 constexpr std::int64_t kGenerousNs = 10'000'000'000;  ///< a loaded 2-core VM
 
+/// The device's configuration for the node: its ids, a handshake that waits as generously
+/// as the tests do (each step waits for a reply that comes; on a loaded machine the emulated
+/// node's round trip can outlast the 200 ms default: hid_device_server.hpp, "Timing"), and
+/// `extra`.
 DeviceConfig hid_config(const EmulatedHidDevice& emulated, const std::string& extra = "") {
     DeviceConfig c;
     c.axes = 1;
     c.rate_hz = 1000.0;
     c.lockstep = true;
-    c.plugin_table_toml = emulated.table_toml() + extra;
+    c.plugin_table_toml = emulated.table_toml() + "handshake_timeout_ms = 10000\n" + extra;
     c.source = "cfg.toml";
     return c;
 }
@@ -47,16 +51,25 @@ Command push(double force_n) {
     return c;
 }
 
-/// One servo tick in lockstep: the sample answering the last command, then the next command.
+/// One lockstep tick: a command, then the sample answering it.
 struct Tick {
-    IoResult read = IoResult::error;
     IoResult write = IoResult::error;
+    bool answered = false;  ///< the device answered the command within kGenerousNs
+    IoResult read = IoResult::error;
     Sample sample;
 };
-Tick tick(device::Device& device, const Command& command) {
+/// The command; then, once the device has answered it (its reports, if any, are in the node),
+/// the read. What the read returns is then the device's answer, whatever the emulation's
+/// round trip takes under load: a reply in the node is found at once, and a read that
+/// passes over it waits out its deadline for nothing (hid_device_server.hpp, "Timing").
+/// Needs every earlier report answered: every tick here waits, and so does open().
+/// Allocates nothing.
+Tick answered_tick(device::Device& device, HidDeviceServer& server, const Command& command) {
     Tick t;
-    t.read = device.read(t.sample);
+    const std::uint64_t reports = server.output_reports() + 1;
     t.write = device.write(command);
+    t.answered = server.await_answered(reports, std::chrono::nanoseconds(kGenerousNs));
+    t.read = device.read(t.sample);
     return t;
 }
 
@@ -86,14 +99,18 @@ TEST(HidDevice, LoadedByNameItRunsLockstepTicksWithoutAllocating) {
     EXPECT_TRUE(info.paces_loop);
     EXPECT_TRUE(info.lockstep);
 
-    for (int i = 0; i < 10; ++i) ASSERT_EQ(tick(*device, push(0.0)).read, IoResult::ok);
+    HidDeviceServer& server = emulated.server();
+    for (int i = 0; i < 10; ++i) {
+        ASSERT_EQ(answered_tick(*device, server, push(0.0)).read, IoResult::ok);
+    }
 
     constexpr int kTicks = 2500;
     const Command command = push(0.2);  // 0.2 N on 0.1 kg with 2 N s/m: 0.1 m/s at rest
     int reads_ok = 0;
     int writes_ok = 0;
+    int answered = 0;
     std::uint64_t first_sequence = 0;
-    std::uint64_t last_sequence = 0;
+    Sample last;
     std::uint64_t allocations = 0;
     std::uint64_t mallocs = 0;
     const std::int64_t start = device::link::monotonic_now_ns();
@@ -101,11 +118,12 @@ TEST(HidDevice, LoadedByNameItRunsLockstepTicksWithoutAllocating) {
         const std::uint64_t mallocs_before = thread_malloc_count();
         AllocationGuard guard;
         for (int i = 0; i < kTicks; ++i) {
-            Sample sample;
-            reads_ok += device->read(sample) == IoResult::ok ? 1 : 0;
-            if (i == 0) first_sequence = sample.sequence;
-            last_sequence = sample.sequence;
-            writes_ok += device->write(command) == IoResult::ok ? 1 : 0;
+            const Tick t = answered_tick(*device, server, command);
+            writes_ok += t.write == IoResult::ok ? 1 : 0;
+            answered += t.answered ? 1 : 0;
+            reads_ok += t.read == IoResult::ok ? 1 : 0;
+            if (i == 0) first_sequence = t.sample.sequence;
+            last = t.sample;
         }
         allocations = guard.allocations();
         mallocs = thread_malloc_count() - mallocs_before;
@@ -116,14 +134,13 @@ TEST(HidDevice, LoadedByNameItRunsLockstepTicksWithoutAllocating) {
 
     EXPECT_EQ(allocations, 0u) << "operator new: ours";
     EXPECT_EQ(mallocs, 0u) << "malloc: hidapi's, libc's, libumockdev-preload's";
-    EXPECT_EQ(reads_ok, kTicks);
     EXPECT_EQ(writes_ok, kTicks);
-    EXPECT_EQ(last_sequence - first_sequence, static_cast<std::uint64_t>(kTicks - 1));
+    ASSERT_EQ(answered, kTicks) << "the emulated device did not answer within 10 s";
+    EXPECT_EQ(reads_ok, kTicks);
+    EXPECT_EQ(last.sequence - first_sequence, static_cast<std::uint64_t>(kTicks - 1));
 
     // The sample answering the last command is the reference device's own state, latched.
-    Sample last;
-    ASSERT_EQ(device->read(last), IoResult::ok);
-    const auto [position_m, time_us, held_n] = emulated.server().with_device([](auto& d) {
+    const auto [position_m, time_us, held_n] = server.with_device([](auto& d) {
         return std::tuple(d.sim().plant(0).state().position_m, d.time_us(), d.output_force_n()[0]);
     });
     EXPECT_EQ(last.encoder_counts[0], static_cast<std::int64_t>(std::floor(position_m * 1e5)));
@@ -131,10 +148,13 @@ TEST(HidDevice, LoadedByNameItRunsLockstepTicksWithoutAllocating) {
     EXPECT_DOUBLE_EQ(held_n, 0.2);
     // 2.5 s of 0.2 N: the handle coasts at F/b = 0.1 m/s, about 0.245 m from the start.
     EXPECT_NEAR(position_m, 0.1 * (2.51 - 0.05), 0.005);
+    // close(): a command of zero force and a bye, which the device has handled once it has
+    // answered them (close() waits for the bye's answer only so long).
+    const std::uint64_t reports = server.output_reports() + 2;
     device->close();
-    EXPECT_DOUBLE_EQ(emulated.server().with_device([](auto& d) { return d.output_force_n()[0]; }),
-                     0.0);
-    EXPECT_FALSE(emulated.server().with_device([](auto& d) { return d.session_open(); }));
+    ASSERT_TRUE(server.await_answered(reports, std::chrono::nanoseconds(kGenerousNs)));
+    EXPECT_DOUBLE_EQ(server.with_device([](auto& d) { return d.output_force_n()[0]; }), 0.0);
+    EXPECT_FALSE(server.with_device([](auto& d) { return d.session_open(); }));
 }
 
 /// The reply to the next command misbehaves as `knob` says; what the servo sees.
@@ -142,11 +162,16 @@ class HidDeviceFaults : public ::testing::Test {
   protected:
     void SetUp() override {
         device_ = device::load_device("hid");
+        // The reply timeout bounds only the reads that find no good reply: every read here
+        // waits until the device has answered (answered_tick()).
         device_->open(hid_config(emulated_, "reply_timeout_ms = 300\n"));
         // Commands and their samples, ending on a sample: no reply is outstanding.
         for (int i = 0; i < 5; ++i) {
-            ASSERT_EQ(device_->write(push(0.1)), IoResult::ok);
-            ASSERT_EQ(device_->read(last_), IoResult::ok);
+            const Tick t = answered_tick(*device_, emulated_.server(), push(0.1));
+            ASSERT_TRUE(t.answered);
+            ASSERT_EQ(t.write, IoResult::ok);
+            ASSERT_EQ(t.read, IoResult::ok);
+            last_ = t.sample;
         }
     }
 
@@ -154,16 +179,14 @@ class HidDeviceFaults : public ::testing::Test {
     template <typename Knob>
     Tick faulty_tick(Knob knob) {
         emulated_.server().with_device([&](auto& d) { knob(d.faults()); });
-        (void)device_->write(push(0.1));  // answered by the faulty reply
-        Tick t;
-        t.read = device_->read(t.sample);
+        const Tick t = answered_tick(*device_, emulated_.server(), push(0.1));
+        EXPECT_TRUE(t.answered) << "the device did not handle the command within 10 s";
         return t;
     }
     /// A clean tick after it: the loop goes on.
     Tick next_tick() {
-        (void)device_->write(push(0.1));
-        Tick t;
-        t.read = device_->read(t.sample);
+        const Tick t = answered_tick(*device_, emulated_.server(), push(0.1));
+        EXPECT_TRUE(t.answered) << "the device did not answer within 10 s";
         return t;
     }
 
@@ -216,7 +239,10 @@ TEST(HidDevice, UnpluggedItIsLostInThatTickAndAdoptedWhenItReturns) {
     EmulatedHidDevice emulated;
     DeviceHandle device = device::load_device("hid");
     device->open(hid_config(emulated, "reconnect_interval_ms = 20\n"));
-    for (int i = 0; i < 20; ++i) ASSERT_EQ(tick(*device, push(0.1)).read, IoResult::ok);
+    for (int i = 0; i < 20; ++i) {
+        ASSERT_EQ(answered_tick(*device, emulated.server(), push(0.1)).read, IoResult::ok);
+    }
+    ASSERT_EQ(device->write(push(0.1)), IoResult::ok);  // its answer is what read() waits for
 
     emulated.unplug();
     Sample sample;
@@ -239,13 +265,12 @@ TEST(HidDevice, UnpluggedItIsLostInThatTickAndAdoptedWhenItReturns) {
     }
     ASSERT_EQ(result, IoResult::ok) << "not adopted again within 10 s";
     for (int i = 0; i < 100; ++i) {
-        const Tick t = tick(*device, push(0.1));
-        ASSERT_EQ(t.read, IoResult::ok) << "tick " << i;
+        const Tick t = answered_tick(*device, emulated.server(), push(0.1));
         ASSERT_EQ(t.write, IoResult::ok) << "tick " << i;
+        ASSERT_TRUE(t.answered) << "tick " << i;
+        ASSERT_EQ(t.read, IoResult::ok) << "tick " << i;
     }
     // The replugged device (power-cycled: counting from zero) got every command since.
-    Sample last;
-    ASSERT_EQ(device->read(last), IoResult::ok);
     EXPECT_TRUE(emulated.server().with_device([](auto& d) { return d.session_open(); }));
     EXPECT_EQ(emulated.server().with_device([](auto& d) { return d.counters().commands_applied; }),
               100u);

@@ -15,6 +15,7 @@
 #include <string>
 
 #include "emulated_hid_device.hpp"
+#include "hapticd/servo/telemetry.hpp"
 #include "hapticd_run.hpp"
 #include "pen_display.hpp"
 #include "tuned_gains.hpp"
@@ -27,6 +28,9 @@ constexpr double kWallStiffnessNPerM = 1e5;
 constexpr double kStartM = -0.001;  ///< 1 mm in front of the wall
 constexpr double kDurationS = 4.0;
 constexpr double kSettleS = 2.0;
+/// Each handshake step waits for a reply that comes; on a loaded machine the emulated node's
+/// round trip can take longer than the 200 ms default (hid_device_server.hpp, "Timing").
+constexpr const char* kHandshakeTimeout = "handshake_timeout_ms = 10000\n";
 
 /// hapticd's config for the pen display on the `hid` plugin (cf. DaemonConfig::toml()).
 std::string hid_daemon_config(const EmulatedHidDevice& device, const CouplingGains& gains) {
@@ -37,7 +41,7 @@ std::string hid_daemon_config(const EmulatedHidDevice& device, const CouplingGai
            coupling_table(gains, "encoder") + "[scene]\nfile = \"scene.toml\"\n" +
            "[safety]\nmax_force = " + toml_number(kForceLimitN) +
            "\nmax_speed = 1.0\nsoft_start_ramp = 0.5\npassivity = \"observe\"\n" +
-           "[device.hid]\n" + device.table_toml();
+           "[device.hid]\n" + device.table_toml() + kHandshakeTimeout;
 }
 
 device::protocol::EmulatorConfig pen_display_at_start() {
@@ -78,7 +82,11 @@ TEST(HidClosedLoop, TheDaemonHoldsAStiffWallStablyThroughHid) {
     // The same run on the sim plugin: the same physics with no transport in between. The
     // trajectories are the same tick for tick until the contact (lockstep: deterministic);
     // there the wire's whole micronewtons tip an encoder count the other way now and then,
-    // and the two dither apart by no more than the dither itself.
+    // and the two dither apart by no more than the dither itself. Lockstep is deterministic
+    // as long as every reply comes within the lockstep reply timeout (1 s); on a loaded
+    // machine the emulated node now and then answers later (hid_device_server.hpp,
+    // "Timing"), the servo goes on without that sample (a tick with kFlagNoSample, counted in
+    // read_timeouts), and from that tick the runs part: they are compared up to it.
     DaemonConfig sim;
     sim.coupling = coupling_table(gains, "encoder");
     sim.initial_position = toml_number(kStartM);
@@ -90,16 +98,30 @@ TEST(HidClosedLoop, TheDaemonHoldsAStiffWallStablyThroughHid) {
     ASSERT_EQ(direct.exit_code, 0) << direct.err;
     const auto& x_sim = direct.log.column("x0_m");
     ASSERT_EQ(x_sim.size(), x.size());
-    std::size_t first_difference = x.size();
+    const auto& flags = run.log.column("flags");
+    std::size_t compared = x.size();
+    for (std::size_t i = 0; i < flags.size(); ++i) {
+        if ((static_cast<std::uint32_t>(flags[i]) & servo::kFlagNoSample) != 0u) {
+            compared = i;
+            break;
+        }
+    }
+    std::size_t first_difference = compared;
     double worst_m = 0.0;
-    for (std::size_t i = 0; i < x.size(); ++i) {
+    for (std::size_t i = 0; i < compared; ++i) {
         const double difference_m = std::abs(x[i] - x_sim[i]);
-        if (difference_m > 0.0 && first_difference == x.size()) first_difference = i;
+        if (difference_m > 0.0 && first_difference == compared) first_difference = i;
         worst_m = std::max(worst_m, difference_m);
     }
     std::cout << "[hid] against the sim plugin: the same until tick " << first_difference
-              << ", then at most " << worst_m / kCountM << " counts apart\n";
-    EXPECT_GE(first_difference, static_cast<std::size_t>(kRateHz));  // contact: about 1.2 s
+              << ", then at most " << worst_m / kCountM << " counts apart";
+    if (compared < x.size()) {
+        std::cout << " (compared up to tick " << compared << ", the first of "
+                  << run.summary.at("read_timeouts") << " without a sample in time)";
+    }
+    std::cout << "\n";
+    // Contact: about 1.2 s.
+    EXPECT_GE(first_difference, std::min(compared, static_cast<std::size_t>(kRateHz)));
     EXPECT_LE(worst_m, 4.0 * kCountM);
 }
 

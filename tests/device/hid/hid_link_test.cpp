@@ -10,7 +10,6 @@
 #include <chrono>
 #include <stdexcept>
 #include <string>
-#include <thread>
 #include <variant>
 #include <vector>
 
@@ -66,14 +65,18 @@ Received receive(HidLink& link, std::int64_t deadline_ns) {
     return r;
 }
 
-template <typename Predicate>
-bool eventually(Predicate predicate) {
-    const std::int64_t deadline = monotonic_now_ns() + kGenerousNs;
-    while (!predicate()) {
-        if (monotonic_now_ns() > deadline) return false;
-        std::this_thread::sleep_for(std::chrono::milliseconds(1));
-    }
-    return true;
+/// What the device behind the node has seen and said, for failure messages.
+std::string device_side(EmulatedHidDevice& device) {
+    return "(the device read " + std::to_string(device.server().output_reports()) +
+           " output reports and wrote " + std::to_string(device.server().input_reports()) +
+           " input reports)";
+}
+
+/// Waits until the device has answered `output_reports` output reports in all: its answers are
+/// in the node, and a receive() finds them at once, whatever the emulation's round trip takes
+/// under load (hid_device_server.hpp, "Timing").
+bool answered(EmulatedHidDevice& device, std::uint64_t output_reports) {
+    return device.server().await_answered(output_reports, std::chrono::nanoseconds(kGenerousNs));
 }
 
 /// A USB keyboard's report descriptor (boot protocol): another device on the bus.
@@ -134,7 +137,7 @@ TEST(HidLinkFrames, HelloRoundTripThroughReports) {
 
     send_hello(link);
     const Received r = receive(link, monotonic_now_ns() + kGenerousNs);
-    ASSERT_EQ(r.result, LinkResult::ok);
+    ASSERT_EQ(r.result, LinkResult::ok) << device_side(device);
     ASSERT_EQ(r.error, proto::Error::none);
     const auto* identity = std::get_if<proto::Identity>(&r.message);
     ASSERT_NE(identity, nullptr);
@@ -170,7 +173,7 @@ TEST(HidLinkFrames, ReportsWithAnotherIdAreSkipped) {
     }
     send_hello(link);
     const Received r = receive(link, monotonic_now_ns() + kGenerousNs);
-    ASSERT_EQ(r.result, LinkResult::ok);
+    ASSERT_EQ(r.result, LinkResult::ok) << device_side(device);
     EXPECT_TRUE(std::holds_alternative<proto::Identity>(r.message));
     EXPECT_EQ(link.counters().framing_errors, 2u);
     EXPECT_EQ(link.counters().frames_received, 1u);
@@ -181,14 +184,10 @@ TEST(HidLinkFrames, APastDeadlineTakesOnlyWhatIsAlreadyThere) {
     HidLink link(ids());
     link.open();
     send_hello(link);
-    ASSERT_TRUE(eventually([&] { return device.server().input_reports() == 1; }));
-    // The identity is on its way through the pty; a past deadline finds it once it is in.
-    Received r;
-    ASSERT_TRUE(eventually([&] {
-        r = receive(link, 0);
-        return r.result != LinkResult::timeout;
-    }));
-    ASSERT_EQ(r.result, LinkResult::ok);
+    // Once the identity is in the node, a past deadline finds it.
+    ASSERT_TRUE(answered(device, 1)) << device_side(device);
+    const Received r = receive(link, 0);
+    ASSERT_EQ(r.result, LinkResult::ok) << device_side(device);
     EXPECT_TRUE(std::holds_alternative<proto::Identity>(r.message));
     const std::int64_t start = monotonic_now_ns();
     EXPECT_EQ(receive(link, 0).result, LinkResult::timeout);
@@ -255,7 +254,7 @@ TEST(HidLinkFrames, AnUnpluggedDeviceIsDisconnectedAndFoundAgainWhenItReturns) {
     EXPECT_EQ(link.counters().reopens, 1u);
     send_hello(link);
     const Received r = receive(link, monotonic_now_ns() + kGenerousNs);
-    ASSERT_EQ(r.result, LinkResult::ok);
+    ASSERT_EQ(r.result, LinkResult::ok) << device_side(device);
     EXPECT_TRUE(std::holds_alternative<proto::Identity>(r.message));
 }
 
@@ -266,7 +265,8 @@ TEST(HidLinkFrames, AConfiguredPathOverridesEnumeration) {
     HidLink link(by_path);
     link.open();
     send_hello(link);
-    EXPECT_EQ(receive(link, monotonic_now_ns() + kGenerousNs).result, LinkResult::ok);
+    EXPECT_EQ(receive(link, monotonic_now_ns() + kGenerousNs).result, LinkResult::ok)
+        << device_side(device);
 
     HidSettings wrong = ids(0x1209, 0x1234);
     wrong.path = "/dev/hidraw0";

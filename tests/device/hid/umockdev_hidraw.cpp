@@ -4,6 +4,7 @@
 #include <fcntl.h>
 #include <linux/hidraw.h>
 #include <pty.h>
+#include <sys/file.h>
 #include <sys/ioctl.h>
 #include <termios.h>
 #include <umockdev.h>
@@ -96,6 +97,7 @@ struct Node {
     std::vector<std::string> syspaths;  ///< usb device, interface, hid, hidraw
     std::string devnode;
     int master = -1;
+    int slave = -1;  ///< held open and flock()ed while plugged (see plug())
 };
 
 }  // namespace
@@ -154,11 +156,85 @@ int UmockdevHidraw::plug(const HidrawNodeSpec& spec) {
         node.spec.report_descriptor.assign(device::protocol::hid::kReportDescriptor.begin(),
                                            device::protocol::hid::kReportDescriptor.end());
     }
+    const std::string number = std::to_string(spec.hidraw_number);
+    node.devnode = "/dev/hidraw" + number;
+
+    // In the order that leaves no half-made device to a client that enumerates meanwhile (a
+    // reconnecting ProtocolDevice does, every few milliseconds): first what answers the
+    // node's ioctls, then the node, then the sysfs tree through which hidapi finds it. A node
+    // without its ioctl socket would be opened as a plain pty (HIDIOCGRDESCSIZE fails), and a
+    // socket bound but not yet listening makes libumockdev-preload exit(1) in open().
+
+    // The ioctls, once per /dev node for the testbed's lifetime: bound and listening when
+    // umockdev_testbed_attach_ioctl() returns.
+    auto& target = impl.targets[node.devnode];
+    if (!target) target = std::make_unique<IoctlTarget>();
+    {
+        std::lock_guard lock(target->mutex);
+        target->descriptor = node.spec.report_descriptor;
+        target->vid = spec.vid;
+        target->pid = spec.pid;
+    }
+    if (!impl.handlers.contains(node.devnode)) {
+        UMockdevIoctlBase* handler = umockdev_ioctl_base_new();
+        g_signal_connect(handler, "handle-ioctl", G_CALLBACK(on_hidraw_ioctl), target.get());
+        GError* error = nullptr;
+        if (!umockdev_testbed_attach_ioctl(impl.testbed, node.devnode.c_str(), handler, &error)) {
+            const std::string message = error != nullptr ? error->message : "?";
+            g_clear_error(&error);
+            g_object_unref(handler);
+            throw std::runtime_error("umockdev_testbed_attach_ioctl(" + node.devnode +
+                                     "): " + message);
+        }
+        impl.handlers.emplace(node.devnode, handler);
+    }
+    // The node: a raw pty that delivers whole reports (VMIN = a report), set up before its
+    // link appears, so no client ever sees it cooked. /dev/pts/N is a name any process on the
+    // machine can open, and a number is reused as soon as its pty is gone: a test of another
+    // suite that still holds the path of a pty it closed (the serial tests' hosts reconnect
+    // to a symlink to their unplugged device's pty) opens this one when it gets that number,
+    // and a serial host sets the line VMIN = 0, flushes both queues and writes its own frames.
+    // So the node keeps its slave open with flock(LOCK_EX), as a serial host does with the
+    // port it holds (it backs off, "busy", before touching the line), and sets the line up
+    // and empties both queues only once it has the lock (after such a host let go).
+    char slave_name[256] = {};
+    if (openpty(&node.master, &node.slave, slave_name, nullptr, nullptr) != 0) {
+        throw std::runtime_error(std::string("openpty: ") + std::strerror(errno));
+    }
+    (void)fcntl(node.master, F_SETFD, FD_CLOEXEC);  // children must not keep the pty up
+    (void)fcntl(node.slave, F_SETFD, FD_CLOEXEC);
+    while (::flock(node.slave, LOCK_EX) != 0) {
+        if (errno != EINTR) {
+            throw std::runtime_error(std::string("flock(") + slave_name +
+                                     "): " + std::strerror(errno));
+        }
+    }
+    (void)::ioctl(node.slave, TIOCNXCL);  // what such a host may have left (TIOCEXCL)
+    termios mode{};
+    if (tcgetattr(node.slave, &mode) != 0) {
+        throw std::runtime_error(std::string("tcgetattr: ") + std::strerror(errno));
+    }
+    cfmakeraw(&mode);
+    mode.c_cc[VMIN] = static_cast<cc_t>(device::protocol::hid::kReportSize);
+    mode.c_cc[VTIME] = 0;
+    if (tcsetattr(node.slave, TCSANOW, &mode) != 0) {
+        throw std::runtime_error(std::string("tcsetattr: ") + std::strerror(errno));
+    }
+    (void)tcflush(node.slave, TCIOFLUSH);
+    (void)tcflush(node.master, TCIFLUSH);
+    const std::string link_path = root_dir() + node.devnode;
+    if (g_mkdir_with_parents((root_dir() + "/dev").c_str(), 0755) != 0) {
+        throw std::runtime_error("mkdir " + root_dir() + "/dev: " + std::strerror(errno));
+    }
+    (void)::unlink(link_path.c_str());
+    if (::symlink(slave_name, link_path.c_str()) != 0) {
+        throw std::runtime_error("symlink " + link_path + ": " + std::strerror(errno));
+    }
+
+    // The device in sysfs: from here enumeration lists it.
     const std::string bus = std::to_string(index + 1);
     const std::string vid = hex(spec.vid, 4);
     const std::string pid = hex(spec.pid, 4);
-    const std::string number = std::to_string(spec.hidraw_number);
-    node.devnode = "/dev/hidraw" + number;
 
     const std::string usb =
         impl.add("usb", "usb" + bus + "/" + bus + "-1", "",
@@ -189,48 +265,6 @@ int UmockdevHidraw::plug(const HidrawNodeSpec& spec) {
                                         ("../../../" + hid_name).c_str());
     node.syspaths = {usb, interface, hid, hidraw};
 
-    // The node: a raw pty that delivers whole reports (VMIN = a report).
-    int slave = -1;
-    char slave_name[256] = {};
-    if (openpty(&node.master, &slave, slave_name, nullptr, nullptr) != 0) {
-        throw std::runtime_error(std::string("openpty: ") + std::strerror(errno));
-    }
-    ::close(slave);
-    (void)fcntl(node.master, F_SETFD, FD_CLOEXEC);  // children must not keep the pty up
-    termios mode{};
-    tcgetattr(node.master, &mode);
-    cfmakeraw(&mode);
-    mode.c_cc[VMIN] = static_cast<cc_t>(device::protocol::hid::kReportSize);
-    mode.c_cc[VTIME] = 0;
-    tcsetattr(node.master, TCSANOW, &mode);  // on a master: the slave's termios
-    const std::string link_path = root_dir() + node.devnode;
-    (void)::unlink(link_path.c_str());
-    if (::symlink(slave_name, link_path.c_str()) != 0) {
-        throw std::runtime_error("symlink " + link_path + ": " + std::strerror(errno));
-    }
-
-    // The ioctls, once per /dev node for the testbed's lifetime.
-    auto& target = impl.targets[node.devnode];
-    if (!target) target = std::make_unique<IoctlTarget>();
-    {
-        std::lock_guard lock(target->mutex);
-        target->descriptor = node.spec.report_descriptor;
-        target->vid = spec.vid;
-        target->pid = spec.pid;
-    }
-    if (!impl.handlers.contains(node.devnode)) {
-        UMockdevIoctlBase* handler = umockdev_ioctl_base_new();
-        g_signal_connect(handler, "handle-ioctl", G_CALLBACK(on_hidraw_ioctl), target.get());
-        GError* error = nullptr;
-        if (!umockdev_testbed_attach_ioctl(impl.testbed, node.devnode.c_str(), handler, &error)) {
-            const std::string message = error != nullptr ? error->message : "?";
-            g_clear_error(&error);
-            g_object_unref(handler);
-            throw std::runtime_error("umockdev_testbed_attach_ioctl(" + node.devnode +
-                                     "): " + message);
-        }
-        impl.handlers.emplace(node.devnode, handler);
-    }
     impl.nodes.push_back(std::move(node));
     return index;
 }
@@ -243,8 +277,10 @@ void UmockdevHidraw::unplug(int index) {
         umockdev_testbed_remove_device(impl_->testbed, path->c_str());
     }
     (void)::unlink((root_dir() + node.devnode).c_str());
-    ::close(node.master);
+    ::close(node.master);  // the slave hangs up, for every client and for the node's own hold
+    ::close(node.slave);
     node.master = -1;
+    node.slave = -1;
 }
 
 bool UmockdevHidraw::plugged(int node) const {

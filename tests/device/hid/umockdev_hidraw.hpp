@@ -12,17 +12,23 @@
 //                                        <hidraw>/device/report_descriptor)
 //
 // and the node /dev/hidrawK, a symlink to the slave of a pseudo-terminal that this class
-// owns (umockdev creates no node for a device added this way). The pty is raw with VMIN = 64
-// (set through the master, which sets the slave's termios), so a client's read() and poll()
-// see whole 64-byte reports, as on hidraw; the test side reads output reports from and
-// writes input reports to master_fd(). The ioctls hidapi needs (HIDIOCGRDESCSIZE in
-// hid_open_path, also HIDIOCGRDESC and HIDIOCGRAWINFO) are answered by a umockdev ioctl
-// handler ("handle-ioctl", umockdev >= 0.16) on umockdev's own thread; reads and writes are
-// left to the pty.
+// owns (umockdev creates no node for a device added this way). The pty is raw with VMIN = 64,
+// so a client's read() and poll() see whole 64-byte reports, as on hidraw; the test side
+// reads output reports from and writes input reports to master_fd(). The class keeps the
+// slave open itself, flock()ed, while the node is plugged: the master does not hang up
+// between clients, and a serial host of another test that reconnects to a stale /dev/pts/N
+// which this pty now has backs off instead of reconfiguring and flushing it (plug()). The
+// ioctls hidapi needs (HIDIOCGRDESCSIZE in hid_open_path, also HIDIOCGRDESC and
+// HIDIOCGRAWINFO) are answered by a umockdev ioctl handler ("handle-ioctl", umockdev >= 0.16)
+// on umockdev's own thread; reads and writes go to the pty (each after a round trip to that
+// thread, which asks the handler first: hid_device_server.hpp, "Timing").
 //
-// unplug() removes the sysfs tree and the node and closes the pty master: a client's poll()
-// gets POLLHUP and its write() EIO, as from a removed hidraw node (whose write() says ENODEV).
-// plug() again adds it back, under the same or another hidrawK.
+// plug() makes the ioctl handler, then the node, then the sysfs tree, so that a client that
+// enumerates meanwhile (a reconnecting plugin) finds either nothing or a node it can open.
+// unplug() removes the sysfs tree, then the node, and closes the pty master (the ioctl
+// handler stays, for clients that still hold the node): a client's poll() gets POLLHUP and
+// its write() EIO, as from a removed hidraw node (whose write() says ENODEV). plug() again
+// adds it back, under the same or another hidrawK.
 //
 // The process that uses the node must run with libumockdev-preload (umockdev-wrapper, or
 // LD_PRELOAD=libumockdev-preload.so.0) and the testbed's UMOCKDEV_DIR, which the constructor

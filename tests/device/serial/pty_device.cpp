@@ -64,8 +64,10 @@ PtyDevice::PtyDevice(const device::protocol::EmulatorConfig& config, std::string
 }
 
 PtyDevice::~PtyDevice() {
-    stop();
+    // The link goes first, as udev removes /dev/serial/by-id/... on unplug: a host that keeps
+    // reconnecting must not follow it to a /dev/pts/N that another test's pty reuses.
     if (!stable_path_.empty()) ::unlink(stable_path_.c_str());
+    stop();
 }
 
 std::string PtyDevice::port() const { return stable_path_.empty() ? slave_path() : stable_path_; }
@@ -96,7 +98,10 @@ void PtyDevice::stop() {
     pair_.reset();  // closes the master: the host's descriptor hangs up
 }
 
-void PtyDevice::hang_up() { stop(); }
+void PtyDevice::hang_up() {
+    if (!stable_path_.empty()) ::unlink(stable_path_.c_str());  // see the destructor
+    stop();
+}
 
 void PtyDevice::plug_in() {
     stop();

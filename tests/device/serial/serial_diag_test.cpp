@@ -37,7 +37,7 @@ mass = 0.1
 damping = 2.0
 [device.serial]
 port = ")" + port + R"("
-reply_timeout_ms = 50
+reply_timeout_ms = 500
 reconnect = false
 [coupling]
 stiffness = 1000
@@ -69,7 +69,7 @@ TEST(SerialLinkDiag, ReportsTheInjectedLossesAndLateRepliesThroughARealTty) {
     EXPECT_EQ(r.replies, 498u);
     EXPECT_EQ(r.disconnects + r.errors, 0u);
     EXPECT_GT(r.rtt_p50_us, 0.0);
-    EXPECT_LT(r.rtt_p50_us, 50'000.0);  // within the reply timeout, by construction
+    EXPECT_LT(r.rtt_p50_us, 500'000.0);  // within the reply timeout, by construction
     ASSERT_TRUE(r.clock_fit);
     EXPECT_NE(daemon::diag_text(r).find("lost: 1"), std::string::npos) << daemon::diag_text(r);
 }
