@@ -265,7 +265,10 @@ int run_loop(const RunOptions& options, const Config& config,
     });
 
     // This thread: signals, the duration and the status line.
-    const auto started = Clock::now();
+    // --duration counts servo time: from the first tick, not from before the real-time set-up
+    // (locking and prefaulting memory can take a tenth of a second).
+    auto started = Clock::now();
+    bool ticking = false;
     const auto status_every = std::chrono::duration<double>(options.status_interval_s);
     auto next_status = started + std::chrono::duration_cast<Clock::duration>(status_every);
     bool duration_ended = false;
@@ -273,6 +276,13 @@ int run_loop(const RunOptions& options, const Config& config,
     while (!servo_done.load(std::memory_order_acquire)) {
         std::this_thread::sleep_for(std::chrono::milliseconds(10));
         const auto now = Clock::now();
+        if (!ticking && loop.status().tick >= 1) {
+            ticking = true;
+            started =
+                now - std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
+                          static_cast<double>(loop.status().tick) / config.servo.rate_hz));
+            next_status = started + std::chrono::duration_cast<Clock::duration>(status_every);
+        }
         if (const servo::StatusSnapshot status = loop.status(); status.faults != logged_faults) {
             if ((status.faults & ~logged_faults) != 0u || status.faults == 0u) {
                 log << fault_change_line(logged_faults, status, config) << "\n" << std::flush;

@@ -300,7 +300,15 @@ TEST(SerialDaemon, RecoversWhenTheDeviceComesBack) {
     ASSERT_LT(lost, log.rows());
     ASSERT_GT(lost, 0u);
     EXPECT_EQ(f[lost], 0.0);
-    EXPECT_GT(std::abs(f[lost - 1]), 0.5);
+    // Before the first fault of any kind the spring pulled. (On a loaded machine a reply
+    // can miss its 8 ms budget before the unplug and latch read_timeout first; the force is
+    // zero from that fault on, which the loop below checks from the loss.)
+    std::size_t first_fault = 0;
+    while (first_fault < lost && faults_at(log, first_fault) == 0u) ++first_fault;
+    EXPECT_EQ(f[first_fault], 0.0);
+    double pulled = 0.0;
+    for (std::size_t row = 0; row < first_fault; ++row) pulled = std::max(pulled, std::abs(f[row]));
+    EXPECT_GT(pulled, 0.5);
     EXPECT_NE(static_cast<std::uint32_t>(log.column("status")[lost]) & servo::kStatusDisconnected,
               0u);
     // Back: the latch cleared, and the spring pulls again at the end.
