@@ -13,5 +13,7 @@ void add_check_command(CLI::App& app, Invocation& invocation);
 void add_plot_command(CLI::App& app, Invocation& invocation);
 void add_zwidth_command(CLI::App& app, Invocation& invocation);
 void add_diag_command(CLI::App& app, Invocation& invocation);
+void add_identify_command(CLI::App& app, Invocation& invocation);
+void add_autotune_command(CLI::App& app, Invocation& invocation);
 
 }  // namespace hapticd::tools

@@ -19,6 +19,8 @@ int main(int argc, char** argv) {
     add_plot_command(app, invocation);
     add_zwidth_command(app, invocation);
     add_diag_command(app, invocation);
+    add_identify_command(app, invocation);
+    add_autotune_command(app, invocation);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& help) {

@@ -1,0 +1,627 @@
+#include "hapticd/tune/identification.hpp"
+
+#include <ceres/ceres.h>
+#include <ceres/manifold.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <numbers>
+#include <tuple>
+
+#include "hapticd/tune/identification_model.hpp"
+#include "identification_data.hpp"
+
+namespace hapticd::tune {
+namespace {
+
+using detail::AxisData;
+using detail::format;
+using detail::percent;
+using detail::refuse;
+using detail::SegmentRange;
+
+using Jet = ceres::Jet<double, 6>;  // d/d(log m, log b, F_c, F_0, x0, v0)
+constexpr int kGlobalSize = 4;      // log m, log b, F_c, F_0
+constexpr int kStateSize = 2;       // a segment's x0, v0
+constexpr int kCoulombIndex = 2;
+using Matrix4 = Eigen::Matrix4d;
+using Vector4 = Eigen::Vector4d;
+using Matrix6 = Eigen::Matrix<double, kGlobalSize + kStateSize, kGlobalSize + kStateSize>;
+using Vector6 = Eigen::Matrix<double, kGlobalSize + kStateSize, 1>;
+
+// The Huber loss is quadratic out to kHuberK robust standard deviations of the residual
+// (never less than the quantisation noise q/√12); the first pass uses kFirstPassScale
+// residual units (encoder steps, or µm when the positions are not quantised).
+constexpr double kHuberK = 2.0;
+constexpr double kFirstPassScale = 10.0;
+// When a pass stops: near the optimum, parameters k standard errors off raise the cost by
+// about k²/N relative (N samples), so a relative cost change below k²/N means the fit moves
+// by less than k standard errors. The final pass stops at k = 0.01; pass 1, which only has
+// to find the residuals' scale, at k = 0.1. (A fixed tolerance would either stop short on
+// short logs or, on long ones, crawl on through the kinks that stiction puts in the cost.)
+constexpr double kFirstPassStepInStdErrors = 0.1;
+constexpr double kFinalStepInStdErrors = 0.01;
+// Without quantisation (resolution unknown), residuals are computed in this unit, m.
+constexpr double kUnquantisedUnitM = 1e-6;
+// The range m and b are searched in (exp() cannot overflow); an estimate on its edge is
+// refused.
+constexpr double kMassRangeKg[] = {1e-5, 1e5};
+constexpr double kDampingRangeNsPerM[] = {1e-5, 1e7};
+// The smallest eigenvalue of the (scaled) information matrix below which the log is
+// declared unable to separate the parameters.
+constexpr double kMinInformationEigenvalue = 1e-10;
+constexpr const char* kParameterNames[] = {"the mass m", "the damping b",
+                                           "the Coulomb friction F_c", "the force offset F_0"};
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+double median(std::vector<double> values) {
+    const auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+    std::nth_element(values.begin(), mid, values.end());
+    return *mid;
+}
+
+/// One segment's simulation with its derivatives, cached for the parameter values it was last
+/// run at. Each sample is its own Ceres residual block (so that the robust loss acts on each
+/// sample); they all read this cache, so a segment is simulated once per evaluation.
+class SegmentSimulation {
+  public:
+    SegmentSimulation(const double* force, std::size_t length, double period_s)
+        : force_(force), period_s_(period_s), x_(length) {}
+
+    /// Simulates at (global, state) unless that is where the cache is. False when the
+    /// simulation is not finite.
+    bool update(const double* global, const double* state) {
+        const std::array<double, 6> key = {global[0], global[1], global[2],
+                                           global[3], state[0],  state[1]};
+        if (valid_ && key == key_) return finite_;
+        key_ = key;
+        valid_ = true;
+        const Jet mass = exp(Jet(global[0], 0));
+        const Jet damping = exp(Jet(global[1], 1));
+        const Jet coulomb(global[2], 2);
+        const Jet offset(global[3], 3);
+        const Jet a = damping / mass;
+        const HoldConstants<Jet> full = hold_constants(a, period_s_);
+        MotionState<Jet> motion{Jet(state[0], 4), Jet(state[1], 5)};
+        x_[0] = motion.x;
+        stuck_ = 0;
+        for (std::size_t j = 1; j < x_.size(); ++j) {
+            hold_step(motion, mass, a, coulomb, Jet(force_[j - 1]) + offset, full, period_s_);
+            x_[j] = motion.x;
+            stuck_ += motion.v == 0.0;
+        }
+        // ceres::isfinite(Jet) looks at the value only; a NaN derivative would corrupt the
+        // step just as well. Positions only accumulate, so the last one carries any NaN.
+        finite_ = std::isfinite(motion.x.a) && motion.x.v.allFinite();
+        return finite_;
+    }
+    const Jet& position(std::size_t j) const { return x_[j]; }
+    /// Holds after which the handle was at rest (stuck by Coulomb friction).
+    std::size_t stuck() const { return stuck_; }
+
+  private:
+    const double* force_;
+    double period_s_;
+    std::vector<Jet> x_;
+    std::array<double, 6> key_{};
+    bool valid_ = false;
+    bool finite_ = false;
+    std::size_t stuck_ = 0;
+};
+
+/// (simulated - logged position) of one sample, in units of `unit_m`.
+class SampleResidual final : public ceres::SizedCostFunction<1, kGlobalSize, kStateSize> {
+  public:
+    SampleResidual(SegmentSimulation* simulation, std::size_t index, double logged_m, double unit_m)
+        : simulation_(simulation),
+          index_(index),
+          logged_m_(logged_m),
+          inverse_unit_(1.0 / unit_m) {}
+
+    bool Evaluate(double const* const* parameters, double* residuals,
+                  double** jacobians) const override {
+        if (!simulation_->update(parameters[0], parameters[1])) return false;
+        const Jet& x = simulation_->position(index_);
+        residuals[0] = (x.a - logged_m_) * inverse_unit_;
+        if (jacobians != nullptr && jacobians[0] != nullptr) {
+            for (int k = 0; k < kGlobalSize; ++k) jacobians[0][k] = x.v[k] * inverse_unit_;
+        }
+        if (jacobians != nullptr && jacobians[1] != nullptr) {
+            for (int k = 0; k < kStateSize; ++k) {
+                jacobians[1][k] = x.v[kGlobalSize + k] * inverse_unit_;
+            }
+        }
+        return true;
+    }
+
+  private:
+    SegmentSimulation* simulation_;
+    std::size_t index_;
+    double logged_m_;
+    double inverse_unit_;
+};
+
+/// The covariance of (log m, log b, F_c, F_0).
+struct Uncertainty {
+    Matrix4 clustered;    ///< segment-clustered sandwich: what is reported
+    Matrix4 independent;  ///< σ² (JᵀJ)⁻¹: residuals taken as independent
+};
+
+/// The output-error problem: per-sample residual blocks over the shooting segments, the four
+/// parameters shared by all, two initial-state parameters per segment.
+class OutputErrorFit {
+  public:
+    OutputErrorFit(const AxisData& data, const std::vector<SegmentRange>& ranges,
+                   const detail::StartingGuess& guess, double unit_m, int max_iterations)
+        : data_(data), unit_m_(unit_m) {
+        const auto inside = [](double value, const double(&range)[2]) {
+            return std::clamp(value, 2.0 * range[0], 0.5 * range[1]);
+        };
+        global_ = {std::log(inside(guess.mass_kg, kMassRangeKg)),
+                   std::log(inside(guess.damping_n_s_per_m, kDampingRangeNsPerM)), guess.coulomb_n,
+                   guess.offset_n};
+        segments_.reserve(ranges.size());
+        for (const SegmentRange& range : ranges) {
+            segments_.push_back(
+                {range,
+                 {detail::initial_position(data, range), detail::initial_velocity(data, range)},
+                 std::make_unique<SegmentSimulation>(data.f->data() + range.start, range.length,
+                                                     data.period_s)});
+        }
+        ceres::Problem::Options problem_options;
+        problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+        problem_ = std::make_unique<ceres::Problem>(problem_options);
+        for (Segment& s : segments_) {
+            for (std::size_t j = 0; j < s.range.length; ++j) {
+                const std::size_t row = s.range.start + j;
+                if (data.masked[row]) continue;
+                problem_->AddResidualBlock(
+                    new SampleResidual(s.simulation.get(), j, (*data.x)[row], unit_m), &loss_,
+                    global_.data(), s.state.data());
+                ++samples_;
+            }
+        }
+        // m and b through their logarithms, inside a physical range. F_c is not bounded:
+        // the model is defined for F_c < 0 (it never sticks), and a bound that is active
+        // (a device without friction) stalls the trust region; see hold_coulomb_at_zero().
+        problem_->SetParameterLowerBound(global_.data(), 0, std::log(kMassRangeKg[0]));
+        problem_->SetParameterUpperBound(global_.data(), 0, std::log(kMassRangeKg[1]));
+        problem_->SetParameterLowerBound(global_.data(), 1, std::log(kDampingRangeNsPerM[0]));
+        problem_->SetParameterUpperBound(global_.data(), 1, std::log(kDampingRangeNsPerM[1]));
+
+        options_.linear_solver_type = ceres::DENSE_SCHUR;
+        options_.num_threads = 1;
+        options_.max_num_iterations = max_iterations;
+        options_.gradient_tolerance = 1e-14;
+        options_.parameter_tolerance = 1e-10;
+        options_.logging_type = ceres::SILENT;
+    }
+
+    /// Solves with a Huber loss of scale `huber_scale` (residual units) until the cost
+    /// changes by less than `function_tolerance` (relative); refuses on failure.
+    ceres::Solver::Summary solve(double huber_scale, double function_tolerance) {
+        loss_.Reset(new ceres::HuberLoss(huber_scale), ceres::TAKE_OWNERSHIP);
+        huber_scale_ = huber_scale;
+        options_.function_tolerance = function_tolerance;
+        // Schur elimination of the segments' states: the reduced system is 4 x 4. (A fresh
+        // ordering each time: Ceres edits the one it is given.)
+        auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+        for (Segment& s : segments_) ordering->AddElementToGroup(s.state.data(), 0);
+        ordering->AddElementToGroup(global_.data(), 1);
+        options_.linear_solver_ordering = ordering;
+        ceres::Solver::Summary summary;
+        ceres::Solve(options_, problem_.get(), &summary);
+        iterations_ += static_cast<int>(summary.iterations.size()) - 1;
+        if (summary.termination_type == ceres::FAILURE ||
+            summary.termination_type == ceres::USER_FAILURE) {
+            refuse(RefusalReason::fit_failed, "the fit failed: " + summary.message);
+        }
+        return summary;
+    }
+
+    /// Fits only the segments' initial states, the four parameters held: each segment on its
+    /// own, so that the joint fit starts from states consistent with the starting guess.
+    void solve_states() {
+        problem_->SetParameterBlockConstant(global_.data());
+        ceres::Solver::Options options = options_;
+        options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;  // block diagonal
+        options.linear_solver_ordering = nullptr;
+        options.function_tolerance = tolerance(kFirstPassStepInStdErrors);
+        options.max_num_iterations = 20;
+        ceres::Solver::Summary summary;
+        ceres::Solve(options, problem_.get(), &summary);
+        iterations_ += static_cast<int>(summary.iterations.size()) - 1;
+        problem_->SetParameterBlockVariable(global_.data());
+    }
+
+    /// Holds F_c at 0 from now on (a fit that wanted negative friction).
+    void hold_coulomb_at_zero() {
+        global_[kCoulombIndex] = 0.0;
+        problem_->SetManifold(global_.data(),
+                              new ceres::SubsetManifold(kGlobalSize, {kCoulombIndex}));
+    }
+
+    /// Robust standard deviation of the residuals (residual units): 1.4826 median |r|.
+    double robust_sigma() {
+        std::vector<double> magnitudes;
+        magnitudes.reserve(samples_);
+        for_each_residual(
+            [&](double r, const Vector6&, std::size_t) { magnitudes.push_back(std::abs(r)); });
+        return 1.4826 * median(std::move(magnitudes));
+    }
+
+    /// Fraction of the holds after which the fitted model's handle is at rest.
+    double stuck_fraction() {
+        std::size_t stuck = 0;
+        std::size_t holds = 0;
+        for (Segment& s : segments_) {
+            s.simulation->update(global_.data(), s.state.data());
+            stuck += s.simulation->stuck();
+            holds += s.range.length - 1;
+        }
+        return static_cast<double>(stuck) / static_cast<double>(std::max<std::size_t>(holds, 1));
+    }
+
+    /// RMS of the residuals, m.
+    double residual_rms_m() {
+        double sum = 0.0;
+        for_each_residual([&](double r, const Vector6&, std::size_t) { sum += r * r; });
+        return std::sqrt(sum / static_cast<double>(samples_)) * unit_m_;
+    }
+
+    /// The covariance at the solution: the bread (JᵀJ)⁻¹ from ceres::Covariance, the meat from
+    /// each segment's score. Refuses when the log cannot separate the parameters.
+    Uncertainty uncertainty() {
+        // Per segment: the information of its samples with the weights Ceres' Huber corrector
+        // uses (1 inside the scale, δ/|r| outside), and its score Σ ψ(r) ∂r/∂θ.
+        std::vector<Matrix6> information(segments_.size(), Matrix6::Zero());
+        std::vector<Vector4> score(segments_.size(), Vector4::Zero());
+        double sum_psi2 = 0.0;
+        for_each_residual([&](double r, const Vector6& J, std::size_t k) {
+            const double weight = std::abs(r) <= huber_scale_ ? 1.0 : huber_scale_ / std::abs(r);
+            const double psi = std::clamp(r, -huber_scale_, huber_scale_);  // ρ'(r²) r
+            information[k] += weight * J * J.transpose();
+            score[k] += psi * J.head<kGlobalSize>();
+            sum_psi2 += psi * psi;
+        });
+        check_information(information);
+
+        ceres::Covariance::Options covariance_options;
+        covariance_options.num_threads = 1;
+        ceres::Covariance covariance(covariance_options);
+        const std::vector<std::pair<const double*, const double*>> blocks = {
+            {global_.data(), global_.data()}};
+        if (!covariance.Compute(blocks, problem_.get())) {
+            refuse(RefusalReason::too_little_excitation,
+                   "ceres::Covariance found the Jacobian of the fit rank-deficient: the log "
+                   "cannot tell m, b, F_c and F_0 apart");
+        }
+        Matrix4 bread;  // symmetric: row- or column-major alike
+        covariance.GetCovarianceBlock(global_.data(), global_.data(), bread.data());
+
+        // Sandwich with the segments as clusters: within a segment, force noise correlates
+        // the residuals; across segments (each with its own initial state) it does not.
+        Matrix4 meat = Matrix4::Zero();
+        for (const Vector4& g : score) meat += g * g.transpose();
+        const double clusters = static_cast<double>(segments_.size());
+        if (clusters > 1.0) meat *= clusters / (clusters - 1.0);
+        const double dof =
+            std::max(1.0, static_cast<double>(samples_) - static_cast<double>(parameters()));
+        return {bread * meat * bread, bread * (sum_psi2 / dof)};
+    }
+
+    /// The relative cost change that corresponds to a step of `k` standard errors.
+    double tolerance(double k) const { return k * k / static_cast<double>(samples_); }
+
+    const std::array<double, kGlobalSize>& global() const { return global_; }
+    std::size_t samples() const { return samples_; }
+    std::size_t segments() const { return segments_.size(); }
+    std::size_t parameters() const { return kGlobalSize + kStateSize * segments_.size(); }
+    int iterations() const { return iterations_; }
+
+  private:
+    struct Segment {
+        SegmentRange range;
+        std::array<double, kStateSize> state;
+        std::unique_ptr<SegmentSimulation> simulation;
+    };
+
+    /// Calls visit(residual, ∂residual/∂(global, state), segment) for every fresh sample at
+    /// the current parameters.
+    template <typename Visit>
+    void for_each_residual(Visit visit) {
+        for (std::size_t k = 0; k < segments_.size(); ++k) {
+            Segment& s = segments_[k];
+            s.simulation->update(global_.data(), s.state.data());
+            for (std::size_t j = 0; j < s.range.length; ++j) {
+                const std::size_t row = s.range.start + j;
+                if (data_.masked[row]) continue;
+                const Jet& x = s.simulation->position(j);
+                visit((x.a - (*data_.x)[row]) / unit_m_, Vector6(x.v / unit_m_), k);
+            }
+        }
+    }
+
+    /// The information about the four parameters once each segment's initial state is
+    /// eliminated (Schur complement), scaled to unit diagonal: refuses if it is singular,
+    /// naming the parameters the log cannot tell apart. A segment that sits in stiction from
+    /// its start has no use for v0 (any small v0 stops at once): v0 is held for the
+    /// covariance.
+    void check_information(const std::vector<Matrix6>& information) {
+        Matrix4 reduced = Matrix4::Zero();
+        for (std::size_t k = 0; k < segments_.size(); ++k) {
+            const Matrix6& M = information[k];
+            const double span_s = static_cast<double>(segments_[k].range.length) * data_.period_s;
+            const Matrix4 A = M.topLeftCorner<kGlobalSize, kGlobalSize>();
+            if (M(5, 5) > 1e-10 * M(4, 4) * span_s * span_s) {
+                const Eigen::Matrix<double, kGlobalSize, kStateSize> B =
+                    M.topRightCorner<kGlobalSize, kStateSize>();
+                const Eigen::Matrix2d D = M.bottomRightCorner<kStateSize, kStateSize>();
+                reduced += A - B * D.ldlt().solve(B.transpose());
+            } else {
+                problem_->SetManifold(segments_[k].state.data(),
+                                      new ceres::SubsetManifold(kStateSize, {1}));
+                const Vector4 b = M.block<kGlobalSize, 1>(0, kGlobalSize);
+                reduced += A - b * b.transpose() / M(4, 4);
+            }
+        }
+        const bool coulomb_held = problem_->GetManifold(global_.data()) != nullptr;
+        Vector4 scale = reduced.diagonal().cwiseMax(0.0).cwiseSqrt();
+        if (coulomb_held) scale[kCoulombIndex] = 1.0;  // its row is out of the problem
+        for (int p = 0; p < kGlobalSize; ++p) {
+            if (!(scale[p] > 0.0)) {
+                refuse(RefusalReason::too_little_excitation,
+                       std::string(kParameterNames[p]) +
+                           " has no effect on the simulated positions of this log");
+            }
+        }
+        Matrix4 normalized =
+            scale.cwiseInverse().asDiagonal() * reduced * scale.cwiseInverse().asDiagonal();
+        if (coulomb_held) {
+            normalized.row(kCoulombIndex).setZero();
+            normalized.col(kCoulombIndex).setZero();
+            normalized(kCoulombIndex, kCoulombIndex) = 1.0;
+        }
+        const Eigen::SelfAdjointEigenSolver<Matrix4> eigen(normalized);
+        if (!(eigen.eigenvalues()[0] > kMinInformationEigenvalue)) {
+            std::string which;
+            for (int p = 0; p < kGlobalSize; ++p) {
+                if (std::abs(eigen.eigenvectors()(p, 0)) > 0.3) {
+                    which += (which.empty() ? "" : " and ") + std::string(kParameterNames[p]);
+                }
+            }
+            refuse(RefusalReason::too_little_excitation,
+                   "the log cannot tell " + which +
+                       " apart (the Jacobian of the fit is rank-deficient): the force needs "
+                       "content above and below the mechanical corner b/(2 pi m), and the handle "
+                       "must reverse direction for Coulomb friction to show apart from a "
+                       "constant offset");
+        }
+    }
+
+    const AxisData& data_;
+    double unit_m_;
+    // The loss outlives the problem, which does not own it (one loss shared by every block).
+    ceres::LossFunctionWrapper loss_{new ceres::HuberLoss(kFirstPassScale), ceres::TAKE_OWNERSHIP};
+    double huber_scale_ = kFirstPassScale;
+    std::array<double, kGlobalSize> global_{};
+    std::vector<Segment> segments_;
+    std::unique_ptr<ceres::Problem> problem_;
+    ceres::Solver::Options options_;
+    std::size_t samples_ = 0;
+    int iterations_ = 0;
+};
+
+AxisParameters std_errors(const Matrix4& c, double mass, double damping) {
+    // m = e^{log m}: SE(m) = m SE(log m), to first order (the delta method).
+    return {mass * std::sqrt(c(0, 0)), damping * std::sqrt(c(1, 1)), std::sqrt(c(2, 2)),
+            std::sqrt(c(3, 3))};
+}
+
+/// Refuses a fit dominated by stick-slip, or whose standard errors say the log did not
+/// determine it.
+void check_precision(const IdentifiedAxis& fit, const AxisData& data,
+                     const IdentificationOptions& options) {
+    const double limit = options.max_relative_std_error;
+    const AxisParameters& e = fit.estimate;
+    const AxisParameters& se = fit.std_error;
+    if (fit.stuck_fraction > options.max_stuck_fraction) {
+        const double rms = detail::force_rms(data);
+        refuse(RefusalReason::too_little_excitation,
+               "the handle sat still, held by Coulomb friction (F_c = " + format(e.coulomb_n) +
+                   " N), after " + percent(fit.stuck_fraction) + " of the periods (allowed " +
+                   percent(options.max_stuck_fraction) +
+                   "): stick-slip dominates the run, and force noise at each breakaway biases "
+                   "the fit; raise the excitation (its RMS is " +
+                   format(rms) + " N, " + format(rms / std::max(e.coulomb_n, 1e-300), 2) +
+                   " F_c; 2.5 F_c or more keeps the handle moving)");
+    }
+    const double corner_hz = e.damping_n_s_per_m / (2.0 * std::numbers::pi * e.mass_kg);
+    const auto explain = [&](const std::string& what, double value, double error,
+                             const std::string& unit, const std::string& advice) {
+        refuse(RefusalReason::too_little_excitation,
+               "too little excitation to identify the " + what + ": " + format(value) + " ± " +
+                   format(error) + " " + unit + " (relative standard error " +
+                   percent(error / value) + ", allowed " + percent(limit) + "). " +
+                   percent(detail::force_power_above(data, corner_hz)) +
+                   " of the force's variance lies above the mechanical corner b/(2 pi m) = " +
+                   format(corner_hz, 3) + " Hz; " + advice);
+    };
+    if (!(se.mass_kg <= limit * e.mass_kg)) {
+        explain("mass m", e.mass_kg, se.mass_kg, "kg",
+                "the mass shows above the corner: add force content there, raise the "
+                "amplitude, or record longer");
+    }
+    if (!(se.damping_n_s_per_m <= limit * e.damping_n_s_per_m)) {
+        explain("damping b", e.damping_n_s_per_m, se.damping_n_s_per_m, "N s/m",
+                "the damping shows below the corner: add force content there, raise the "
+                "amplitude, or record longer");
+    }
+    const double friction_limit = limit * detail::force_rms(data);
+    if (!(se.coulomb_n <= friction_limit && se.offset_n <= friction_limit)) {
+        refuse(RefusalReason::too_little_excitation,
+               "too little excitation to tell Coulomb friction from the force offset: F_c = " +
+                   format(e.coulomb_n) + " ± " + format(se.coulomb_n) +
+                   " N, F_0 = " + format(e.offset_n) + " ± " + format(se.offset_n) +
+                   " N (allowed standard error " + format(friction_limit) + " N, " +
+                   percent(limit) + " of the force's RMS; correlation " +
+                   format(fit.correlation[2][3], 3) +
+                   "): the handle must reverse direction often, at speeds well above the "
+                   "stiction region");
+    }
+}
+
+}  // namespace
+
+std::string_view to_string(RefusalReason reason) {
+    switch (reason) {
+        case RefusalReason::missing_column:
+            return "missing_column";
+        case RefusalReason::too_short:
+            return "too_short";
+        case RefusalReason::non_uniform_time:
+            return "non_uniform_time";
+        case RefusalReason::faults:
+            return "faults";
+        case RefusalReason::saturated:
+            return "saturated";
+        case RefusalReason::too_little_excitation:
+            return "too_little_excitation";
+        case RefusalReason::fit_failed:
+            return "fit_failed";
+    }
+    return "unknown";
+}
+
+void IdentificationOptions::validate() const {
+    const auto reject = [](const std::string& name, double value, const std::string& allowed) {
+        throw std::invalid_argument("identification option " + name + " = " + format(value) +
+                                    " is out of range: allowed " + allowed);
+    };
+    if (!(std::isfinite(segment_s) && segment_s > 0.0)) reject("segment_s", segment_s, "> 0 s");
+    if (resolution_m && !(std::isfinite(*resolution_m) && *resolution_m > 0.0)) {
+        reject("resolution_m", *resolution_m, "> 0 m");
+    }
+    if (force_limit_n && !(std::isfinite(*force_limit_n) && *force_limit_n > 0.0)) {
+        reject("force_limit_n", *force_limit_n, "> 0 N");
+    }
+    if (!(min_duration_s >= 0.0)) reject("min_duration_s", min_duration_s, ">= 0 s");
+    if (!(max_saturated_fraction >= 0.0 && max_saturated_fraction <= 1.0)) {
+        reject("max_saturated_fraction", max_saturated_fraction, "0 .. 1");
+    }
+    if (!(max_masked_fraction >= 0.0 && max_masked_fraction <= 1.0)) {
+        reject("max_masked_fraction", max_masked_fraction, "0 .. 1");
+    }
+    if (!(max_stuck_fraction >= 0.0 && max_stuck_fraction <= 1.0)) {
+        reject("max_stuck_fraction", max_stuck_fraction, "0 .. 1");
+    }
+    if (!(max_relative_std_error > 0.0)) {
+        reject("max_relative_std_error", max_relative_std_error, "> 0 (inf: no check)");
+    }
+    if (max_iterations < 1) reject("max_iterations", max_iterations, ">= 1");
+}
+
+IdentifiedAxis identify_axis(const TelemetryLog& log, int axis,
+                             const IdentificationOptions& options) {
+    const auto start = std::chrono::steady_clock::now();
+    options.validate();
+    const AxisData data = detail::prepare_axis(log, axis, options);
+    const double q = data.resolution_m;
+    const double unit_m = q > 0.0 ? q : kUnquantisedUnitM;
+    const std::size_t target_samples = std::max<std::size_t>(
+        detail::kMinSegmentSamples,
+        static_cast<std::size_t>(std::lround(options.segment_s / data.period_s)));
+    const std::vector<SegmentRange> ranges = detail::make_segments(data, target_samples);
+    OutputErrorFit fit(data, ranges, detail::starting_guess(data, ranges), unit_m,
+                       options.max_iterations);
+
+    // Pass 1 from the starting guess with a wide loss; its residuals give the noise scale.
+    fit.solve_states();
+    fit.solve(kFirstPassScale, fit.tolerance(kFirstPassStepInStdErrors));
+    const double quantisation_sigma = q > 0.0 ? 1.0 / std::sqrt(12.0) : 0.0;  // in units of q
+    const double huber_scale = kHuberK * std::max(fit.robust_sigma(), quantisation_sigma);
+    if (!(huber_scale > 0.0)) {
+        refuse(RefusalReason::fit_failed,
+               "the model reproduces the positions exactly: the log is not a run of a "
+               "physical device");
+    }
+    // Pass 2 with the final scale.
+    ceres::Solver::Summary summary = fit.solve(huber_scale, fit.tolerance(kFinalStepInStdErrors));
+    Uncertainty uncertainty = fit.uncertainty();
+    double coulomb_std_error = std::sqrt(uncertainty.clustered(kCoulombIndex, kCoulombIndex));
+    bool coulomb_held = false;
+    if (fit.global()[kCoulombIndex] < 0.0) {
+        // Negative friction is not physical: the device has none the log can see. Refit with
+        // F_c = 0; its standard error stays that of the free fit (how far from 0 it could be).
+        fit.hold_coulomb_at_zero();
+        summary = fit.solve(huber_scale, fit.tolerance(kFinalStepInStdErrors));
+        uncertainty = fit.uncertainty();
+        coulomb_held = true;
+    }
+    const std::array<double, kGlobalSize>& global = fit.global();
+    for (const auto& [index, range, name] :
+         {std::tuple{0, kMassRangeKg, "mass m (kg)"},
+          std::tuple{1, kDampingRangeNsPerM, "damping b (N s/m)"}}) {
+        const double value = std::exp(global[index]);
+        if (value < 1.001 * range[0] || value > 0.999 * range[1]) {
+            refuse(RefusalReason::too_little_excitation,
+                   std::string("the fit ran the ") + name + " to the edge of its range [" +
+                       format(range[0]) + ", " + format(range[1]) + "] (" + format(value) +
+                       "): the log does not determine it");
+        }
+    }
+
+    IdentifiedAxis result;
+    result.axis = axis;
+    const double mass = std::exp(global[0]);
+    const double damping = std::exp(global[1]);
+    result.estimate = {mass, damping, global[2], global[3]};
+    result.std_error = std_errors(uncertainty.clustered, mass, damping);
+    result.std_error_independent = std_errors(uncertainty.independent, mass, damping);
+    if (coulomb_held) result.std_error.coulomb_n = coulomb_std_error;
+    for (int i = 0; i < kGlobalSize; ++i) {
+        for (int j = 0; j < kGlobalSize; ++j) {
+            const double scale =
+                std::sqrt(uncertainty.clustered(i, i) * uncertainty.clustered(j, j));
+            result.correlation[i][j] = scale > 0.0 ? uncertainty.clustered(i, j) / scale : 0.0;
+        }
+    }
+    result.residual_rms_m = fit.residual_rms_m();
+    result.stuck_fraction = fit.stuck_fraction();
+    result.residual_rms_counts =
+        q > 0.0 ? result.residual_rms_m / q : std::numeric_limits<double>::quiet_NaN();
+    result.resolution_m = q;
+    result.resolution_estimated = data.resolution_estimated;
+    result.rate_hz = 1.0 / data.period_s;
+    result.duration_s = data.duration_s;
+    result.samples = fit.samples();
+    result.masked_samples = data.masked_count;
+    result.segments = fit.segments();
+    result.gaps = data.gaps;
+    result.report.iterations = fit.iterations();
+    result.report.converged = summary.termination_type == ceres::CONVERGENCE;
+    result.report.termination = summary.message;
+    result.report.huber_scale_m = huber_scale * unit_m;
+    result.report.parameters = fit.parameters();
+    result.report.coulomb_held_at_zero = coulomb_held;
+    check_precision(result, data, options);
+    result.report.solve_time_s = seconds_since(start);
+    return result;
+}
+
+std::vector<IdentifiedAxis> identify_all_axes(const TelemetryLog& log,
+                                              const IdentificationOptions& options) {
+    std::vector<IdentifiedAxis> axes;
+    for (int axis = 0; axis < log.axes; ++axis) axes.push_back(identify_axis(log, axis, options));
+    return axes;
+}
+
+}  // namespace hapticd::tune

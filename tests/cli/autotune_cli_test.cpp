@@ -1,0 +1,451 @@
+// haptic-tune autotune, end to end through the real executables: a commented lab config,
+// logs of the sim device made in-process (tests/tune/identification_sim_run.hpp) or by
+// `hapticd --identify --lockstep`, and the files autotune leaves: the edited config (every
+// other line and comment kept; the daemon's start-up check and the exact model pass it),
+// the backup (identical to the original), and nothing at all when it refuses.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "../hil/scratch_dir.hpp"
+#include "../tune/identification_sim_run.hpp"
+#include "hapticd/daemon/config.hpp"
+#include "hapticd/daemon/startup_check.hpp"
+#include "hapticd/tune/coupling_sizing.hpp"
+#include "hapticd/tune/exact_model.hpp"
+#include "run_command.hpp"
+
+namespace hapticd {
+namespace {
+
+namespace fs = std::filesystem;
+using hapticd::testing::CommandResult;
+using hapticd::testing::run_command;
+using hapticd::testing::ScratchDir;
+using nlohmann::json;
+
+/// A lab's config: comments everywhere, a wrong guess in [device.model], and the sim device
+/// whose truth (m = 0.1 kg, b = 2 N s/m, 0.2 N Coulomb friction) the run should find.
+std::string lab_config(int axes = 1, const std::string& identify = "") {
+    std::ostringstream out;
+    out << "# Bench 3: the pen display, on the sim until the hardware arrives.\n"
+           "# Every comment here must survive haptic-tune autotune.\n"
+           "\n"
+           "[servo]\n"
+           "rate_hz = 1000.0        # Hz\n"
+           "realtime = \"off\"        # a test machine\n"
+           "\n"
+           "[device]\n"
+           "plugin = \"sim\"\n"
+           "axes = "
+        << axes
+        << "\n"
+           "\n"
+           "[device.model]          # a guess, before identification\n"
+           "mass = 0.12             # kg\n"
+           "damping = 1.5           # N s/m\n"
+           "\n"
+           "# The coupling, to be sized.\n"
+           "[coupling]\n"
+           "stiffness = 2000.0      # N/m: 2/3 of 2b/T for the guess\n"
+           "damping = 0.0           # N s/m\n"
+           "check = \"encoder\"       # the start-up check's model\n"
+           "\n"
+           "[scene]\n"
+           "file = \""
+        << HAPTICD_SOURCE_DIR
+        << "/config/scenes/demo-wall.toml\"\n"
+           "\n"
+           "[safety]\n"
+           "max_force = 20.0        # N\n"
+           "max_speed = 1.0         # m/s\n"
+           "\n"
+           "[device.sim]            # the truth\n"
+           "mass = 0.1              # kg\n"
+           "damping = 2.0           # N s/m\n"
+           "counts_per_meter = 1e5  # 10 um per count\n"
+           "force_limit = 20.0      # N\n"
+           "coulomb = 0.2           # N\n"
+           "clock = \"lockstep\"\n";
+    if (!identify.empty()) out << "\n[identify]\n" << identify;
+    return out.str();
+}
+
+std::string read(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream text;
+    text << in.rdbuf();
+    return text.str();
+}
+
+std::vector<std::string> lines(const std::string& text) {
+    std::vector<std::string> out;
+    std::istringstream in(text);
+    for (std::string line; std::getline(in, line);) out.push_back(line);
+    return out;
+}
+
+std::string quoted(const std::string& s) { return "'" + s + "'"; }
+
+/// A 10 s open-loop run of the sim (tune/identification_sim_run.hpp), as the daemon's CSV.
+std::string write_sim_log(const ScratchDir& dir, tune::testing::SimulatedRun run = {},
+                          const std::string& name = "run.csv") {
+    const auto records = tune::testing::simulate_run(run);
+    return dir.write(name, tune::testing::daemon_csv(records, run.axes));
+}
+
+struct Bench {
+    ScratchDir dir;
+    std::string config;
+    std::string original;
+    explicit Bench(const std::string& text = lab_config()) {
+        config = dir.write("lab.toml", text);
+        original = text;
+    }
+    CommandResult autotune(const std::string& args, const std::string& prefix = "") const {
+        return run_command(prefix + quoted(HAPTIC_TUNE) + " autotune --config " + quoted(config) +
+                           " " + args);
+    }
+    /// Nothing written: the config is the original and no backup or temporary is left.
+    void expect_untouched() const {
+        EXPECT_EQ(read(config), original);
+        EXPECT_FALSE(fs::exists(config + ".bak"));
+        EXPECT_FALSE(fs::exists(config + ".tmp"));
+    }
+};
+
+/// The encoder bound at b_c = 0: what `haptic-tune size` computes.
+double encoder_bound(double mass_kg, double damping_n_s_per_m, double rate_hz) {
+    tune::ImpedanceSizingRequest request;
+    request.device = {mass_kg, damping_n_s_per_m};
+    request.rate_hz = rate_hz;
+    request.model = theory::HoldModel::encoder;
+    request.coupling_damping_n_s_per_m = 0.0;
+    return tune::size_impedance_coupling(request).coupling.stiffness_n_per_m;
+}
+
+/// The tuned config as the daemon reads it: identified m and b within `tolerance` of the
+/// sim's, k_c = margin x haptic-tune size's bound for the written m and b (to the 6
+/// significant digits written), b_c = 0; the start-up check and the exact model pass it.
+void expect_tuned(const std::string& path, double margin, double tolerance) {
+    const daemon::Config config = daemon::load_config(path);
+    ASSERT_TRUE(config.device.model_mass_kg && config.device.model_damping_n_s_per_m);
+    const double mass = *config.device.model_mass_kg;
+    const double damping = *config.device.model_damping_n_s_per_m;
+    EXPECT_NEAR(mass, 0.1, tolerance * 0.1);
+    EXPECT_NEAR(damping, 2.0, tolerance * 2.0);
+    const double bound = encoder_bound(mass, damping, config.servo.rate_hz);
+    EXPECT_NEAR(config.coupling.stiffness_n_per_m, margin * bound, 5e-6 * margin * bound);
+    EXPECT_LE(config.coupling.stiffness_n_per_m, bound);
+    EXPECT_EQ(config.coupling.damping_n_s_per_m, 0.0);
+
+    const daemon::StartupCheck startup = daemon::check_coupling_at_startup(config);
+    EXPECT_TRUE(startup.passed) << startup.describe();
+    const tune::ExactCheck exact = tune::check_exact(
+        {mass, damping}, {config.coupling.stiffness_n_per_m, config.coupling.damping_n_s_per_m},
+        config.servo.rate_hz);
+    EXPECT_TRUE(exact.stable) << exact.worst_operator.describe();
+}
+
+/// Every line of `before` is in `after`, in order, unchanged, except the values of the
+/// four keys autotune sets: those keep their key, their spacing before '=' and their
+/// comment.
+void expect_only_the_four_values_changed(const std::string& before, const std::string& after) {
+    const std::vector<std::string> a = lines(before);
+    const std::vector<std::string> b = lines(after);
+    ASSERT_EQ(a.size(), b.size()) << after;
+    std::string table;
+    int edited = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+        if (!a[i].empty() && a[i][0] == '[') table = a[i].substr(0, a[i].find(']') + 1);
+        const std::string key = a[i].substr(0, a[i].find(' '));
+        const bool autotuned = (table == "[device.model]" && (key == "mass" || key == "damping")) ||
+                               (table == "[coupling]" && (key == "stiffness" || key == "damping"));
+        if (!autotuned) {
+            EXPECT_EQ(b[i], a[i]) << "line " << i + 1;
+            continue;
+        }
+        ++edited;
+        EXPECT_EQ(b[i].substr(0, b[i].find('=') + 1), a[i].substr(0, a[i].find('=') + 1));
+        const auto comment = [](const std::string& line) {
+            const std::size_t hash = line.find('#');
+            return hash == std::string::npos ? std::string() : line.substr(hash);
+        };
+        EXPECT_EQ(comment(b[i]), comment(a[i])) << "line " << i + 1;
+    }
+    EXPECT_EQ(edited, 4);
+}
+
+// --- from a log -------------------------------------------------------------------------
+
+TEST(AutotuneCli, WritesTheIdentifiedModelAndTheMarginTimesTheBoundKeepingEverythingElse) {
+    const Bench bench;
+    const std::string log = write_sim_log(bench.dir);
+    const CommandResult r = bench.autotune("--log " + quoted(log));
+    ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
+
+    const std::string tuned = read(bench.config);
+    expect_only_the_four_values_changed(bench.original, tuned);
+    // The issue's accuracy target: m and b within 2 % (force noise, friction, 10 um counts).
+    expect_tuned(bench.config, 0.9, 0.02);
+    EXPECT_EQ(read(bench.config + ".bak"), bench.original);
+    EXPECT_FALSE(fs::exists(bench.config + ".tmp"));
+    // The backup has the config's permissions.
+    EXPECT_EQ(fs::status(bench.config + ".bak").permissions(),
+              fs::status(bench.config).permissions());
+
+    // What changed and why.
+    for (const char* expected :
+         {"[device.model] mass", "0.12 -> ", "[coupling] stiffness", "2000.0 -> ", "(unchanged)",
+          "margin 0.9 x ", "+- ", "verified: the exact model",
+          "start-up check of the edited config", "backup: "}) {
+        EXPECT_NE(r.out.find(expected), std::string::npos) << expected << " in\n" << r.out;
+    }
+}
+
+TEST(AutotuneCli, JsonSaysTheSameAndTheMarginIsAnOption) {
+    const Bench bench;
+    const std::string log = write_sim_log(bench.dir);
+    const CommandResult r = bench.autotune("--log " + quoted(log) + " --margin 0.8 --json");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const json j = json::parse(r.out);
+    EXPECT_TRUE(j.at("written").get<bool>());
+    EXPECT_EQ(j.at("backup"), bench.config + ".bak");
+    EXPECT_TRUE(j.at("verified").get<bool>());
+    EXPECT_EQ(j.at("margin").get<double>(), 0.8);
+    EXPECT_EQ(j.at("model"), "encoder");
+    EXPECT_EQ(j.at("rate_hz").get<double>(), 1000.0);
+    EXPECT_EQ(j.at("binding_axis").get<int>(), 0);
+    const json& axis = j.at("axes").at(0);
+    EXPECT_GT(axis.at("mass_std_error").get<double>(), 0.0);
+    EXPECT_GT(axis.at("damping_std_error").get<double>(), 0.0);
+    EXPECT_NEAR(axis.at("coulomb").get<double>(), 0.2, 0.02);
+    EXPECT_GT(j.at("bound").at("stiffness_std_error").get<double>(), 0.0);
+    const double bound = j.at("bound").at("stiffness").get<double>();
+    EXPECT_NEAR(j.at("stiffness").get<double>(), 0.8 * bound, 5e-6 * 0.8 * bound);
+    EXPECT_TRUE(j.at("exact_check").at("stable").get<bool>());
+    EXPECT_FALSE(j.at("exact_check").at("worst_operator").get<std::string>().empty());
+    ASSERT_EQ(j.at("changes").size(), 4u);
+    EXPECT_EQ(j.at("changes").at(0).at("table"), "device.model");
+    EXPECT_EQ(j.at("changes").at(0).at("key"), "mass");
+    EXPECT_EQ(j.at("changes").at(0).at("old"), "0.12");
+    EXPECT_EQ(j.at("changes").at(3).at("changed").get<bool>(), false);  // b_c 0.0 -> 0.0
+    expect_tuned(bench.config, 0.8, 0.02);
+}
+
+TEST(AutotuneCli, DryRunWritesNothing) {
+    const Bench bench;
+    const std::string log = write_sim_log(bench.dir);
+    const CommandResult r = bench.autotune("--log " + quoted(log) + " --dry-run");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    bench.expect_untouched();
+    EXPECT_NE(r.out.find("changes (not written):"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("dry run: "), std::string::npos) << r.out;
+    const CommandResult j = bench.autotune("--log " + quoted(log) + " --dry-run --json");
+    ASSERT_EQ(j.exit_code, 0) << j.err;
+    EXPECT_FALSE(json::parse(j.out).at("written").get<bool>());
+    bench.expect_untouched();
+}
+
+// An older backup is never overwritten: the next one is FILE.bak.1, then .2.
+TEST(AutotuneCli, KeepsOlderBackups) {
+    const Bench bench;
+    const std::string log = write_sim_log(bench.dir);
+    ASSERT_EQ(bench.autotune("--log " + quoted(log) + " --margin 0.7").exit_code, 0);
+    const std::string first = read(bench.config);
+    const CommandResult second = bench.autotune("--log " + quoted(log) + " --json");
+    ASSERT_EQ(second.exit_code, 0) << second.err;
+    EXPECT_EQ(json::parse(second.out).at("backup"), bench.config + ".bak.1");
+    EXPECT_EQ(read(bench.config + ".bak"), bench.original);
+    EXPECT_EQ(read(bench.config + ".bak.1"), first);
+    expect_tuned(bench.config, 0.9, 0.02);
+}
+
+TEST(AutotuneCli, SizesForTheBindingAxisOfAMultiAxisDevice) {
+    const Bench bench(lab_config(2));
+    tune::testing::SimulatedRun run;
+    run.axes = 2;
+    const std::string log = write_sim_log(bench.dir, run);
+    const CommandResult r = bench.autotune("--log " + quoted(log) + " --json");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const json j = json::parse(r.out);
+    ASSERT_EQ(j.at("axes").size(), 2u);
+    const int binding = j.at("binding_axis").get<int>();
+    const json& a0 = j.at("axes").at(0);
+    const json& a1 = j.at("axes").at(1);
+    const double k0 = a0.at("bound").at("stiffness").get<double>();
+    const double k1 = a1.at("bound").at("stiffness").get<double>();
+    EXPECT_EQ(binding, k1 < k0 ? 1 : 0);
+    EXPECT_EQ(j.at("bound").at("stiffness").get<double>(), std::min(k0, k1));
+    EXPECT_TRUE(a0.at("exact_check").at("stable").get<bool>());
+    EXPECT_TRUE(a1.at("exact_check").at("stable").get<bool>());
+    expect_tuned(bench.config, 0.9, 0.02);
+}
+
+// --- refusals: exit 2 (input) or 1 (the exact model), and the file untouched -------------
+
+TEST(AutotuneCli, ARefusedLogExitsTwoNamingTheReason) {
+    const Bench bench;
+    tune::testing::SimulatedRun run;
+    run.duration_s = 0.5;
+    const std::string log = write_sim_log(bench.dir, run);
+    const CommandResult r = bench.autotune("--log " + quoted(log));
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find("cannot identify the device"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("[too_short]"), std::string::npos) << r.err;
+    bench.expect_untouched();
+}
+
+TEST(AutotuneCli, ALogOfAnotherDeviceIsRefused) {
+    const Bench bench(lab_config(2));
+    const std::string log = write_sim_log(bench.dir);  // one axis
+    const CommandResult r = bench.autotune("--log " + quoted(log));
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find("[device] axes = 2"), std::string::npos) << r.err;
+    bench.expect_untouched();
+}
+
+TEST(AutotuneCli, GainsTheExactModelRejectsAreNotWritten) {
+    const Bench bench;
+    const std::string log = write_sim_log(bench.dir);
+    const CommandResult r = bench.autotune("--log " + quoted(log) + " --optimize-damping");
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.err.find("not written"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("unstable on axis 0"), std::string::npos) << r.err;
+    EXPECT_NE(r.out.find("REJECTED"), std::string::npos) << r.out;
+    bench.expect_untouched();
+}
+
+TEST(AutotuneCli, AMarginOutsideZeroToOneIsAUsageError) {
+    const Bench bench;
+    const std::string log = write_sim_log(bench.dir);
+    for (const char* margin : {"0", "1.5", "-0.2", "abc"}) {
+        const CommandResult r = bench.autotune("--log " + quoted(log) + " --margin " + margin);
+        EXPECT_EQ(r.exit_code, 2) << margin;
+        EXPECT_NE(r.err.find("(0, 1]"), std::string::npos) << r.err;
+    }
+    bench.expect_untouched();
+}
+
+/// Runs as an unprivileged user (nobody) when the tests run as root, who can write anything.
+std::string unprivileged() {
+    if (::geteuid() != 0) return "";
+    if (!fs::exists("/usr/bin/setpriv")) return "unavailable";
+    return "/usr/bin/setpriv --reuid=65534 --regid=65534 --clear-groups ";
+}
+
+TEST(AutotuneCli, AnUnwritableDirectoryIsReportedAndNothingIsLost) {
+    const std::string as = unprivileged();
+    if (as == "unavailable") GTEST_SKIP() << "running as root without setpriv";
+    Bench bench;
+    const std::string log = write_sim_log(bench.dir);
+    // The file may be written, the directory (backup, temporary) not.
+    fs::permissions(bench.config, fs::perms::owner_read | fs::perms::owner_write |
+                                      fs::perms::group_read | fs::perms::group_write |
+                                      fs::perms::others_read | fs::perms::others_write);
+    fs::permissions(bench.dir.path(), fs::perms::owner_all | fs::perms::group_read |
+                                          fs::perms::group_exec | fs::perms::others_read |
+                                          fs::perms::others_exec);
+    fs::permissions(bench.dir.path(), fs::perms::owner_write, fs::perm_options::remove);
+    const CommandResult r = bench.autotune("--log " + quoted(log), as);
+    fs::permissions(bench.dir.path(), fs::perms::owner_write, fs::perm_options::add);
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find("cannot create the backup " + bench.config + ".bak"), std::string::npos)
+        << r.err;
+    EXPECT_NE(r.err.find("was not changed"), std::string::npos) << r.err;
+    bench.expect_untouched();
+}
+
+TEST(AutotuneCli, AReadOnlyConfigIsNotReplaced) {
+    const std::string as = unprivileged();
+    if (as == "unavailable") GTEST_SKIP() << "running as root without setpriv";
+    Bench bench;
+    const std::string log = write_sim_log(bench.dir);
+    fs::permissions(bench.dir.path(), fs::perms::all);  // anyone may create files here
+    fs::permissions(bench.config,
+                    fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
+    const CommandResult r = bench.autotune("--log " + quoted(log), as);
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find(bench.config + " is not writable"), std::string::npos) << r.err;
+    bench.expect_untouched();
+}
+
+// The config cannot be replaced (its temporary's name is taken by a directory) after the
+// backup was made: the config is the original and the redundant backup is removed.
+TEST(AutotuneCli, AFailedWriteLeavesTheOriginalAndNoStrayBackup) {
+    const Bench bench;
+    const std::string log = write_sim_log(bench.dir);
+    fs::create_directory(bench.config + ".tmp");
+    const CommandResult r = bench.autotune("--log " + quoted(log));
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find("could not write " + bench.config + ".tmp"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("the config was not changed"), std::string::npos) << r.err;
+    EXPECT_EQ(read(bench.config), bench.original);
+    EXPECT_FALSE(fs::exists(bench.config + ".bak"));
+}
+
+// --- from a run it starts: hapticd --identify --lockstep ---------------------------------
+
+TEST(AutotuneCli, RunsHapticdIdentifyWhenNoLogIsGiven) {
+    // The excitation's default peak comes from [device.model] alone and knows nothing of the
+    // 0.2 N friction; identification needs a peak of several times the friction
+    // (docs/identification-excitation.md), so the lab sets it.
+    const Bench bench(lab_config(1, "force_amplitude = 0.7\n"));
+    const std::string record = bench.dir.file("identify.csv");
+    const CommandResult r = bench.autotune("--record " + quoted(record));
+    ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
+    // The hapticd next to haptic-tune, on the sim's lockstep clock.
+    const std::string hapticd = (fs::path(HAPTIC_TUNE).parent_path() / "hapticd").string();
+    EXPECT_NE(r.err.find("running " + hapticd + " --identify --config " + bench.config + " --log " +
+                         record + " --lockstep"),
+              std::string::npos)
+        << r.err;
+    EXPECT_TRUE(fs::exists(record));
+    expect_only_the_four_values_changed(bench.original, read(bench.config));
+    // hapticd plans the excitation from [device.model]; from the guess (m 20 % heavy, b 25 %
+    // light) against 0.2 N of friction it is weaker than it could be: a few %.
+    expect_tuned(bench.config, 0.9, 0.05);
+    EXPECT_EQ(read(bench.config + ".bak"), bench.original);
+
+    // A second pass plans the run from the first one's model: the issue's 2 %.
+    const std::string first = read(bench.config);
+    const CommandResult again = bench.autotune("");
+    ASSERT_EQ(again.exit_code, 0) << again.err << again.out;
+    expect_tuned(bench.config, 0.9, 0.02);
+    EXPECT_EQ(read(bench.config + ".bak.1"), first);
+    // Without --record the run's log was temporary and is gone.
+    EXPECT_NE(again.out.find("identified from the identification run"), std::string::npos)
+        << again.out;
+}
+
+TEST(AutotuneCli, AMissingHapticdIsNamed) {
+    const Bench bench;
+    const CommandResult r = bench.autotune("--hapticd /nonexistent/hapticd");
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find("cannot run /nonexistent/hapticd for the identification run"),
+              std::string::npos)
+        << r.err;
+    bench.expect_untouched();
+}
+
+TEST(AutotuneCli, AFailedIdentificationRunIsNamed) {
+    // A push far too strong for a 0.5 mm workspace: hapticd stops the excitation at its
+    // edge and exits 1.
+    const Bench bench(lab_config(1, "force_amplitude = 5.0\nworkspace = 0.0005\n"));
+    const CommandResult r = bench.autotune("");
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find("the identification run failed"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("exited with status 1"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("nothing was written"), std::string::npos) << r.err;
+    bench.expect_untouched();
+}
+
+}  // namespace
+}  // namespace hapticd

@@ -1,0 +1,578 @@
+// haptic-tune autotune: from the device to verified coupling gains in its config, in one
+// command (issue 5; docs/autotune.md). The computing half (identify, size, verify) is
+// tune::autotune (hapticd/tune/autotune.hpp); this file is the glue to the daemon: its
+// config (read, edited keeping comments, checked at start-up, written with a backup) and
+// its executable (`hapticd --identify` when no --log is given).
+//
+// Exit 0 written (or would be, --dry-run); 1 the exact model rejects the gains (nothing
+// written); 2 bad usage or input, a log that cannot identify the device, a failed
+// identification run, or a config that cannot be edited or written (nothing changed).
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <toml++/toml.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <csignal>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include "commands.hpp"
+#include "hapticd/daemon/config.hpp"
+#include "hapticd/daemon/config_editor.hpp"
+#include "hapticd/daemon/startup_check.hpp"
+#include "hapticd/tune/autotune.hpp"
+
+extern char** environ;
+
+namespace hapticd::tools {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct AutotuneCliOptions {
+    std::string config_path;
+    std::string log_path;     ///< --log: identify from this log; empty: run hapticd --identify
+    std::string record_path;  ///< --record: where the run's log goes (kept)
+    std::string hapticd_path;
+    double margin = tune::kDefaultAutotuneMargin;
+    bool optimize_damping = false;
+    bool dry_run = false;
+    bool json = false;
+};
+
+/// A failure that stops autotune before anything was written: exit 2 with this message.
+class AutotuneError : public std::runtime_error {
+  public:
+    using std::runtime_error::runtime_error;
+};
+
+std::string read_file(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw AutotuneError("cannot read " + path + ": " + std::strerror(errno));
+    std::ostringstream text;
+    text << in.rdbuf();
+    return text.str();
+}
+
+std::string number_text(double value, int digits = 6) {
+    std::ostringstream out;
+    out << std::setprecision(digits) << value;
+    return out.str();
+}
+
+// ---------------------------------------------------------------------------------------
+// The identification run: hapticd --identify as a child process.
+
+/// The hapticd next to this haptic-tune (the build tree's bin/, or the install's bindir),
+/// else "hapticd" to be found on PATH.
+std::string default_hapticd() {
+    std::error_code error;
+    const fs::path self = fs::read_symlink("/proc/self/exe", error);
+    if (!error) {
+        const fs::path beside = self.parent_path() / "hapticd";
+        if (::access(beside.c_str(), X_OK) == 0) return beside.string();
+    }
+    return "hapticd";
+}
+
+/// The sim plugin on its lockstep clock: the run can go as fast as the CPU (--lockstep).
+bool sim_lockstep(const daemon::Config& config) {
+    if (config.device.plugin != "sim" || config.device.plugin_table_toml.empty()) return false;
+    try {
+        const toml::table table = toml::parse(config.device.plugin_table_toml);
+        return table["clock"].value_or(std::string()) == "lockstep";
+    } catch (const toml::parse_error&) {
+        return false;  // hapticd itself will say what is wrong with the table
+    }
+}
+
+volatile std::sig_atomic_t g_child_pid = 0;
+volatile std::sig_atomic_t g_interrupted = 0;
+
+extern "C" void on_stop_signal(int signal) {
+    g_interrupted = 1;
+    // A terminal's Ctrl-C reaches the whole process group, hapticd included; a SIGTERM sent
+    // to haptic-tune alone is passed on, so that hapticd stops and zeroes the force.
+    if (signal == SIGTERM && g_child_pid > 0) ::kill(static_cast<pid_t>(g_child_pid), SIGTERM);
+}
+
+std::string describe_hapticd_exit(int status) {
+    if (WIFSIGNALED(status)) {
+        return std::string("was killed by signal ") + std::to_string(WTERMSIG(status)) + " (" +
+               strsignal(WTERMSIG(status)) + ")";
+    }
+    const int code = WEXITSTATUS(status);
+    switch (code) {
+        case 1:
+            return "exited with status 1: a fault stopped the run, or the handle left the "
+                   "[identify] workspace (its message above says which)";
+        case 2:
+            return "exited with status 2: it refused the config or the command line (its "
+                   "message above says why)";
+        default:
+            return "exited with status " + std::to_string(code);
+    }
+}
+
+/// Runs `hapticd --identify --config CONFIG --log LOG [--lockstep]`. Its standard output
+/// goes to our standard error (so that --json output stays clean); its messages show.
+void run_identification(const std::string& hapticd, const std::string& config_path,
+                        const std::string& log_path, bool lockstep, bool quiet) {
+    std::vector<std::string> args = {hapticd,     "--identify", "--config",
+                                     config_path, "--log",      log_path};
+    if (lockstep) args.emplace_back("--lockstep");
+    if (quiet) args.emplace_back("--no-status");
+    std::vector<char*> argv;
+    for (std::string& arg : args) argv.push_back(arg.data());
+    argv.push_back(nullptr);
+
+    std::string command;
+    for (const std::string& arg : args) command += (command.empty() ? "" : " ") + arg;
+    std::cerr << "haptic-tune: autotune: running " << command << '\n';
+
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_adddup2(&actions, STDERR_FILENO, STDOUT_FILENO);
+    struct sigaction stop {};
+    stop.sa_handler = on_stop_signal;
+    sigemptyset(&stop.sa_mask);
+    struct sigaction old_int {};
+    struct sigaction old_term {};
+    g_interrupted = 0;
+    ::sigaction(SIGINT, &stop, &old_int);
+    ::sigaction(SIGTERM, &stop, &old_term);
+    pid_t pid = 0;
+    // posix_spawnp searches PATH when the name has no '/'; glibc reports a failed exec here.
+    const int spawn_error = ::posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&actions);
+    int status = 0;
+    if (spawn_error == 0) {
+        g_child_pid = pid;
+        while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+        }
+        g_child_pid = 0;
+    }
+    ::sigaction(SIGINT, &old_int, nullptr);
+    ::sigaction(SIGTERM, &old_term, nullptr);
+
+    if (spawn_error != 0) {
+        throw AutotuneError(
+            "cannot run " + hapticd + " for the identification run: " + std::strerror(spawn_error) +
+            (hapticd.find('/') == std::string::npos
+                 ? " (it is neither next to haptic-tune nor on PATH; give --hapticd PATH, or "
+                   "record a run yourself and give --log)"
+                 : " (give --hapticd PATH, or record a run yourself and give --log)"));
+    }
+    if (g_interrupted) {
+        throw AutotuneError("interrupted: the identification run (" + command +
+                            ") was stopped; nothing was written");
+    }
+    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+        throw AutotuneError("the identification run failed: " + command + " " +
+                            describe_hapticd_exit(status) + "; nothing was written");
+    }
+}
+
+/// A fresh temporary file name for the run's log.
+std::string temporary_log_path() {
+    std::string name = (fs::temp_directory_path() / "haptic-tune-autotune-XXXXXX.csv").string();
+    const int fd = ::mkstemps(name.data(), 4);
+    if (fd < 0) {
+        throw AutotuneError("cannot create a temporary file for the identification log in " +
+                            fs::temp_directory_path().string() + ": " + std::strerror(errno) +
+                            " (give --record FILE)");
+    }
+    ::close(fd);
+    return name;
+}
+
+// ---------------------------------------------------------------------------------------
+// The backup.
+
+/// Reserves the backup name by creating it exclusively: FILE.bak, or FILE.bak.1, .2, ...
+/// when that exists, so that no older backup is overwritten (also not by a second autotune
+/// running at the same time).
+std::string reserve_backup(const std::string& path) {
+    for (int n = 0; n < 1000; ++n) {
+        const std::string name = path + ".bak" + (n == 0 ? "" : "." + std::to_string(n));
+        const int fd = ::open(name.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+        if (fd >= 0) {
+            ::close(fd);
+            return name;
+        }
+        if (errno != EEXIST) {
+            throw AutotuneError("cannot create the backup " + name + ": " + std::strerror(errno) +
+                                "; " + path + " was not changed");
+        }
+    }
+    throw AutotuneError(path + ".bak through " + path + ".bak.999 all exist; remove old backups; " +
+                        path + " was not changed");
+}
+
+// ---------------------------------------------------------------------------------------
+// The report.
+
+nlohmann::ordered_json exact_json(const tune::ExactCheck& exact) {
+    return {{"stable", exact.stable},
+            {"worst_margin", exact.worst_margin},
+            {"worst_spectral_radius", exact.worst_spectral_radius},
+            {"worst_frequency_hz", exact.worst_frequency_hz},
+            {"worst_operator", exact.worst_operator.describe()},
+            {"worst_environment", exact.worst_environment.describe()},
+            {"cases_checked", exact.cases_checked}};
+}
+
+nlohmann::ordered_json axis_json(const tune::AutotuneAxis& a) {
+    const tune::IdentifiedAxis& id = a.identified;
+    return {{"axis", id.axis},
+            {"mass", id.estimate.mass_kg},
+            {"mass_std_error", id.std_error.mass_kg},
+            {"damping", id.estimate.damping_n_s_per_m},
+            {"damping_std_error", id.std_error.damping_n_s_per_m},
+            {"coulomb", id.estimate.coulomb_n},
+            {"coulomb_std_error", id.std_error.coulomb_n},
+            {"offset", id.estimate.offset_n},
+            {"offset_std_error", id.std_error.offset_n},
+            {"residual_rms_m", id.residual_rms_m},
+            {"log_rate_hz", id.rate_hz},
+            {"duration_s", id.duration_s},
+            {"converged", id.report.converged},
+            {"bound",
+             {{"stiffness", a.bound.coupling.stiffness_n_per_m},
+              {"stiffness_std_error", a.bound_stiffness_std_error_n_per_m},
+              {"damping", a.bound.coupling.damping_n_s_per_m},
+              {"binding_frequency_hz", a.bound.binding_frequency_hz}}},
+            {"exact_check", exact_json(a.exact)}};
+}
+
+struct Outcome {
+    std::string config_path;
+    std::string log_path;
+    bool log_kept = true;
+    tune::AutotuneResult result;
+    std::vector<daemon::ConfigChange> changes;
+    std::optional<daemon::StartupCheck> startup;
+    std::string backup_path;  ///< empty: nothing written
+    bool dry_run = false;
+};
+
+nlohmann::ordered_json outcome_json(const Outcome& o) {
+    const tune::AutotuneResult& r = o.result;
+    nlohmann::ordered_json axes = nlohmann::ordered_json::array();
+    for (const tune::AutotuneAxis& a : r.axes) axes.push_back(axis_json(a));
+    nlohmann::ordered_json changes = nlohmann::ordered_json::array();
+    for (const daemon::ConfigChange& c : o.changes) {
+        changes.push_back({{"table", c.table},
+                           {"key", c.key},
+                           {"old", c.old_text.empty() ? nlohmann::ordered_json(nullptr)
+                                                      : nlohmann::ordered_json(c.old_text)},
+                           {"new", c.new_text},
+                           {"changed", c.old_text != c.new_text}});
+    }
+    nlohmann::ordered_json out = {
+        {"config", o.config_path},
+        {"log", o.log_kept ? nlohmann::ordered_json(o.log_path) : nlohmann::ordered_json(nullptr)},
+        {"written", !o.backup_path.empty()},
+        {"dry_run", o.dry_run},
+        {"backup", o.backup_path.empty() ? nlohmann::ordered_json(nullptr)
+                                         : nlohmann::ordered_json(o.backup_path)},
+        {"verified", r.verified},
+        {"model", "encoder"},
+        {"rate_hz", r.rate_hz},
+        {"margin", r.margin},
+        {"optimize_damping", r.optimize_damping},
+        {"binding_axis", r.binding().identified.axis},
+        {"device", {{"mass", r.device.mass_kg}, {"damping", r.device.damping_n_s_per_m}}},
+        {"bound",
+         {{"stiffness", r.bound.stiffness_n_per_m},
+          {"stiffness_std_error", r.binding().bound_stiffness_std_error_n_per_m},
+          {"damping", r.bound.damping_n_s_per_m},
+          {"binding_frequency_hz", r.binding().bound.binding_frequency_hz}}},
+        {"stiffness", r.coupling.stiffness_n_per_m},
+        {"damping", r.coupling.damping_n_s_per_m},
+        {"exact_check",
+         [&] {
+             nlohmann::ordered_json e =
+                 exact_json(r.axes[static_cast<std::size_t>(r.worst_axis)].exact);
+             e["stable"] = r.verified;
+             e["worst_axis"] = r.axes[static_cast<std::size_t>(r.worst_axis)].identified.axis;
+             return e;
+         }()},
+        {"verdict", r.verdict},
+        {"axes", axes},
+        {"changes", changes},
+        {"startup_check", o.startup ? nlohmann::ordered_json(o.startup->describe())
+                                    : nlohmann::ordered_json(nullptr)},
+        {"warnings", r.warnings},
+        {"solve_time_s", r.solve_time_s},
+    };
+    return out;
+}
+
+void print_text(const Outcome& o) {
+    const tune::AutotuneResult& r = o.result;
+    const tune::IdentifiedAxis& first = r.axes.front().identified;
+    std::cout << "identified from " << (o.log_kept ? o.log_path : "the identification run") << " ("
+              << number_text(first.duration_s, 4) << " s at " << number_text(first.rate_hz, 6)
+              << " Hz, " << r.axes.size() << (r.axes.size() == 1 ? " axis" : " axes")
+              << "), value +- standard error:\n";
+    for (const tune::AutotuneAxis& a : r.axes) {
+        const tune::IdentifiedAxis& id = a.identified;
+        std::cout << "  axis " << id.axis << ": mass " << number_text(id.estimate.mass_kg) << " +- "
+                  << number_text(id.std_error.mass_kg, 2) << " kg, damping "
+                  << number_text(id.estimate.damping_n_s_per_m) << " +- "
+                  << number_text(id.std_error.damping_n_s_per_m, 2) << " N s/m, coulomb "
+                  << number_text(id.estimate.coulomb_n, 3) << " +- "
+                  << number_text(id.std_error.coulomb_n, 2) << " N, offset "
+                  << number_text(id.estimate.offset_n, 3) << " +- "
+                  << number_text(id.std_error.offset_n, 2) << " N\n";
+    }
+    std::cout << "largest stable coupling (encoder model, "
+              << (r.optimize_damping ? "optimised damping" : "b_c = 0") << ", [servo] rate_hz "
+              << number_text(r.rate_hz) << " Hz):\n";
+    for (const tune::AutotuneAxis& a : r.axes) {
+        std::cout << "  axis " << a.identified.axis << ": k_c "
+                  << number_text(a.bound.coupling.stiffness_n_per_m) << " +- "
+                  << number_text(a.bound_stiffness_std_error_n_per_m, 2) << " N/m";
+        if (r.optimize_damping) {
+            std::cout << " with b_c " << number_text(a.bound.coupling.damping_n_s_per_m)
+                      << " N s/m";
+        }
+        std::cout << (a.bound.binding_frequency_hz > 0.0
+                          ? ", binding at " + number_text(a.bound.binding_frequency_hz, 4) + " Hz"
+                          : ", binding as f -> 0")
+                  << (&a == &r.binding() && r.axes.size() > 1 ? "  <- binding axis" : "") << '\n';
+    }
+    std::cout << "coupling: margin " << number_text(r.margin) << " x "
+              << number_text(r.bound.stiffness_n_per_m) << " N/m = k_c "
+              << number_text(r.coupling.stiffness_n_per_m) << " N/m, b_c "
+              << number_text(r.coupling.damping_n_s_per_m) << " N s/m\n";
+    std::cout << (r.verified ? "verified: " : "REJECTED: ") << r.verdict << '\n';
+    if (o.startup)
+        std::cout << "start-up check of the edited config: " << o.startup->describe() << '\n';
+    for (const std::string& warning : r.warnings) std::cout << "warning: " << warning << '\n';
+    if (!o.changes.empty()) {
+        std::cout << (o.backup_path.empty() ? "changes (not written):\n" : "changes:\n");
+        std::size_t width = 0;
+        for (const daemon::ConfigChange& c : o.changes) {
+            width = std::max(width, c.table.size() + c.key.size() + 5);
+        }
+        for (const daemon::ConfigChange& c : o.changes) {
+            std::cout << "  " << std::left << std::setw(static_cast<int>(width))
+                      << "[" + c.table + "] " + c.key << (c.old_text.empty() ? "(new)" : c.old_text)
+                      << " -> " << c.new_text << (c.old_text == c.new_text ? "  (unchanged)" : "")
+                      << '\n';
+        }
+    }
+    if (!o.backup_path.empty()) {
+        std::cout << "written: " << o.config_path << " (backup: " << o.backup_path << ")\n";
+    } else if (o.dry_run) {
+        std::cout << "dry run: " << o.config_path << " not written\n";
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+
+int run_autotune(const AutotuneCliOptions& o) {
+    tune::AutotuneOptions options;
+    options.margin = o.margin;
+    options.optimize_damping = o.optimize_damping;
+
+    // The config first: a config the daemon would refuse is refused before any run.
+    daemon::Config config;
+    try {
+        config = daemon::load_config(o.config_path);
+    } catch (const daemon::ConfigError& e) {
+        throw AutotuneError(std::string("the config does not load: ") + e.what());
+    }
+    const std::string original = read_file(o.config_path);
+    options.rate_hz = config.servo.rate_hz;
+    options.identification.force_limit_n = config.safety.max_force_n;
+    options.validate();
+
+    Outcome outcome;
+    outcome.config_path = o.config_path;
+    outcome.dry_run = o.dry_run;
+    bool temporary = false;
+    if (!o.log_path.empty()) {
+        outcome.log_path = o.log_path;
+    } else {
+        temporary = o.record_path.empty();
+        outcome.log_path = temporary ? temporary_log_path() : o.record_path;
+        try {
+            run_identification(o.hapticd_path.empty() ? default_hapticd() : o.hapticd_path,
+                               o.config_path, outcome.log_path, sim_lockstep(config), o.json);
+        } catch (const AutotuneError&) {
+            if (temporary) fs::remove(outcome.log_path);
+            throw;
+        }
+    }
+    // The run's temporary log is removed once the gains are found; kept (and named) when
+    // the log cannot identify the device, for haptic-tune identify and a look at it.
+    const auto keep_log = [&](const std::string& message) {
+        return AutotuneError(message + (temporary
+                                            ? " (the run's log is kept: " + outcome.log_path + ")"
+                                            : std::string()));
+    };
+
+    tune::TelemetryLog log;
+    try {
+        log = tune::read_telemetry_log(outcome.log_path);
+    } catch (const tune::LogFormatError& e) {
+        throw keep_log(std::string("bad log: ") + e.what());
+    }
+    if (log.axes != config.device.axes) {
+        throw keep_log(outcome.log_path + " has " + std::to_string(log.axes) +
+                       " axes (x{i}_m and "
+                       "f{i}_n), but " +
+                       o.config_path + " says [device] axes = " +
+                       std::to_string(config.device.axes) + ": is it a run of this device?");
+    }
+    try {
+        outcome.result = tune::autotune(log, options);
+    } catch (const tune::IdentificationRefused& e) {
+        throw keep_log(outcome.log_path + ": cannot identify the device: " + e.what() + " [" +
+                       std::string(tune::to_string(e.reason())) + "]");
+    }
+    if (temporary) {
+        fs::remove(outcome.log_path);
+        outcome.log_kept = false;
+    }
+    const tune::AutotuneResult& result = outcome.result;
+
+    if (!result.verified) {
+        if (o.json) {
+            print_result(outcome_json(outcome), true);
+        } else {
+            print_text(outcome);
+        }
+        std::cerr << "haptic-tune: autotune: " << o.config_path
+                  << " not written: " << result.verdict << '\n';
+        return kExitVerdictNo;
+    }
+
+    // Edit the text, then hold the edited config to what the daemon will check at start-up.
+    daemon::EditedConfig edited;
+    try {
+        edited =
+            daemon::edit_config_text(original,
+                                     {{"device.model", "mass", result.device.mass_kg},
+                                      {"device.model", "damping", result.device.damping_n_s_per_m},
+                                      {"coupling", "stiffness", result.coupling.stiffness_n_per_m},
+                                      {"coupling", "damping", result.coupling.damping_n_s_per_m}},
+                                     o.config_path);
+    } catch (const daemon::ConfigEditError& e) {
+        throw AutotuneError(std::string(e.what()) + "; nothing was written");
+    }
+    outcome.changes = edited.changes;
+    try {
+        const daemon::Config tuned =
+            daemon::parse_config(edited.text, o.config_path, config.base_dir);
+        outcome.startup = daemon::check_coupling_at_startup(tuned);
+    } catch (const daemon::ConfigError& e) {
+        throw AutotuneError(std::string("the edited config would not load: ") + e.what() +
+                            "; nothing was written");
+    }
+    if (!outcome.startup->passed && !outcome.startup->skipped) {
+        throw AutotuneError("the daemon's start-up check would refuse the edited config: " +
+                            outcome.startup->describe() + "; nothing was written");
+    }
+
+    if (!o.dry_run) {
+        // A read-only config is a statement: do not replace it (the rename below would).
+        if (::access(o.config_path.c_str(), W_OK) != 0) {
+            throw AutotuneError(o.config_path + " is not writable: " + std::strerror(errno) +
+                                "; nothing was written (--dry-run shows the changes)");
+        }
+        const std::string backup = reserve_backup(o.config_path);
+        try {
+            daemon::write_config_with_backup(o.config_path, edited.text, backup);
+        } catch (const std::exception& e) {
+            // write_config_with_backup replaces the config last, by a rename: when it throws,
+            // the config is the original. The backup is then ours and redundant.
+            std::error_code ignored;
+            if (read_file(o.config_path) == original) fs::remove(backup, ignored);
+            throw AutotuneError(e.what());
+        }
+        outcome.backup_path = backup;
+    }
+    if (o.json) {
+        print_result(outcome_json(outcome), true);
+    } else {
+        print_text(outcome);
+    }
+    return kExitOk;
+}
+
+}  // namespace
+
+void add_autotune_command(CLI::App& app, Invocation& invocation) {
+    auto options = std::make_shared<AutotuneCliOptions>();
+    CLI::App* command = app.add_subcommand(
+        "autotune",
+        "Identify the device (from --log, or from a `hapticd --identify` run it starts), size "
+        "the coupling with the encoder model and a safety margin, verify it with the exact "
+        "model, and write [device.model] mass, damping and [coupling] stiffness, damping into "
+        "the config, keeping its comments, with a backup (FILE.bak, or FILE.bak.N if that "
+        "exists). Exit 0 written, 1 the exact model rejects the gains (nothing written), 2 bad "
+        "input, a log that cannot identify the device or a failed run (nothing written). "
+        "docs/autotune.md");
+    command->add_option("--config", options->config_path, "the hapticd config to tune")
+        ->required()
+        ->check(CLI::ExistingFile);
+    CLI::Option* log =
+        command
+            ->add_option("--log", options->log_path,
+                         "identify from this telemetry CSV instead of starting a run")
+            ->check(CLI::ExistingFile);
+    command
+        ->add_option("--record", options->record_path,
+                     "keep the identification run's log in FILE (default: a temporary file, "
+                     "removed once the gains are found)")
+        ->excludes(log);
+    command
+        ->add_option("--hapticd", options->hapticd_path,
+                     "the hapticd executable for the run (default: the one next to "
+                     "haptic-tune, else hapticd on PATH)")
+        ->excludes(log);
+    command
+        ->add_option("--margin", options->margin,
+                     "fraction of the largest stable coupling stiffness to use, (0, 1] "
+                     "(default 0.9)")
+        ->check(CLI::Validator(
+            [](std::string& text) -> std::string {
+                try {
+                    std::size_t used = 0;
+                    const double value = std::stod(text, &used);
+                    if (used == text.size() && value > 0.0 && value <= 1.0) return {};
+                } catch (const std::exception&) {
+                }
+                return "value " + text + " is out of range: allowed (0, 1]";
+            },
+            "(0, 1]"));
+    command->add_flag("--optimize-damping", options->optimize_damping,
+                      "size the best (k_c, b_c) pair instead of k_c at b_c = 0 (the exact model "
+                      "rejects it above a margin of about 0.77; docs/autotune.md)");
+    command->add_flag("--dry-run", options->dry_run,
+                      "identify, size, verify and print the changes, but do not write");
+    command->add_flag("--json", options->json, "print the result as JSON");
+    command->callback([options, &invocation] {
+        invocation.run = [options] {
+            try {
+                return run_autotune(*options);
+            } catch (const AutotuneError& e) {
+                std::cerr << "haptic-tune: autotune: " << e.what() << '\n';
+                return static_cast<int>(kExitUsage);
+            }
+        };
+    });
+}
+
+}  // namespace hapticd::tools
