@@ -16,14 +16,14 @@
 #include <string>
 
 #include "hapticd/device/link/protocol_device.hpp"
+#include "hapticd/device/protocol/transport.hpp"
 #include "hapticd/device/table_reader.hpp"
 
 namespace hapticd::device::hid {
 
-/// pid.codes (https://pid.codes) and its test PID 0x0001: free for development, never for a
-/// shipped product (which gets its own PID and sets device.hid.pid).
-inline constexpr std::uint16_t kDefaultVendorId = 0x1209;
-inline constexpr std::uint16_t kDefaultProductId = 0x0001;
+/// The development VID:PID of the protocol (transport.hpp), as the usb plugin's.
+inline constexpr std::uint16_t kDefaultVendorId = protocol::kDevelopmentVendorId;
+inline constexpr std::uint16_t kDefaultProductId = protocol::kDevelopmentProductId;
 
 struct HidSettings {
     std::uint16_t vid = kDefaultVendorId;   ///< device.hid.vid; 0: any vendor

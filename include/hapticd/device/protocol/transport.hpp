@@ -12,6 +12,13 @@
 
 namespace hapticd::device::protocol {
 
+/// The VID:PID the usb and hid plugins look for by default: pid.codes (https://pid.codes),
+/// the open-source vendor ID, and its test PID 0x0001 — free for development and testing,
+/// never for a shipped product (a lab that ships firmware asks pid.codes for its own PID and
+/// sets device.usb.pid / device.hid.pid).
+inline constexpr std::uint16_t kDevelopmentVendorId = 0x1209;
+inline constexpr std::uint16_t kDevelopmentProductId = 0x0001;
+
 /// 6.1 USB: a vendor-specific interface with one interrupt (or bulk) endpoint each way; one
 /// frame per transfer, always a short packet (kMaxFrameSize < 64), so no zero-length packet.
 namespace usb {

@@ -5,15 +5,14 @@
 #include <cstdint>
 #include <string>
 
+#include "hapticd/device/protocol/transport.hpp"
 #include "hapticd/device/table_reader.hpp"
 
 namespace hapticd::device::usb {
 
-/// pid.codes (https://pid.codes), the open-source vendor ID that hands out free product IDs.
-inline constexpr std::uint16_t kDefaultVendorId = 0x1209;
-/// pid.codes test PID 0x0001: free for development and testing, never for a shipped product
-/// (a lab that ships firmware asks pid.codes for its own PID and sets device.usb.pid).
-inline constexpr std::uint16_t kDefaultProductId = 0x0001;
+/// The development VID:PID of the protocol (transport.hpp).
+inline constexpr std::uint16_t kDefaultVendorId = protocol::kDevelopmentVendorId;
+inline constexpr std::uint16_t kDefaultProductId = protocol::kDevelopmentProductId;
 
 /// How frames travel (docs/protocol.md 6.1): both endpoints interrupt or both bulk.
 enum class TransferKind : std::uint8_t {
