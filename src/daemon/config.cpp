@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "embedded_defaults.hpp"
+#include "hapticd/tune/input_checks.hpp"
 
 namespace hapticd::daemon {
 namespace {
@@ -195,9 +196,21 @@ Config parse_config(std::string_view toml_text, const std::string& source,
     device.allow_only({"plugin", "axes"}, {"model", plugin_key});
     if (device_table != nullptr) {
         const TableReader model(source, "device.model", sub_table(*device_table, source, "model"));
-        model.allow_only({"mass", "damping"});
-        config.device.model_mass_kg = model.number("mass", 0.0, kInf, true, "kg");
-        config.device.model_damping_n_s_per_m = model.number("damping", 0.0, kInf, true, "N s/m");
+        model.allow_only({"mass", "damping", "delay"});
+        // The physical ranges of hapticd::tune (input_checks.hpp), which every model obeys.
+        config.device.model_mass_kg =
+            model.number("mass", tune::kMinDeviceMassKg, tune::kMaxDeviceMassKg, false, "kg");
+        config.device.model_damping_n_s_per_m = model.number(
+            "damping", tune::kMinDeviceDamping, tune::kMaxDeviceDamping, false, "N s/m");
+        const double period_s = 1.0 / config.servo.rate_hz;
+        config.device.model_delay_s = model.number("delay", 0.0, kInf, false, "s").value_or(0.0);
+        if (!(config.device.model_delay_s < 10.0 * period_s)) {
+            std::ostringstream m;
+            m << source << ": [device.model] delay = " << config.device.model_delay_s
+              << " s is out of range: allowed >= 0 and < 10 periods (" << 10.0 * period_s
+              << " s at [servo] rate_hz = " << config.servo.rate_hz << ")";
+            throw ConfigError(m.str());
+        }
         if (const toml::table* own = sub_table(*device_table, source, plugin_key)) {
             std::ostringstream text;
             text << *own;
@@ -213,7 +226,7 @@ Config parse_config(std::string_view toml_text, const std::string& source,
     config.coupling.damping_n_s_per_m =
         coupling.number("damping", 0.0, kInf, false, "N s/m").value_or(0.0);
     config.coupling.check =
-        coupling.text("check", {"paper", "encoder", "exact", "off"}).value_or("encoder");
+        coupling.text("check", {"passive", "exact", "paper", "encoder", "off"}).value_or("passive");
     if (!config.coupling.enabled) {
         // The conventional design, for experiments: the daemon will not pretend to check it.
         for (const char* key : {"stiffness", "damping"}) {

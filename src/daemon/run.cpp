@@ -158,7 +158,7 @@ StartupCheck run_startup_check(const Config& config, std::ostream& log) {
           << config.servo.rate_hz;
         throw StartError(kExitBadInput, m.str());
     }
-    log << "hapticd: " << check.describe() << "\n";
+    log << "hapticd: " << (check.guarantee ? "" : "WARNING: ") << check.describe() << "\n";
     return check;
 }
 

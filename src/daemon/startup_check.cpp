@@ -13,10 +13,16 @@ std::string StartupCheck::describe() const {
         return "stability check OFF ([coupling] check = \"off\"): these gains are not checked "
                "against any model";
     }
-    out << "stability check (" << model
-        << " model): " << (passed ? "unconditionally stable" : "NOT unconditionally stable")
+    out << "stability check (" << model << " model, loop delay " << delay_s * 1e3
+        << " ms): " << (passed ? "unconditionally stable" : "NOT unconditionally stable")
         << ", worst margin " << worst_margin << " at " << worst_frequency_hz << " Hz";
     if (!worst_case.empty()) out << " (" << worst_case << ")";
+    if (!guarantee) {
+        out << ". The " << model
+            << " model is NOT a guarantee: it keeps one term of the hold's alias sum and "
+               "misses operators with several modes (docs/stability-models.md); use check = "
+               "\"passive\" (the default) or \"exact\" to arm hardware";
+    }
     return out.str();
 }
 
@@ -45,8 +51,11 @@ StartupCheck check_coupling_at_startup(const Config& config) {
     }
     StartupCheck check;
     check.model = config.coupling.check;
+    check.delay_s = config.device.model_delay_s;
+    const double delay_periods = config.device.model_delay_s * config.servo.rate_hz;
     if (check.model == "exact") {
-        const tune::ExactCheck exact = tune::check_exact(device, coupling, config.servo.rate_hz);
+        const tune::ExactCheck exact =
+            tune::check_exact(device, coupling, config.servo.rate_hz, delay_periods);
         check.passed = exact.stable;
         check.worst_margin = exact.worst_margin;
         check.worst_frequency_hz = exact.worst_frequency_hz;
@@ -55,8 +64,9 @@ StartupCheck check_coupling_at_startup(const Config& config) {
         return check;
     }
     const theory::HoldModel model = *theory::parse_hold_model(check.model);
+    check.guarantee = model == theory::HoldModel::passive;
     const theory::CouplingCheck result =
-        theory::check_coupling(device, coupling, model, config.servo.rate_hz);
+        theory::check_coupling(device, coupling, {model, delay_periods}, config.servo.rate_hz);
     check.passed = result.unconditionally_stable;
     check.worst_margin = result.worst_margin;
     check.worst_frequency_hz = result.worst_frequency_hz;

@@ -5,12 +5,21 @@
 namespace hapticd::theory {
 
 std::string_view to_string(HoldModel model) {
-    return model == HoldModel::paper ? "paper" : "encoder";
+    switch (model) {
+        case HoldModel::paper:
+            return "paper";
+        case HoldModel::encoder:
+            return "encoder";
+        case HoldModel::passive:
+            return "passive";
+    }
+    return "unknown";
 }
 
 std::optional<HoldModel> parse_hold_model(std::string_view name) {
-    if (name == "paper") return HoldModel::paper;
-    if (name == "encoder") return HoldModel::encoder;
+    for (HoldModel model : {HoldModel::paper, HoldModel::encoder, HoldModel::passive}) {
+        if (name == to_string(model)) return model;
+    }
     return std::nullopt;
 }
 
@@ -31,19 +40,31 @@ Complex coupling_impedance(const SpringDamperCoupling& coupling, double theta,
     return coupling.damping_n_s_per_m + coupling.stiffness_n_per_m / s;  // (16)
 }
 
-Complex hold_term(HoldModel model, double theta) {
+Complex hold_term(const LoopModel& model, double theta) {
     const Complex z = unit_circle_point(theta);
-    if (model == HoldModel::paper) return 0.5 * (z + 1.0) / z;  // (13)
+    const Complex delay = std::polar(1.0, -model.delay_periods * theta);
+    if (model.hold == HoldModel::paper) return 0.5 * (z + 1.0) / z * delay;  // (13)
+    if (model.hold == HoldModel::passive) return std::polar(1.0, -theta) * delay;
     const double s = sinc(theta / 2.0);
-    return std::polar(s * s, -theta);
+    return std::polar(s * s, -theta) * delay;
 }
 
-double hold_delay_samples(HoldModel model) { return model == HoldModel::paper ? 0.5 : 1.0; }
+double hold_delay_samples(const LoopModel& model) {
+    switch (model.hold) {
+        case HoldModel::paper:
+            return 0.5 + model.delay_periods;
+        case HoldModel::encoder:
+            return 1.0 + model.delay_periods;
+        case HoldModel::passive:
+            break;
+    }
+    return passive_delay_samples(model.delay_periods);
+}
 
-TwoPort impedance_display(const DeviceModel& device, HoldModel model, double theta,
+TwoPort impedance_display(const DeviceModel& device, const LoopModel& model, double theta,
                           double sample_period_s) {
     // (14): [F_h, -v_d*] = [[Z_dI, ZOH], [-1, 0]] [v_h, F_d*].
-    return {ImmittanceForm::hybrid, device_impedance(device, model, theta, sample_period_s),
+    return {ImmittanceForm::hybrid, device_impedance(device, model.hold, theta, sample_period_s),
             hold_term(model, theta), -1.0, 0.0};
 }
 
@@ -55,7 +76,7 @@ TwoPort coupling_network(const SpringDamperCoupling& coupling, double theta,
 }
 
 TwoPort impedance_interface(const DeviceModel& device, const SpringDamperCoupling& coupling,
-                            HoldModel model, double theta, double sample_period_s) {
+                            const LoopModel& model, double theta, double sample_period_s) {
     // (18): the cascade of (14) and (17) changes only the lower-right term.
     TwoPort network = impedance_display(device, model, theta, sample_period_s);
     network.p22 = 1.0 / coupling_impedance(coupling, theta, sample_period_s);
@@ -63,7 +84,7 @@ TwoPort impedance_interface(const DeviceModel& device, const SpringDamperCouplin
 }
 
 double coupling_margin(const DeviceModel& device, const SpringDamperCoupling& coupling,
-                       HoldModel model, double theta, double sample_period_s) {
+                       const LoopModel& model, double theta, double sample_period_s) {
     const double bound = conductance_bound(model, device.damping_n_s_per_m, theta);
     const double conductance = coupling_conductance(
         coupling.stiffness_n_per_m, coupling.damping_n_s_per_m, theta, sample_period_s);
@@ -72,7 +93,7 @@ double coupling_margin(const DeviceModel& device, const SpringDamperCoupling& co
 }
 
 double coupling_margin_at_dc(const DeviceModel& device, const SpringDamperCoupling& coupling,
-                             HoldModel model, double sample_period_s) {
+                             const LoopModel& model, double sample_period_s) {
     const double k_t = coupling.stiffness_n_per_m * sample_period_s;
     if (k_t <= 0.0) return std::numeric_limits<double>::infinity();  // a damper alone
     const double tau = hold_delay_samples(model);

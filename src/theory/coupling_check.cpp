@@ -1,11 +1,13 @@
 #include "hapticd/theory/coupling_check.hpp"
 
+#include <cmath>
+
 #include "hapticd/theory/frequency_grid.hpp"
 
 namespace hapticd::theory {
 
 CouplingCheck check_coupling(const DeviceModel& device, const SpringDamperCoupling& coupling,
-                             HoldModel model, double rate_hz, int grid_points) {
+                             const LoopModel& model, double rate_hz, int grid_points) {
     const double period = 1.0 / rate_hz;
     const auto margin = [&](double theta) {
         return coupling_margin(device, coupling, model, theta, period);
@@ -13,7 +15,9 @@ CouplingCheck check_coupling(const DeviceModel& device, const SpringDamperCoupli
     const GridMinimum interior = minimize_on_grid(margin, frequency_grid(grid_points));
     const double dc = coupling_margin_at_dc(device, coupling, model, period);
     CouplingCheck result;
-    if (dc <= interior.value) {
+    // A margin flat in frequency (the passive model at b_c = 0 binds everywhere) is
+    // reported at its low-frequency end: within rounding, the limit f -> 0 counts as worst.
+    if (dc <= interior.value + 1e-9 * std::abs(dc)) {
         result.worst_margin = dc;
         result.worst_frequency_hz = 0.0;
     } else {

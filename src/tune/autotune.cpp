@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "hapticd/tune/exact_model.hpp"
 #include "hapticd/tune/input_checks.hpp"
 
 namespace hapticd::tune {
@@ -19,7 +20,7 @@ ImpedanceSizingRequest sizing_request(const theory::DeviceModel& device,
     ImpedanceSizingRequest request;
     request.device = device;
     request.rate_hz = options.rate_hz;
-    request.model = theory::HoldModel::encoder;
+    request.model = {theory::HoldModel::passive, options.delay_periods};
     request.coupling_damping_n_s_per_m =
         options.optimize_damping ? std::nullopt : std::optional<double>(0.0);
     return request;
@@ -90,6 +91,7 @@ void AutotuneOptions::validate() const {
                    "coupling stiffness to use)";
         throw std::invalid_argument(message.str());
     }
+    check_delay_periods(delay_periods);
     identification.validate();
 }
 
@@ -109,6 +111,7 @@ AutotuneResult autotune(std::vector<IdentifiedAxis> axes, const AutotuneOptions&
     AutotuneResult result;
     result.margin = options.margin;
     result.rate_hz = options.rate_hz;
+    result.delay_periods = options.delay_periods;
     result.optimize_damping = options.optimize_damping;
     result.axes.reserve(axes.size());
     for (IdentifiedAxis& identified : axes) {
@@ -145,7 +148,8 @@ AutotuneResult autotune(std::vector<IdentifiedAxis> axes, const AutotuneOptions&
 
     for (std::size_t i = 0; i < result.axes.size(); ++i) {
         AutotuneAxis& axis = result.axes[i];
-        axis.exact = check_exact(axis.device, result.coupling, options.rate_hz);
+        axis.exact =
+            check_exact(axis.device, result.coupling, options.rate_hz, options.delay_periods);
         if (axis.exact.worst_spectral_radius >
             result.axes[static_cast<std::size_t>(result.worst_axis)].exact.worst_spectral_radius) {
             result.worst_axis = static_cast<int>(i);
@@ -192,13 +196,7 @@ AutotuneResult autotune(std::vector<IdentifiedAxis> axes, const AutotuneOptions&
                 << worst.exact.worst_environment.describe()
                 << " grows by |z| = " << worst.exact.worst_spectral_radius << " per tick at "
                 << worst.exact.worst_frequency_hz << " Hz";
-        if (options.optimize_damping) {
-            verdict << "; the encoder model's optimised damping is optimistic at Nyquist "
-                       "(docs/stability-models.md): tune without --optimize-damping, or with "
-                       "a smaller margin";
-        } else {
-            verdict << "; try a smaller margin";
-        }
+        verdict << "; try a smaller margin";
     }
     result.verdict = verdict.str();
     result.solve_time_s = std::chrono::duration<double>(Clock::now() - start).count();

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "hapticd/theory/frequency_grid.hpp"
+#include "hapticd/tune/exact_model.hpp"
 #include "hapticd/tune/input_checks.hpp"
 
 namespace hapticd::tune {
@@ -47,7 +48,8 @@ double alpha_max(double theta, double beta, double r, double period) {
     if (qc > 0.0) return -1.0;  // Re(1/W) at α = 0 is 1/β < r
     const double root = std::sqrt(qb * qb - 4.0 * qa * qc);
     // The larger root without cancellation: (-b + √d)/2a when b <= 0, else 2c/(-b - √d).
-    return qb <= 0.0 ? (-qb + root) / (2.0 * qa) : (qb + root > 0.0 ? -2.0 * qc / (qb + root) : 0.0);
+    return qb <= 0.0 ? (-qb + root) / (2.0 * qa)
+                     : (qb + root > 0.0 ? -2.0 * qc / (qb + root) : 0.0);
 }
 
 /// Re(1/W) and its partial derivatives in α and θ, by forward-mode automatic differentiation.
@@ -131,8 +133,8 @@ struct FixedBetaSolution {
 /// refined with Ceres at the tangency point, and checked on a dense grid (a tangency the
 /// scan missed is refined in turn).
 FixedBetaSolution size_fixed_beta(const ConductanceBound& bound, double beta, double period,
-                                  const std::vector<double>& scan,
-                                  const std::vector<double>& dense, int* iterations) {
+                                  const std::vector<double>& scan, const std::vector<double>& dense,
+                                  int* iterations) {
     const auto solve_from = [&](const std::vector<double>& grid) {
         std::size_t best = 0;
         double best_alpha = kInf;
@@ -150,9 +152,9 @@ FixedBetaSolution size_fixed_beta(const ConductanceBound& bound, double beta, do
         } else if (best + 1 == grid.size()) {
             s.method = "nyquist";
         } else if (std::isfinite(best_alpha) && best_alpha >= 0.0) {
-            const double theta = solve_in_bracket(TangencyResidual{&bound, beta, period},
-                                                  grid[best - 1], grid[best + 1], grid[best],
-                                                  iterations);
+            const double theta =
+                solve_in_bracket(TangencyResidual{&bound, beta, period}, grid[best - 1],
+                                 grid[best + 1], grid[best], iterations);
             const double alpha = alpha_max(theta, beta, bound.value(theta), period);
             if (alpha <= best_alpha) s = {alpha, theta, "tangency"};
         }
@@ -226,12 +228,13 @@ PairSolution size_best_pair(const ConductanceBound& bound, double period,
     }
     for (std::size_t i = 1; i + 1 < kappa.size(); ++i) {
         if (!(kappa[i] <= kappa[i - 1] && kappa[i] <= kappa[i + 1])) continue;
-        const double theta = solve_in_bracket(SaddleResidual{&bound}, thetas[i - 1],
-                                              thetas[i + 1], thetas[i], iterations);
+        const double theta = solve_in_bracket(SaddleResidual{&bound}, thetas[i - 1], thetas[i + 1],
+                                              thetas[i], iterations);
         const double beta = saddle_beta(bound, theta);
         const double alpha = saddle_alpha(bound, theta, period);
         if (!(beta >= 0.0)) continue;
-        const FixedBetaSolution fixed = size_fixed_beta(bound, beta, period, scan, dense, iterations);
+        const FixedBetaSolution fixed =
+            size_fixed_beta(bound, beta, period, scan, dense, iterations);
         if (std::abs(fixed.alpha - alpha) > 1e-7 * alpha) continue;  // another θ binds first
         confirmed = true;
         if (fixed.alpha > best.alpha) best = {fixed.alpha, beta, theta, "saddle"};
@@ -263,7 +266,8 @@ PairSolution size_best_pair(const ConductanceBound& bound, double period,
     return best;
 }
 
-ConductanceBound impedance_display_bound(const theory::DeviceModel& device, HoldModel model) {
+ConductanceBound impedance_display_bound(const theory::DeviceModel& device,
+                                         const theory::LoopModel& model) {
     const double b = device.damping_n_s_per_m;
     return {[=](double theta) { return theory::conductance_bound(model, b, theta); },
             [=](double theta) {
@@ -295,6 +299,7 @@ ImpedanceSizing size_impedance_coupling(const ImpedanceSizingRequest& request) {
     const auto start = std::chrono::steady_clock::now();
     check_device(request.device);
     check_rate(request.rate_hz);
+    check_delay_periods(request.model.delay_periods);
     if (request.coupling_damping_n_s_per_m) {
         check_non_negative("coupling damping b_c", *request.coupling_damping_n_s_per_m, "N s/m");
     }
@@ -311,8 +316,9 @@ ImpedanceSizing size_impedance_coupling(const ImpedanceSizingRequest& request) {
         if (b_c * peak.value >= 1.0) {
             std::ostringstream why;
             why << "coupling damping b_c = " << b_c << " N s/m is infeasible for model '"
-                << theory::to_string(request.model) << "': (21) needs Re(1/Z_c) >= "
-                << peak.value << " S at " << theory::frequency_hz(peak.theta, period)
+                << theory::to_string(request.model.hold)
+                << "': (21) needs Re(1/Z_c) >= " << peak.value << " S at "
+                << theory::frequency_hz(peak.theta, period)
                 << " Hz, and a coupling with damping b_c has Re(1/Z_c) < 1/b_c at any k_c > 0; "
                 << "b_c must be below " << 1.0 / peak.value << " N s/m";
             throw InfeasibleCoupling(why.str());
@@ -329,9 +335,8 @@ ImpedanceSizing size_impedance_coupling(const ImpedanceSizingRequest& request) {
         result.report.method = s.method;
     }
     result.coupling.stiffness_n_per_m *= 1.0 - kBackOff;
-    result.verified_worst_margin =
-        verified_margin(bound, result.coupling.stiffness_n_per_m,
-                        result.coupling.damping_n_s_per_m, period, dense);
+    result.verified_worst_margin = verified_margin(
+        bound, result.coupling.stiffness_n_per_m, result.coupling.damping_n_s_per_m, period, dense);
     result.report.ceres_iterations = iterations;
     result.report.verify_points = kVerifyPoints;
     result.report.solver_time_s = seconds_since(start);
@@ -342,8 +347,7 @@ AdmittanceSizing size_admittance_coupling(const AdmittanceSizingRequest& request
     const auto start = std::chrono::steady_clock::now();
     check_device(request.device);
     check_rate(request.rate_hz);
-    check_non_negative("proportional gain k_p", request.loop.proportional_gain_n_s_per_m,
-                       "N s/m");
+    check_non_negative("proportional gain k_p", request.loop.proportional_gain_n_s_per_m, "N s/m");
     check_non_negative("integral gain k_i", request.loop.integral_gain_n_per_m, "N/m");
     if (request.coupling_damping_n_s_per_m) {
         check_positive_or_infinite("coupling damping b_c", *request.coupling_damping_n_s_per_m,
@@ -374,9 +378,8 @@ AdmittanceSizing size_admittance_coupling(const AdmittanceSizingRequest& request
     if (const double growth = low_frequency_growth(bound); growth > 10.0) {
         std::ostringstream why;
         why << "(37) cannot be met as f -> 0 with k_i = " << request.loop.integral_gain_n_per_m
-            << " N/m: with integral action the bound stays near "
-            << bound.value(kLowestTheta) << " N s/m at "
-            << theory::frequency_hz(kLowestTheta, period)
+            << " N/m: with integral action the bound stays near " << bound.value(kLowestTheta)
+            << " N s/m at " << theory::frequency_hz(kLowestTheta, period)
             << " Hz, while the series mass-damper coupling (32) has no resistance at DC "
             << "(Re(Z_cA) ~ f²); use k_i = 0 (proportional velocity feedback)";
         throw InfeasibleCoupling(why.str());

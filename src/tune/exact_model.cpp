@@ -7,38 +7,34 @@
 #include <stdexcept>
 #include <unsupported/Eigen/MatrixFunctions>
 
+#include "hapticd/theory/passive_model.hpp"
 #include "hapticd/tune/input_checks.hpp"
+#include "hapticd/tune/operator_synthesis.hpp"
 
 namespace hapticd::tune {
 namespace {
 
+using Eigen::MatrixXd;
+using Eigen::RowVectorXd;
+using Eigen::VectorXd;
 using theory::DeviceModel;
 using theory::SpringDamperCoupling;
 
-// Fixed upper bounds keep every matrix on the stack: the plant has at most 4 states
-// (two-mass grasp), the controller at most 3 (x_d[n-1], x_e[n-1], v_e[n-1]).
-constexpr int kMaxPlant = 4;
-constexpr int kMaxMemory = 3;
-constexpr int kMaxLoop = kMaxPlant + kMaxMemory;
-using PlantMatrix =
-    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPlant + 1, kMaxPlant + 1>;
-using PlantVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxPlant + 1, 1>;
-using LoopMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxLoop, kMaxLoop>;
-using MemoryMatrix =
-    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxMemory, kMaxMemory + 1>;
-using ControlRow = Eigen::Matrix<double, 1, Eigen::Dynamic, Eigen::RowMajor, 1, kMaxMemory + 1>;
-
-/// Device + operator sampled with an exact ZOH on F_d: s[n+1] = Φ s[n] + Γ F[n], and the
-/// encoder reads x_d = s(0).
+/// Device + operator sampled with the ZOH shifted by the loop delay's fraction φ of a period:
+///   s[n+1] = Φ s[n] + Γ_new F_new + Γ_old F_old,
+/// F_old acting for the first φT of the period and F_new for the rest (Γ_old = 0 at φ = 0).
+/// The encoder reads x_d = s(0).
 struct SampledPlant {
-    PlantMatrix phi;
-    PlantVector gamma;
+    MatrixXd phi;
+    VectorXd gamma_new;
+    VectorXd gamma_old;
 };
 
 /// Continuous state space ds/dt = A s + B F_d of the device (10) with the operator attached.
-/// States: [x_d, v_d] or, for the two-mass grasp, [x_d, v_d, x_h, v_h].
-void continuous_plant(const DeviceModel& device, const OperatorModel& human, PlantMatrix& a,
-                      PlantVector& b) {
+/// States: [x_d, v_d], then [x_i, v_i] for every mass hung off the handle (the two-mass
+/// grasp's hand, the multi-mode grasp's absorbers).
+void continuous_plant(const DeviceModel& device, const OperatorModel& human, MatrixXd& a,
+                      VectorXd& b) {
     const double m = device.mass_kg;
     const double c = device.damping_n_s_per_m;
     if (human.family == OperatorFamily::two_mass_grasp) {
@@ -62,36 +58,82 @@ void continuous_plant(const DeviceModel& device, const OperatorModel& human, Pla
         b(1) = -1.0 / m;
         return;
     }
-    // The other families add a rigid mass, a damper and a spring to ground to (10):
-    // (m + m_h) dv/dt + (b + b_h) v + k_h x = -F_d.
+    // The rigid part adds a mass, a damper and a spring to ground to (10):
+    // (m + m_h) dv/dt + (b + b_h) v + k_h x = -F_d - Σ_i [k_i (x - x_i) + b_i (v - v_i)].
     const double total_mass = m + human.hand_mass_kg;
-    a.setZero(2, 2);
-    b.setZero(2);
+    const auto n = static_cast<Eigen::Index>(2 + 2 * human.modes.size());
+    a.setZero(n, n);
+    b.setZero(n);
     a(0, 1) = 1.0;
     a(1, 0) = -human.hand_stiffness_n_per_m / total_mass;
     a(1, 1) = -(c + human.hand_damping_n_s_per_m) / total_mass;
     b(1) = -1.0 / total_mass;
+    for (std::size_t i = 0; i < human.modes.size(); ++i) {
+        const OperatorMode& mode = human.modes[i];
+        const auto x = static_cast<Eigen::Index>(2 + 2 * i), v = x + 1;
+        const double k = mode.stiffness_n_per_m, d = mode.damping_n_s_per_m;
+        a(1, 0) -= k / total_mass;
+        a(1, 1) -= d / total_mass;
+        a(1, x) += k / total_mass;
+        a(1, v) += d / total_mass;
+        // m_i dv_i/dt = k_i (x - x_i) + b_i (v - v_i)
+        a(x, v) = 1.0;
+        a(v, 0) = k / mode.mass_kg;
+        a(v, 1) = d / mode.mass_kg;
+        a(v, x) = -k / mode.mass_kg;
+        a(v, v) = -d / mode.mass_kg;
+    }
 }
 
-/// Φ = e^{AT}, Γ = ∫_0^T e^{Aτ} dτ B, both read off exp([[A, B], [0, 0]] T).
-SampledPlant sample_plant(const DeviceModel& device, const OperatorModel& human, double period_s) {
-    PlantMatrix a;
-    PlantVector b;
-    continuous_plant(device, human, a, b);
+/// e^{A t} and ∫_0^t e^{Aτ} dτ B, both read off exp([[A, B], [0, 0]] t).
+std::pair<MatrixXd, VectorXd> sample_over(const MatrixXd& a, const VectorXd& b, double t) {
     const Eigen::Index n = a.rows();
-    PlantMatrix augmented = PlantMatrix::Zero(n + 1, n + 1);
-    augmented.topLeftCorner(n, n) = a * period_s;
-    augmented.topRightCorner(n, 1) = b * period_s;
-    const PlantMatrix e = augmented.exp();
+    MatrixXd augmented = MatrixXd::Zero(n + 1, n + 1);
+    augmented.topLeftCorner(n, n) = a * t;
+    augmented.topRightCorner(n, 1) = b * t;
+    const MatrixXd e = augmented.exp();
     return {e.topLeftCorner(n, n), e.topRightCorner(n, 1)};
+}
+
+SampledPlant sample_plant(const DeviceModel& device, const OperatorModel& human, double period_s,
+                          double delay_fraction) {
+    MatrixXd a;
+    VectorXd b;
+    continuous_plant(device, human, a, b);
+    if (delay_fraction == 0.0) {
+        auto [phi, gamma] = sample_over(a, b, period_s);
+        return {phi, gamma, VectorXd::Zero(gamma.size())};
+    }
+    // [0, φT): the previous command; [φT, T): the new one.
+    const auto [phi_old, gamma_old] = sample_over(a, b, delay_fraction * period_s);
+    const auto [phi_new, gamma_new] = sample_over(a, b, (1.0 - delay_fraction) * period_s);
+    return {phi_new * phi_old, gamma_new, phi_new * gamma_old};
 }
 
 /// The controller of one tick as linear maps of w = (x_d[n], memory[n]):
 ///   F[n] = force · w,   memory[n+1] = next · w.
 struct Controller {
-    ControlRow force;
-    MemoryMatrix next;
+    RowVectorXd force;
+    MatrixXd next;
 };
+
+/// An environment as a difference equation from the tool position to the coupling force:
+///   F[n] + a1 F[n-1] = c0 x_e[n] + c1 x_e[n-1] + c2 x_e[n-2].
+struct EnvironmentRecurrence {
+    double a1 = 0.0;
+    double c0 = 0.0, c1 = 0.0, c2 = 0.0;
+};
+
+EnvironmentRecurrence recurrence_of(const EnvironmentModel& env, double t) {
+    const double me = env.mass_kg, ke = env.stiffness_n_per_m, be = env.damping_n_s_per_m;
+    if (env.kind == EnvironmentModel::Kind::mass_spring) {
+        // Implicit Euler: m_e (x_e[n] - 2x_e[n-1] + x_e[n-2])/T² = F - k_e x_e[n] - b_e v_e[n].
+        return {0.0, me / (t * t) + be / t + ke, -2.0 * me / (t * t) - be / t, me / (t * t)};
+    }
+    // Trapezoidal: (1 + z⁻¹) F = [m_e (2/T²)(1 - z⁻¹)² + (b_e/T)(1 - z⁻²) + (k_e/2)(1 + z⁻¹)²] x_e.
+    return {1.0, 2.0 * me / (t * t) + be / t + ke / 2.0, -4.0 * me / (t * t) + ke,
+            2.0 * me / (t * t) - be / t + ke / 2.0};
+}
 
 Controller make_controller(const SpringDamperCoupling& coupling, const EnvironmentModel& env,
                            double period_s) {
@@ -107,32 +149,61 @@ Controller make_controller(const SpringDamperCoupling& coupling, const Environme
         ctl.next << 1.0, 0.0;
         return ctl;
     }
-    // w = (x_d[n], x_d[n-1], x_e[n-1], v_e[n-1]); the implicit update of the header.
-    const double me = env.mass_kg, ke = env.stiffness_n_per_m, be = env.damping_n_s_per_m;
-    const double d = me + t * (bc + be) + t * t * (kc + ke);
-    ControlRow x_d(4), v_d(4), v_e(4), x_e(4);
-    x_d << 1.0, 0.0, 0.0, 0.0;
-    v_d << 1.0 / t, -1.0 / t, 0.0, 0.0;
-    v_e << (t * kc + bc) / d, -bc / d, -t * (kc + ke) / d, me / d;
-    x_e << 0.0, 0.0, 1.0, 0.0;
-    x_e += t * v_e;
-    ctl.force = kc * (x_d - x_e) + bc * (v_d - v_e);
-    ctl.next.resize(3, 4);
-    ctl.next << x_d, x_e, v_e;
+    // w = (x_d[n], x_d[n-1], x_e[n-1], x_e[n-2]) and, when the environment remembers its
+    // force (a1 != 0), F[n-1]. The coupling (16),
+    //   F = P - g x_e[n],  P = k_c x_d + b_c (x_d - x_d[n-1])/T + (b_c/T) x_e[n-1],  g = k_c +
+    //   b_c/T,
+    // solved together with the environment's recurrence for x_e[n] and F[n].
+    const EnvironmentRecurrence r = recurrence_of(env, t);
+    const Eigen::Index w = r.a1 != 0.0 ? 5 : 4;
+    RowVectorXd p = RowVectorXd::Zero(w), rhs = RowVectorXd::Zero(w);
+    p.head(3) << kc + bc / t, -bc / t, bc / t;
+    rhs.segment(2, 2) << r.c1, r.c2;  // c1 x_e[n-1] + c2 x_e[n-2] - a1 F[n-1]
+    if (w == 5) rhs(4) = -r.a1;
+    const double g = kc + bc / t;
+    const RowVectorXd x_e = (p - rhs) / (g + r.c0);
+    const RowVectorXd f = p - g * x_e;
+    ctl.force = f;
+    RowVectorXd x_d = RowVectorXd::Zero(w), x_e1 = RowVectorXd::Zero(w);
+    x_d(0) = 1.0;
+    x_e1(2) = 1.0;
+    ctl.next.resize(w - 1, w);
+    if (w == 5) {
+        ctl.next << x_d, x_e, x_e1, f;
+    } else {
+        ctl.next << x_d, x_e, x_e1;
+    }
     return ctl;
 }
 
-/// Closed-loop state (s[n], memory[n]) -> (s[n+1], memory[n+1]), with x_d[n] = s(0).
-LoopMatrix closed_loop_matrix(const SampledPlant& plant, const Controller& ctl) {
+/// Closed-loop state (s[n], memory[n], F[n-1], ..., F[n-L]) one tick on, with x_d[n] = s(0)
+/// and the delay line as long as the delay needs: L = q, or q + 1 when φ > 0.
+template <typename Loop>
+Loop closed_loop_matrix(const SampledPlant& plant, const Controller& ctl,
+                        const theory::LoopDelay& delay) {
     const Eigen::Index n = plant.phi.rows();
     const Eigen::Index q = ctl.next.rows();
-    LoopMatrix loop(n + q, n + q);
+    const Eigen::Index lag = delay.whole_periods + (delay.fraction > 0.0 ? 1 : 0);
+    const Eigen::Index size = n + q + lag;
+    // F[n] as a row over the whole state.
+    RowVectorXd force = RowVectorXd::Zero(size);
+    force(0) = ctl.force(0);
+    force.segment(n, q) = ctl.force.tail(q);
+    Loop loop = Loop::Zero(size, size);
     loop.topLeftCorner(n, n) = plant.phi;
-    loop.topLeftCorner(n, 1) += plant.gamma * ctl.force(0);
-    loop.topRightCorner(n, q) = plant.gamma * ctl.force.tail(q);
-    loop.bottomLeftCorner(q, n).setZero();
-    loop.bottomLeftCorner(q, 1) = ctl.next.col(0);
-    loop.bottomRightCorner(q, q) = ctl.next.rightCols(q);
+    // The force acting over the rest of the period: F[n-q]; over its first φT: F[n-q-1].
+    if (delay.whole_periods == 0) {
+        loop.topRows(n) += plant.gamma_new * force;
+    } else {
+        loop.block(0, n + q + delay.whole_periods - 1, n, 1) += plant.gamma_new;
+    }
+    if (delay.fraction > 0.0) loop.block(0, n + q + lag - 1, n, 1) += plant.gamma_old;
+    loop.block(n, 0, q, 1) = ctl.next.col(0);
+    loop.block(n, n, q, q) = ctl.next.rightCols(q);
+    if (lag > 0) {
+        loop.row(n + q) = force;
+        for (Eigen::Index i = 1; i < lag; ++i) loop(n + q + i, n + q + i - 1) = 1.0;
+    }
     return loop;
 }
 
@@ -140,7 +211,8 @@ LoopMatrix closed_loop_matrix(const SampledPlant& plant, const Controller& ctl) 
 /// and column norms. The loop matrix mixes metres, metres per second and newtons, and
 /// Eigen's real Schur iteration can fail to converge on it unbalanced (a two-mass grasp
 /// with a 0.1 g hand on a 1e6 N/m arm did).
-void balance(LoopMatrix& a) {
+template <typename Loop>
+void balance(Loop& a) {
     const Eigen::Index n = a.rows();
     for (bool changed = true; changed;) {
         changed = false;
@@ -160,9 +232,15 @@ void balance(LoopMatrix& a) {
     }
 }
 
-ClosedLoopPoles poles_of(LoopMatrix loop, double period_s) {
+template <typename Loop>
+ClosedLoopPoles poles_of(Loop loop, double period_s) {
+    if (!loop.allFinite()) {
+        throw std::invalid_argument(
+            "exact model: the sampled loop is not finite (a mass, stiffness or rate far outside "
+            "the physical range)");
+    }
     balance(loop);
-    Eigen::EigenSolver<LoopMatrix> solver(loop, /*computeEigenvectors=*/false);
+    Eigen::EigenSolver<Loop> solver(loop, /*computeEigenvectors=*/false);
     if (solver.info() != Eigen::Success) {
         throw std::runtime_error("exact model: the closed-loop eigenvalue solver did not converge");
     }
@@ -182,6 +260,25 @@ ClosedLoopPoles poles_of(LoopMatrix loop, double period_s) {
     return poles;
 }
 
+// Loops of up to 12 states (every default case) stay on the stack: the sweep's 67,522
+// eigenvalue problems are 30% faster without a heap allocation each.
+constexpr int kSmallLoop = 12;
+using SmallLoop = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kSmallLoop, kSmallLoop>;
+
+Eigen::Index loop_size(const SampledPlant& plant, const Controller& ctl,
+                       const theory::LoopDelay& delay) {
+    return plant.phi.rows() + ctl.next.rows() + delay.whole_periods +
+           (delay.fraction > 0.0 ? 1 : 0);
+}
+
+ClosedLoopPoles loop_poles(const SampledPlant& plant, const Controller& ctl,
+                           const theory::LoopDelay& delay, double period_s) {
+    if (loop_size(plant, ctl, delay) <= kSmallLoop) {
+        return poles_of(closed_loop_matrix<SmallLoop>(plant, ctl, delay), period_s);
+    }
+    return poles_of(closed_loop_matrix<MatrixXd>(plant, ctl, delay), period_s);
+}
+
 void require_unused(const char* name, double value, OperatorFamily family) {
     if (value != 0.0) {
         std::ostringstream message;
@@ -194,7 +291,9 @@ void require_unused(const char* name, double value, OperatorFamily family) {
 void check_operator(const OperatorModel& h) {
     const OperatorFamily f = h.family;
     const bool hand = f != OperatorFamily::hands_off;
-    const bool grounded_hand = f == OperatorFamily::heavy_hand || f == OperatorFamily::stiff_grasp;
+    const bool multi = f == OperatorFamily::multi_mode;
+    const bool grounded_hand =
+        f == OperatorFamily::heavy_hand || f == OperatorFamily::stiff_grasp || multi;
     const bool two_mass = f == OperatorFamily::two_mass_grasp;
     if (two_mass) {
         check_positive("operator hand mass m_h", h.hand_mass_kg, "kg");
@@ -208,7 +307,7 @@ void check_operator(const OperatorModel& h) {
     } else {
         require_unused("hand_damping_n_s_per_m", h.hand_damping_n_s_per_m, f);
     }
-    if (f == OperatorFamily::stiff_grasp) {
+    if (f == OperatorFamily::stiff_grasp || multi) {
         check_non_negative("operator hand stiffness k_h", h.hand_stiffness_n_per_m, "N/m");
     } else {
         require_unused("hand_stiffness_n_per_m", h.hand_stiffness_n_per_m, f);
@@ -224,6 +323,16 @@ void check_operator(const OperatorModel& h) {
         require_unused("arm_stiffness_n_per_m", h.arm_stiffness_n_per_m, f);
         require_unused("arm_damping_n_s_per_m", h.arm_damping_n_s_per_m, f);
     }
+    if (multi) {
+        if (h.modes.empty()) throw std::invalid_argument("multi-mode grasp: no modes");
+        for (const OperatorMode& mode : h.modes) {
+            check_positive("operator mode mass m_i", mode.mass_kg, "kg");
+            check_positive("operator mode stiffness k_i", mode.stiffness_n_per_m, "N/m");
+            check_non_negative("operator mode damping b_i", mode.damping_n_s_per_m, "N s/m");
+        }
+    } else if (!h.modes.empty()) {
+        throw std::invalid_argument("modes are used only by the 'multi-mode grasp' operator");
+    }
 }
 
 void check_environment(const EnvironmentModel& e) {
@@ -233,11 +342,12 @@ void check_environment(const EnvironmentModel& e) {
     check_non_negative("environment damping b_e", e.damping_n_s_per_m, "N s/m");
 }
 
-void check_loop(const DeviceModel& device, const SpringDamperCoupling& coupling, double rate_hz) {
+void check_loop(const DeviceModel& device, const SpringDamperCoupling& coupling, double rate_hz,
+                double delay_periods) {
     check_device(device);
     check_rate(rate_hz);
-    check_non_negative("coupling stiffness k_c", coupling.stiffness_n_per_m, "N/m");
-    check_non_negative("coupling damping b_c", coupling.damping_n_s_per_m, "N s/m");
+    check_coupling_gains(coupling);
+    check_delay_periods(delay_periods);
 }
 
 constexpr double kTunedGripFractionsOfNyquist[] = {0.125, 0.25, 0.5, 0.75, 0.9, 1.0};
@@ -261,6 +371,8 @@ std::string_view to_string(OperatorFamily family) {
             return "stiff grasp";
         case OperatorFamily::two_mass_grasp:
             return "two-mass grasp";
+        case OperatorFamily::multi_mode:
+            return "multi-mode grasp";
     }
     return "unknown";
 }
@@ -297,6 +409,16 @@ OperatorModel OperatorModel::two_mass_grasp(double skin_stiffness_n_per_m,
     return h;
 }
 
+OperatorModel OperatorModel::multi_mode(double hand_mass_kg, double hand_stiffness_n_per_m,
+                                        double hand_damping_n_s_per_m,
+                                        std::vector<OperatorMode> modes, std::string origin) {
+    OperatorModel h = stiff_grasp(hand_mass_kg, hand_stiffness_n_per_m, hand_damping_n_s_per_m);
+    h.family = OperatorFamily::multi_mode;
+    h.modes = std::move(modes);
+    h.origin = std::move(origin);
+    return h;
+}
+
 std::string OperatorModel::describe() const {
     std::ostringstream s;
     s << to_string(family);
@@ -315,6 +437,15 @@ std::string OperatorModel::describe() const {
               << " N s/m, m_h = " << hand_mass_kg << " kg, k_a = " << arm_stiffness_n_per_m
               << " N/m, b_a = " << arm_damping_n_s_per_m << " N s/m)";
             break;
+        case OperatorFamily::multi_mode:
+            s << " (" << modes.size() << " modes" << (origin.empty() ? "" : ", ") << origin
+              << "; m_h = " << hand_mass_kg << " kg, k_h = " << hand_stiffness_n_per_m
+              << " N/m, b_h = " << hand_damping_n_s_per_m << " N s/m; modes (m_i kg, k_i N/m):";
+            for (const OperatorMode& mode : modes) {
+                s << " (" << mode.mass_kg << ", " << mode.stiffness_n_per_m << ")";
+            }
+            s << ")";
+            break;
     }
     return s.str();
 }
@@ -326,24 +457,39 @@ EnvironmentModel EnvironmentModel::mass_spring(double mass_kg, double stiffness_
     return {Kind::mass_spring, mass_kg, stiffness_n_per_m, damping_n_s_per_m};
 }
 
+EnvironmentModel EnvironmentModel::lossless_mass_spring(double mass_kg, double stiffness_n_per_m,
+                                                        double damping_n_s_per_m) {
+    return {Kind::lossless_mass_spring, mass_kg, stiffness_n_per_m, damping_n_s_per_m};
+}
+
 std::string EnvironmentModel::describe() const {
     if (kind == Kind::rigid_wall) return "rigid wall";
     std::ostringstream s;
-    s << "mass-spring (m_e = " << mass_kg << " kg, k_e = " << stiffness_n_per_m
+    s << (kind == Kind::mass_spring ? "mass-spring" : "lossless mass-spring (trapezoidal)")
+      << " (m_e = " << mass_kg << " kg, k_e = " << stiffness_n_per_m
       << " N/m, b_e = " << damping_n_s_per_m << " N s/m)";
     return s.str();
 }
 
+void check_delay_periods(double delay_periods) {
+    if (!(std::isfinite(delay_periods) && delay_periods >= 0.0 && delay_periods < 10.0)) {
+        std::ostringstream message;
+        message << "loop delay = " << delay_periods
+                << " periods is out of range: allowed 0 <= delay < 10 periods";
+        throw std::invalid_argument(message.str());
+    }
+}
+
 ClosedLoopPoles closed_loop_poles(const DeviceModel& device, const SpringDamperCoupling& coupling,
                                   double rate_hz, const OperatorModel& human,
-                                  const EnvironmentModel& environment) {
-    check_loop(device, coupling, rate_hz);
+                                  const EnvironmentModel& environment, double delay_periods) {
+    check_loop(device, coupling, rate_hz, delay_periods);
     check_operator(human);
     check_environment(environment);
     const double period_s = 1.0 / rate_hz;
-    const SampledPlant plant = sample_plant(device, human, period_s);
-    return poles_of(closed_loop_matrix(plant, make_controller(coupling, environment, period_s)),
-                    period_s);
+    const theory::LoopDelay delay = theory::split_delay(delay_periods);
+    const SampledPlant plant = sample_plant(device, human, period_s, delay.fraction);
+    return loop_poles(plant, make_controller(coupling, environment, period_s), delay, period_s);
 }
 
 std::vector<OperatorModel> default_operator_sweep(const DeviceModel& device, double rate_hz) {
@@ -398,11 +544,12 @@ std::vector<EnvironmentModel> default_environment_sweep(const DeviceModel& devic
 
 ExactCheck check_exact(const DeviceModel& device, const SpringDamperCoupling& coupling,
                        double rate_hz, const std::vector<OperatorModel>& operators,
-                       const std::vector<EnvironmentModel>& environments) {
-    check_loop(device, coupling, rate_hz);
+                       const std::vector<EnvironmentModel>& environments, double delay_periods) {
+    check_loop(device, coupling, rate_hz, delay_periods);
     for (const OperatorModel& h : operators) check_operator(h);
     for (const EnvironmentModel& e : environments) check_environment(e);
     const double period_s = 1.0 / rate_hz;
+    const theory::LoopDelay delay = theory::split_delay(delay_periods);
 
     std::vector<Controller> controllers;
     controllers.reserve(environments.size());
@@ -411,11 +558,12 @@ ExactCheck check_exact(const DeviceModel& device, const SpringDamperCoupling& co
     }
     ExactCheck check;
     check.worst_spectral_radius = -1.0;
+    check.delay_periods = delay_periods;
     for (const OperatorModel& h : operators) {
-        const SampledPlant plant = sample_plant(device, h, period_s);  // once per operator
+        // once per operator
+        const SampledPlant plant = sample_plant(device, h, period_s, delay.fraction);
         for (std::size_t i = 0; i < environments.size(); ++i) {
-            const ClosedLoopPoles poles =
-                poles_of(closed_loop_matrix(plant, controllers[i]), period_s);
+            const ClosedLoopPoles poles = loop_poles(plant, controllers[i], delay, period_s);
             ++check.cases_checked;
             if (poles.spectral_radius > check.worst_spectral_radius) {
                 check.worst_spectral_radius = poles.spectral_radius;
@@ -434,9 +582,27 @@ ExactCheck check_exact(const DeviceModel& device, const SpringDamperCoupling& co
 }
 
 ExactCheck check_exact(const DeviceModel& device, const SpringDamperCoupling& coupling,
-                       double rate_hz) {
-    return check_exact(device, coupling, rate_hz, default_operator_sweep(device, rate_hz),
-                       default_environment_sweep(device));
+                       double rate_hz, double delay_periods) {
+    check_loop(device, coupling, rate_hz, delay_periods);
+    // The adversaries built for this design: the default operators meet the worst lossless
+    // environments too, and the alias-tuned operators meet the rigid wall and those.
+    const Adversaries adversaries =
+        synthesize_adversaries(device, coupling, rate_hz, delay_periods);
+    std::vector<EnvironmentModel> environments = default_environment_sweep(device);
+    environments.insert(environments.end(), adversaries.environments.begin(),
+                        adversaries.environments.end());
+    ExactCheck check =
+        check_exact(device, coupling, rate_hz, default_operator_sweep(device, rate_hz),
+                    environments, delay_periods);
+    std::vector<EnvironmentModel> tuned_environments{EnvironmentModel::rigid_wall()};
+    tuned_environments.insert(tuned_environments.end(), adversaries.environments.begin(),
+                              adversaries.environments.end());
+    const ExactCheck tuned = check_exact(device, coupling, rate_hz, adversaries.operators,
+                                         tuned_environments, delay_periods);
+    const int cases = check.cases_checked + tuned.cases_checked;
+    if (tuned.worst_spectral_radius > check.worst_spectral_radius) check = tuned;
+    check.cases_checked = cases;
+    return check;
 }
 
 }  // namespace hapticd::tune

@@ -29,11 +29,30 @@ void check_positive_or_infinite(std::string_view name, double value, std::string
     if (!(value > 0.0)) reject(name, value, unit, "> 0 (inf for none)");
 }
 
-void check_device(const theory::DeviceModel& device) {
-    check_positive("device mass m", device.mass_kg, "kg");
-    check_positive("device damping b", device.damping_n_s_per_m, "N s/m");
+void check_in_range(std::string_view name, double value, double lo, double hi,
+                    std::string_view unit) {
+    if (!(value >= lo && value <= hi)) {  // false for NaN
+        std::ostringstream allowed;
+        allowed << lo << " to " << hi;
+        reject(name, value, unit, allowed.str());
+    }
 }
 
-void check_rate(double rate_hz) { check_positive("servo rate", rate_hz, "Hz"); }
+void check_device(const theory::DeviceModel& device) {
+    check_in_range("device mass m", device.mass_kg, kMinDeviceMassKg, kMaxDeviceMassKg, "kg");
+    check_in_range("device damping b", device.damping_n_s_per_m, kMinDeviceDamping,
+                   kMaxDeviceDamping, "N s/m");
+}
+
+void check_rate(double rate_hz) {
+    check_in_range("servo rate", rate_hz, kMinRateHz, kMaxRateHz, "Hz");
+}
+
+void check_coupling_gains(const theory::SpringDamperCoupling& coupling) {
+    check_in_range("coupling stiffness k_c", coupling.stiffness_n_per_m, 0.0, kMaxCouplingStiffness,
+                   "N/m");
+    check_in_range("coupling damping b_c", coupling.damping_n_s_per_m, 0.0, kMaxCouplingDamping,
+                   "N s/m");
+}
 
 }  // namespace hapticd::tune

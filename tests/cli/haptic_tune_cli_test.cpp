@@ -1,8 +1,8 @@
 // haptic-tune size and check, end to end through the real executable.
 #include <gtest/gtest.h>
 
-#include <nlohmann/json.hpp>
 #include <cctype>
+#include <nlohmann/json.hpp>
 #include <ostream>
 #include <string>
 
@@ -38,16 +38,73 @@ TEST(HapticTuneSize, ReadsTheDeviceFromAConfigFileAndFlagsOverrideIt) {
     EXPECT_NEAR(json::parse(overridden.out).at("stiffness").get<double>(), 2000.0, 1e-6);
 }
 
-TEST(HapticTuneSize, OptimizeDampingFindsAStifferPairAndWarnsThatTheExactModelDisagrees) {
-    const auto result = run_command(tune("size --mass 0.1 --damping 2 --rate 1000 --optimize-damping --json"));
-    ASSERT_EQ(result.exit_code, 0) << result.err;
+// The encoder model's optimised pair is stiffer, and the exact model rejects it: size says
+// so and exits 1 (issue 9). The passive model's optimum is no damping at 2b/T, and passes.
+TEST(HapticTuneSize, AnAnswerTheExactModelRejectsExitsOne) {
+    const auto result = run_command(
+        tune("size --mass 0.1 --damping 2 --rate 1000 --optimize-damping --model encoder --json"));
+    EXPECT_EQ(result.exit_code, 1) << result.err;
     const json j = json::parse(result.out);
     EXPECT_GT(j.at("stiffness").get<double>(), 4000.0);
     EXPECT_GT(j.at("damping").get<double>(), 0.0);
     EXPECT_GT(j.at("binding_frequency_hz").get<double>(), 0.0);
     // The encoder model ignores the hold's alias at Nyquist (docs/stability-models.md).
     EXPECT_FALSE(j.at("exact_check").at("stable").get<bool>());
-    EXPECT_NE(result.err.find("warning: the exact sampled-data model"), std::string::npos);
+    EXPECT_NE(result.err.find("the exact sampled-data model finds this design unstable"),
+              std::string::npos);
+
+    const auto passive =
+        run_command(tune("size --mass 0.1 --damping 2 --rate 1000 --optimize-damping --json"));
+    ASSERT_EQ(passive.exit_code, 0) << passive.err;
+    const json p = json::parse(passive.out);
+    EXPECT_EQ(p.at("model"), "passive");
+    EXPECT_NEAR(p.at("stiffness").get<double>(), 4000.0, 1e-5);
+    EXPECT_NEAR(p.at("damping").get<double>(), 0.0, 1e-6);
+    EXPECT_TRUE(p.at("exact_check").at("stable").get<bool>());
+}
+
+// A delay of d periods: at b_c = 0 the passive model allows k_c = 2b/(T τ²) against every
+// passive environment, τ² = (1 + d)² for whole periods, (1 + 3d) for d < 1.
+TEST(HapticTuneSize, DelayLowersThePassiveBound) {
+    for (auto [delay, tau2] : {std::pair{"0.001", 4.0}, {"0.0005", 2.5}, {"0.002", 9.0}}) {
+        const auto r = run_command(
+            tune(std::string("size --mass 0.1 --damping 2 --rate 1000 --json --delay ") + delay));
+        ASSERT_EQ(r.exit_code, 0) << r.err;
+        const json j = json::parse(r.out);
+        EXPECT_NEAR(j.at("stiffness").get<double>(), 4000.0 / tau2, 1e-4) << delay;
+        EXPECT_EQ(j.at("delay_s").get<double>(), std::stod(delay));
+        EXPECT_TRUE(j.at("exact_check").at("stable").get<bool>()) << delay;
+    }
+}
+
+TEST(HapticTuneSize, BadDelayAndExtremeMassesAreUsageErrorsNamingTheRange) {
+    struct Bad {
+        const char* args;
+        const char* message;
+    };
+    for (const Bad bad :
+         {Bad{"--delay -0.001", "--delay: value -0.001 is out of range: allowed finite and >= 0"},
+          Bad{"--delay nan", "--delay: value nan is out of range"},
+          Bad{"--delay 0.01", "--delay 0.01 s is out of range: allowed >= 0 and < 10 periods"},
+          Bad{"--mass 1e-20 --delay 0",
+              "device mass m = 1e-20 kg is out of range: allowed 0.0001 to 1000"}}) {
+        std::string args = std::string(bad.args);
+        if (args.find("--mass") == std::string::npos) args += " --mass 0.1";
+        for (const char* command : {"size", "check --stiffness 100 --model exact"}) {
+            const auto r =
+                run_command(tune(std::string(command) + " --damping 2 --rate 1000 " + args));
+            EXPECT_EQ(r.exit_code, 2) << command << " " << args;
+            EXPECT_NE(r.err.find(bad.message), std::string::npos) << r.err;
+        }
+    }
+    const auto huge =
+        run_command(tune("check --mass 0.1 --damping 2 --rate 1000 --stiffness 100 "
+                         "--coupling-damping 1e307 --model exact"));
+    EXPECT_EQ(huge.exit_code, 2);
+    EXPECT_NE(
+        huge.err.find("coupling damping b_c = 1e+307 N s/m is out of range: allowed 0 to 100000"),
+        std::string::npos)
+        << huge.err;
 }
 
 TEST(HapticTuneSize, DefaultDesignPassesTheExactCrossCheckQuietly) {
@@ -55,21 +112,23 @@ TEST(HapticTuneSize, DefaultDesignPassesTheExactCrossCheckQuietly) {
     ASSERT_EQ(result.exit_code, 0) << result.err;
     EXPECT_TRUE(json::parse(result.out).at("exact_check").at("stable").get<bool>());
     EXPECT_EQ(result.err, "");
-    const auto skipped = run_command(tune("size --mass 0.1 --damping 2 --rate 1000 --json --no-exact-check"));
+    const auto skipped =
+        run_command(tune("size --mass 0.1 --damping 2 --rate 1000 --json --no-exact-check"));
     EXPECT_FALSE(json::parse(skipped.out).contains("exact_check"));
 }
 
 TEST(HapticTuneSize, TextOutputNamesEveryField) {
     const auto result = run_command(tune("size --mass 0.1 --damping 2 --rate 1000"));
     ASSERT_EQ(result.exit_code, 0) << result.err;
-    for (const char* key : {"stiffness", "damping", "binding_frequency_hz", "model", "solver_time_s"}) {
+    for (const char* key :
+         {"stiffness", "damping", "binding_frequency_hz", "model", "solver_time_s"}) {
         EXPECT_NE(result.out.find(key), std::string::npos) << key;
     }
 }
 
 TEST(HapticTuneSize, AdmittanceDisplayExplainsAnInfeasibleLoop) {
-    const auto result = run_command(tune(
-        "size --display admittance --mass 2 --damping 5 --rate 1000 --kp 2000 --ki 0"));
+    const auto result = run_command(
+        tune("size --display admittance --mass 2 --damping 5 --rate 1000 --kp 2000 --ki 0"));
     EXPECT_EQ(result.exit_code, 2);
     EXPECT_NE(result.err.find("(35) fails"), std::string::npos) << result.err;
 }
@@ -104,11 +163,13 @@ INSTANTIATE_TEST_SUITE_P(
         BadInput{"size --mass 0.1 --damping 2 --rate -5", "-5"},
         BadInput{"size --mass 0.1 --damping 2 --rate 1000 --model magic", "magic"},
         BadInput{"size --mass 0.1 --damping 2 --rate 1000 --coupling-damping 50", "b_c = 50"},
-        BadInput{"size --mass 0.1 --damping 2 --rate 1000 --coupling-damping 1 --optimize-damping", "--optimize-damping"},
+        BadInput{"size --mass 0.1 --damping 2 --rate 1000 --coupling-damping 1 --optimize-damping",
+                 "--optimize-damping"},
         BadInput{"size --mass 0.1 --damping 2", "--rate"},
         BadInput{"size --mass abc --damping 2 --rate 1000", "abc"},
         BadInput{"check --mass 0.1 --damping 2 --rate 1000", "--stiffness"},
-        BadInput{"check --mass 0.1 --damping 2 --rate 1000 --stiffness 100 --model exactly", "exactly"},
+        BadInput{"check --mass 0.1 --damping 2 --rate 1000 --stiffness 100 --model exactly",
+                 "exactly"},
         BadInput{"size --config /nonexistent.toml", "/nonexistent.toml"}),
     bad_input_name);
 
@@ -132,14 +193,16 @@ TEST(HapticTuneConfig, ErrorsNameTheFileTheKeyAndTheRange) {
 }
 
 TEST(HapticTuneCheck, ExitCodeIsTheVerdict) {
-    const auto stable = run_command(tune("check --mass 0.1 --damping 2 --rate 1000 --stiffness 3900 --json"));
+    const auto stable =
+        run_command(tune("check --mass 0.1 --damping 2 --rate 1000 --stiffness 3900 --json"));
     EXPECT_EQ(stable.exit_code, 0) << stable.err;
     const json s = json::parse(stable.out);
     EXPECT_TRUE(s.at("unconditionally_stable").get<bool>());
     EXPECT_NEAR(s.at("worst_margin").get<double>(), 4000.0 / 3900.0 - 1.0, 1e-9);
     EXPECT_EQ(s.at("worst_frequency_hz").get<double>(), 0.0);
 
-    const auto unstable = run_command(tune("check --mass 0.1 --damping 2 --rate 1000 --stiffness 4100 --json"));
+    const auto unstable =
+        run_command(tune("check --mass 0.1 --damping 2 --rate 1000 --stiffness 4100 --json"));
     EXPECT_EQ(unstable.exit_code, 1);
     EXPECT_FALSE(json::parse(unstable.out).at("unconditionally_stable").get<bool>());
 }

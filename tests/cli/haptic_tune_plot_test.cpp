@@ -28,12 +28,12 @@ constexpr double kPi = std::numbers::pi;
 constexpr Complex kJ{0.0, 1.0};
 
 // The device and design every test uses unless it says otherwise.
-constexpr double kMass = 0.1;       // kg
-constexpr double kDamping = 2.0;    // N s/m
-constexpr double kRate = 1000.0;    // Hz
+constexpr double kMass = 0.1;     // kg
+constexpr double kDamping = 2.0;  // N s/m
+constexpr double kRate = 1000.0;  // Hz
 constexpr double kPeriod = 1.0 / kRate;
-constexpr double kStiffness = 3000.0;       // N/m
-constexpr double kCouplingDamping = 0.5;    // N s/m
+constexpr double kStiffness = 3000.0;     // N/m
+constexpr double kCouplingDamping = 0.5;  // N s/m
 const std::string kDevice = "--mass 0.1 --damping 2 --rate 1000";
 const std::string kDesign = kDevice + " --stiffness 3000 --coupling-damping 0.5";
 
@@ -47,9 +47,10 @@ json run_json(const std::string& args) {
 
 /// A fresh directory under the system temp dir, removed with the object.
 class TempDir {
-public:
+  public:
     TempDir() {
-        std::string pattern = (std::filesystem::temp_directory_path() / "hapticd-plot-XXXXXX").string();
+        std::string pattern =
+            (std::filesystem::temp_directory_path() / "hapticd-plot-XXXXXX").string();
         if (mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
         path_ = pattern;
     }
@@ -61,7 +62,7 @@ public:
     }
     std::string file(const std::string& name) const { return (path_ / name).string(); }
 
-private:
+  private:
     std::filesystem::path path_;
 };
 
@@ -140,7 +141,8 @@ TEST(plotCommand, JsonConductanceIsRealPartOfOneOverTheCoupling) {
     const std::vector<double> f = doubles(j.at("frequency_hz"));
     const std::vector<double> g = doubles(j.at("coupling_conductance"));
     ASSERT_EQ(g.size(), f.size());
-    for (const std::size_t i : {std::size_t{0}, std::size_t{60}, std::size_t{100}, std::size_t{119}}) {
+    for (const std::size_t i :
+         {std::size_t{0}, std::size_t{60}, std::size_t{100}, std::size_t{119}}) {
         const double expected = std::real(1.0 / coupling_impedance(theta_at(f[i])));
         EXPECT_NEAR(g[i], expected, 1e-9 * expected) << "f = " << f[i];
     }
@@ -157,7 +159,8 @@ TEST(plotCommand, WorstMarginPerModelMatchesCheck) {
          std::vector<std::string>{kDesign, kDevice + " --stiffness 6000 --coupling-damping 1"}) {
         const json plot = run_json("plot " + design + " --json");
         for (const std::string model : {"paper", "encoder"}) {
-            const auto check = run_command(tune("check " + design + " --model " + model + " --json"));
+            const auto check =
+                run_command(tune("check " + design + " --model " + model + " --json"));
             ASSERT_TRUE(check.exit_code == 0 || check.exit_code == 1) << check.err;
             const json c = json::parse(check.out);
             const json& p = plot.at("models").at(model);
@@ -191,7 +194,8 @@ TEST(plotCommand, MarginArrayAndBindingMarkerAreConsistent) {
     }
     const json& marker = encoder.at("marker");
     const double theta = theta_at(marker.at("frequency_hz").get<double>());
-    EXPECT_EQ(marker.at("frequency_hz").get<double>(), encoder.at("worst_frequency_hz").get<double>());
+    EXPECT_EQ(marker.at("frequency_hz").get<double>(),
+              encoder.at("worst_frequency_hz").get<double>());
     EXPECT_NEAR(marker.at("bound").get<double>(), encoder_bound(theta), 1e-12);
     EXPECT_NEAR(marker.at("conductance").get<double>() / marker.at("bound").get<double>() - 1.0,
                 worst, 1e-9);
@@ -201,17 +205,18 @@ TEST(plotCommand, ModelsOptionSelectsAndOrdersTheCurves) {
     const json j = run_json("plot " + kDesign + " --models encoder --json --points 20");
     ASSERT_EQ(j.at("models").size(), 1u);
     EXPECT_TRUE(j.at("models").contains("encoder"));
-    const json both = run_json("plot " + kDesign + " --models encoder,paper,encoder --json --points 20");
+    const json both =
+        run_json("plot " + kDesign + " --models encoder,paper,encoder --json --points 20");
     ASSERT_EQ(both.at("models").size(), 2u);
     EXPECT_EQ(both.at("models").begin().key(), "encoder");
 }
 
-TEST(plotCommand, WithoutStiffnessItSizesWithTheEncoderModel) {
+TEST(plotCommand, WithoutStiffnessItSizesWithThePassiveModel) {
     const json j = run_json("plot " + kDevice + " --coupling-damping 0.5 --json --points 20");
-    const json size = run_json("size " + kDevice + " --coupling-damping 0.5 --model encoder --json");
+    const json size = run_json("size " + kDevice + " --coupling-damping 0.5 --json");
     const json& design = j.at("design");
     EXPECT_EQ(design.at("source"), "sized");
-    EXPECT_EQ(design.at("sizing_model"), "encoder");
+    EXPECT_EQ(design.at("sizing_model"), "passive");
     EXPECT_NEAR(design.at("stiffness").get<double>(), size.at("stiffness").get<double>(),
                 1e-9 * size.at("stiffness").get<double>());
     EXPECT_EQ(design.at("damping").get<double>(), 0.5);
@@ -220,14 +225,16 @@ TEST(plotCommand, WithoutStiffnessItSizesWithTheEncoderModel) {
     TempDir dir;
     const auto text = run_command(tune("plot " + kDevice + " --out " + dir.file("s.svg")));
     ASSERT_EQ(text.exit_code, 0) << text.err;
-    EXPECT_NE(text.out.find("sized from (21) with the encoder model"), std::string::npos) << text.out;
+    EXPECT_NE(text.out.find("sized from (21) with the passive model"), std::string::npos)
+        << text.out;
 }
 
 TEST(plotCommand, TakesTheCouplingFromTheConfigFile) {
     TempDir dir;
     const std::string config = dir.file("design.toml");
-    std::ofstream(config) << "[servo]\nrate_hz = 1000\n\n[device.model]\nmass = 0.1\ndamping = 2\n\n"
-                             "[coupling]\nstiffness = 2500\ndamping = 0.25\n";
+    std::ofstream(config)
+        << "[servo]\nrate_hz = 1000\n\n[device.model]\nmass = 0.1\ndamping = 2\n\n"
+           "[coupling]\nstiffness = 2500\ndamping = 0.25\n";
     const json j = run_json("plot --config " + config + " --json --points 20");
     EXPECT_EQ(j.at("design").at("source"), "config");
     EXPECT_EQ(j.at("design").at("stiffness").get<double>(), 2500.0);
@@ -252,7 +259,7 @@ void expect_png(const std::string& path) {
     const std::string png = read_file(path);
     ASSERT_GE(png.size(), 33u) << path;
     EXPECT_EQ(png.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
-    EXPECT_EQ(png.substr(12, 4), "IHDR");  // the first chunk, after its 4-byte length
+    EXPECT_EQ(png.substr(12, 4), "IHDR");    // the first chunk, after its 4-byte length
     EXPECT_GT(big_endian_u32(png, 16), 0u);  // width
     EXPECT_GT(big_endian_u32(png, 20), 0u);  // height
 }
@@ -300,7 +307,8 @@ TEST(plotZwidth, ImpedanceDisplayIs24And25PerModel) {
     const std::vector<double> paper_max = doubles(models.at("paper").at("zmax_magnitude"));
     const std::vector<double> enc_min = doubles(models.at("encoder").at("zmin_magnitude"));
     const std::vector<double> enc_max = doubles(models.at("encoder").at("zmax_magnitude"));
-    for (const std::size_t i : {std::size_t{0}, std::size_t{30}, std::size_t{60}, std::size_t{75}}) {
+    for (const std::size_t i :
+         {std::size_t{0}, std::size_t{30}, std::size_t{60}, std::size_t{75}}) {
         const double theta = theta_at(f[i]);
         const double omega = 2.0 * kPi * f[i];
         // (24): Z_min = Z_d. Encoder model: |m jω + b|; paper: |Tustin (12)|.
@@ -337,10 +345,10 @@ TEST(plotZwidth, AdmittanceDisplayIs42And43) {
         const Complex z = std::polar(1.0, theta);
         const Complex pi_gain = kp + ki * kPeriod * z / (z - 1.0);  // (27)
         const Complex h = encoder_hold(theta);
-        const Complex zda = encoder_device(theta) + pi_gain * h;                 // (30)
+        const Complex zda = encoder_device(theta) + pi_gain * h;                       // (30)
         const Complex tracking = h * pi_gain / (encoder_device(theta) + h * pi_gain);  // (29)
-        const Complex zca = 1.0 / (kPeriod * z / ((z - 1.0) * mc));                 // (32)
-        EXPECT_NEAR(zmax[i], std::abs(zda), 1e-9 * zmax[i]);                        // (43)
+        const Complex zca = 1.0 / (kPeriod * z / ((z - 1.0) * mc));                    // (32)
+        EXPECT_NEAR(zmax[i], std::abs(zda), 1e-9 * zmax[i]);                           // (43)
         EXPECT_NEAR(zmin[i], std::abs(zca / (tracking + zca / zda)), 1e-9 * zmin[i]);  // (42)
     }
 }

@@ -98,7 +98,8 @@ TEST(DaemonConfig, DefaultsFillWhatIsMissing) {
     EXPECT_EQ(c.servo.realtime, "warn");
     EXPECT_FALSE(c.servo.cpu.has_value());
     EXPECT_EQ(c.device.plugin, "sim");
-    EXPECT_EQ(c.coupling.check, "encoder");
+    EXPECT_EQ(c.coupling.check, "passive");
+    EXPECT_EQ(c.device.model_delay_s, 0.0);
     EXPECT_TRUE(c.scene_file.empty());
 }
 
@@ -127,7 +128,14 @@ INSTANTIATE_TEST_SUITE_P(
         Bad{"[device]\naxes = 4\n", "[device] axes = 4 is out of range: allowed 1..3"},
         Bad{"[device]\nplugin = \"sim\"\n[device.usb]\nvid = 1\n", "unknown key [device] usb"},
         Bad{"[device.model]\nmass = -1\n",
-            "[device.model] mass = -1 is out of range: allowed > 0 (kg)"},
+            "[device.model] mass = -1 is out of range: allowed >= 0.0001 and <= 1000 (kg)"},
+        Bad{"[device.model]\nmass = 1e-20\n", "[device.model] mass = 1e-20 is out of range"},
+        Bad{"[device.model]\ndelay = -0.001\n",
+            "[device.model] delay = -0.001 is out of range: allowed >= 0 (s)"},
+        Bad{"[device.model]\ndelay = nan\n", "[device.model] delay = nan is out of range"},
+        Bad{"[device.model]\ndelay = 0.01\n",
+            "[device.model] delay = 0.01 s is out of range: allowed >= 0 and < 10 periods "
+            "(0.01 s at [servo] rate_hz = 1000)"},
         Bad{"[device.model]\ndamping = nan\n", "[device.model] damping = nan"},
         Bad{"[device.model]\ninertia = 1\n", "unknown key [device.model] inertia"},
         Bad{"[coupling]\nstiffness = -3\n",

@@ -100,7 +100,7 @@ TEST_F(DaemonRun, LockstepRunOfTheEmbeddedDefaultGivesTheSummary) {
     EXPECT_TRUE(s["lockstep"].get<bool>());
     EXPECT_TRUE(s["faults"].empty());
     EXPECT_EQ(s["realtime"]["mode"], "off");  // virtual time has no deadlines
-    EXPECT_EQ(s["stability_check"]["model"], "encoder");
+    EXPECT_EQ(s["stability_check"]["model"], "passive");
     EXPECT_TRUE(s["stability_check"]["passed"].get<bool>());
     // The default's grasp pushes 5 mm past the wall from t = 1 s: the wall pushes back.
     EXPECT_GT(s["max_force_n"].get<double>(), 1.0);
@@ -121,7 +121,7 @@ TEST_F(DaemonRun, RefusesGainsThatFailTheCheckNamingMarginAndFrequency) {
     EXPECT_NE(outcome.log.find("lab.toml: refusing to arm: [coupling] stiffness = 16000 N/m"),
               std::string::npos)
         << outcome.log;
-    EXPECT_NE(outcome.log.find("fail the encoder model"), std::string::npos) << outcome.log;
+    EXPECT_NE(outcome.log.find("fail the passive model"), std::string::npos) << outcome.log;
     EXPECT_NE(outcome.log.find("worst margin -"), std::string::npos) << outcome.log;
     EXPECT_NE(outcome.log.find(" Hz"), std::string::npos) << outcome.log;
     EXPECT_NE(outcome.log.find("haptic-tune size --mass 0.1 --damping 2 --rate 1000"),

@@ -21,7 +21,7 @@
 // noise until the handle bounces off the wall (a limit cycle: the wall only pushes); a
 // stable one stays at the count level. The daemon runs the paper's gains because the
 // config asks for check = "paper" (they pass the model they were sized with); the default
-// check = "encoder" refuses them (tested below).
+// check = "passive" refuses them (tested below).
 #include <gtest/gtest.h>
 
 #include <iostream>
@@ -108,11 +108,11 @@ TEST(HilPaperGains, GrowWithAHeavyHandWhileEncoderGainsDoNot) {
     expect_stable(stable);
 }
 
-// The daemon's own start-up check, with its default encoder model, refuses the paper's
+// The daemon's own start-up check, with its default passive model, refuses the paper's
 // gains before any force flows: the guard that the experiment above had to switch off.
-TEST(HilPaperGains, AreRefusedByTheDefaultEncoderCheck) {
+TEST(HilPaperGains, AreRefusedByTheDefaultPassiveCheck) {
     DaemonConfig config;
-    config.coupling = coupling_table(size_coupling("paper"), "encoder");
+    config.coupling = coupling_table(size_coupling("paper"), "passive");
     const ScratchDir dir;
     const DaemonRun run = run_hapticd(dir, {.config_toml = config.toml(),
                                             .scene_toml = wall_contact_scene(kWallStiffnessNPerM),

@@ -15,13 +15,15 @@
 
 namespace hapticd::testing {
 
-/// Sizes (k_c, b_c) with the `model` ("encoder" or "paper") at b_c = 0 (the default).
-/// Fails the calling test (and returns zeros) if haptic-tune fails.
+/// Sizes (k_c, b_c) with the `model` ("passive", "encoder" or "paper") at b_c = 0 (the
+/// default), without the exact cross-check (which rejects the paper's gains, exit 1: the
+/// HIL tests show the same in closed loop). Fails the calling test (and returns zeros) if
+/// haptic-tune fails.
 inline CouplingGains run_haptic_tune_size(std::string_view model) {
     const std::string command = shell_quote(HAPTIC_TUNE_BIN) + " size --mass " +
                                 toml_number(kPenMassKg) + " --damping " +
                                 toml_number(kPenDampingNsPerM) + " --rate " + toml_number(kRateHz) +
-                                " --model " + std::string(model) + " --json";
+                                " --model " + std::string(model) + " --json --no-exact-check";
     const CommandResult result = run_command(command);
     EXPECT_EQ(result.exit_code, 0) << command << "\n" << result.err;
     if (result.exit_code != 0) return {};
@@ -30,8 +32,7 @@ inline CouplingGains run_haptic_tune_size(std::string_view model) {
             .damping_n_s_per_m = sized.at("damping").get<double>()};
 }
 
-/// The same, sized once per test program and model (haptic-tune takes about 0.3 s: it
-/// holds its answer against the exact model's 67,522 cases).
+/// The same, sized once per test program and model.
 inline CouplingGains size_coupling(std::string_view model) {
     static std::map<std::string, CouplingGains, std::less<>> sized;
     const auto found = sized.find(model);

@@ -82,7 +82,7 @@ std::string to_lower(std::string text) {
 
 /// Closes a file descriptor once.
 class Fd {
-public:
+  public:
     explicit Fd(int fd = -1) : fd_(fd) {}
     Fd(const Fd&) = delete;
     Fd& operator=(const Fd&) = delete;
@@ -93,14 +93,14 @@ public:
         fd_ = -1;
     }
 
-private:
+  private:
     int fd_;
 };
 
 /// Ignores SIGPIPE while it lives, so a script that exits early makes write() fail with
 /// EPIPE instead of killing haptic-tune.
 class IgnoreSigpipe {
-public:
+  public:
     IgnoreSigpipe() {
         struct sigaction ignore {};
         ignore.sa_handler = SIG_IGN;
@@ -111,7 +111,7 @@ public:
     IgnoreSigpipe& operator=(const IgnoreSigpipe&) = delete;
     ~IgnoreSigpipe() { ::sigaction(SIGPIPE, &old_, nullptr); }
 
-private:
+  private:
     struct sigaction old_ {};
 };
 
@@ -119,17 +119,19 @@ private:
 
 void add_chart_options(CLI::App& command, ChartOptions& options) {
     add_device_options(command, options.device);
-    command.add_option("--stiffness", options.stiffness,
-                       "coupling stiffness k_c (N/m); default [coupling] stiffness from "
-                       "--config, else sized from (21) with the encoder model")
+    command
+        .add_option("--stiffness", options.stiffness,
+                    "coupling stiffness k_c (N/m); default [coupling] stiffness from "
+                    "--config, else sized from (21) with the passive model")
         ->check(non_negative_finite("N/m"));
-    command.add_option("--coupling-damping", options.coupling_damping,
-                       "coupling damping b_c (N s/m); default [coupling] damping from "
-                       "--config, else 0")
+    command
+        .add_option("--coupling-damping", options.coupling_damping,
+                    "coupling damping b_c (N s/m); default [coupling] damping from "
+                    "--config, else 0")
         ->check(non_negative_finite("N s/m"));
     command.add_option("--models", options.models,
-                       "comma-separated stability models to draw: paper, encoder "
-                       "(default paper,encoder)");
+                       "comma-separated stability models to draw: paper, encoder, passive "
+                       "(default paper,encoder,passive)");
     command.add_option("--out", options.out,
                        "chart file to write, .png or .svg (required unless --json)");
     command.add_option("--points", options.points, "frequencies on the chart (default 400)")
@@ -151,8 +153,7 @@ std::string chart_format(const std::string& path) {
     if (extension == ".png") return "png";
     if (extension == ".svg") return "svg";
     throw UsageError("--out " + path + ": unsupported file extension '" +
-                     std::filesystem::path(path).extension().string() +
-                     "' (allowed: .png, .svg)");
+                     std::filesystem::path(path).extension().string() + "' (allowed: .png, .svg)");
 }
 
 void check_writable(const std::string& path) {
@@ -171,8 +172,7 @@ void check_writable(const std::string& path) {
     fs::path directory = fs::path(path).parent_path();
     if (directory.empty()) directory = ".";
     if (!fs::is_directory(directory, error)) {
-        throw UsageError("--out " + path + ": directory " + directory.string() +
-                         " does not exist");
+        throw UsageError("--out " + path + ": directory " + directory.string() + " does not exist");
     }
     if (::access(directory.c_str(), W_OK | X_OK) != 0) {
         throw UsageError("--out " + path + ": directory " + directory.string() +
@@ -187,17 +187,19 @@ std::vector<theory::HoldModel> parse_model_list(const std::string& list) {
     while (std::getline(stream, item, ',')) {
         const std::string name = trim(item);
         if (name.empty()) {
-            throw UsageError("--models '" + list + "': empty model name (allowed: paper, encoder)");
+            throw UsageError("--models '" + list +
+                             "': empty model name (allowed: paper, encoder, passive)");
         }
         const std::optional<theory::HoldModel> model = theory::parse_hold_model(name);
         if (!model) {
-            throw UsageError("--models: unknown model '" + name + "' (allowed: paper, encoder)");
+            throw UsageError("--models: unknown model '" + name +
+                             "' (allowed: paper, encoder, passive)");
         }
         if (std::find(models.begin(), models.end(), *model) == models.end()) {
             models.push_back(*model);
         }
     }
-    if (models.empty()) throw UsageError("--models is empty (allowed: paper, encoder)");
+    if (models.empty()) throw UsageError("--models is empty (allowed: paper, encoder, passive)");
     return models;
 }
 
@@ -231,7 +233,7 @@ ImpedanceDesign resolve_impedance_design(const ChartOptions& options, const Desi
         tune::ImpedanceSizingRequest request;
         request.device = input.device;
         request.rate_hz = input.rate_hz;
-        request.model = theory::HoldModel::encoder;
+        request.model = {theory::HoldModel::passive, input.delay_periods()};
         request.coupling_damping_n_s_per_m = design.coupling.damping_n_s_per_m;
         const tune::ImpedanceSizing sizing = tune::size_impedance_coupling(request);
         design.coupling = sizing.coupling;
@@ -249,7 +251,7 @@ nlohmann::ordered_json design_json(const ImpedanceDesign& design) {
                                   {"damping", design.coupling.damping_n_s_per_m},
                                   {"source", design.source}};
     if (design.source == "sized") {
-        out["sizing_model"] = "encoder";
+        out["sizing_model"] = "passive";
         out["sizing_binding_frequency_hz"] = design.sized_binding_frequency_hz;
     }
     return out;
@@ -263,16 +265,15 @@ std::string format_number(double value) {
 
 std::string describe_design(const ImpedanceDesign& design) {
     std::string text = "k_c = " + format_number(design.coupling.stiffness_n_per_m) +
-                       " N/m, b_c = " + format_number(design.coupling.damping_n_s_per_m) +
-                       " N s/m";
-    if (design.source == "sized") text += " (sized from (21) with the encoder model)";
+                       " N/m, b_c = " + format_number(design.coupling.damping_n_s_per_m) + " N s/m";
+    if (design.source == "sized") text += " (sized from (21) with the passive model)";
     if (design.source == "config") text += " (from [coupling] in the config)";
     return text;
 }
 
 std::string describe_device(const DesignInput& input) {
-    return "m = " + format_number(input.device.mass_kg) + " kg, b = " +
-           format_number(input.device.damping_n_s_per_m) + " N s/m, " +
+    return "m = " + format_number(input.device.mass_kg) +
+           " kg, b = " + format_number(input.device.damping_n_s_per_m) + " N s/m, " +
            format_number(input.rate_hz) + " Hz servo";
 }
 
@@ -377,8 +378,7 @@ void render_chart(nlohmann::ordered_json chart, const std::string& out_path,
     std::error_code error;
     if (!std::filesystem::is_regular_file(out_path, error) ||
         std::filesystem::file_size(out_path, error) == 0) {
-        throw ChartError("chart script " + script + " reported success but wrote no " +
-                         out_path);
+        throw ChartError("chart script " + script + " reported success but wrote no " + out_path);
     }
 }
 

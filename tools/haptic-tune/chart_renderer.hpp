@@ -21,7 +21,7 @@ namespace hapticd::tools {
 /// The chart could not be drawn (no python, no matplotlib, the script failed). Reported
 /// like a usage error: exit 2, with what to install or what went wrong.
 class ChartError : public UsageError {
-public:
+  public:
     using UsageError::UsageError;
 };
 
@@ -30,7 +30,7 @@ struct ChartOptions {
     DeviceOptions device;
     std::optional<double> stiffness;         ///< k_c (N/m), impedance display
     std::optional<double> coupling_damping;  ///< b_c (N s/m)
-    std::string models = "paper,encoder";
+    std::string models = "paper,encoder,passive";
     std::string out;
     int points = 400;
     bool json = false;
@@ -49,7 +49,7 @@ std::string chart_format(const std::string& path);
 /// writable regular file; a new one needs an existing, writable directory.
 void check_writable(const std::string& path);
 
-/// "paper,encoder" -> the models in the given order, duplicates dropped; UsageError naming
+/// "paper,encoder,passive" -> the models in the given order, duplicates dropped; UsageError naming
 /// an unknown or empty entry.
 std::vector<theory::HoldModel> parse_model_list(const std::string& list);
 
@@ -61,18 +61,19 @@ std::vector<double> chart_frequencies_hz(double rate_hz, int points);
 struct ImpedanceDesign {
     theory::SpringDamperCoupling coupling;
     /// "flags" (--stiffness), "config" ([coupling] stiffness) or "sized" (neither given:
-    /// sized from (21) with the encoder model for the given damping).
+    /// sized from (21) with the passive model, and the delay, for the given damping).
     std::string source;
     double sized_binding_frequency_hz = 0.0;  ///< only for source == "sized"
 };
 /// k_c from --stiffness, else [coupling] stiffness, else size_impedance_coupling with the
-/// encoder model; b_c from --coupling-damping, else [coupling] damping, else 0.
+/// passive model and the input's delay; b_c from --coupling-damping, else [coupling] damping, else
+/// 0.
 ImpedanceDesign resolve_impedance_design(const ChartOptions& options, const DesignInput& input);
 
 /// JSON of the design, for --json and the chart.
 nlohmann::ordered_json design_json(const ImpedanceDesign& design);
 
-/// "k_c = 4000 N/m, b_c = 0 N s/m" and, when sized, "(sized with the encoder model)".
+/// "k_c = 4000 N/m, b_c = 0 N s/m" and, when sized, "(sized with the passive model)".
 std::string describe_design(const ImpedanceDesign& design);
 /// "m = 0.1 kg, b = 2 N s/m, 1000 Hz servo".
 std::string describe_device(const DesignInput& input);

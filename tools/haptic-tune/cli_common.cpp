@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "device_file.hpp"
+#include "hapticd/tune/input_checks.hpp"
 
 namespace hapticd::tools {
 namespace {
@@ -22,8 +23,8 @@ CLI::Validator numeric_range(std::string allowed, std::function<bool(double)> ok
             } catch (const std::exception&) {
                 return "value '" + text + "' is not a number (" + unit + ")";
             }
-            if (!ok(value)) return "value " + text + " is out of range: allowed " + allowed +
-                                   " (" + unit + ")";
+            if (!ok(value))
+                return "value " + text + " is out of range: allowed " + allowed + " (" + unit + ")";
             return {};
         },
         allowed + " " + unit);
@@ -32,19 +33,20 @@ CLI::Validator numeric_range(std::string allowed, std::function<bool(double)> ok
 }  // namespace
 
 CLI::Validator positive_finite(std::string unit) {
-    return numeric_range("finite and > 0", [](double v) { return std::isfinite(v) && v > 0.0; },
-                         std::move(unit));
+    return numeric_range(
+        "finite and > 0", [](double v) { return std::isfinite(v) && v > 0.0; }, std::move(unit));
 }
 
 CLI::Validator non_negative_finite(std::string unit) {
-    return numeric_range("finite and >= 0",
-                         [](double v) { return std::isfinite(v) && v >= 0.0; }, std::move(unit));
+    return numeric_range(
+        "finite and >= 0", [](double v) { return std::isfinite(v) && v >= 0.0; }, std::move(unit));
 }
 
 void add_device_options(CLI::App& command, DeviceOptions& options) {
-    command.add_option("--config", options.config_path,
-                       "hapticd config file to take [device.model], [servo] rate_hz and "
-                       "[coupling] from; flags override it")
+    command
+        .add_option("--config", options.config_path,
+                    "hapticd config file to take [device.model], [servo] rate_hz and "
+                    "[coupling] from; flags override it")
         ->check(CLI::ExistingFile);
     command.add_option("--mass", options.mass_kg, "device mass m (kg)")
         ->check(positive_finite("kg"));
@@ -52,6 +54,28 @@ void add_device_options(CLI::App& command, DeviceOptions& options) {
         ->check(positive_finite("N s/m"));
     command.add_option("--rate", options.rate_hz, "servo rate 1/T (Hz)")
         ->check(positive_finite("Hz"));
+}
+
+void add_delay_option(CLI::App& command, DeviceOptions& options) {
+    command
+        .add_option("--delay", options.delay_s,
+                    "loop delay (s) from the encoder sample to the force taking effect, "
+                    "beyond the zero-order hold; 0 <= delay < 10 periods (default "
+                    "[device.model] delay, else 0; haptic-tune diag measures it)")
+        ->check(non_negative_finite("s"));
+}
+
+void add_model_option(CLI::App& command, std::string& model,
+                      const std::vector<std::string>& allowed) {
+    std::string list;
+    for (const std::string& name : allowed) list += (list.empty() ? "" : ", ") + name;
+    model = allowed.front();
+    command
+        .add_option("--model", model,
+                    "stability model: " + list + " (default " + allowed.front() +
+                        ": holds for every passive operator and environment; paper and "
+                        "encoder reproduce the paper and compare models, they are no guarantee)")
+        ->check(CLI::IsMember(allowed));
 }
 
 DesignInput resolve_design_input(const DeviceOptions& options) {
@@ -64,12 +88,26 @@ DesignInput resolve_design_input(const DeviceOptions& options) {
         throw UsageError(std::string("missing ") + what);
     };
     DesignInput input;
-    input.device.mass_kg = pick(options.mass_kg, file.mass_kg, "--mass (or [device.model] mass in --config)");
+    input.device.mass_kg =
+        pick(options.mass_kg, file.mass_kg, "--mass (or [device.model] mass in --config)");
     input.device.damping_n_s_per_m = pick(options.damping_n_s_per_m, file.damping_n_s_per_m,
                                           "--damping (or [device.model] damping in --config)");
     input.rate_hz = pick(options.rate_hz, file.rate_hz, "--rate (or [servo] rate_hz in --config)");
     input.coupling_stiffness_n_per_m = file.coupling_stiffness_n_per_m;
     input.coupling_damping_n_s_per_m = file.coupling_damping_n_s_per_m;
+    input.delay_s = options.delay_s.value_or(file.delay_s.value_or(0.0));
+    try {
+        tune::check_device(input.device);
+        tune::check_rate(input.rate_hz);
+    } catch (const std::invalid_argument& error) {
+        throw UsageError(error.what());
+    }
+    if (!(input.delay_s >= 0.0 && input.delay_periods() < 10.0)) {
+        std::ostringstream message;
+        message << "--delay " << input.delay_s << " s is out of range: allowed >= 0 and < 10 "
+                << "periods (" << 10.0 / input.rate_hz << " s at " << input.rate_hz << " Hz)";
+        throw UsageError(message.str());
+    }
     return input;
 }
 

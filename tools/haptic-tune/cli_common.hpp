@@ -25,7 +25,7 @@ struct Invocation {
 
 /// Bad input found after parsing (a missing value, an inconsistent combination).
 class UsageError : public std::runtime_error {
-public:
+  public:
     using std::runtime_error::runtime_error;
 };
 
@@ -41,16 +41,27 @@ struct DeviceOptions {
     std::optional<double> mass_kg;
     std::optional<double> damping_n_s_per_m;
     std::optional<double> rate_hz;
+    std::optional<double> delay_s;  ///< --delay, where the command takes it
 };
 void add_device_options(CLI::App& command, DeviceOptions& options);
+/// --delay SECONDS: the loop delay from the encoder sample to the force taking effect,
+/// beyond the zero-order hold ([device.model] delay in a config).
+void add_delay_option(CLI::App& command, DeviceOptions& options);
+
+/// --model for size/check/plot: `allowed` (the first is the default, passive).
+void add_model_option(CLI::App& command, std::string& model,
+                      const std::vector<std::string>& allowed);
 
 struct DesignInput {
     theory::DeviceModel device;
     double rate_hz = 0.0;
     std::optional<double> coupling_stiffness_n_per_m;  ///< from [coupling] if present
     std::optional<double> coupling_damping_n_s_per_m;
+    double delay_s = 0.0;  ///< checked: >= 0 and < 10 periods
+    double delay_periods() const { return delay_s * rate_hz; }
 };
-/// Merges the config file and the flags; throws UsageError naming what is missing.
+/// Merges the config file and the flags; throws UsageError naming what is missing or a
+/// value out of its range (device, rate, delay).
 DesignInput resolve_design_input(const DeviceOptions& options);
 
 /// Prints `fields` as aligned "key  value" lines, or as one JSON object with --json.

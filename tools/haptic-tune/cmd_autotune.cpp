@@ -43,6 +43,7 @@ struct AutotuneCliOptions {
     std::string hapticd_path;
     double margin = tune::kDefaultAutotuneMargin;
     bool optimize_damping = false;
+    std::optional<double> delay_s;  ///< --delay; default [device.model] delay
     bool dry_run = false;
     bool json = false;
 };
@@ -284,8 +285,9 @@ nlohmann::ordered_json outcome_json(const Outcome& o) {
         {"backup", o.backup_path.empty() ? nlohmann::ordered_json(nullptr)
                                          : nlohmann::ordered_json(o.backup_path)},
         {"verified", r.verified},
-        {"model", "encoder"},
+        {"model", "passive"},
         {"rate_hz", r.rate_hz},
+        {"delay_s", r.delay_periods / r.rate_hz},
         {"margin", r.margin},
         {"optimize_damping", r.optimize_damping},
         {"binding_axis", r.binding().identified.axis},
@@ -334,9 +336,10 @@ void print_text(const Outcome& o) {
                   << number_text(id.estimate.offset_n, 3) << " +- "
                   << number_text(id.std_error.offset_n, 2) << " N\n";
     }
-    std::cout << "largest stable coupling (encoder model, "
+    std::cout << "largest stable coupling (passive model, "
               << (r.optimize_damping ? "optimised damping" : "b_c = 0") << ", [servo] rate_hz "
-              << number_text(r.rate_hz) << " Hz):\n";
+              << number_text(r.rate_hz) << " Hz, loop delay "
+              << number_text(r.delay_periods / r.rate_hz * 1e3) << " ms):\n";
     for (const tune::AutotuneAxis& a : r.axes) {
         std::cout << "  axis " << a.identified.axis << ": k_c "
                   << number_text(a.bound.coupling.stiffness_n_per_m) << " +- "
@@ -394,8 +397,14 @@ int run_autotune(const AutotuneCliOptions& o) {
     }
     const std::string original = read_file(o.config_path);
     options.rate_hz = config.servo.rate_hz;
+    options.delay_periods = o.delay_s.value_or(config.device.model_delay_s) * config.servo.rate_hz;
     options.identification.force_limit_n = config.safety.max_force_n;
-    options.validate();
+    try {
+        options.validate();
+    } catch (const std::invalid_argument& e) {
+        throw AutotuneError(std::string(e.what()) +
+                            " ([device.model] delay or --delay x [servo] rate_hz)");
+    }
 
     Outcome outcome;
     outcome.config_path = o.config_path;
@@ -461,13 +470,17 @@ int run_autotune(const AutotuneCliOptions& o) {
     // Edit the text, then hold the edited config to what the daemon will check at start-up.
     daemon::EditedConfig edited;
     try {
-        edited =
-            daemon::edit_config_text(original,
-                                     {{"device.model", "mass", result.device.mass_kg},
-                                      {"device.model", "damping", result.device.damping_n_s_per_m},
-                                      {"coupling", "stiffness", result.coupling.stiffness_n_per_m},
-                                      {"coupling", "damping", result.coupling.damping_n_s_per_m}},
-                                     o.config_path);
+        std::vector<daemon::ConfigEdit> edits{
+            {"device.model", "mass", result.device.mass_kg},
+            {"device.model", "damping", result.device.damping_n_s_per_m},
+            {"coupling", "stiffness", result.coupling.stiffness_n_per_m},
+            {"coupling", "damping", result.coupling.damping_n_s_per_m}};
+        // The delay the gains were sized for goes with them (a zero delay that neither the
+        // config nor --delay stated is not added).
+        if (o.delay_s || options.delay_periods > 0.0) {
+            edits.push_back({"device.model", "delay", options.delay_periods / options.rate_hz});
+        }
+        edited = daemon::edit_config_text(original, edits, o.config_path);
     } catch (const daemon::ConfigEditError& e) {
         throw AutotuneError(std::string(e.what()) + "; nothing was written");
     }
@@ -518,8 +531,9 @@ void add_autotune_command(CLI::App& app, Invocation& invocation) {
     CLI::App* command = app.add_subcommand(
         "autotune",
         "Identify the device (from --log, or from a `hapticd --identify` run it starts), size "
-        "the coupling with the encoder model and a safety margin, verify it with the exact "
-        "model, and write [device.model] mass, damping and [coupling] stiffness, damping into "
+        "the coupling with the passive model (with the loop delay) and a safety margin, verify "
+        "it with the exact model, and write [device.model] mass, damping, delay and [coupling] "
+        "stiffness, damping into "
         "the config, keeping its comments, with a backup (FILE.bak, or FILE.bak.N if that "
         "exists). Exit 0 written, 1 the exact model rejects the gains (nothing written), 2 bad "
         "input, a log that cannot identify the device or a failed run (nothing written). "
@@ -558,8 +572,14 @@ void add_autotune_command(CLI::App& app, Invocation& invocation) {
             },
             "(0, 1]"));
     command->add_flag("--optimize-damping", options->optimize_damping,
-                      "size the best (k_c, b_c) pair instead of k_c at b_c = 0 (the exact model "
-                      "rejects it above a margin of about 0.77; docs/autotune.md)");
+                      "size the best (k_c, b_c) pair instead of k_c at b_c = 0 (with no delay "
+                      "the best pair has b_c = 0; docs/autotune.md)");
+    command
+        ->add_option("--delay", options->delay_s,
+                     "loop delay (s) from the encoder sample to the force taking effect, "
+                     "beyond the hold (default [device.model] delay, else 0; measure it with "
+                     "haptic-tune diag); written to [device.model] delay")
+        ->check(non_negative_finite("s"));
     command->add_flag("--dry-run", options->dry_run,
                       "identify, size, verify and print the changes, but do not write");
     command->add_flag("--json", options->json, "print the result as JSON");

@@ -14,9 +14,24 @@ struct CheckOptions {
     DeviceOptions device;
     std::optional<double> stiffness;
     std::optional<double> coupling_damping;
-    std::string model = "encoder";
+    std::string model;
     bool json = false;
 };
+
+/// What a verdict rests on: the class of operators and environments it holds for.
+std::string holds_for(const std::string& model) {
+    if (model == "passive") {
+        return "every passive operator and every passive environment (Colgate and Schenkel's "
+               "sampled-data passivity condition)";
+    }
+    if (model == "exact") {
+        return "the operators and environments of the exact model's sweep and its synthesised "
+               "adversaries (multi-mode operators on the aliases, worst lossless environments)";
+    }
+    return "no class: the " + model +
+           " model keeps one term of the hold's alias sum and is not a guarantee "
+           "(docs/stability-models.md)";
+}
 
 int run_check(const CheckOptions& o) {
     const DesignInput input = resolve_design_input(o.device);
@@ -33,13 +48,13 @@ int run_check(const CheckOptions& o) {
     if (coupling.stiffness_n_per_m == 0.0 && coupling.damping_n_s_per_m == 0.0) {
         throw UsageError("--stiffness 0 with --coupling-damping 0 is no coupling at all");
     }
-    tune::check_device(input.device);
-    tune::check_rate(input.rate_hz);
+    tune::check_coupling_gains(coupling);
 
     nlohmann::ordered_json out;
     bool stable = false;
     if (o.model == "exact") {
-        const tune::ExactCheck exact = tune::check_exact(input.device, coupling, input.rate_hz);
+        const tune::ExactCheck exact =
+            tune::check_exact(input.device, coupling, input.rate_hz, input.delay_periods());
         stable = exact.stable;
         out = {{"unconditionally_stable", exact.stable},
                {"worst_margin", exact.worst_margin},
@@ -51,14 +66,17 @@ int run_check(const CheckOptions& o) {
                {"cases_checked", exact.cases_checked}};
     } else {
         const theory::HoldModel model = *theory::parse_hold_model(o.model);
-        const theory::CouplingCheck check =
-            theory::check_coupling(input.device, coupling, model, input.rate_hz);
+        const theory::CouplingCheck check = theory::check_coupling(
+            input.device, coupling, {model, input.delay_periods()}, input.rate_hz);
         stable = check.unconditionally_stable;
         out = {{"unconditionally_stable", check.unconditionally_stable},
                {"worst_margin", check.worst_margin},
                {"worst_frequency_hz", check.worst_frequency_hz},
                {"model", o.model}};
     }
+    out["holds_for"] = holds_for(o.model);
+    out["delay_s"] = input.delay_s;
+    out["delay_periods"] = input.delay_periods();
     out["stiffness"] = coupling.stiffness_n_per_m;
     out["damping"] = coupling.damping_n_s_per_m;
     out["device"] = {{"mass", input.device.mass_kg}, {"damping", input.device.damping_n_s_per_m}};
@@ -74,19 +92,17 @@ void add_check_command(CLI::App& app, Invocation& invocation) {
     CLI::App* command = app.add_subcommand(
         "check", "Check a coupling design; exit 0 if unconditionally stable, 1 if not");
     add_device_options(*command, options->device);
+    add_delay_option(*command, options->device);
     command->add_option("--stiffness", options->stiffness, "coupling stiffness k_c (N/m)")
         ->check(non_negative_finite("N/m"));
-    command->add_option("--coupling-damping", options->coupling_damping,
-                        "coupling damping b_c (N s/m), default 0")
+    command
+        ->add_option("--coupling-damping", options->coupling_damping,
+                     "coupling damping b_c (N s/m), default 0")
         ->check(non_negative_finite("N s/m"));
-    command->add_option("--model", options->model,
-                        "stability model: paper (13), encoder (exact ZOH and backward "
-                        "difference) or exact (closed-loop eigenvalues over an operator sweep)")
-        ->check(CLI::IsMember({"paper", "encoder", "exact"}));
+    add_model_option(*command, options->model, {"passive", "exact", "paper", "encoder"});
     command->add_flag("--json", options->json, "print the result as JSON");
-    command->callback([options, &invocation] {
-        invocation.run = [options] { return run_check(*options); };
-    });
+    command->callback(
+        [options, &invocation] { invocation.run = [options] { return run_check(*options); }; });
 }
 
 }  // namespace hapticd::tools

@@ -13,8 +13,8 @@ namespace hapticd::tools {
 namespace {
 
 nlohmann::ordered_json model_curve(const DesignInput& input, const ImpedanceDesign& design,
-                                   theory::HoldModel model,
-                                   const std::vector<double>& frequencies) {
+                                   theory::HoldModel hold, const std::vector<double>& frequencies) {
+    const theory::LoopModel model{hold, input.delay_periods()};
     const double period = 1.0 / input.rate_hz;
     const double b = input.device.damping_n_s_per_m;
     std::vector<double> bound;
@@ -43,9 +43,9 @@ nlohmann::ordered_json model_curve(const DesignInput& input, const ImpedanceDesi
         {"marker",
          {{"frequency_hz", marker_hz},
           {"bound", theory::conductance_bound(model, b, marker_theta)},
-          {"conductance", theory::coupling_conductance(design.coupling.stiffness_n_per_m,
-                                                       design.coupling.damping_n_s_per_m,
-                                                       marker_theta, period)}}},
+          {"conductance",
+           theory::coupling_conductance(design.coupling.stiffness_n_per_m,
+                                        design.coupling.damping_n_s_per_m, marker_theta, period)}}},
     };
 }
 
@@ -69,13 +69,14 @@ int run_plot(const ChartOptions& o) {
         per_model[std::string(theory::to_string(model))] =
             model_curve(input, design, model, frequencies);
     }
-    const std::string title = "Design procedure, (21): " + describe_device(input) + "\n" +
-                              describe_design(design);
+    const std::string title =
+        "Design procedure, (21): " + describe_device(input) + "\n" + describe_design(design);
     nlohmann::ordered_json chart = {
         {"kind", "design-procedure"},
         {"title", title},
         {"device", {{"mass", input.device.mass_kg}, {"damping", input.device.damping_n_s_per_m}}},
         {"rate_hz", input.rate_hz},
+        {"delay_s", input.delay_s},
         {"nyquist_hz", theory::nyquist_hz(period)},
         {"design", design_json(design)},
         {"frequency_hz", frequencies},
@@ -93,7 +94,7 @@ int run_plot(const ChartOptions& o) {
         {"stiffness", design.coupling.stiffness_n_per_m},
         {"damping", design.coupling.damping_n_s_per_m},
         {"coupling_source", design.source == "sized"
-                                ? "sized from (21) with the encoder model (no --stiffness, "
+                                ? "sized from (21) with the passive model (no --stiffness, "
                                   "no [coupling] stiffness)"
                                 : design.source},
         {"device", {{"mass", input.device.mass_kg}, {"damping", input.device.damping_n_s_per_m}}},
@@ -117,9 +118,9 @@ void add_plot_command(CLI::App& app, Invocation& invocation) {
         "Chart the design procedure of (21): the least coupling conductance each stability "
         "model needs against frequency, and the coupling's Re(1/Z_c)");
     add_chart_options(*command, *options);
-    command->callback([options, &invocation] {
-        invocation.run = [options] { return run_plot(*options); };
-    });
+    add_delay_option(*command, options->device);
+    command->callback(
+        [options, &invocation] { invocation.run = [options] { return run_plot(*options); }; });
 }
 
 }  // namespace hapticd::tools

@@ -1,9 +1,10 @@
 #include "device_file.hpp"
 
+#include <toml++/toml.h>
+
 #include <cmath>
 #include <set>
 #include <sstream>
-#include <toml++/toml.h>
 
 namespace hapticd::tools {
 namespace {
@@ -58,11 +59,12 @@ DeviceFile read_device_file(const std::string& path) {
     const toml::table* model = root["device"]["model"].as_table();
     const toml::table* servo = root["servo"].as_table();
     const toml::table* coupling = root["coupling"].as_table();
-    reject_unknown_keys(path, model, "device.model", {"mass", "damping"});
+    reject_unknown_keys(path, model, "device.model", {"mass", "damping", "delay"});
     reject_unknown_keys(path, coupling, "coupling", {"stiffness", "damping", "check"});
     DeviceFile file;
     file.mass_kg = read_number(path, model, "device.model", "mass", false, "kg");
     file.damping_n_s_per_m = read_number(path, model, "device.model", "damping", false, "N s/m");
+    file.delay_s = read_number(path, model, "device.model", "delay", true, "s");
     file.rate_hz = read_number(path, servo, "servo", "rate_hz", false, "Hz");
     file.coupling_stiffness_n_per_m =
         read_number(path, coupling, "coupling", "stiffness", true, "N/m");

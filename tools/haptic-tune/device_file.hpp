@@ -10,16 +10,17 @@
 namespace hapticd::tools {
 
 class ConfigError : public std::runtime_error {
-public:
+  public:
     using std::runtime_error::runtime_error;
 };
 
 struct DeviceFile {
-    std::optional<double> mass_kg;                    ///< [device.model] mass
-    std::optional<double> damping_n_s_per_m;          ///< [device.model] damping
-    std::optional<double> rate_hz;                    ///< [servo] rate_hz
-    std::optional<double> coupling_stiffness_n_per_m; ///< [coupling] stiffness
-    std::optional<double> coupling_damping_n_s_per_m; ///< [coupling] damping
+    std::optional<double> mass_kg;                     ///< [device.model] mass
+    std::optional<double> damping_n_s_per_m;           ///< [device.model] damping
+    std::optional<double> rate_hz;                     ///< [servo] rate_hz
+    std::optional<double> coupling_stiffness_n_per_m;  ///< [coupling] stiffness
+    std::optional<double> coupling_damping_n_s_per_m;  ///< [coupling] damping
+    std::optional<double> delay_s;                     ///< [device.model] delay
 };
 
 /// Throws ConfigError for unreadable TOML, wrong types, out-of-range values and unknown

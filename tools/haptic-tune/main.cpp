@@ -41,6 +41,9 @@ int main(int argc, char** argv) {
         std::cerr << "haptic-tune: infeasible: " << error.what() << '\n';
     } catch (const std::invalid_argument& error) {
         std::cerr << "haptic-tune: invalid input: " << error.what() << '\n';
+    } catch (const std::exception& error) {
+        // Anything else is a failure of the computation on this input, never a crash.
+        std::cerr << "haptic-tune: error: " << error.what() << '\n';
     }
     return kExitUsage;
 }

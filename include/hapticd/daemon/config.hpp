@@ -3,10 +3,14 @@
 //   [servo]        rate_hz (Hz, 100..20000), realtime ("enforce"|"warn"|"off"),
 //                  priority (SCHED_FIFO 1..99), cpu (core to pin the servo thread to, >= 0)
 //   [device]       plugin (a name such as "sim", or a path to a .so), axes (1..3)
-//   [device.model] mass (kg, > 0), damping (N s/m, > 0): the model the start-up check uses
+//   [device.model] mass (kg, 1e-4..1e3), damping (N s/m, 1e-4..1e4): the model the start-up
+//                  check uses; delay (s, >= 0 and < 10 periods, default 0): the time from
+//                  the encoder sample to the force taking effect, beyond the hold
+//                  (haptic-tune diag measures it)
 //   [device.<plugin>]  the plugin's own table, handed to it as TOML text; it validates it
 //   [coupling]     stiffness (N/m, >= 0), damping (N s/m, >= 0),
-//                  check ("paper"|"encoder"|"exact"|"off", the start-up stability model),
+//                  check ("passive" (default)|"exact"|"paper"|"encoder"|"off", the start-up
+//                  stability model; paper and encoder are not a guarantee and say so),
 //                  enabled (default true; false: no coupling, the scene's forces act on the
 //                  device directly: the conventional design, for experiments; needs
 //                  check = "off" and no gains)
@@ -57,6 +61,7 @@ struct DeviceSection {
     int axes = 1;
     std::optional<double> model_mass_kg;
     std::optional<double> model_damping_n_s_per_m;
+    double model_delay_s = 0.0;  ///< sample to force, beyond the hold
     /// [device.<plugin>] as TOML text (empty when absent), for the plugin to validate.
     std::string plugin_table_toml;
 };
@@ -65,7 +70,7 @@ struct CouplingSection {
     bool enabled = true;
     double stiffness_n_per_m = 0.0;
     double damping_n_s_per_m = 0.0;
-    std::string check = "encoder";
+    std::string check = "passive";
 };
 
 struct SafetySection {

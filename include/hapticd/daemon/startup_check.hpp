@@ -12,7 +12,10 @@ namespace hapticd::daemon {
 struct StartupCheck {
     bool passed = false;
     bool skipped = false;  ///< check = "off": nothing was checked
-    std::string model;     ///< "paper", "encoder" or "exact"
+    std::string model;     ///< "passive", "exact", "paper" or "encoder"
+    /// passive and exact hold for every passive operator; paper and encoder do not.
+    bool guarantee = true;
+    double delay_s = 0.0;  ///< the loop delay the check assumed ([device.model] delay)
     double worst_margin = 0.0;
     double worst_frequency_hz = 0.0;
     std::string worst_case;  ///< exact model: the operator and environment

@@ -2,11 +2,17 @@
 // damping b, sampled with a zero-order hold, coupled to the virtual environment by the
 // spring-damper virtual coupling (16).
 //
-// The hold term is where the stability models differ (DESIGN.md):
+// The hold term is where the stability models differ (DESIGN.md, docs/stability-models.md):
 //   HoldModel::paper   ZOH(z) = (1/2)(z + 1)/z, (13) as printed;
 //   HoldModel::encoder e^{-jθ/2} sinc(θ/2), the exact zero-order hold, times the same
 //                      factor again for the backward-difference velocity, which averages
-//                      the true velocity over the last period:  e^{-jθ} sinc²(θ/2).
+//                      the true velocity over the last period:  e^{-jθ} sinc²(θ/2);
+//   HoldModel::passive e^{-j(1+d)θ}: the whole alias sum of the hold, Colgate and Schenkel's
+//                      sampled-data passivity condition worst-cased over every passive
+//                      environment (passive_model.hpp; exact for whole-period delays, and
+//                      for a fraction of a period through M(θ) there).
+// A loop delay of d periods beyond the hold (sample to force) multiplies the hold term by
+// e^{-jdθ} for `paper` and `encoder`; `passive` treats it exactly.
 // All functions take the normalised frequency θ = ωT, 0 < θ <= π.
 #pragma once
 
@@ -14,6 +20,7 @@
 #include <optional>
 #include <string_view>
 
+#include "hapticd/theory/passive_model.hpp"
 #include "hapticd/theory/twoport.hpp"
 #include "hapticd/theory/unit_circle.hpp"
 
@@ -32,10 +39,21 @@ struct SpringDamperCoupling {
 };
 
 /// Which hold term stands in for (13).
-enum class HoldModel { paper, encoder };
+enum class HoldModel { paper, encoder, passive };
 
+/// "paper", "encoder", "passive".
 std::string_view to_string(HoldModel model);
 std::optional<HoldModel> parse_hold_model(std::string_view name);
+
+/// A frequency-domain stability model of the impedance display: the hold term, and the
+/// loop's delay beyond the hold in periods (from the encoder sample to the force taking
+/// effect; 0 <= d < 10, validated by the caller). A bare HoldModel means no delay.
+struct LoopModel {
+    HoldModel hold = HoldModel::passive;
+    double delay_periods = 0.0;
+    LoopModel(HoldModel hold_model = HoldModel::passive, double delay = 0.0)  // NOLINT: implicit
+        : hold(hold_model), delay_periods(delay) {}
+};
 
 /// (12): Z_dI(z) = (m s + b) with s -> (2/T)(z-1)/(z+1). Its real part is b on the
 /// unit circle, which is why Tustin preserves passivity.
@@ -52,11 +70,12 @@ Complex device_impedance(const DeviceModel& device, HoldModel model, double thet
 Complex coupling_impedance(const SpringDamperCoupling& coupling, double theta,
                            double sample_period_s);
 
-/// The hold term: (13) for HoldModel::paper, e^{-jθ} sinc²(θ/2) for HoldModel::encoder.
-Complex hold_term(HoldModel model, double theta);
+/// The hold term: (13) for HoldModel::paper, e^{-jθ} sinc²(θ/2) for HoldModel::encoder,
+/// e^{-jθ} for HoldModel::passive; times e^{-jdθ} for a delay of d periods.
+Complex hold_term(const LoopModel& model, double theta);
 
 /// (14): hybrid matrix of the sampled impedance display without a coupling.
-TwoPort impedance_display(const DeviceModel& device, HoldModel model, double theta,
+TwoPort impedance_display(const DeviceModel& device, const LoopModel& model, double theta,
                           double sample_period_s);
 
 /// (17): hybrid matrix of the virtual coupling network alone.
@@ -65,37 +84,44 @@ TwoPort coupling_network(const SpringDamperCoupling& coupling, double theta,
 
 /// (18): hybrid matrix of the haptic interface, display and coupling in cascade.
 TwoPort impedance_interface(const DeviceModel& device, const SpringDamperCoupling& coupling,
-                            HoldModel model, double theta, double sample_period_s);
+                            const LoopModel& model, double theta, double sample_period_s);
 
 // ---- (21) in real arithmetic ---------------------------------------------------------
 // The sizing solver differentiates these with Ceres jets, so they are templates on the
 // scalar type and use only +, -, *, /, sin, cos, tan, sqrt.
 
-/// (1 - cos∠H)|H|, the numerator of the right side of (21), for the hold term H.
+/// (1 - cos∠H)|H|, the numerator of the right side of (21), for the hold term H; for the
+/// passive model M(θ) of passive_model.hpp, which is that with H = e^{-j(1+d)θ} when the
+/// delay is a whole number of periods.
 template <typename S>
-S hold_bound_numerator(HoldModel model, const S& theta) {
+S hold_bound_numerator(const LoopModel& model, const S& theta) {
     using std::cos;
     using std::sin;
+    const double d = model.delay_periods;
     // 1 - cos(x) is written 2 sin²(x/2) to keep its precision as θ -> 0.
-    if (model == HoldModel::paper) {
-        // ∠ZOH = -θ/2, |ZOH| = cos(θ/2).
-        const S s = sin(theta / 4.0);
+    if (model.hold == HoldModel::paper) {
+        // ∠ZOH = -θ/2 - dθ, |ZOH| = cos(θ/2).
+        const S s = sin((0.5 + d) * theta / 2.0);
         return 2.0 * s * s * cos(theta / 2.0);
     }
-    // ∠H = -θ, |H| = sinc²(θ/2).
-    const S s = sin(theta / 2.0);
-    const S sc = sinc(S(theta / 2.0));
-    return 2.0 * s * s * sc * sc;
+    if (model.hold == HoldModel::encoder) {
+        // ∠H = -(1 + d)θ, |H| = sinc²(θ/2).
+        const S s = sin((1.0 + d) * theta / 2.0);
+        const S sc = sinc(S(theta / 2.0));
+        return 2.0 * s * s * sc * sc;
+    }
+    return passive_hold_numerator(theta, d);
 }
 
-/// Group delay of the hold term in samples: H ≈ e^{-j τ θ} as θ -> 0, so the numerator of
-/// (21) behaves like τ² θ²/2 there. τ = 1/2 for (13), 1 for the encoder model.
-double hold_delay_samples(HoldModel model);
+/// Group delay of the hold term in samples: the numerator of (21) behaves like τ² θ²/2 as
+/// θ -> 0. τ = 1/2 + d for (13), 1 + d for the encoder model, and passive_delay_samples(d)
+/// (1 with no delay) for the passive model.
+double hold_delay_samples(const LoopModel& model);
 
 /// Right side of (21): the least coupling conductance Re(1/Z_c) the device needs,
 ///   (1 - cos∠H)|H| / (2 Re Z_dI),  with Re Z_dI = b.
 template <typename S>
-S conductance_bound(HoldModel model, double device_damping_n_s_per_m, const S& theta) {
+S conductance_bound(const LoopModel& model, double device_damping_n_s_per_m, const S& theta) {
     return hold_bound_numerator(model, theta) / (2.0 * device_damping_n_s_per_m);
 }
 
@@ -115,11 +141,11 @@ S coupling_conductance(const S& stiffness_n_per_m, const S& damping_n_s_per_m, c
 /// Relative margin of (21) at θ: Re(1/Z_c) / bound - 1. Equal to the Llewellyn margin of
 /// (18) (tested); >= 0 means (21) holds at θ. +inf where the bound is zero.
 double coupling_margin(const DeviceModel& device, const SpringDamperCoupling& coupling,
-                       HoldModel model, double theta, double sample_period_s);
+                       const LoopModel& model, double theta, double sample_period_s);
 
 /// Limit of coupling_margin as θ -> 0+, where both sides of (21) vanish like θ²:
 ///   Re(1/Z_c) ~ (b_c + k_c T/2) θ² / (k_c T)²,  bound ~ τ² θ² / (4 b).
 double coupling_margin_at_dc(const DeviceModel& device, const SpringDamperCoupling& coupling,
-                             HoldModel model, double sample_period_s);
+                             const LoopModel& model, double sample_period_s);
 
 }  // namespace hapticd::theory

@@ -17,6 +17,6 @@ struct CouplingCheck {
 /// Checks (19)-(21) for the device at `rate_hz` on a dense grid (with the f -> 0 limit),
 /// refining the worst point. `grid_points` trades speed for resolution.
 CouplingCheck check_coupling(const DeviceModel& device, const SpringDamperCoupling& coupling,
-                             HoldModel model, double rate_hz, int grid_points = 4096);
+                             const LoopModel& model, double rate_hz, int grid_points = 4096);
 
 }  // namespace hapticd::theory

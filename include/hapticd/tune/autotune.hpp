@@ -2,9 +2,9 @@
 // to coupling gains that the `exact` model confirms.
 //
 //   1. identify every axis of the log (identification.hpp);
-//   2. size the coupling of each axis alone with the `encoder` model (coupling_sizing.hpp):
-//      b_c = 0 by default (the only b_c at which the encoder model is exact; with damping
-//      it is optimistic at Nyquist, docs/stability-models.md), or the optimised pair;
+//   2. size the coupling of each axis alone with the `passive` model (coupling_sizing.hpp):
+//      with the loop's delay, b_c = 0 by default (with no delay the passive optimum), or
+//      the optimised pair;
 //   3. the binding axis is the one whose bound stiffness is smallest (ties: the lowest
 //      index); the coupling is margin x its bound stiffness, with its b_c;
 //   4. hold that coupling against the `exact` model on every axis's identified device.
@@ -25,7 +25,7 @@
 
 namespace hapticd::tune {
 
-/// The default safety margin: the coupling stiffness is 90 % of the largest the `encoder`
+/// The default safety margin: the coupling stiffness is 90 % of the largest the `passive`
 /// model allows for the identified device, as in the project's example configs. The 10 %
 /// covers the identification's error (m and b within 2 %, refused beyond 5 % standard
 /// error) and a drift of b of the same order (temperature, pose) before the bound is met.
@@ -37,11 +37,14 @@ struct AutotuneOptions {
     double rate_hz = 1000.0;
     /// k_c = margin x the binding axis's bound stiffness; in (0, 1].
     double margin = kDefaultAutotuneMargin;
-    /// false: b_c = 0. true: the encoder model's optimised (k_c, b_c) pair of the binding
-    /// axis; the margin scales k_c only (less b_c would lower the low-frequency bound
-    /// k_c T/2 < b + b_c). The `exact` model refuses this pair unless the margin is low
-    /// enough (about 0.77 for any m and b at b_c = 0.31 b; docs/autotune.md).
+    /// false: b_c = 0. true: the passive model's optimised (k_c, b_c) pair of the binding
+    /// axis; the margin scales k_c only. With no delay the optimum is b_c = 0 (against every
+    /// passive operator, coupling damping buys no stiffness: docs/stability-models.md);
+    /// with a delay it is positive.
     bool optimize_damping = false;
+    /// The loop's delay beyond the hold, in periods ([device.model] delay x rate_hz):
+    /// 0 <= d < 10. The sizing and the exact check both include it.
+    double delay_periods = 0.0;
     IdentificationOptions identification;
 
     /// Throws std::invalid_argument naming the option, the value and the allowed range.
@@ -80,11 +83,12 @@ struct AutotuneResult {
     /// The binding axis's (rounded) device: what [device.model] should say, so that the
     /// daemon's start-up check re-checks the binding case.
     theory::DeviceModel device;
-    theory::SpringDamperCoupling bound;  ///< the binding axis's encoder bound
+    theory::SpringDamperCoupling bound;  ///< the binding axis's passive bound
     /// (margin x bound k_c, bound b_c), rounded: what to write.
     theory::SpringDamperCoupling coupling;
     double margin = 0.0;
     double rate_hz = 0.0;
+    double delay_periods = 0.0;  ///< the loop delay sized and checked for
     bool optimize_damping = false;
 
     /// The exact model finds `coupling` stable on every axis. When false, do not write it.

@@ -21,7 +21,7 @@ namespace hapticd::tune {
 
 /// The requested coupling cannot satisfy the condition; what() says why.
 class InfeasibleCoupling : public std::runtime_error {
-public:
+  public:
     using std::runtime_error::runtime_error;
 };
 
@@ -36,7 +36,7 @@ struct SizingReport {
 struct ImpedanceSizingRequest {
     theory::DeviceModel device;
     double rate_hz = 1000.0;
-    theory::HoldModel model = theory::HoldModel::encoder;
+    theory::LoopModel model{theory::HoldModel::passive};
     /// b_c to size k_c for; nullopt asks for the best (k_c, b_c) pair.
     std::optional<double> coupling_damping_n_s_per_m = 0.0;
 };

@@ -5,15 +5,22 @@
 // environments. It is the ground truth the `paper` and `encoder` models are held against.
 //
 // One servo tick n, as modelled (and as the runtime must implement it):
-//   x_d[n]  sampled encoder position (no quantisation, no computation delay: the force
-//           F[n] is applied from t = nT and held until (n+1)T, the exact ZOH);
+//   x_d[n]  sampled encoder position (no quantisation); the force F[n] computed from it acts
+//           from t = nT + D and is held until (n+1)T + D, the exact ZOH shifted by the loop
+//           delay D = (q + φ) T (q whole periods, 0 <= φ < 1; D = 0 by default). Within a
+//           period the plant sees F[n-q-1] for φT, then F[n-q]: both pieces are sampled
+//           exactly (two matrix exponentials);
 //   v_d[n] = (x_d[n] - x_d[n-1]) / T                                     backward difference
 //   F[n]   = k_c (x_d[n] - x_e[n]) + b_c (v_d[n] - v_e[n])               coupling (16)
 //   the device obeys  m dv/dt + b v = F_h - F[n]  (10): positive F pushes the handle back,
 //   and the same F pulls the environment toward the handle (+F on it along +x).
 //
-// Environments (discrete, in the tick; both passive, see Definition 2):
+// Environments (discrete, in the tick; all passive, see Definition 2):
 //   rigid wall:    x_e = v_e = 0 (persistent contact, linearised), F = k_c x_d + b_c v_d.
+//   lossless mass-spring: m_e, k_e (and b_e) integrated by the trapezoidal rule, i.e. the
+//     impedance m_e s + b_e + k_e/s with s -> (2/T)(z-1)/(z+1) on the backward-difference
+//     v_e: Re Z_e = b_e on the unit circle, so with b_e = 0 it stores and returns every
+//     joule (the worst passive environments are lossless; passive_model.hpp);
 //   mass-spring:   virtual mass m_e on a spring k_e to ground with damper b_e, driven by F.
 //     It is integrated by implicit (backward) Euler, with the coupling force taken at the
 //     END of the step, i.e. solved together with the environment:
@@ -37,6 +44,10 @@
 //   heavy hand:     mass m_h rigidly on the handle, damper b_h to ground.
 //   stiff grasp:    mass m_h rigidly on the handle, spring k_h and damper b_h to ground.
 //   two-mass grasp: handle --(skin k_s, b_s)-- hand mass m_h --(arm k_a, b_a)-- ground.
+//   multi-mode grasp: a rigid mass m_h with k_h, b_h to ground, and absorbers on the handle,
+//                   handle --(k_i, b_i)-- m_i: any lossless operator is such a network
+//                   (Foster's reactance theorem, mechanically). Built by synthesis in
+//                   operator_synthesis.hpp, with its modes on the aliases of a frequency.
 //
 // Default sweep (log-spaced grids; the zero dampings are the classic worst cases):
 //   heavy hand      m_h 0.1..10 kg (9), b_h {0, 0.3, 1, 3, 10} N s/m                    45
@@ -78,22 +89,31 @@
 
 namespace hapticd::tune {
 
-enum class OperatorFamily { hands_off, heavy_hand, stiff_grasp, two_mass_grasp };
+enum class OperatorFamily { hands_off, heavy_hand, stiff_grasp, two_mass_grasp, multi_mode };
 
-/// "hands-off", "heavy hand", "stiff grasp", "two-mass grasp".
+/// "hands-off", "heavy hand", "stiff grasp", "two-mass grasp", "multi-mode grasp".
 std::string_view to_string(OperatorFamily family);
+
+/// A multi-mode grasp's absorber: handle --(stiffness, damping)-- mass.
+struct OperatorMode {
+    double mass_kg = 0.0;            ///< > 0
+    double stiffness_n_per_m = 0.0;  ///< > 0
+    double damping_n_s_per_m = 0.0;  ///< >= 0
+};
 
 /// A passive human operator. Only the fields its family uses may be non-zero
 /// (closed_loop_poles rejects the others, so a typo cannot be silently ignored).
 struct OperatorModel {
     OperatorFamily family = OperatorFamily::hands_off;
-    double hand_mass_kg = 0.0;            ///< heavy hand, stiff grasp, two-mass grasp
-    double hand_damping_n_s_per_m = 0.0;  ///< heavy hand, stiff grasp (to ground)
-    double hand_stiffness_n_per_m = 0.0;  ///< stiff grasp (to ground)
+    double hand_mass_kg = 0.0;            ///< heavy hand, stiff grasp, two-mass, multi-mode
+    double hand_damping_n_s_per_m = 0.0;  ///< heavy hand, stiff grasp, multi-mode (to ground)
+    double hand_stiffness_n_per_m = 0.0;  ///< stiff grasp, multi-mode (to ground)
     double skin_stiffness_n_per_m = 0.0;  ///< two-mass grasp: handle to hand
     double skin_damping_n_s_per_m = 0.0;  ///< two-mass grasp: handle to hand
     double arm_stiffness_n_per_m = 0.0;   ///< two-mass grasp: hand to ground
     double arm_damping_n_s_per_m = 0.0;   ///< two-mass grasp: hand to ground
+    std::vector<OperatorMode> modes;      ///< multi-mode grasp: the absorbers
+    std::string origin;                   ///< multi-mode grasp: how it was built (for describe)
 
     static OperatorModel hands_off();
     static OperatorModel heavy_hand(double hand_mass_kg, double hand_damping_n_s_per_m);
@@ -102,6 +122,9 @@ struct OperatorModel {
     static OperatorModel two_mass_grasp(double skin_stiffness_n_per_m,
                                         double skin_damping_n_s_per_m, double hand_mass_kg,
                                         double arm_stiffness_n_per_m, double arm_damping_n_s_per_m);
+    static OperatorModel multi_mode(double hand_mass_kg, double hand_stiffness_n_per_m,
+                                    double hand_damping_n_s_per_m, std::vector<OperatorMode> modes,
+                                    std::string origin);
 
     /// For example "stiff grasp (m_h = 1 kg, k_h = 1000 N/m, b_h = 0 N s/m)".
     std::string describe() const;
@@ -109,15 +132,19 @@ struct OperatorModel {
 
 /// A passive virtual environment, run in the servo tick (update in the file comment).
 struct EnvironmentModel {
-    enum class Kind { rigid_wall, mass_spring };
+    enum class Kind { rigid_wall, mass_spring, lossless_mass_spring };
     Kind kind = Kind::rigid_wall;
-    double mass_kg = 0.0;            ///< mass-spring: m_e >= 0
-    double stiffness_n_per_m = 0.0;  ///< mass-spring: k_e > 0 (grounds the loop)
-    double damping_n_s_per_m = 0.0;  ///< mass-spring: b_e >= 0
+    double mass_kg = 0.0;            ///< m_e >= 0
+    double stiffness_n_per_m = 0.0;  ///< k_e > 0 (grounds the loop)
+    double damping_n_s_per_m = 0.0;  ///< b_e >= 0
 
     static EnvironmentModel rigid_wall();
+    /// Implicit Euler (the servo's own environments): dissipative.
     static EnvironmentModel mass_spring(double mass_kg, double stiffness_n_per_m,
                                         double damping_n_s_per_m = 0.0);
+    /// Trapezoidal rule: lossless when b_e = 0.
+    static EnvironmentModel lossless_mass_spring(double mass_kg, double stiffness_n_per_m,
+                                                 double damping_n_s_per_m = 0.0);
 
     /// For example "mass-spring (m_e = 0.1 kg, k_e = 1000 N/m, b_e = 0 N s/m)".
     std::string describe() const;
@@ -130,11 +157,13 @@ struct ClosedLoopPoles {
     std::vector<theory::Complex> eigenvalues;
 };
 
-/// The closed loop of device + operator + coupling + environment. Throws
-/// std::invalid_argument naming the offending value for non-physical input.
+/// The closed loop of device + operator + coupling + environment, with a loop delay of
+/// `delay_periods` (0 <= d < 10) beyond the hold. Throws std::invalid_argument naming the
+/// offending value for non-physical input.
 ClosedLoopPoles closed_loop_poles(const theory::DeviceModel& device,
                                   const theory::SpringDamperCoupling& coupling, double rate_hz,
-                                  const OperatorModel& human, const EnvironmentModel& environment);
+                                  const OperatorModel& human, const EnvironmentModel& environment,
+                                  double delay_periods = 0.0);
 
 /// A spectral radius up to 1 + this counts as stable: the only unit-circle eigenvalue the
 /// models produce is the simple z = 1 of a free handle (k_c = 0), marginal and therefore
@@ -154,6 +183,7 @@ struct ExactCheck {
     OperatorModel worst_operator;
     EnvironmentModel worst_environment;
     int cases_checked = 0;
+    double delay_periods = 0.0;  ///< the loop delay the check assumed
 };
 
 /// The tuned steel grips depend on the device mass and the rate (see the file comment).
@@ -167,10 +197,19 @@ std::vector<EnvironmentModel> default_environment_sweep(const theory::DeviceMode
 ExactCheck check_exact(const theory::DeviceModel& device,
                        const theory::SpringDamperCoupling& coupling, double rate_hz,
                        const std::vector<OperatorModel>& operators,
-                       const std::vector<EnvironmentModel>& environments);
+                       const std::vector<EnvironmentModel>& environments,
+                       double delay_periods = 0.0);
 
-/// check_exact over the default sweep.
+/// check_exact over the default sweep, plus the adversaries synthesised for this design
+/// (operator_synthesis.hpp): the worst lossless environment at each frequency where the
+/// passive bound binds (and a spread of others), met by the default operators, and
+/// multi-mode grasps with their modes on the aliases of those frequencies, met by the rigid
+/// wall and those environments.
 ExactCheck check_exact(const theory::DeviceModel& device,
-                       const theory::SpringDamperCoupling& coupling, double rate_hz);
+                       const theory::SpringDamperCoupling& coupling, double rate_hz,
+                       double delay_periods = 0.0);
+
+/// Throws std::invalid_argument unless 0 <= delay_periods < 10 (and finite).
+void check_delay_periods(double delay_periods);
 
 }  // namespace hapticd::tune

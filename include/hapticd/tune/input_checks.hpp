@@ -11,7 +11,23 @@ namespace hapticd::tune {
 void check_positive(std::string_view name, double value, std::string_view unit);
 void check_non_negative(std::string_view name, double value, std::string_view unit);
 void check_positive_or_infinite(std::string_view name, double value, std::string_view unit);
+void check_in_range(std::string_view name, double value, double lo, double hi,
+                    std::string_view unit);
+
+// Physical ranges. Every input that reaches a solver or an eigenvalue problem is held to
+// one, not merely to "finite": outside them the numbers mean nothing for a haptic device
+// and the numerics (matrix exponentials, eigenvalues) lose their footing.
+inline constexpr double kMinDeviceMassKg = 1e-4, kMaxDeviceMassKg = 1e3;
+inline constexpr double kMinDeviceDamping = 1e-4, kMaxDeviceDamping = 1e4;  // N s/m
+inline constexpr double kMinRateHz = 10.0, kMaxRateHz = 1e5;
+inline constexpr double kMaxCouplingStiffness = 1e9;  // N/m
+inline constexpr double kMaxCouplingDamping = 1e5;    // N s/m
+
+/// m in [1e-4, 1e3] kg, b in [1e-4, 1e4] N s/m.
 void check_device(const theory::DeviceModel& device);
+/// [10, 1e5] Hz.
 void check_rate(double rate_hz);
+/// k_c in [0, 1e9] N/m, b_c in [0, 1e5] N s/m.
+void check_coupling_gains(const theory::SpringDamperCoupling& coupling);
 
 }  // namespace hapticd::tune

@@ -1,0 +1,176 @@
+#include "hapticd/tune/operator_synthesis.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+
+#include "hapticd/theory/coupling_check.hpp"
+#include "hapticd/theory/passive_model.hpp"
+
+namespace hapticd::tune {
+namespace {
+
+using theory::Complex;
+constexpr double kPi = std::numbers::pi;
+
+/// Absorbers of the free-handle part: zeros of the handle's reactance on `zeros`.
+void add_free_handle_modes(double device_mass_kg, const std::vector<double>& zeros,
+                           std::vector<OperatorMode>& modes) {
+    const std::size_t n = zeros.size();
+    std::vector<double> poles(n);
+    poles[0] = zeros[0] / std::sqrt(2.0);
+    for (std::size_t i = 1; i < n; ++i) poles[i] = std::sqrt(zeros[i - 1] * zeros[i]);
+    // C = m Π Ω_j²/p_i², so that X_0(ω) -> m ω as ω -> ∞.
+    double c = device_mass_kg;
+    for (std::size_t i = 0; i < n; ++i) c *= (zeros[i] * zeros[i]) / (poles[i] * poles[i]);
+    for (std::size_t i = 0; i < n; ++i) {
+        const double p2 = poles[i] * poles[i];
+        double residue = c * p2;
+        for (std::size_t j = 0; j < n; ++j) residue *= 1.0 - p2 / (zeros[j] * zeros[j]);
+        for (std::size_t l = 0; l < n; ++l) {
+            if (l != i) residue /= 1.0 - p2 / (poles[l] * poles[l]);
+        }
+        modes.push_back({residue / p2, residue, 0.0});
+    }
+}
+
+}  // namespace
+
+std::vector<double> alias_frequencies_rad_per_s(double theta, double rate_hz, int count) {
+    std::vector<double> aliases;
+    for (int k = -count; k <= count; ++k) aliases.push_back(std::abs(theta + 2.0 * kPi * k));
+    std::sort(aliases.begin(), aliases.end());
+    aliases.erase(std::unique(aliases.begin(), aliases.end(),
+                              [](double a, double b) { return std::abs(a - b) < 1e-9 * (a + b); }),
+                  aliases.end());
+    aliases.erase(std::remove(aliases.begin(), aliases.end(), 0.0), aliases.end());
+    aliases.resize(static_cast<std::size_t>(count));
+    for (double& a : aliases) a *= rate_hz;
+    return aliases;
+}
+
+OperatorModel alias_tuned_operator(const theory::DeviceModel& device, double theta, double rate_hz,
+                                   int aliases, double reactance_n_s_per_m) {
+    if (!(theta > 0.0 && theta <= kPi) || aliases < 1) {
+        throw std::invalid_argument("alias_tuned_operator: need 0 < θ <= π and >= 1 alias");
+    }
+    const double period = 1.0 / rate_hz;
+    std::vector<OperatorMode> modes;
+    const std::vector<double> zeros = alias_frequencies_rad_per_s(theta, rate_hz, aliases);
+    add_free_handle_modes(device.mass_kg, zeros, modes);
+    double rigid_mass = 0.0;
+    double ground_stiffness = 0.0;
+    // A reactance below a billionth of the device mass's at the first alias is rounding.
+    const double x = std::abs(reactance_n_s_per_m) < 1e-9 * device.mass_kg * zeros[0]
+                         ? 0.0
+                         : reactance_n_s_per_m;
+    const int terms = aliases / 2 + 2;
+    if (x != 0.0 && std::isfinite(x)) {
+        const double residue_per_a = 4.0 / period;
+        if (x > 0.0) {
+            // A tan(ωT/2) = Σ_k (4A/T) ω / (((2k+1)π/T)² - ω²), A = X / tan(θ/2).
+            const double a = x / std::tan(theta / 2.0);
+            double kept = 0.0;
+            for (int k = 0; k < terms; ++k) {
+                const double pole = (2 * k + 1) * kPi / period;
+                modes.push_back({a * residue_per_a / (pole * pole), a * residue_per_a, 0.0});
+                kept += 1.0 / ((k + 0.5) * (k + 0.5));
+            }
+            rigid_mass = a * period / (kPi * kPi) * (kPi * kPi / 2.0 - kept);
+        } else {
+            // -A cot(ωT/2) = -2A/(ωT) + Σ_{k>=1} (4A/T) ω / ((2kπ/T)² - ω²), A = -X tan(θ/2).
+            const double a = -x * std::tan(theta / 2.0);
+            ground_stiffness = 2.0 * a / period;
+            double kept = 0.0;
+            for (int k = 1; k <= terms; ++k) {
+                const double pole = 2.0 * k * kPi / period;
+                modes.push_back({a * residue_per_a / (pole * pole), a * residue_per_a, 0.0});
+                kept += 1.0 / (double(k) * k);
+            }
+            rigid_mass = a * period / (kPi * kPi) * (kPi * kPi / 6.0 - kept);
+        }
+    }
+    std::ostringstream origin;
+    origin << "free-handle modes on " << aliases << " aliases of "
+           << theory::frequency_hz(theta, period) << " Hz, reactance " << x << " N s/m there";
+    return OperatorModel::multi_mode(rigid_mass, ground_stiffness, 0.0, std::move(modes),
+                                     origin.str());
+}
+
+EnvironmentModel lossless_environment_with_admittance(double theta, double rate_hz,
+                                                      double admittance_imag) {
+    if (!(theta > 0.0 && theta < kPi) || admittance_imag == 0.0 ||
+        !std::isfinite(admittance_imag)) {
+        throw std::invalid_argument(
+            "lossless_environment_with_admittance: need 0 < θ < π and a finite admittance != 0");
+    }
+    const double period = 1.0 / rate_hz;
+    // Trapezoidal m_e s + k_e/s on the unit circle: j [m_e (2/T) tan(θ/2) - k_e (T/2) cot(θ/2)].
+    const double mass_gain = 2.0 / period * std::tan(theta / 2.0);
+    const double spring_gain = period / 2.0 / std::tan(theta / 2.0);
+    const double reactance = -1.0 / admittance_imag;  // Z_e = 1/(j h) = -j/h
+    // The other element takes a thousandth of the reactance, so that the environment is
+    // both grounded (k_e > 0) and has mass.
+    if (reactance > 0.0) {
+        const double ke = 1e-3 * reactance / spring_gain;
+        return EnvironmentModel::lossless_mass_spring((reactance + ke * spring_gain) / mass_gain,
+                                                      ke);
+    }
+    const double me = 1e-3 * -reactance / mass_gain;
+    return EnvironmentModel::lossless_mass_spring(me, (me * mass_gain - reactance) / spring_gain);
+}
+
+Adversaries synthesize_adversaries(const theory::DeviceModel& device,
+                                   const theory::SpringDamperCoupling& coupling, double rate_hz,
+                                   double delay_periods) {
+    const double period = 1.0 / rate_hz;
+    const theory::LoopDelay delay = theory::split_delay(delay_periods);
+    // Below 0.01 rad (1.6 Hz at 1 kHz) the aliases of θ sit a thousand times apart, and the
+    // synthesised modes span masses beyond what the eigenvalue problem resolves; the low
+    // band's bound is the θ -> 0 limit, which 0.01 already meets to 1e-5.
+    constexpr double kLowestTheta = 0.01;
+    std::vector<double> thetas{kPi, 2.0 * kPi / 3.0, kPi / 2.0, 0.3, 0.1, 0.03, kLowestTheta};
+    const theory::CouplingCheck passive = theory::check_coupling(
+        device, coupling, {theory::HoldModel::passive, delay_periods}, rate_hz, 1024);
+    const double worst = theory::normalized_frequency(passive.worst_frequency_hz, period);
+    const bool known = std::any_of(thetas.begin(), thetas.end(),
+                                   [&](double t) { return std::abs(t - worst) < 1e-3; });
+    if (worst > kLowestTheta && !known) thetas.push_back(worst);
+
+    Adversaries out;
+    for (const double theta : thetas) {
+        const Complex zc = theory::coupling_impedance(coupling, theta, period);
+        const Complex rotation = std::polar(1.0, -(1.0 + delay.whole_periods) * theta);
+        std::vector<double> reactances{(-zc * rotation).imag()};  // the rigid wall's
+        const double conductance = (1.0 / zc).real();
+        if (conductance > 0.0 && theta < kPi * (1.0 - 1e-9)) {
+            // The worst passive environment at θ: Z = c u, u = 2 cos χ e^{jχ} on the boundary
+            // of the disk |u - 1| <= 1, c = 1/(2 Re(1/Z_c)) (passive_model.hpp).
+            const double chi = theory::passive_detail::worst_boundary_angle(
+                theta, delay.whole_periods, delay.fraction);
+            const Complex z = std::polar(2.0 * std::cos(chi) / (2.0 * conductance), chi);
+            const double admittance = (1.0 / z - 1.0 / zc).imag();
+            // Within a millionth of rigid (or of free) the rigid wall (or the coupling's own
+            // spring) is the same case, and the environment's numbers would not be physical.
+            const double relative = std::abs(admittance) * std::abs(zc);
+            if (relative > 1e-6 && relative < 1e6) {
+                out.environments.push_back(
+                    lossless_environment_with_admittance(theta, rate_hz, admittance));
+            }
+            reactances.push_back((-z * rotation).imag());
+        }
+        for (const double x : reactances) {
+            for (const int aliases : {1, 2, 4, 8, 16}) {
+                // Low in the band the 16th alias is 1000 times the first, and the modes'
+                // masses then span more than the eigenvalues resolve (rounding reaches 1e-9).
+                if (aliases > 8 && theta < 0.1) continue;
+                out.operators.push_back(alias_tuned_operator(device, theta, rate_hz, aliases, x));
+            }
+        }
+    }
+    return out;
+}
+
+}  // namespace hapticd::tune
