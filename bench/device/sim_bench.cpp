@@ -54,14 +54,21 @@ void lockstep_tick(benchmark::State& state, HumanFamily family, double coulomb_n
         benchmark::DoNotOptimize(sample);
     }
     state.SetItemsProcessed(state.iterations());
-    state.counters["ns_per_tick"] = benchmark::Counter(
-        static_cast<double>(state.iterations()), benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+    state.counters["ns_per_tick"] =
+        benchmark::Counter(static_cast<double>(state.iterations()),
+                           benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
 
 void BM_SimLockstepHandsOff(benchmark::State& s) { lockstep_tick(s, HumanFamily::hands_off, 0.0); }
-void BM_SimLockstepStiffGrasp(benchmark::State& s) { lockstep_tick(s, HumanFamily::stiff_grasp, 0.0); }
-void BM_SimLockstepTwoMassGrasp(benchmark::State& s) { lockstep_tick(s, HumanFamily::two_mass_grasp, 0.0); }
-void BM_SimLockstepHandsOffCoulomb(benchmark::State& s) { lockstep_tick(s, HumanFamily::hands_off, 0.2); }
+void BM_SimLockstepStiffGrasp(benchmark::State& s) {
+    lockstep_tick(s, HumanFamily::stiff_grasp, 0.0);
+}
+void BM_SimLockstepTwoMassGrasp(benchmark::State& s) {
+    lockstep_tick(s, HumanFamily::two_mass_grasp, 0.0);
+}
+void BM_SimLockstepHandsOffCoulomb(benchmark::State& s) {
+    lockstep_tick(s, HumanFamily::hands_off, 0.2);
+}
 
 BENCHMARK(BM_SimLockstepHandsOff)->Arg(1)->Arg(3);
 BENCHMARK(BM_SimLockstepStiffGrasp)->Arg(1)->Arg(3);

@@ -1,11 +1,12 @@
 // The [device.sim] table: defaults, every key read, and errors that name the file, the key,
 // the value and the allowed range.
+#include "hapticd/device/sim/sim_config.hpp"
+
 #include <gtest/gtest.h>
 
 #include <stdexcept>
 #include <string>
 
-#include "hapticd/device/sim/sim_config.hpp"
 #include "hapticd/device/sim/sim_device.hpp"
 
 namespace hapticd::device::sim {
@@ -77,7 +78,7 @@ late_probability = 0.02
 late_by = 0.002
 seed = 99
 )",
-                                                    2));
+                                                2));
     EXPECT_EQ(c.mass_kg, 0.25);
     EXPECT_EQ(c.damping_n_s_per_m, 3.0);
     EXPECT_EQ(c.counts_per_meter, 40000.0);
@@ -127,7 +128,7 @@ hand_mass = 0.0
 hand_stiffness = 700
 [[human]]
 )",
-                                                    3));
+                                                3));
     EXPECT_EQ(c.human[0].family, HumanFamily::heavy_hand);
     EXPECT_EQ(c.human[0].hand_mass_kg, 1.0);
     EXPECT_EQ(c.human[0].hand_damping_n_s_per_m, 2.0);
@@ -154,7 +155,8 @@ TEST(SimConfig, OutOfRangeValuesNameFileKeyValueAndRange) {
     EXPECT_NE(e.find("> 0"), std::string::npos) << e;
     EXPECT_NE(e.find("kg"), std::string::npos) << e;
 
-    EXPECT_NE(error_of("damping = -1").find("device.sim.damping = -1 is not allowed: must be a number >= 0"),
+    EXPECT_NE(error_of("damping = -1")
+                  .find("device.sim.damping = -1 is not allowed: must be a number >= 0"),
               std::string::npos);
     EXPECT_NE(error_of("counts_per_meter = 0").find("device.sim.counts_per_meter = 0"),
               std::string::npos);
@@ -169,9 +171,11 @@ TEST(SimConfig, OutOfRangeValuesNameFileKeyValueAndRange) {
     EXPECT_NE(error_of("[human]\nmodel = \"stiff-grasp\"\nhand_stiffness = -5")
                   .find("device.sim.human.hand_stiffness = -5"),
               std::string::npos);
-    EXPECT_NE(error_of("[faults]\ndrop_probability = 1.5").find("device.sim.faults.drop_probability = 1.5"),
+    EXPECT_NE(error_of("[faults]\ndrop_probability = 1.5")
+                  .find("device.sim.faults.drop_probability = 1.5"),
               std::string::npos);
-    EXPECT_NE(error_of("[faults]\njump_axis = 1").find("an integer from 0 to 0"), std::string::npos);
+    EXPECT_NE(error_of("[faults]\njump_axis = 1").find("an integer from 0 to 0"),
+              std::string::npos);
     EXPECT_NE(error_of("[faults]\ndrop_at = [0.1, -2]").find("device.sim.faults.drop_at = -2"),
               std::string::npos);
     const std::string model = error_of("[human]\nmodel = \"firm-grip\"");
@@ -182,11 +186,13 @@ TEST(SimConfig, OutOfRangeValuesNameFileKeyValueAndRange) {
 TEST(SimConfig, UnknownKeysAreErrors) {
     const std::string e = error_of("mass = 0.1\nmas = 0.2");
     EXPECT_NE(e.find("lab.toml: device.sim.mas is not a known key"), std::string::npos) << e;
-    EXPECT_NE(error_of("[human]\nmodel = \"heavy-hand\"\nhand_mas = 1").find("device.sim.human.hand_mas"),
-              std::string::npos);
+    EXPECT_NE(
+        error_of("[human]\nmodel = \"heavy-hand\"\nhand_mas = 1").find("device.sim.human.hand_mas"),
+        std::string::npos);
     EXPECT_NE(error_of("[faults]\ndisconnect = 1.0").find("device.sim.faults.disconnect"),
               std::string::npos);
-    EXPECT_NE(error_of("[human]\nmodel = \"stiff-grasp\"\npush = { too = 1 }").find("device.sim.human.push.too"),
+    EXPECT_NE(error_of("[human]\nmodel = \"stiff-grasp\"\npush = { too = 1 }")
+                  .find("device.sim.human.push.too"),
               std::string::npos);
     EXPECT_NE(error_of("[[human]]\n[[human]]\n[[human]]\nmodel = \"heavy-hand\"\nfoo = 1", 3)
                   .find("device.sim.human[2].foo"),
@@ -208,7 +214,8 @@ TEST(SimConfig, KeysTheModelDoesNotUseAreErrors) {
 
 TEST(SimConfig, BadDeviceSettingsAndBadTomlAreErrors) {
     EXPECT_NE(error_of("", 4).find("lab.toml: device.axes = 4"), std::string::npos);
-    EXPECT_NE(error_of("mass = ").find("lab.toml: [device.sim] is not valid TOML"), std::string::npos);
+    EXPECT_NE(error_of("mass = ").find("lab.toml: [device.sim] is not valid TOML"),
+              std::string::npos);
     EXPECT_NE(error_of("human = 3").find("device.sim.human = 3"), std::string::npos);
     EXPECT_NE(error_of("[[human]]\n[[human]]", 3).find("3 tables [[device.sim.human]]"),
               std::string::npos);

@@ -1,7 +1,6 @@
 // The sim's real-time contract and its realtime clock: read()/write() never allocate, and on
 // the realtime clock the physics follows CLOCK_MONOTONIC exactly.
 #include <gtest/gtest.h>
-
 #include <time.h>
 
 #include <cmath>
@@ -59,7 +58,7 @@ TEST(SimRealtime, ReadAndWriteNeverAllocateInLockstep) {
     }
     EXPECT_EQ(allocations, 0u);
     EXPECT_EQ(dev.read(s), IoResult::disconnected);  // it did get through every fault
-    {  // the guard itself sees an allocation
+    {                                                // the guard itself sees an allocation
         AllocationGuard guard;
         int* volatile p = new int(3);  // volatile: the allocation cannot be elided
         delete p;
@@ -120,7 +119,8 @@ TEST(SimRealtime, PhysicsFollowsTheMonotonicClockExactly) {
         const double t = s.device_time_s - t_w, decay = -std::expm1(-t / tau);
         const double x = F / b * (t - tau * decay);
         EXPECT_NEAR(dev.plant(0).state().position_m, x, 1e-12 * x);
-        EXPECT_EQ(s.encoder_counts[0], static_cast<std::int64_t>(std::floor(dev.plant(0).state().position_m * 1e9)));
+        EXPECT_EQ(s.encoder_counts[0],
+                  static_cast<std::int64_t>(std::floor(dev.plant(0).state().position_m * 1e9)));
     }
     EXPECT_EQ(s.sequence, 2u);  // one per read on this clock
     dev.close();

@@ -2,9 +2,8 @@
 
 #include <time.h>
 
-#include <cerrno>
-
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <limits>
 
@@ -73,7 +72,8 @@ double SimDevice::time_s() const noexcept { return units_to_s(units_); }
 
 std::uint64_t SimDevice::now_units() const noexcept {
     const double elapsed_s = static_cast<double>(monotonic_ns() - open_time_ns_) * 1e-9;
-    const double units = std::floor(elapsed_s * config_.rate_hz * static_cast<double>(kUnitsPerPeriod));
+    const double units =
+        std::floor(elapsed_s * config_.rate_hz * static_cast<double>(kUnitsPerPeriod));
     return units > 0.0 ? static_cast<std::uint64_t>(units) : 0;
 }
 
@@ -114,9 +114,9 @@ IoResult SimDevice::read(Sample& sample) noexcept {
     if (!lockstep) advance_to(now_units());
     const double time_s = units_to_s(units_);
     const std::uint64_t sequence = lockstep ? units_ >> kFractionBits : samples_produced_++;
-    const double previous_s =
-        lockstep ? (sequence == 0 ? kMinusInfinity : time_s - config_.period_s())
-                 : previous_sample_time_s_;
+    const double previous_s = lockstep
+                                  ? (sequence == 0 ? kMinusInfinity : time_s - config_.period_s())
+                                  : previous_sample_time_s_;
     previous_sample_time_s_ = time_s;
     const FaultVerdict verdict = faults_.evaluate(previous_s, time_s, sequence);
 

@@ -53,7 +53,7 @@ inline constexpr std::uint64_t kUnitsPerPeriod = std::uint64_t{1} << kFractionBi
 inline constexpr int kCoulombSubstepBits = 5;
 
 class AxisPlant {
-public:
+  public:
     /// Mechanical state of one axis. For the single-mass families the hand moves with the
     /// handle and hand_position_m / hand_velocity_mps stay 0.
     struct State {
@@ -88,7 +88,7 @@ public:
     /// x_s, v_s). For tests (it is the discrete plant the `exact` model samples).
     Eigen::Matrix<double, 4, 7> period_transition() const { return transition_[0]; }
 
-private:
+  private:
     using Transition = Eigen::Matrix<double, 4, 7>;
 
     /// One exact linear step of length T 2^-k with total handle force f and set-point
@@ -101,11 +101,12 @@ private:
     /// The net force on the handle other than friction, at the current state with v = 0.
     double resting_handle_force_n(double force_n, double set_point_velocity_mps) const noexcept;
 
-    std::array<Transition, kFractionBits + 1> transition_{};  ///< e^{M T 2^-k}, rows 0..3
+    std::array<Transition, kFractionBits + 1> transition_{};        ///< e^{M T 2^-k}, rows 0..3
     std::array<Transition, kFractionBits + 1> stuck_transition_{};  ///< same, handle clamped
-    std::array<double, kFractionBits + 1> step_s_{};          ///< T 2^-k
-    Eigen::Matrix<double, 1, 7> acceleration_row_ = Eigen::Matrix<double, 1, 7>::Zero();  ///< row v of M
-    double handle_mass_kg_ = 1.0;  ///< the mass the handle's equation divides by
+    std::array<double, kFractionBits + 1> step_s_{};                ///< T 2^-k
+    Eigen::Matrix<double, 1, 7> acceleration_row_ =
+        Eigen::Matrix<double, 1, 7>::Zero();  ///< row v of M
+    double handle_mass_kg_ = 1.0;             ///< the mass the handle's equation divides by
     double coulomb_n_ = 0.0;
     HumanModel human_;
     double mass_kg_ = 1.0;

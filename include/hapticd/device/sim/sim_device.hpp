@@ -32,7 +32,7 @@
 namespace hapticd::device::sim {
 
 class SimDevice final : public Device {
-public:
+  public:
     /// Parses config.plugin_table_toml (parse_sim_config), then opens.
     void open(const DeviceConfig& config) override;
     /// The non-plugin way in, for unit tests: an already validated configuration.
@@ -51,7 +51,7 @@ public:
     const std::array<double, kMaxAxes>& held_force_n() const noexcept { return held_force_n_; }
     bool is_open() const noexcept { return open_; }
 
-private:
+  private:
     /// Advances every axis to `units` (T 2^-20 since open) under the held force.
     void advance_to(std::uint64_t units) noexcept;
     /// Realtime: the current CLOCK_MONOTONIC time in units since open.
@@ -64,10 +64,10 @@ private:
     FaultInjector faults_;
     std::array<double, kMaxAxes> held_force_n_{};
     std::array<std::int64_t, kMaxAxes> last_fresh_counts_{};
-    std::uint64_t units_ = 0;               ///< physics time since open, T 2^-20
-    std::int64_t open_time_ns_ = 0;          ///< realtime: CLOCK_MONOTONIC at open()
-    std::uint64_t samples_produced_ = 0;     ///< realtime: sequence of the next sample
-    double previous_sample_time_s_ = 0.0;    ///< realtime: device time of the last sample
+    std::uint64_t units_ = 0;              ///< physics time since open, T 2^-20
+    std::int64_t open_time_ns_ = 0;        ///< realtime: CLOCK_MONOTONIC at open()
+    std::uint64_t samples_produced_ = 0;   ///< realtime: sequence of the next sample
+    double previous_sample_time_s_ = 0.0;  ///< realtime: device time of the last sample
     bool open_ = false;
 };
 
