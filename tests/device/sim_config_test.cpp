@@ -42,6 +42,7 @@ TEST(SimConfig, EmptyTableGivesTheDefaults) {
     EXPECT_EQ(c.force_limit_n, 20.0);
     EXPECT_EQ(c.coulomb_n, 0.0);
     EXPECT_EQ(c.clock, SimClock::realtime);
+    EXPECT_EQ(c.delay_s, 0.0);
     EXPECT_EQ(c.human[0].family, HumanFamily::hands_off);
     EXPECT_FALSE(c.faults.any());
 }
@@ -54,6 +55,7 @@ counts_per_meter = 40000.0
 force_limit = 8.0
 coulomb = 0.1
 clock = "lockstep"
+delay = 0.0013
 initial_position = [0.01, -0.02]
 [human]
 model = "two-mass-grasp"
@@ -85,6 +87,7 @@ seed = 99
     EXPECT_EQ(c.force_limit_n, 8.0);
     EXPECT_EQ(c.coulomb_n, 0.1);
     EXPECT_EQ(c.clock, SimClock::lockstep);
+    EXPECT_EQ(c.delay_s, 0.0013);
     EXPECT_EQ(c.initial_position_m[0], 0.01);
     EXPECT_EQ(c.initial_position_m[1], -0.02);
     for (int i = 0; i < 2; ++i) {
@@ -181,6 +184,30 @@ TEST(SimConfig, OutOfRangeValuesNameFileKeyValueAndRange) {
     const std::string model = error_of("[human]\nmodel = \"firm-grip\"");
     EXPECT_NE(model.find("device.sim.human.model = \"firm-grip\""), std::string::npos) << model;
     EXPECT_NE(model.find("\"two-mass-grasp\""), std::string::npos) << model;
+}
+
+// [device.sim] delay: >= 0 and < 10 periods; at the 2000 Hz of config(), < 0.005 s.
+TEST(SimConfig, DelayIsFiniteNonNegativeAndBelowTenPeriods) {
+    EXPECT_EQ(parse_sim_config(config("delay = 0")).delay_s, 0.0);
+    EXPECT_EQ(parse_sim_config(config("delay = 0.0")).delay_s, 0.0);
+    EXPECT_EQ(parse_sim_config(config("delay = 0.0005")).delay_s, 0.0005);    // 1 period
+    EXPECT_EQ(parse_sim_config(config("delay = 0.00499")).delay_s, 0.00499);  // 9.98 periods
+    EXPECT_EQ(parse_sim_config(config("delay = 1.85e-4")).delay_s, 1.85e-4);  // 0.37 period
+    for (const char* bad : {"-1e-3", "nan", "inf", "-inf", "0.005", "1e9", "\"1 ms\"", "true"}) {
+        const std::string e = error_of(std::string("delay = ") + bad);
+        SCOPED_TRACE(e);
+        EXPECT_EQ(e.find("lab.toml: device.sim.delay = "), 0u);
+        EXPECT_NE(e.find("is not allowed: must be a number >= 0 and < 0.005 (s: 10 periods at "
+                         "servo.rate_hz = 2000 Hz)"),
+                  std::string::npos);
+    }
+    EXPECT_NE(error_of("delay = -1e-3").find("delay = -0.001 is not allowed"), std::string::npos);
+    EXPECT_NE(error_of("delay = nan").find("delay = nan is not allowed"), std::string::npos);
+    // (the value as toml++ prints it: 0.0050000000000000001, to 17 digits)
+    EXPECT_NE(error_of("delay = 0.005").find("delay = 0.005"), std::string::npos);
+    EXPECT_NE(error_of("delay = 1e9").find("delay = 1000000000.0 is not allowed"),
+              std::string::npos);
+    EXPECT_NE(error_of("delay = inf").find("delay = inf is not allowed"), std::string::npos);
 }
 
 TEST(SimConfig, UnknownKeysAreErrors) {

@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "hapticd/device/sim/command_pipeline.hpp"
 #include "hapticd/device/table_reader.hpp"
 
 namespace hapticd::device::sim {
@@ -113,6 +114,24 @@ FaultConfig read_faults(const toml::table& table, const std::string& source, int
     return f;
 }
 
+/// [device.sim] delay: finite, >= 0 and below kMaxDelayPeriods periods of the servo rate.
+double read_delay(TableReader& r, double rate_hz) {
+    const toml::node* node = r.get("delay");
+    if (node == nullptr) return 0.0;
+    std::optional<double> value;
+    if (const auto* f = node->as_floating_point()) value = f->get();
+    if (const auto* i = node->as_integer()) value = static_cast<double>(i->get());
+    const double max_s = kMaxDelayPeriods / rate_hz;
+    if (!value || !std::isfinite(*value) || *value < 0.0 ||
+        !(*value * rate_hz < kMaxDelayPeriods)) {
+        std::ostringstream allowed;
+        allowed << "a number >= 0 and < " << max_s << " (s: " << kMaxDelayPeriods
+                << " periods at servo.rate_hz = " << rate_hz << " Hz)";
+        r.fail_value("delay", *node, allowed.str());
+    }
+    return *value;
+}
+
 }  // namespace
 
 SimConfig parse_sim_config(const DeviceConfig& config) {
@@ -151,6 +170,7 @@ SimConfig parse_sim_config(const DeviceConfig& config) {
                   ? SimClock::lockstep
                   : SimClock::realtime;
     if (config.lockstep) c.clock = SimClock::lockstep;
+    c.delay_s = read_delay(r, c.rate_hz);
 
     if (const toml::node* node = r.get("initial_position")) {
         const std::string allowed = "a position or an array of " + std::to_string(c.axes) +

@@ -82,6 +82,10 @@ struct SimConfig {
     double force_limit_n = 20.0;     ///< commands are clamped to +-this
     double coulomb_n = 0.0;          ///< Coulomb friction magnitude; 0: none
     SimClock clock = SimClock::realtime;
+    /// Loop delay D, s: from the encoder sample at t = nT to the force computed from it
+    /// taking effect (beyond the zero-order hold); >= 0 and < 10 periods
+    /// (command_pipeline.hpp).
+    double delay_s = 0.0;
     std::array<double, kMaxAxes> initial_position_m{};
     std::array<HumanModel, kMaxAxes> human{};  ///< per axis
     FaultConfig faults;
