@@ -1,5 +1,6 @@
 // The sim device's share of a lockstep servo tick: one read() and one write(), for 1 and 3
-// axes, per operator family, with and without Coulomb friction (which substeps 32 times).
+// axes, per operator family, with and without Coulomb friction (which substeps 32 times),
+// and with a fractional loop delay.
 // Run with --benchmark_repetitions=N --benchmark_report_aggregates_only=true for medians.
 #include <benchmark/benchmark.h>
 
@@ -36,10 +37,13 @@ SimConfig config(int axes, HumanFamily family, double coulomb_n) {
     return c;
 }
 
-void lockstep_tick(benchmark::State& state, HumanFamily family, double coulomb_n) {
+void lockstep_tick(benchmark::State& state, HumanFamily family, double coulomb_n,
+                   double delay_periods = 0.0) {
     const int axes = static_cast<int>(state.range(0));
+    SimConfig c = config(axes, family, coulomb_n);
+    c.delay_s = delay_periods * c.period_s();
     SimDevice dev;
-    dev.open(config(axes, family, coulomb_n));
+    dev.open(c);
     Sample sample;
     Command command;
     command.enable = true;
@@ -54,19 +58,31 @@ void lockstep_tick(benchmark::State& state, HumanFamily family, double coulomb_n
         benchmark::DoNotOptimize(sample);
     }
     state.SetItemsProcessed(state.iterations());
-    state.counters["ns_per_tick"] = benchmark::Counter(
-        static_cast<double>(state.iterations()), benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+    state.counters["ns_per_tick"] =
+        benchmark::Counter(static_cast<double>(state.iterations()),
+                           benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
 
 void BM_SimLockstepHandsOff(benchmark::State& s) { lockstep_tick(s, HumanFamily::hands_off, 0.0); }
-void BM_SimLockstepStiffGrasp(benchmark::State& s) { lockstep_tick(s, HumanFamily::stiff_grasp, 0.0); }
-void BM_SimLockstepTwoMassGrasp(benchmark::State& s) { lockstep_tick(s, HumanFamily::two_mass_grasp, 0.0); }
-void BM_SimLockstepHandsOffCoulomb(benchmark::State& s) { lockstep_tick(s, HumanFamily::hands_off, 0.2); }
+void BM_SimLockstepStiffGrasp(benchmark::State& s) {
+    lockstep_tick(s, HumanFamily::stiff_grasp, 0.0);
+}
+void BM_SimLockstepTwoMassGrasp(benchmark::State& s) {
+    lockstep_tick(s, HumanFamily::two_mass_grasp, 0.0);
+}
+void BM_SimLockstepHandsOffCoulomb(benchmark::State& s) {
+    lockstep_tick(s, HumanFamily::hands_off, 0.2);
+}
+// A fractional loop delay: each period is two exact steps, one per piece of the split hold.
+void BM_SimLockstepHandsOffDelay(benchmark::State& s) {
+    lockstep_tick(s, HumanFamily::hands_off, 0.0, 2.37);
+}
 
 BENCHMARK(BM_SimLockstepHandsOff)->Arg(1)->Arg(3);
 BENCHMARK(BM_SimLockstepStiffGrasp)->Arg(1)->Arg(3);
 BENCHMARK(BM_SimLockstepTwoMassGrasp)->Arg(1)->Arg(3);
 BENCHMARK(BM_SimLockstepHandsOffCoulomb)->Arg(1)->Arg(3);
+BENCHMARK(BM_SimLockstepHandsOffDelay)->Arg(1)->Arg(3);
 
 /// Realtime clock: read() + write() each read CLOCK_MONOTONIC and advance to now.
 void BM_SimRealtimeTick(benchmark::State& state) {

@@ -1,11 +1,12 @@
 // The [device.sim] table: defaults, every key read, and errors that name the file, the key,
 // the value and the allowed range.
+#include "hapticd/device/sim/sim_config.hpp"
+
 #include <gtest/gtest.h>
 
 #include <stdexcept>
 #include <string>
 
-#include "hapticd/device/sim/sim_config.hpp"
 #include "hapticd/device/sim/sim_device.hpp"
 
 namespace hapticd::device::sim {
@@ -41,6 +42,7 @@ TEST(SimConfig, EmptyTableGivesTheDefaults) {
     EXPECT_EQ(c.force_limit_n, 20.0);
     EXPECT_EQ(c.coulomb_n, 0.0);
     EXPECT_EQ(c.clock, SimClock::realtime);
+    EXPECT_EQ(c.delay_s, 0.0);
     EXPECT_EQ(c.human[0].family, HumanFamily::hands_off);
     EXPECT_FALSE(c.faults.any());
 }
@@ -53,6 +55,7 @@ counts_per_meter = 40000.0
 force_limit = 8.0
 coulomb = 0.1
 clock = "lockstep"
+delay = 0.0013
 initial_position = [0.01, -0.02]
 [human]
 model = "two-mass-grasp"
@@ -77,13 +80,14 @@ late_probability = 0.02
 late_by = 0.002
 seed = 99
 )",
-                                                    2));
+                                                2));
     EXPECT_EQ(c.mass_kg, 0.25);
     EXPECT_EQ(c.damping_n_s_per_m, 3.0);
     EXPECT_EQ(c.counts_per_meter, 40000.0);
     EXPECT_EQ(c.force_limit_n, 8.0);
     EXPECT_EQ(c.coulomb_n, 0.1);
     EXPECT_EQ(c.clock, SimClock::lockstep);
+    EXPECT_EQ(c.delay_s, 0.0013);
     EXPECT_EQ(c.initial_position_m[0], 0.01);
     EXPECT_EQ(c.initial_position_m[1], -0.02);
     for (int i = 0; i < 2; ++i) {
@@ -127,7 +131,7 @@ hand_mass = 0.0
 hand_stiffness = 700
 [[human]]
 )",
-                                                    3));
+                                                3));
     EXPECT_EQ(c.human[0].family, HumanFamily::heavy_hand);
     EXPECT_EQ(c.human[0].hand_mass_kg, 1.0);
     EXPECT_EQ(c.human[0].hand_damping_n_s_per_m, 2.0);
@@ -154,7 +158,8 @@ TEST(SimConfig, OutOfRangeValuesNameFileKeyValueAndRange) {
     EXPECT_NE(e.find("> 0"), std::string::npos) << e;
     EXPECT_NE(e.find("kg"), std::string::npos) << e;
 
-    EXPECT_NE(error_of("damping = -1").find("device.sim.damping = -1 is not allowed: must be a number >= 0"),
+    EXPECT_NE(error_of("damping = -1")
+                  .find("device.sim.damping = -1 is not allowed: must be a number >= 0"),
               std::string::npos);
     EXPECT_NE(error_of("counts_per_meter = 0").find("device.sim.counts_per_meter = 0"),
               std::string::npos);
@@ -169,9 +174,11 @@ TEST(SimConfig, OutOfRangeValuesNameFileKeyValueAndRange) {
     EXPECT_NE(error_of("[human]\nmodel = \"stiff-grasp\"\nhand_stiffness = -5")
                   .find("device.sim.human.hand_stiffness = -5"),
               std::string::npos);
-    EXPECT_NE(error_of("[faults]\ndrop_probability = 1.5").find("device.sim.faults.drop_probability = 1.5"),
+    EXPECT_NE(error_of("[faults]\ndrop_probability = 1.5")
+                  .find("device.sim.faults.drop_probability = 1.5"),
               std::string::npos);
-    EXPECT_NE(error_of("[faults]\njump_axis = 1").find("an integer from 0 to 0"), std::string::npos);
+    EXPECT_NE(error_of("[faults]\njump_axis = 1").find("an integer from 0 to 0"),
+              std::string::npos);
     EXPECT_NE(error_of("[faults]\ndrop_at = [0.1, -2]").find("device.sim.faults.drop_at = -2"),
               std::string::npos);
     const std::string model = error_of("[human]\nmodel = \"firm-grip\"");
@@ -179,14 +186,40 @@ TEST(SimConfig, OutOfRangeValuesNameFileKeyValueAndRange) {
     EXPECT_NE(model.find("\"two-mass-grasp\""), std::string::npos) << model;
 }
 
+// [device.sim] delay: >= 0 and < 10 periods; at the 2000 Hz of config(), < 0.005 s.
+TEST(SimConfig, DelayIsFiniteNonNegativeAndBelowTenPeriods) {
+    EXPECT_EQ(parse_sim_config(config("delay = 0")).delay_s, 0.0);
+    EXPECT_EQ(parse_sim_config(config("delay = 0.0")).delay_s, 0.0);
+    EXPECT_EQ(parse_sim_config(config("delay = 0.0005")).delay_s, 0.0005);    // 1 period
+    EXPECT_EQ(parse_sim_config(config("delay = 0.00499")).delay_s, 0.00499);  // 9.98 periods
+    EXPECT_EQ(parse_sim_config(config("delay = 1.85e-4")).delay_s, 1.85e-4);  // 0.37 period
+    for (const char* bad : {"-1e-3", "nan", "inf", "-inf", "0.005", "1e9", "\"1 ms\"", "true"}) {
+        const std::string e = error_of(std::string("delay = ") + bad);
+        SCOPED_TRACE(e);
+        EXPECT_EQ(e.find("lab.toml: device.sim.delay = "), 0u);
+        EXPECT_NE(e.find("is not allowed: must be a number >= 0 and < 0.005 (s: 10 periods at "
+                         "servo.rate_hz = 2000 Hz)"),
+                  std::string::npos);
+    }
+    EXPECT_NE(error_of("delay = -1e-3").find("delay = -0.001 is not allowed"), std::string::npos);
+    EXPECT_NE(error_of("delay = nan").find("delay = nan is not allowed"), std::string::npos);
+    // (the value as toml++ prints it: 0.0050000000000000001, to 17 digits)
+    EXPECT_NE(error_of("delay = 0.005").find("delay = 0.005"), std::string::npos);
+    EXPECT_NE(error_of("delay = 1e9").find("delay = 1000000000.0 is not allowed"),
+              std::string::npos);
+    EXPECT_NE(error_of("delay = inf").find("delay = inf is not allowed"), std::string::npos);
+}
+
 TEST(SimConfig, UnknownKeysAreErrors) {
     const std::string e = error_of("mass = 0.1\nmas = 0.2");
     EXPECT_NE(e.find("lab.toml: device.sim.mas is not a known key"), std::string::npos) << e;
-    EXPECT_NE(error_of("[human]\nmodel = \"heavy-hand\"\nhand_mas = 1").find("device.sim.human.hand_mas"),
-              std::string::npos);
+    EXPECT_NE(
+        error_of("[human]\nmodel = \"heavy-hand\"\nhand_mas = 1").find("device.sim.human.hand_mas"),
+        std::string::npos);
     EXPECT_NE(error_of("[faults]\ndisconnect = 1.0").find("device.sim.faults.disconnect"),
               std::string::npos);
-    EXPECT_NE(error_of("[human]\nmodel = \"stiff-grasp\"\npush = { too = 1 }").find("device.sim.human.push.too"),
+    EXPECT_NE(error_of("[human]\nmodel = \"stiff-grasp\"\npush = { too = 1 }")
+                  .find("device.sim.human.push.too"),
               std::string::npos);
     EXPECT_NE(error_of("[[human]]\n[[human]]\n[[human]]\nmodel = \"heavy-hand\"\nfoo = 1", 3)
                   .find("device.sim.human[2].foo"),
@@ -208,7 +241,8 @@ TEST(SimConfig, KeysTheModelDoesNotUseAreErrors) {
 
 TEST(SimConfig, BadDeviceSettingsAndBadTomlAreErrors) {
     EXPECT_NE(error_of("", 4).find("lab.toml: device.axes = 4"), std::string::npos);
-    EXPECT_NE(error_of("mass = ").find("lab.toml: [device.sim] is not valid TOML"), std::string::npos);
+    EXPECT_NE(error_of("mass = ").find("lab.toml: [device.sim] is not valid TOML"),
+              std::string::npos);
     EXPECT_NE(error_of("human = 3").find("device.sim.human = 3"), std::string::npos);
     EXPECT_NE(error_of("[[human]]\n[[human]]", 3).find("3 tables [[device.sim.human]]"),
               std::string::npos);

@@ -1,11 +1,12 @@
 // The sim's real-time contract and its realtime clock: read()/write() never allocate, and on
 // the realtime clock the physics follows CLOCK_MONOTONIC exactly.
 #include <gtest/gtest.h>
-
 #include <time.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <iostream>
 
 #include "alloc_guard.hpp"
 #include "hapticd/device/sim/sim_device.hpp"
@@ -59,7 +60,7 @@ TEST(SimRealtime, ReadAndWriteNeverAllocateInLockstep) {
     }
     EXPECT_EQ(allocations, 0u);
     EXPECT_EQ(dev.read(s), IoResult::disconnected);  // it did get through every fault
-    {  // the guard itself sees an allocation
+    {                                                // the guard itself sees an allocation
         AllocationGuard guard;
         int* volatile p = new int(3);  // volatile: the allocation cannot be elided
         delete p;
@@ -120,9 +121,63 @@ TEST(SimRealtime, PhysicsFollowsTheMonotonicClockExactly) {
         const double t = s.device_time_s - t_w, decay = -std::expm1(-t / tau);
         const double x = F / b * (t - tau * decay);
         EXPECT_NEAR(dev.plant(0).state().position_m, x, 1e-12 * x);
-        EXPECT_EQ(s.encoder_counts[0], static_cast<std::int64_t>(std::floor(dev.plant(0).state().position_m * 1e9)));
+        EXPECT_EQ(s.encoder_counts[0],
+                  static_cast<std::int64_t>(std::floor(dev.plant(0).state().position_m * 1e9)));
     }
     EXPECT_EQ(s.sequence, 2u);  // one per read on this clock
+    dev.close();
+    EXPECT_EQ(dev.held_force_n()[0], 0.0);
+}
+
+// With a loop delay D the command computed from the sample taken at t_s lands at t_s + D
+// (or at once, if the write came later than that): the closed form of (10) from then on,
+// and nothing before.
+TEST(SimRealtime, ACommandLandsTheLoopDelayAfterItsSample) {
+    SimConfig c;
+    c.clock = SimClock::realtime;
+    c.counts_per_meter = 1e9;
+    c.delay_s = 0.0043;  // 4.3 periods at 1 kHz
+    SimDevice dev;
+    dev.open(c);
+    Sample s;
+    ASSERT_EQ(dev.read(s), IoResult::ok);
+    const double t_sample = s.device_time_s;
+    Command cmd;
+    cmd.enable = true;
+    cmd.force_n[0] = 2.0;
+    ASSERT_EQ(dev.write(cmd), IoResult::ok);
+    const double t_write = dev.time_s();
+    // The delay on this clock is whole units of T 2^-20.
+    const double delay_s =
+        std::ldexp(static_cast<double>(dev.loop_delay().units), -kFractionBits) / c.rate_hz;
+    EXPECT_NEAR(delay_s, 0.0043, 1e-9);
+    const double t_land = std::max(t_sample + delay_s, t_write);
+    if (t_write < t_land) {  // (a machine that stalled 4 ms between the two calls lands it now)
+        EXPECT_EQ(dev.held_force_n()[0], 0.0);
+        EXPECT_EQ(dev.commands_in_flight(), 1u);
+    }
+    const double m = 0.1, b = 2.0, F = 2.0, tau = m / b;
+    bool saw_before = false, saw_after = false;
+    for (double wait_s : {0.0011, 0.0012, 0.0173, 0.0456}) {
+        sleep_s(wait_s);
+        ASSERT_EQ(dev.read(s), IoResult::ok);
+        const double t = s.device_time_s - t_land;
+        if (t <= 0.0) {
+            saw_before = true;
+            EXPECT_EQ(dev.plant(0).state().position_m, 0.0);
+            EXPECT_EQ(dev.held_force_n()[0], 0.0);
+            continue;
+        }
+        saw_after = true;
+        const double decay = -std::expm1(-t / tau);
+        const double x = F / b * (t - tau * decay);
+        EXPECT_NEAR(dev.plant(0).state().position_m, x, 1e-12 * x + 1e-18);
+        EXPECT_EQ(dev.held_force_n()[0], F);
+        EXPECT_EQ(dev.commands_in_flight(), 0u);
+    }
+    EXPECT_TRUE(saw_after);
+    std::cout << "[sim] realtime delay: a read before the command landed: "
+              << (saw_before ? "yes" : "no (the machine was slow)") << "\n";
     dev.close();
     EXPECT_EQ(dev.held_force_n()[0], 0.0);
 }

@@ -77,6 +77,7 @@ struct DaemonConfig {
     std::string coupling;                  ///< a [coupling] table (coupling_table() ...)
     std::string initial_position = "0.0";  ///< TOML: a number, or an array of `axes`
     std::string humans;                    ///< [device.sim.human] table(s); empty: hands-off
+    std::string sim_keys;                  ///< more [device.sim] keys, e.g. "delay = 0.001\n"
     std::string faults;                    ///< the body of [device.sim.faults]; empty: none
     std::string sim_clock = "lockstep";
     std::string realtime = "off";
@@ -104,6 +105,7 @@ struct DaemonConfig {
                 "\ncounts_per_meter = " + toml_number(kCountsPerMeter) +
                 "\nforce_limit = " + toml_number(kForceLimitN) + "\nclock = \"" + sim_clock +
                 "\"\ninitial_position = " + initial_position + "\n";
+        text += sim_keys;
         text += humans;
         if (!faults.empty()) text += "[device.sim.faults]\n" + faults;
         return text;

@@ -60,8 +60,24 @@ Augmented continuous_matrix(double m, double b, const HumanModel& h) {
 
 }  // namespace
 
+AxisPlant::ExactStep AxisPlant::exact_step(const Augmented& a, double duration_s) {
+    ExactStep step;
+    step.duration_s = duration_s;
+    const Augmented scaled = a * duration_s;
+    const Augmented e = scaled.exp();
+    step.free = e.topRows<4>();
+    Augmented held = a;  // the handle clamped by stiction: dx/dt = dv/dt = 0
+    held.row(kX).setZero();
+    held.row(kV).setZero();
+    const Augmented held_scaled = held * duration_s;
+    const Augmented held_e = held_scaled.exp();
+    step.stuck = held_e.topRows<4>();
+    return step;
+}
+
 void AxisPlant::configure(double mass_kg, double damping_n_s_per_m, double coulomb_n,
-                          const HumanModel& human, double period_s, double initial_position_m) {
+                          const HumanModel& human, double period_s, double initial_position_m,
+                          double split_fraction) {
     human_ = human;
     mass_kg_ = mass_kg;
     coulomb_n_ = coulomb_n;
@@ -70,17 +86,18 @@ void AxisPlant::configure(double mass_kg, double damping_n_s_per_m, double coulo
     handle_mass_kg_ = rigid_hand ? mass_kg + human.hand_mass_kg : mass_kg;
     const Augmented a = continuous_matrix(mass_kg, damping_n_s_per_m, human);
     acceleration_row_ = a.row(kV);
-    for (int k = 0; k <= kFractionBits; ++k) {
-        step_s_[k] = std::ldexp(period_s, -k);
-        const Augmented scaled = a * step_s_[k];
-        const Augmented e = scaled.exp();
-        transition_[k] = e.topRows<4>();
-        Augmented held = a;  // the handle clamped by stiction: dx/dt = dv/dt = 0
-        held.row(kX).setZero();
-        held.row(kV).setZero();
-        const Augmented held_scaled = held * step_s_[k];
-        const Augmented held_e = held_scaled.exp();
-        stuck_transition_[k] = held_e.topRows<4>();
+    for (int k = 0; k <= kFractionBits; ++k) steps_[k] = exact_step(a, std::ldexp(period_s, -k));
+    // A fractional loop delay: the period's two pieces [0, φT) and [φT, T), each with its
+    // own exact ZOH transition (and 32 substeps of it for Coulomb friction).
+    split_fraction_ = split_fraction;
+    const double substeps = static_cast<double>(1 << kCoulombSubstepBits);
+    lead_ = {};
+    lag_ = {};
+    if (split_fraction_ > 0.0) {
+        const double lead_s = split_fraction_ * period_s;
+        const double lag_s = (1.0 - split_fraction_) * period_s;
+        lead_ = {exact_step(a, lead_s), exact_step(a, lead_s / substeps)};
+        lag_ = {exact_step(a, lag_s), exact_step(a, lag_s / substeps)};
     }
     state_ = State{};
     state_.position_m = initial_position_m;
@@ -88,16 +105,17 @@ void AxisPlant::configure(double mass_kg, double damping_n_s_per_m, double coulo
     if (human.family == HumanFamily::two_mass_grasp) state_.hand_position_m = initial_position_m;
 }
 
-void AxisPlant::linear_step(int k, double force_n, double set_point_velocity_mps) noexcept {
+void AxisPlant::linear_step(const ExactStep& step, double force_n,
+                            double set_point_velocity_mps) noexcept {
     Eigen::Matrix<double, 7, 1> z;
     z << state_.position_m, state_.velocity_mps, state_.hand_position_m, state_.hand_velocity_mps,
         force_n, state_.set_point_m, set_point_velocity_mps;
-    const Eigen::Matrix<double, 4, 1> next = transition_[k] * z;
+    const Eigen::Matrix<double, 4, 1> next = step.free * z;
     state_.position_m = next(kX);
     state_.velocity_mps = next(kV);
     state_.hand_position_m = next(kXh);
     state_.hand_velocity_mps = next(kVh);
-    state_.set_point_m += set_point_velocity_mps * step_s_[k];
+    state_.set_point_m += set_point_velocity_mps * step.duration_s;
 }
 
 double AxisPlant::resting_handle_force_n(double force_n,
@@ -108,60 +126,65 @@ double AxisPlant::resting_handle_force_n(double force_n,
     return handle_mass_kg_ * acceleration_row_.dot(z);
 }
 
-void AxisPlant::stuck_step(int k, double set_point_velocity_mps) noexcept {
+void AxisPlant::stuck_step(const ExactStep& step, double set_point_velocity_mps) noexcept {
     Eigen::Matrix<double, 7, 1> z;
     z << state_.position_m, 0.0, state_.hand_position_m, state_.hand_velocity_mps, 0.0,
         state_.set_point_m, set_point_velocity_mps;
-    const Eigen::Matrix<double, 4, 1> next = stuck_transition_[k] * z;
+    const Eigen::Matrix<double, 4, 1> next = step.stuck * z;
     state_.velocity_mps = 0.0;  // the handle is held; x stays as it is
     state_.hand_position_m = next(kXh);
     state_.hand_velocity_mps = next(kVh);
-    state_.set_point_m += set_point_velocity_mps * step_s_[k];
+    state_.set_point_m += set_point_velocity_mps * step.duration_s;
 }
 
 void AxisPlant::friction_step(int k, double force_n, double set_point_velocity_mps) noexcept {
     if (k < kCoulombSubstepBits) {  // longer than a substep: split
         for (int i = 0; i < (1 << (kCoulombSubstepBits - k)); ++i) {
-            friction_step(kCoulombSubstepBits, force_n, set_point_velocity_mps);
+            friction_substep(steps_[kCoulombSubstepBits], force_n, set_point_velocity_mps);
         }
         return;
     }
+    friction_substep(steps_[k], force_n, set_point_velocity_mps);
+}
+
+void AxisPlant::friction_substep(const ExactStep& step, double force_n,
+                                 double set_point_velocity_mps) noexcept {
     const State start = state_;
     // The direction friction opposes: the motion, or at rest the net force it must hold.
     double direction = start.velocity_mps;
     if (direction == 0.0) {
         const double net_n = resting_handle_force_n(force_n, set_point_velocity_mps);
         if (std::abs(net_n) <= coulomb_n_) {  // stiction holds the handle
-            stuck_step(k, set_point_velocity_mps);
+            stuck_step(step, set_point_velocity_mps);
             return;
         }
         direction = net_n;  // breakaway
     }
     const double friction_n = direction > 0.0 ? -coulomb_n_ : coulomb_n_;
-    linear_step(k, force_n + friction_n, set_point_velocity_mps);
+    linear_step(step, force_n + friction_n, set_point_velocity_mps);
     if ((state_.velocity_mps > 0.0) != (direction > 0.0) || state_.velocity_mps == 0.0) {
         // Friction stopped the handle within the substep (it never reverses it): hold it
         // where the substep began, which only removes the handle's kinetic energy.
         state_ = start;
-        stuck_step(k, set_point_velocity_mps);
+        stuck_step(step, set_point_velocity_mps);
     }
 }
 
 void AxisPlant::advance(std::uint64_t units, double force_n, double set_point_end_m) noexcept {
     if (units == 0) return;
-    const double duration_s = static_cast<double>(units) * step_s_[kFractionBits];
+    const double duration_s = static_cast<double>(units) * steps_[kFractionBits].duration_s;
     const double set_point_velocity_mps = (set_point_end_m - state_.set_point_m) / duration_s;
     const std::uint64_t periods = units >> kFractionBits;
     const std::uint64_t fraction = units & (kUnitsPerPeriod - 1);
     const bool friction = coulomb_n_ > 0.0;
     for (std::uint64_t i = 0; i < periods; ++i) {
         friction ? friction_step(0, force_n, set_point_velocity_mps)
-                 : linear_step(0, force_n, set_point_velocity_mps);
+                 : linear_step(steps_[0], force_n, set_point_velocity_mps);
     }
     for (int k = 1; k <= kFractionBits; ++k) {
         if ((fraction >> (kFractionBits - k)) & 1u) {
             friction ? friction_step(k, force_n, set_point_velocity_mps)
-                     : linear_step(k, force_n, set_point_velocity_mps);
+                     : linear_step(steps_[k], force_n, set_point_velocity_mps);
         }
     }
     state_.set_point_m = set_point_end_m;  // no drift from summing the pieces
@@ -169,6 +192,32 @@ void AxisPlant::advance(std::uint64_t units, double force_n, double set_point_en
 
 void AxisPlant::step_period(double force_n, double set_point_end_m) noexcept {
     advance(kUnitsPerPeriod, force_n, set_point_end_m);
+}
+
+void AxisPlant::split_piece(const SplitPiece& piece, double force_n,
+                            double set_point_velocity_mps) noexcept {
+    if (coulomb_n_ > 0.0) {
+        for (int i = 0; i < (1 << kCoulombSubstepBits); ++i) {
+            friction_substep(piece.substep, force_n, set_point_velocity_mps);
+        }
+    } else {
+        linear_step(piece.whole, force_n, set_point_velocity_mps);
+    }
+}
+
+void AxisPlant::step_period_split(double lead_force_n, double lag_force_n,
+                                  double set_point_end_m) noexcept {
+    if (split_fraction_ == 0.0) {  // no fractional delay: the force changes at nT
+        step_period(lag_force_n, set_point_end_m);
+        return;
+    }
+    // z((n + φ) T) = e^{M φT} z(nT) under F[n-q-1], then z((n+1) T) = e^{M (1-φ) T} z((n + φ) T)
+    // under F[n-q]; the set-point moves at one velocity over the whole period.
+    const double set_point_velocity_mps =
+        (set_point_end_m - state_.set_point_m) / steps_[0].duration_s;
+    split_piece(lead_, lead_force_n, set_point_velocity_mps);
+    split_piece(lag_, lag_force_n, set_point_velocity_mps);
+    state_.set_point_m = set_point_end_m;
 }
 
 double AxisPlant::energy_j() const noexcept {

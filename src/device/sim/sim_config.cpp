@@ -1,6 +1,8 @@
 // Reads and validates the [device.sim] table (schema: docs/sim-device.md).
 #include "hapticd/device/sim/sim_config.hpp"
 
+#include <toml++/toml.h>
+
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -8,8 +10,8 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
-#include <toml++/toml.h>
 
+#include "hapticd/device/sim/command_pipeline.hpp"
 #include "hapticd/device/table_reader.hpp"
 
 namespace hapticd::device::sim {
@@ -45,11 +47,12 @@ void require_unused(TableReader& r, std::string_view key, std::string_view model
 HumanModel read_human(const toml::table& table, std::string prefix, const std::string& source,
                       double initial_position_m) {
     TableReader r(table, std::move(prefix), source, "docs/sim-device.md");
-    const std::string model = r.choice("model", "hands-off",
-                                       {"hands-off", "heavy-hand", "stiff-grasp", "two-mass-grasp"});
+    const std::string model = r.choice(
+        "model", "hands-off", {"hands-off", "heavy-hand", "stiff-grasp", "two-mass-grasp"});
     HumanModel h;
     h.family = *family_named(model);
-    const bool rigid_hand = h.family == HumanFamily::heavy_hand || h.family == HumanFamily::stiff_grasp;
+    const bool rigid_hand =
+        h.family == HumanFamily::heavy_hand || h.family == HumanFamily::stiff_grasp;
     const bool two_mass = h.family == HumanFamily::two_mass_grasp;
     const bool set_point = h.family == HumanFamily::stiff_grasp || two_mass;
 
@@ -111,6 +114,24 @@ FaultConfig read_faults(const toml::table& table, const std::string& source, int
     return f;
 }
 
+/// [device.sim] delay: finite, >= 0 and below kMaxDelayPeriods periods of the servo rate.
+double read_delay(TableReader& r, double rate_hz) {
+    const toml::node* node = r.get("delay");
+    if (node == nullptr) return 0.0;
+    std::optional<double> value;
+    if (const auto* f = node->as_floating_point()) value = f->get();
+    if (const auto* i = node->as_integer()) value = static_cast<double>(i->get());
+    const double max_s = kMaxDelayPeriods / rate_hz;
+    if (!value || !std::isfinite(*value) || *value < 0.0 ||
+        !(*value * rate_hz < kMaxDelayPeriods)) {
+        std::ostringstream allowed;
+        allowed << "a number >= 0 and < " << max_s << " (s: " << kMaxDelayPeriods
+                << " periods at servo.rate_hz = " << rate_hz << " Hz)";
+        r.fail_value("delay", *node, allowed.str());
+    }
+    return *value;
+}
+
 }  // namespace
 
 SimConfig parse_sim_config(const DeviceConfig& config) {
@@ -141,14 +162,15 @@ SimConfig parse_sim_config(const DeviceConfig& config) {
     TableReader r(table, "device.sim.", source, "docs/sim-device.md");
     c.mass_kg = r.number("mass", c.mass_kg, kMass);
     c.damping_n_s_per_m = r.number("damping", c.damping_n_s_per_m, kDamping);
-    c.counts_per_meter = r.number("counts_per_meter", c.counts_per_meter,
-                                  Range{0.0, 1e10, true, "counts/m"});
+    c.counts_per_meter =
+        r.number("counts_per_meter", c.counts_per_meter, Range{0.0, 1e10, true, "counts/m"});
     c.force_limit_n = r.number("force_limit", c.force_limit_n, Range{0.0, 1e4, true, "N"});
     c.coulomb_n = r.number("coulomb", c.coulomb_n, Range{0.0, 1e3, false, "N"});
     c.clock = r.choice("clock", "realtime", {"lockstep", "realtime"}) == "lockstep"
                   ? SimClock::lockstep
                   : SimClock::realtime;
     if (config.lockstep) c.clock = SimClock::lockstep;
+    c.delay_s = read_delay(r, c.rate_hz);
 
     if (const toml::node* node = r.get("initial_position")) {
         const std::string allowed = "a position or an array of " + std::to_string(c.axes) +
@@ -166,15 +188,16 @@ SimConfig parse_sim_config(const DeviceConfig& config) {
         }
     }
 
-    for (int i = 0; i < c.axes; ++i) c.human[i].push.from_m = c.human[i].push.to_m = c.initial_position_m[i];
+    for (int i = 0; i < c.axes; ++i)
+        c.human[i].push.from_m = c.human[i].push.to_m = c.initial_position_m[i];
     if (const toml::node* node = r.get("human")) {
         if (const auto* one = node->as_table()) {
             for (int i = 0; i < c.axes; ++i) {
                 c.human[i] = read_human(*one, "device.sim.human.", source, c.initial_position_m[i]);
             }
-        } else if (const auto* each = node->as_array();
-                   each != nullptr && each->is_array_of_tables() &&
-                   static_cast<int>(each->size()) == c.axes) {
+        } else if (const auto* each = node->as_array(); each != nullptr &&
+                                                        each->is_array_of_tables() &&
+                                                        static_cast<int>(each->size()) == c.axes) {
             for (int i = 0; i < c.axes; ++i) {
                 c.human[i] = read_human(*each->get(i)->as_table(),
                                         "device.sim.human[" + std::to_string(i) + "].", source,
@@ -186,7 +209,8 @@ SimConfig parse_sim_config(const DeviceConfig& config) {
                              " tables [[device.sim.human]] (one per axis)");
         }
     }
-    if (const toml::table* faults = r.subtable("faults")) c.faults = read_faults(*faults, source, c.axes);
+    if (const toml::table* faults = r.subtable("faults"))
+        c.faults = read_faults(*faults, source, c.axes);
     r.finish();
     return c;
 }

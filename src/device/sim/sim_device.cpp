@@ -2,9 +2,8 @@
 
 #include <time.h>
 
-#include <cerrno>
-
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <limits>
 
@@ -12,6 +11,9 @@ namespace hapticd::device::sim {
 namespace {
 
 constexpr double kMinusInfinity = -std::numeric_limits<double>::infinity();
+/// Realtime clock: room for this many commands in flight (a host writing more often than
+/// this within one loop delay has its newest command in flight replaced, command_pipeline.hpp).
+constexpr std::size_t kRealtimeCommandsInFlight = 1024;
 
 std::int64_t monotonic_ns() noexcept {
     timespec ts{};
@@ -35,13 +37,20 @@ void SimDevice::open(const SimConfig& config) {
     close();
     config_ = config;
     const double period_s = config_.period_s();
+    delay_ = split_delay(config_.delay_s, config_.rate_hz);
+    const bool lockstep = config_.clock == SimClock::lockstep;
     for (int i = 0; i < config_.axes; ++i) {
         plants_[i].configure(config_.mass_kg, config_.damping_n_s_per_m, config_.coulomb_n,
-                             config_.human[i], period_s, config_.initial_position_m[i]);
+                             config_.human[i], period_s, config_.initial_position_m[i],
+                             lockstep ? delay_.fraction : 0.0);
     }
     faults_.configure(config_.faults, period_s);
+    // Lockstep: F[n-q] .. F[n] are in flight after the write of tick n.
+    pipeline_.configure(lockstep ? static_cast<std::size_t>(delay_.whole_periods) + 2
+                                 : kRealtimeCommandsInFlight);
     held_force_n_.fill(0.0);
     units_ = 0;
+    sample_units_ = 0;
     samples_produced_ = 0;
     previous_sample_time_s_ = kMinusInfinity;
     for (int i = 0; i < config_.axes; ++i) last_fresh_counts_[i] = encoder_counts(i);
@@ -73,11 +82,22 @@ double SimDevice::time_s() const noexcept { return units_to_s(units_); }
 
 std::uint64_t SimDevice::now_units() const noexcept {
     const double elapsed_s = static_cast<double>(monotonic_ns() - open_time_ns_) * 1e-9;
-    const double units = std::floor(elapsed_s * config_.rate_hz * static_cast<double>(kUnitsPerPeriod));
+    const double units =
+        std::floor(elapsed_s * config_.rate_hz * static_cast<double>(kUnitsPerPeriod));
     return units > 0.0 ? static_cast<std::uint64_t>(units) : 0;
 }
 
 void SimDevice::advance_to(std::uint64_t units) noexcept {
+    // Each command in flight lands at its own time: the held force up to it, then it.
+    while (const PendingCommand* landing = pipeline_.due(units)) {
+        advance_held_to(landing->due);
+        held_force_n_ = landing->force_n;
+        pipeline_.pop();
+    }
+    advance_held_to(units);
+}
+
+void SimDevice::advance_held_to(std::uint64_t units) noexcept {
     if (units <= units_) return;
     // Whole periods one at a time, so the set-point profile is sampled at least once a period.
     while (units - units_ >= kUnitsPerPeriod) {
@@ -97,6 +117,27 @@ void SimDevice::advance_to(std::uint64_t units) noexcept {
     }
 }
 
+void SimDevice::step_lockstep_period() noexcept {
+    // Period n: F[n-q-1] (held) until nT + φT, then F[n-q], the command due in period n.
+    const std::uint64_t period = units_ >> kFractionBits;
+    const std::array<double, kMaxAxes> lead_force_n = held_force_n_;
+    if (const PendingCommand* landing = pipeline_.due(period)) {
+        held_force_n_ = landing->force_n;
+        pipeline_.pop();
+    }
+    const double end_s = units_to_s(units_ + kUnitsPerPeriod);
+    for (int i = 0; i < config_.axes; ++i) {
+        plants_[i].step_period_split(lead_force_n[i], held_force_n_[i],
+                                     config_.human[i].push.set_point_m(end_s));
+    }
+    units_ += kUnitsPerPeriod;
+}
+
+void SimDevice::cut_force() noexcept {
+    held_force_n_.fill(0.0);
+    pipeline_.clear();
+}
+
 std::int64_t SimDevice::encoder_counts(int axis) const noexcept {
     // Quantisation: floor, like an incremental encoder whose count changes as x crosses
     // each line at k / counts_per_meter.
@@ -112,11 +153,12 @@ IoResult SimDevice::read(Sample& sample) noexcept {
     }
     const bool lockstep = config_.clock == SimClock::lockstep;
     if (!lockstep) advance_to(now_units());
+    sample_units_ = units_;
     const double time_s = units_to_s(units_);
     const std::uint64_t sequence = lockstep ? units_ >> kFractionBits : samples_produced_++;
-    const double previous_s =
-        lockstep ? (sequence == 0 ? kMinusInfinity : time_s - config_.period_s())
-                 : previous_sample_time_s_;
+    const double previous_s = lockstep
+                                  ? (sequence == 0 ? kMinusInfinity : time_s - config_.period_s())
+                                  : previous_sample_time_s_;
     previous_sample_time_s_ = time_s;
     const FaultVerdict verdict = faults_.evaluate(previous_s, time_s, sequence);
 
@@ -125,7 +167,7 @@ IoResult SimDevice::read(Sample& sample) noexcept {
     sample.status = verdict.status;
     sample.encoder_counts.fill(0);
     if (verdict.disconnected) {
-        held_force_n_.fill(0.0);  // the device's watchdog: no host, no force
+        cut_force();  // the device's watchdog: no host, no force, nothing in flight lands
         return IoResult::disconnected;
     }
     const bool fresh = !verdict.stale && !verdict.dropped;
@@ -146,21 +188,34 @@ IoResult SimDevice::write(const Command& command) noexcept {
     if (!lockstep) advance_to(now_units());  // the old force held until now
     const bool disconnected = faults_.disconnected(time_s());
     bool finite = true;
+    std::array<double, kMaxAxes> force_n{};
     for (int i = 0; i < config_.axes; ++i) {
         const double f = command.force_n[i];
         finite = finite && std::isfinite(f);
-        held_force_n_[i] = command.enable && std::isfinite(f)
-                               ? std::clamp(f, -config_.force_limit_n, config_.force_limit_n)
-                               : 0.0;
+        force_n[i] = command.enable && std::isfinite(f)
+                         ? std::clamp(f, -config_.force_limit_n, config_.force_limit_n)
+                         : 0.0;
     }
-    if (!finite || disconnected) held_force_n_.fill(0.0);
-    if (lockstep) advance_to(units_ + kUnitsPerPeriod);  // exactly one period under this force
+    if (!finite || disconnected) {
+        cut_force();  // refused, or no device: zero now, whatever was in flight
+    } else if (lockstep) {
+        // Written in tick n: starts to act in period n + q, at φT into it.
+        pipeline_.push((units_ >> kFractionBits) + delay_.whole_periods, force_n);
+    } else {
+        // D after the sample it was computed from, and never before now.
+        pipeline_.push(std::max(sample_units_ + delay_.units, units_), force_n);
+    }
+    if (lockstep) {
+        step_lockstep_period();  // exactly one period, the commands landing in it
+    } else {
+        advance_to(units_);  // lands at once when it is due now (no delay)
+    }
     if (disconnected) return IoResult::disconnected;
     return finite ? IoResult::ok : IoResult::error;
 }
 
 void SimDevice::close() noexcept {
-    held_force_n_.fill(0.0);
+    cut_force();  // zero force, and nothing still in flight lands after the close
     open_ = false;
 }
 

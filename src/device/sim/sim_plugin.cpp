@@ -11,7 +11,7 @@ constexpr hapticd_device_plugin kSimPlugin{
     hapticd::device::kDeviceAbiVersion,
     "sim",
     "simulated device: mass-damper (10) per axis with a passive human model, exact ZOH, "
-    "encoder quantisation, fault injection; lockstep or realtime clock",
+    "encoder quantisation, loop delay, fault injection; lockstep or realtime clock",
     &create_sim,
     &destroy_sim,
 };

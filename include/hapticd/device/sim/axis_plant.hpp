@@ -23,6 +23,12 @@
 // product of those (binary decomposition). Per step: a 4x7 matrix times a 7-vector, no
 // allocation.
 //
+// Loop delay (command_pipeline.hpp): a fractional delay φT splits each period into [0, φT)
+// under the previous command and [φT, T) under the next. configure() also computes e^{M φT}
+// and e^{M (1-φ) T} (and their 32nds for Coulomb friction), so step_period_split() is two
+// exact ZOH steps, one per piece: the same discretisation with the hold instant moved, not
+// rounded to T 2^-20.
+//
 // Coulomb friction (optional, magnitude F_c on the handle) is not linear. It is integrated
 // in 2^kCoulombSubstepBits = 32 substeps per period, each an exact linear step:
 //   moving (v != 0):  friction -F_c sign(v) is held over the substep (added to f);
@@ -53,7 +59,7 @@ inline constexpr std::uint64_t kUnitsPerPeriod = std::uint64_t{1} << kFractionBi
 inline constexpr int kCoulombSubstepBits = 5;
 
 class AxisPlant {
-public:
+  public:
     /// Mechanical state of one axis. For the single-mass families the hand moves with the
     /// handle and hand_position_m / hand_velocity_mps stay 0.
     struct State {
@@ -66,8 +72,10 @@ public:
 
     /// Outside the tick (computes matrix exponentials). The hand of a two-mass grasp starts
     /// at the handle, the set-point at human.push.set_point_m(0); everything at rest.
+    /// `split_fraction` (φ in [0, 1)): where step_period_split() changes the force.
     void configure(double mass_kg, double damping_n_s_per_m, double coulomb_n,
-                   const HumanModel& human, double period_s, double initial_position_m);
+                   const HumanModel& human, double period_s, double initial_position_m,
+                   double split_fraction = 0.0);
 
     /// Advances by `units` of T 2^-20 (any number, whole periods included) with the force
     /// `force_n` on the handle held and the set-point moving linearly to set_point_end_m.
@@ -75,6 +83,13 @@ public:
 
     /// One whole period: advance(kUnitsPerPeriod, ...).
     void step_period(double force_n, double set_point_end_m) noexcept;
+
+    /// One whole period with `lead_force_n` held over its first φT and `lag_force_n` over
+    /// the rest (φ = configure()'s split_fraction), the set-point moving linearly to
+    /// set_point_end_m over the whole period. Exact for any φ; φ = 0 is
+    /// step_period(lag_force_n), bit for bit.
+    void step_period_split(double lead_force_n, double lag_force_n,
+                           double set_point_end_m) noexcept;
 
     const State& state() const noexcept { return state_; }
     void set_state(const State& state) noexcept { state_ = state; }
@@ -86,26 +101,48 @@ public:
 
     /// e^{M T}, rows x, v, x_h, v_h: the one-period transition of z = (x, v, x_h, v_h, f,
     /// x_s, v_s). For tests (it is the discrete plant the `exact` model samples).
-    Eigen::Matrix<double, 4, 7> period_transition() const { return transition_[0]; }
+    Eigen::Matrix<double, 4, 7> period_transition() const { return steps_[0].free; }
 
-private:
+  private:
     using Transition = Eigen::Matrix<double, 4, 7>;
 
-    /// One exact linear step of length T 2^-k with total handle force f and set-point
-    /// velocity v_s; no friction.
-    void linear_step(int k, double force_n, double set_point_velocity_mps) noexcept;
+    /// The exact transitions of one step length dt, rows x, v, x_h, v_h.
+    struct ExactStep {
+        Transition free = Transition::Zero();   ///< e^{M dt}
+        Transition stuck = Transition::Zero();  ///< the same with the handle clamped
+        double duration_s = 0.0;                ///< dt
+    };
+    /// One piece of a split period: the whole piece and its 32nd (friction substeps).
+    struct SplitPiece {
+        ExactStep whole;
+        ExactStep substep;
+    };
+
+    static ExactStep exact_step(const Eigen::Matrix<double, 7, 7>& m, double duration_s);
+
+    /// One exact linear step with total handle force f and set-point velocity v_s; no
+    /// friction.
+    void linear_step(const ExactStep& step, double force_n, double set_point_velocity_mps) noexcept;
     /// A step of length T 2^-k including Coulomb friction (substeps when longer than one).
     void friction_step(int k, double force_n, double set_point_velocity_mps) noexcept;
-    /// A step of length T 2^-k with the handle held still by stiction.
-    void stuck_step(int k, double set_point_velocity_mps) noexcept;
+    /// One Coulomb substep (the rules of the file comment) of `step`.
+    void friction_substep(const ExactStep& step, double force_n,
+                          double set_point_velocity_mps) noexcept;
+    /// A step with the handle held still by stiction.
+    void stuck_step(const ExactStep& step, double set_point_velocity_mps) noexcept;
+    /// One piece of a split period, with friction in 32 substeps if there is any.
+    void split_piece(const SplitPiece& piece, double force_n,
+                     double set_point_velocity_mps) noexcept;
     /// The net force on the handle other than friction, at the current state with v = 0.
     double resting_handle_force_n(double force_n, double set_point_velocity_mps) const noexcept;
 
-    std::array<Transition, kFractionBits + 1> transition_{};  ///< e^{M T 2^-k}, rows 0..3
-    std::array<Transition, kFractionBits + 1> stuck_transition_{};  ///< same, handle clamped
-    std::array<double, kFractionBits + 1> step_s_{};          ///< T 2^-k
-    Eigen::Matrix<double, 1, 7> acceleration_row_ = Eigen::Matrix<double, 1, 7>::Zero();  ///< row v of M
-    double handle_mass_kg_ = 1.0;  ///< the mass the handle's equation divides by
+    std::array<ExactStep, kFractionBits + 1> steps_{};  ///< dt = T 2^-k
+    SplitPiece lead_;                                   ///< dt = φT
+    SplitPiece lag_;                                    ///< dt = (1 - φ) T
+    double split_fraction_ = 0.0;                       ///< φ
+    Eigen::Matrix<double, 1, 7> acceleration_row_ =
+        Eigen::Matrix<double, 1, 7>::Zero();  ///< row v of M
+    double handle_mass_kg_ = 1.0;             ///< the mass the handle's equation divides by
     double coulomb_n_ = 0.0;
     HumanModel human_;
     double mass_kg_ = 1.0;

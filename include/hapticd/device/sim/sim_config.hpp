@@ -76,12 +76,16 @@ struct FaultConfig {
 struct SimConfig {
     int axes = 1;
     double rate_hz = 1000.0;
-    double mass_kg = 0.1;               ///< m in (10)
-    double damping_n_s_per_m = 2.0;     ///< b in (10)
-    double counts_per_meter = 1e5;      ///< encoder resolution; counts = floor(x cpm)
-    double force_limit_n = 20.0;        ///< commands are clamped to +-this
-    double coulomb_n = 0.0;             ///< Coulomb friction magnitude; 0: none
+    double mass_kg = 0.1;            ///< m in (10)
+    double damping_n_s_per_m = 2.0;  ///< b in (10)
+    double counts_per_meter = 1e5;   ///< encoder resolution; counts = floor(x cpm)
+    double force_limit_n = 20.0;     ///< commands are clamped to +-this
+    double coulomb_n = 0.0;          ///< Coulomb friction magnitude; 0: none
     SimClock clock = SimClock::realtime;
+    /// Loop delay D, s: from the encoder sample at t = nT to the force computed from it
+    /// taking effect (beyond the zero-order hold); >= 0 and < 10 periods
+    /// (command_pipeline.hpp).
+    double delay_s = 0.0;
     std::array<double, kMaxAxes> initial_position_m{};
     std::array<HumanModel, kMaxAxes> human{};  ///< per axis
     FaultConfig faults;

@@ -13,26 +13,36 @@
 //             state at now, write() then holds its force from now. paces_loop = false.
 // Sequence numbers: lockstep, n; realtime, one per read() (the sample the device produced).
 //
-// Commands: force_n clamped to +-force_limit; enable = false or a non-finite force holds zero
-// (a non-finite force also makes write() return IoResult::error). After disconnect, and after
-// close(), the force is zero: the device's own watchdog.
+// Loop delay D ([device.sim] delay, command_pipeline.hpp): a command lands D after the
+// sample it was computed from. Lockstep: the force written in tick n acts over
+// [nT + D, (n+1)T + D), exactly (each period is integrated in its two pieces, F[n-q-1] then
+// F[n-q]). Realtime: a command written after the sample at t_s lands at t_s + D, or at once
+// if that has already passed. Until it lands the previous command acts.
+//
+// Commands: force_n clamped to +-force_limit; enable = false holds zero, landing D later like
+// any command (what is already in flight still acts first: it is the device's own delay).
+// A non-finite force is refused: zero at once, the commands in flight dropped, and write()
+// returns IoResult::error. After a disconnect, and after close(), the force is zero at once
+// and nothing in flight ever lands: the device's own watchdog.
 //
 // Real-time: read() and write() do not allocate, lock, log or throw. The realtime clock's late
 // replies sleep (clock_nanosleep) in read(), as a late device would keep the caller waiting.
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 
 #include "hapticd/device/device.hpp"
 #include "hapticd/device/sim/axis_plant.hpp"
+#include "hapticd/device/sim/command_pipeline.hpp"
 #include "hapticd/device/sim/fault_injector.hpp"
 #include "hapticd/device/sim/sim_config.hpp"
 
 namespace hapticd::device::sim {
 
 class SimDevice final : public Device {
-public:
+  public:
     /// Parses config.plugin_table_toml (parse_sim_config), then opens.
     void open(const DeviceConfig& config) override;
     /// The non-plugin way in, for unit tests: an already validated configuration.
@@ -47,13 +57,25 @@ public:
     const AxisPlant& plant(int axis) const noexcept { return plants_[axis]; }
     /// Device time of the physics state, s.
     double time_s() const noexcept;
-    /// The force being held on each axis, N (after clamping, zero when disabled).
+    /// The force acting on each axis at time_s(), N (after clamping, zero when disabled):
+    /// with a loop delay, the last command that has landed.
     const std::array<double, kMaxAxes>& held_force_n() const noexcept { return held_force_n_; }
+    /// Commands written but not landed yet (the loop delay).
+    std::size_t commands_in_flight() const noexcept { return pipeline_.size(); }
+    const LoopDelay& loop_delay() const noexcept { return delay_; }
     bool is_open() const noexcept { return open_; }
 
-private:
-    /// Advances every axis to `units` (T 2^-20 since open) under the held force.
+  private:
+    /// Realtime: advances every axis to `units` (T 2^-20 since open), landing each command
+    /// in flight at its time on the way.
     void advance_to(std::uint64_t units) noexcept;
+    /// Advances every axis to `units` under the held force.
+    void advance_held_to(std::uint64_t units) noexcept;
+    /// Lockstep: one period [nT, (n+1)T): the held force for its first φT, then the
+    /// command due in period n (if any) for the rest.
+    void step_lockstep_period() noexcept;
+    /// Zero force at once, nothing in flight: the watchdog, close(), a refused command.
+    void cut_force() noexcept;
     /// Realtime: the current CLOCK_MONOTONIC time in units since open.
     std::uint64_t now_units() const noexcept;
     double units_to_s(std::uint64_t units) const noexcept;
@@ -63,11 +85,14 @@ private:
     std::array<AxisPlant, kMaxAxes> plants_{};
     FaultInjector faults_;
     std::array<double, kMaxAxes> held_force_n_{};
+    LoopDelay delay_;
+    CommandPipeline pipeline_;        ///< the commands in flight
+    std::uint64_t sample_units_ = 0;  ///< realtime: when the last sample was taken
     std::array<std::int64_t, kMaxAxes> last_fresh_counts_{};
-    std::uint64_t units_ = 0;               ///< physics time since open, T 2^-20
-    std::int64_t open_time_ns_ = 0;          ///< realtime: CLOCK_MONOTONIC at open()
-    std::uint64_t samples_produced_ = 0;     ///< realtime: sequence of the next sample
-    double previous_sample_time_s_ = 0.0;    ///< realtime: device time of the last sample
+    std::uint64_t units_ = 0;              ///< physics time since open, T 2^-20
+    std::int64_t open_time_ns_ = 0;        ///< realtime: CLOCK_MONOTONIC at open()
+    std::uint64_t samples_produced_ = 0;   ///< realtime: sequence of the next sample
+    double previous_sample_time_s_ = 0.0;  ///< realtime: device time of the last sample
     bool open_ = false;
 };
 
