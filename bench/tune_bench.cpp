@@ -1,5 +1,6 @@
-// Speed of the offline tools: coupling sizing (target: < 20 ms of solver time for one device)
-// and the exact-model check (target: < 2 s). Results are recorded in docs/benchmarks.md.
+// Speed of the offline tools: coupling sizing (target: < 20 ms of solver time for one device),
+// the passive check (target: < 1 ms) and the exact-model check (target: < 2 s). Results are
+// recorded in docs/benchmarks.md.
 #include <benchmark/benchmark.h>
 
 #include "hapticd/theory/coupling_check.hpp"
@@ -40,13 +41,44 @@ void BM_CheckEncoder(benchmark::State& state) {
 }
 BENCHMARK(BM_CheckEncoder)->Unit(benchmark::kMillisecond);
 
-void BM_CheckExact(benchmark::State& state) {
+// The passive model with a delay in hundredths of a period: 0 and 100 are closed forms,
+// 50 takes M(θ)'s one-dimensional maximum at every grid point.
+void BM_CheckPassive(benchmark::State& state) {
+    const hapticd::theory::LoopModel model{HoldModel::passive, state.range(0) / 100.0};
     for (auto _ : state) {
-        auto c = hapticd::tune::check_exact(kPenDisplay, {4000.0, 0.0}, 1000.0);
+        auto c = hapticd::theory::check_coupling(kPenDisplay, {1000.0, 0.2}, model, 1000.0);
         benchmark::DoNotOptimize(c);
     }
 }
-BENCHMARK(BM_CheckExact)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CheckPassive)->Arg(0)->Arg(50)->Arg(100)->Unit(benchmark::kMillisecond);
+
+// Sizing under the passive model: b_c = 0 and the optimised pair, no delay and half a period.
+void BM_SizePassive(benchmark::State& state) {
+    const hapticd::theory::LoopModel model{HoldModel::passive, state.range(0) / 100.0};
+    const std::optional<double> damping =
+        state.range(1) == 0 ? std::optional<double>(0.0) : std::nullopt;
+    for (auto _ : state) {
+        auto s = hapticd::tune::size_impedance_coupling({kPenDisplay, 1000.0, model, damping});
+        benchmark::DoNotOptimize(s);
+    }
+}
+BENCHMARK(BM_SizePassive)
+    ->Args({0, 0})
+    ->Args({0, 1})
+    ->Args({50, 0})
+    ->Args({50, 1})
+    ->Unit(benchmark::kMillisecond);
+
+// The whole exact check: the default sweep and the adversaries synthesised for the design,
+// with a delay in hundredths of a period.
+void BM_CheckExact(benchmark::State& state) {
+    const double delay = state.range(0) / 100.0;
+    for (auto _ : state) {
+        auto c = hapticd::tune::check_exact(kPenDisplay, {900.0, 0.0}, 1000.0, delay);
+        benchmark::DoNotOptimize(c);
+    }
+}
+BENCHMARK(BM_CheckExact)->Arg(0)->Arg(50)->Arg(100)->Unit(benchmark::kMillisecond)->Iterations(3);
 
 }  // namespace
 

@@ -31,6 +31,8 @@ constexpr double kBackOff = 1e-11;
 struct ConductanceBound {
     std::function<double(double)> value;
     std::function<double(double)> slope;
+    /// r on an increasing grid, when a table is cheaper than the values one by one.
+    std::function<std::vector<double>(const std::vector<double>&)> table;
 };
 
 /// Largest α >= 0 with Re(1/W) >= r at θ, for W = β + α T z/(z - 1). Re(1/W) falls
@@ -123,6 +125,25 @@ double solve_in_bracket(const Residual& residual, double lo, double hi, double s
     return theta;
 }
 
+/// A frequency grid with the bound tabulated on it: r(θ) is computed once per sizing, not
+/// once per damping tried (the passive model's M(θ) for a fraction of a period of delay is a
+/// one-dimensional maximum at each frequency).
+struct Grid {
+    std::vector<double> theta;
+    std::vector<double> r;
+};
+
+Grid tabulate(const ConductanceBound& bound, int points) {
+    Grid grid{theory::frequency_grid(points, kLowestTheta), {}};
+    if (bound.table) {
+        grid.r = bound.table(grid.theta);
+        return grid;
+    }
+    grid.r.reserve(grid.theta.size());
+    for (double theta : grid.theta) grid.r.push_back(bound.value(theta));
+    return grid;
+}
+
 struct FixedBetaSolution {
     double alpha = 0.0;
     double theta = 0.0;
@@ -131,15 +152,16 @@ struct FixedBetaSolution {
 
 /// The largest α for a given β: the minimum over θ of α_max(θ), found on a scan grid,
 /// refined with Ceres at the tangency point, and checked on a dense grid (a tangency the
-/// scan missed is refined in turn).
+/// scan missed is refined in turn) unless `check_dense` is false.
 FixedBetaSolution size_fixed_beta(const ConductanceBound& bound, double beta, double period,
-                                  const std::vector<double>& scan, const std::vector<double>& dense,
-                                  int* iterations) {
-    const auto solve_from = [&](const std::vector<double>& grid) {
+                                  const Grid& scan, const Grid& dense, int* iterations,
+                                  bool check_dense = true) {
+    const auto solve_from = [&](const Grid& table) {
+        const std::vector<double>& grid = table.theta;
         std::size_t best = 0;
         double best_alpha = kInf;
         for (std::size_t i = 0; i < grid.size(); ++i) {
-            const double alpha = alpha_max(grid[i], beta, bound.value(grid[i]), period);
+            const double alpha = alpha_max(grid[i], beta, table.r[i], period);
             if (alpha < best_alpha) {
                 best_alpha = alpha;
                 best = i;
@@ -161,18 +183,18 @@ FixedBetaSolution size_fixed_beta(const ConductanceBound& bound, double beta, do
         return s;
     };
     FixedBetaSolution solution = solve_from(scan);
-    if (solution.alpha < 0.0) return solution;
+    if (solution.alpha < 0.0 || !check_dense) return solution;
     const FixedBetaSolution check = solve_from(dense);
     if (check.alpha < solution.alpha * (1.0 - 1e-10)) solution = check;
     return solution;
 }
 
 /// Smallest relative margin Re(1/W)/r - 1 of the final answer over the dense grid.
-double verified_margin(const ConductanceBound& bound, double alpha, double beta, double period,
-                       const std::vector<double>& dense) {
+double verified_margin(double alpha, double beta, double period, const Grid& dense) {
     double worst = kInf;
-    for (double theta : dense) {
-        const double r = bound.value(theta);
+    for (std::size_t i = 0; i < dense.theta.size(); ++i) {
+        const double theta = dense.theta[i];
+        const double r = dense.r[i];
         if (r <= 0.0) continue;
         worst = std::min(worst, theory::coupling_conductance(alpha, beta, theta, period) / r - 1.0);
     }
@@ -184,11 +206,11 @@ struct BoundPeak {
     double value = 0.0;
     double theta = 0.0;
 };
-BoundPeak bound_peak(const ConductanceBound& bound, const std::vector<double>& dense) {
+BoundPeak bound_peak(const Grid& dense) {
     BoundPeak peak;
-    for (double theta : dense) {
-        const double r = bound.value(theta);
-        if (r > peak.value) peak = {r, theta};
+    for (std::size_t i = 0; i < dense.theta.size(); ++i) {
+        const double r = dense.r[i];
+        if (r > peak.value) peak = {r, dense.theta[i]};
     }
     return peak;
 }
@@ -213,7 +235,7 @@ struct PairSolution {
 /// β; β = 0 is the boundary candidate. If no saddle is confirmed, a golden-section search
 /// over β of the fixed-β answer decides.
 PairSolution size_best_pair(const ConductanceBound& bound, double period,
-                            const std::vector<double>& scan, const std::vector<double>& dense,
+                            const Grid& scan, const Grid& dense,
                             double beta_limit, int* iterations) {
     const FixedBetaSolution at_zero = size_fixed_beta(bound, 0.0, period, scan, dense, iterations);
     PairSolution best{at_zero.alpha, 0.0, at_zero.theta, at_zero.method};
@@ -221,10 +243,11 @@ PairSolution size_best_pair(const ConductanceBound& bound, double period,
     // β >= 0 needs tan(θ/2) <= 1, so saddles lie below half the Nyquist angle.
     std::vector<double> kappa;
     std::vector<double> thetas;
-    for (double theta : scan) {
+    for (std::size_t i = 0; i < scan.theta.size(); ++i) {
+        const double theta = scan.theta[i];
         if (theta >= std::numbers::pi / 2.0) break;
         thetas.push_back(theta);
-        kappa.push_back(saddle_alpha(bound, theta, period));
+        kappa.push_back(std::tan(theta / 2.0) / (period * scan.r[i]));  // saddle_alpha
     }
     for (std::size_t i = 1; i + 1 < kappa.size(); ++i) {
         if (!(kappa[i] <= kappa[i - 1] && kappa[i] <= kappa[i + 1])) continue;
@@ -242,7 +265,7 @@ PairSolution size_best_pair(const ConductanceBound& bound, double period,
     if (confirmed) return best;
     // Golden-section over β in [0, beta_limit) on the fixed-β answer.
     const auto alpha_at = [&](double beta) {
-        return size_fixed_beta(bound, beta, period, scan, dense, iterations).alpha;
+        return size_fixed_beta(bound, beta, period, scan, dense, iterations, false).alpha;
     };
     const double inv_phi = (std::sqrt(5.0) - 1.0) / 2.0;
     double lo = 0.0;
@@ -269,11 +292,20 @@ PairSolution size_best_pair(const ConductanceBound& bound, double period,
 ConductanceBound impedance_display_bound(const theory::DeviceModel& device,
                                          const theory::LoopModel& model) {
     const double b = device.damping_n_s_per_m;
-    return {[=](double theta) { return theory::conductance_bound(model, b, theta); },
-            [=](double theta) {
-                using Jet = ceres::Jet<double, 1>;
-                return theory::conductance_bound(model, b, Jet(theta, 0)).v[0];
-            }};
+    ConductanceBound bound{[=](double theta) { return theory::conductance_bound(model, b, theta); },
+                           [=](double theta) {
+                               using Jet = ceres::Jet<double, 1>;
+                               return theory::conductance_bound(model, b, Jet(theta, 0)).v[0];
+                           },
+                           nullptr};
+    if (model.hold == theory::HoldModel::passive) {
+        bound.table = [=](const std::vector<double>& thetas) {
+            std::vector<double> r = theory::passive_hold_numerators(thetas, model.delay_periods);
+            for (double& value : r) value /= 2.0 * b;  // (21): M(θ)/(2b)
+            return r;
+        };
+    }
+    return bound;
 }
 
 ConductanceBound admittance_display_bound(const theory::DeviceModel& device,
@@ -286,7 +318,8 @@ ConductanceBound admittance_display_bound(const theory::DeviceModel& device,
     return {value, [=](double theta) {
                 const double h = 1e-6 * std::max(theta, 1e-3);
                 return (value(theta + h) - value(theta - h)) / (2.0 * h);
-            }};
+            },
+            nullptr};
 }
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
@@ -305,9 +338,9 @@ ImpedanceSizing size_impedance_coupling(const ImpedanceSizingRequest& request) {
     }
     const double period = 1.0 / request.rate_hz;
     const ConductanceBound bound = impedance_display_bound(request.device, request.model);
-    const std::vector<double> scan = theory::frequency_grid(kScanPoints, kLowestTheta);
-    const std::vector<double> dense = theory::frequency_grid(kVerifyPoints, kLowestTheta);
-    const BoundPeak peak = bound_peak(bound, dense);
+    const Grid scan = tabulate(bound, kScanPoints);
+    const Grid dense = tabulate(bound, kVerifyPoints);
+    const BoundPeak peak = bound_peak(dense);
 
     ImpedanceSizing result;
     int iterations = 0;
@@ -336,7 +369,7 @@ ImpedanceSizing size_impedance_coupling(const ImpedanceSizingRequest& request) {
     }
     result.coupling.stiffness_n_per_m *= 1.0 - kBackOff;
     result.verified_worst_margin = verified_margin(
-        bound, result.coupling.stiffness_n_per_m, result.coupling.damping_n_s_per_m, period, dense);
+        result.coupling.stiffness_n_per_m, result.coupling.damping_n_s_per_m, period, dense);
     result.report.ceres_iterations = iterations;
     result.report.verify_points = kVerifyPoints;
     result.report.solver_time_s = seconds_since(start);
@@ -356,12 +389,12 @@ AdmittanceSizing size_admittance_coupling(const AdmittanceSizingRequest& request
     const double period = 1.0 / request.rate_hz;
     const ConductanceBound bound =
         admittance_display_bound(request.device, request.loop, request.model, period);
-    const std::vector<double> scan = theory::frequency_grid(kScanPoints, kLowestTheta);
-    const std::vector<double> dense = theory::frequency_grid(kVerifyPoints, kLowestTheta);
+    const Grid scan = tabulate(bound, kScanPoints);
+    const Grid dense = tabulate(bound, kVerifyPoints);
 
     // (35): the display's own conductance Re(1/Z_dA) must be >= 0 everywhere; where it is
     // negative the bound is infinite and no coupling can meet (37).
-    for (double theta : dense) {
+    for (double theta : dense.theta) {
         const double conductance = theory::admittance_display_conductance(
             request.device, request.loop, request.model, theta, period);
         if (conductance < 0.0) {
@@ -384,7 +417,7 @@ AdmittanceSizing size_admittance_coupling(const AdmittanceSizingRequest& request
             << "(Re(Z_cA) ~ f²); use k_i = 0 (proportional velocity feedback)";
         throw InfeasibleCoupling(why.str());
     }
-    const BoundPeak peak = bound_peak(bound, dense);
+    const BoundPeak peak = bound_peak(dense);
     AdmittanceSizing result;
     int iterations = 0;
     double alpha = 0.0;
@@ -416,7 +449,7 @@ AdmittanceSizing size_admittance_coupling(const AdmittanceSizingRequest& request
     alpha *= 1.0 - kBackOff;
     result.coupling = {1.0 / alpha, beta > 0.0 ? 1.0 / beta : kInf};
     result.binding_frequency_hz = theory::frequency_hz(theta, period);
-    result.verified_worst_margin = verified_margin(bound, alpha, beta, period, dense);
+    result.verified_worst_margin = verified_margin(alpha, beta, period, dense);
     result.report.ceres_iterations = iterations;
     result.report.verify_points = kVerifyPoints;
     result.report.solver_time_s = seconds_since(start);

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <vector>
 
 #include "hapticd/theory/benchmark.hpp"
 #include "hapticd/theory/coupling_check.hpp"
@@ -121,6 +122,31 @@ TEST(PassiveHoldNumerator, WholePeriodsAreTheAliasSumWithTheDelay) {
     // Halfway between whole periods the fraction costs more than the naive e^{-j(1+d)θ}:
     // τ² = (1.5)² + 1/4 = 2.5 against 2.25.
     EXPECT_NEAR(passive_delay_samples(0.5), std::sqrt(2.5), 1e-15);
+}
+
+TEST_P(EveryDelay, TableEqualsTheValuesOneByOne) {
+    const double delay = GetParam();
+    std::vector<double> thetas;
+    for (int i = 0; i < 4000; ++i) thetas.push_back(1e-6 * std::pow(kPi / 1e-6, i / 3999.0));
+    const std::vector<double> table = passive_hold_numerators(thetas, delay);
+    ASSERT_EQ(table.size(), thetas.size());
+    for (std::size_t i = 0; i < thetas.size(); ++i) {
+        const double one = passive_hold_numerator(thetas[i], delay);
+        EXPECT_NEAR(table[i], one, 1e-10 * one + 1e-300) << thetas[i];
+    }
+}
+
+// The independent lifted computation (tools/scripts/lifted_passivity.py, no alias sums):
+// its worst case over every passive environment, per frequency, at half a period of delay.
+TEST(PassiveHoldNumerator, MatchesTheLiftedReferenceAtHalfAPeriod) {
+    const std::pair<double, double> lifted[] = {{0.01, 1.24996e-4}, {0.1, 0.01246463},
+                                                {0.5, 0.29105757},  {1.0, 0.93792227},
+                                                {2.0, 1.5348952},   {3.0, 1.0149111},
+                                                {kPi, 1.0}};
+    for (auto [theta, reference] : lifted) {
+        EXPECT_NEAR(passive_hold_numerator(theta, 0.5), reference, 5e-8 * reference + 1e-9)
+            << theta;
+    }
 }
 
 TEST(PassiveHoldNumerator, IsContinuousAcrossWholePeriods) {

@@ -1,11 +1,13 @@
 #!/usr/bin/python3
 """Largest coupling stiffness each stability model allows, for a few coupling dampings.
 
-paper and encoder come from `haptic-tune size`; exact is a bisection on
-`haptic-tune check --model exact` (the closed-loop eigenvalue sweep). Prints a Markdown
-table for docs/stability-models.md.
+paper, encoder and passive come from `haptic-tune size`; exact is a bisection on
+`haptic-tune check --model exact` (the closed-loop eigenvalues over the sweep and the
+adversaries synthesised for each design). Prints a Markdown table for
+docs/stability-models.md.
 
-usage: tools/scripts/compare_models.py HAPTIC_TUNE --mass M --damping B --rate HZ BC...
+usage: tools/scripts/compare_models.py HAPTIC_TUNE --mass M --damping B --rate HZ
+           [--delay S] BC...
 """
 import argparse
 import json
@@ -43,18 +45,19 @@ def main():
     p.add_argument("--mass", required=True)
     p.add_argument("--damping", required=True)
     p.add_argument("--rate", required=True)
+    p.add_argument("--delay", default="0")
     p.add_argument("dampings", nargs="+", type=float)
     a = p.parse_args()
-    device = ["--mass", a.mass, "--damping", a.damping, "--rate", a.rate]
-    print("| b_c (N s/m) | paper k_c (N/m) | encoder k_c (N/m) | exact k_c (N/m) |")
-    print("|---|---|---|---|")
+    device = ["--mass", a.mass, "--damping", a.damping, "--rate", a.rate, "--delay", a.delay]
+    print("| b_c (N s/m) | paper k_c (N/m) | encoder k_c (N/m) | passive k_c (N/m) | exact k_c (N/m) |")
+    print("|---|---|---|---|---|")
     for b_c in a.dampings:
-        paper = sized(a.tool, device, "paper", b_c)
-        encoder = sized(a.tool, device, "encoder", b_c)
-        hi = 2.0 * max(v for v in (paper, encoder, 1.0) if v is not None)
+        found = {m: sized(a.tool, device, m, b_c) for m in ("paper", "encoder", "passive")}
+        hi = 2.0 * max(v for v in list(found.values()) + [1.0] if v is not None)
         exact = exact_limit(a.tool, device, b_c, hi)
         fmt = lambda v: "infeasible" if v is None else f"{v:.0f}"
-        print(f"| {b_c:g} | {fmt(paper)} | {fmt(encoder)} | {exact:.0f} |", flush=True)
+        print(f"| {b_c:g} | {fmt(found['paper'])} | {fmt(found['encoder'])} | "
+              f"{fmt(found['passive'])} | {exact:.0f} |", flush=True)
 
 
 if __name__ == "__main__":

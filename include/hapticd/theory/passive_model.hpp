@@ -34,6 +34,7 @@
 #include <cmath>
 #include <numbers>
 #include <type_traits>
+#include <vector>
 
 #include "hapticd/theory/unit_circle.hpp"
 
@@ -64,26 +65,38 @@ double scalar_value(const S& x) {
     }
 }
 
-/// h(χ) = cos χ (sqrt(p² c² + s²) - p c), c = cos(χ - α'): λ on the boundary of the worst
-/// environments' disk, u = 2 cos χ e^{jχ} (docs/stability-models.md, "fractional delay").
+/// The θ-dependent part of λ on the boundary of the worst environments' disk: p = |ρ|,
+/// s² = 1 - |ρ|², and α' = (1 + q)θ - arg ρ (docs/stability-models.md).
+template <typename S>
+struct ShiftedHold {
+    S p, s2, alpha;
+    ShiftedHold(const S& theta, double whole_periods, double fraction) {
+        using std::atan2;
+        using std::cos;
+        using std::sin;
+        using std::sqrt;
+        const S rho_re = (1.0 - fraction) + fraction * cos(theta);
+        const S rho_im = -fraction * sin(theta);
+        p = sqrt(rho_re * rho_re + rho_im * rho_im);
+        const S half_sine = sin(theta / 2.0);
+        s2 = 4.0 * fraction * (1.0 - fraction) * half_sine * half_sine;  // 1 - |ρ|², exactly
+        alpha = (1.0 + whole_periods) * theta - atan2(rho_im, rho_re);
+    }
+    /// h(χ) = cos χ (sqrt(p² c² + s²) - p c), c = cos(χ - α'): λ at u = 2 cos χ e^{jχ}.
+    S operator()(const S& chi) const {
+        using std::cos;
+        using std::sqrt;
+        const S pc = p * cos(chi - alpha);
+        const S root = sqrt(pc * pc + s2);
+        // sqrt(p²c² + s²) - pc without cancellation when pc > 0.
+        const S g = scalar_value(pc) > 0.0 ? s2 / (root + pc) : root - pc;
+        return cos(chi) * g;
+    }
+};
+
 template <typename S>
 S boundary_lambda(const S& theta, double chi, double whole_periods, double fraction) {
-    using std::atan2;
-    using std::cos;
-    using std::sin;
-    using std::sqrt;
-    const S rho_re = (1.0 - fraction) + fraction * cos(theta);
-    const S rho_im = -fraction * sin(theta);
-    const S p = sqrt(rho_re * rho_re + rho_im * rho_im);
-    const S half_sine = sin(theta / 2.0);
-    const S s2 = 4.0 * fraction * (1.0 - fraction) * half_sine * half_sine;  // 1 - |ρ|²
-    const S alpha = (1.0 + whole_periods) * theta - atan2(rho_im, rho_re);
-    const S c = cos(chi - alpha);
-    const S pc = p * c;
-    const S root = sqrt(pc * pc + s2);
-    // sqrt(p²c² + s²) - pc without cancellation when pc > 0.
-    const S g = scalar_value(pc) > 0.0 ? s2 / (root + pc) : root - pc;
-    return cos(S(chi)) * g;
+    return ShiftedHold<S>(theta, whole_periods, fraction)(S(chi));
 }
 
 /// The χ in [-π/2, π/2] that maximises boundary_lambda at θ (a scan, then golden section).
@@ -108,6 +121,13 @@ S passive_hold_numerator(const S& theta, double delay_periods) {
                                                             d.whole_periods, d.fraction);
     return passive_detail::boundary_lambda(theta, chi, d.whole_periods, d.fraction);
 }
+
+/// M(θ) on an increasing grid of frequencies, the same values as passive_hold_numerator:
+/// for a fraction of a period each maximum starts from the previous frequency's (the
+/// maximiser moves continuously with θ), which makes a table of 20,000 frequencies about
+/// three times faster than 20,000 separate maxima.
+std::vector<double> passive_hold_numerators(const std::vector<double>& thetas,
+                                            double delay_periods);
 
 /// τ with M(θ) ~ τ² θ²/2 as θ -> 0: τ² = (1 + q + φ)² + φ(1 - φ). τ = 1 with no delay.
 double passive_delay_samples(double delay_periods);
