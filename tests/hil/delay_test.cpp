@@ -98,19 +98,6 @@ std::string weighted_wall_scene(double wall_stiffness_n_per_m) {
            "]\nstiffness = " + toml_number(kWeightSpringNPerM) + "\n";
 }
 
-/// The growth rate of the envelope over its linear phase: least squares through
-/// log(amplitude) of the windows from the first on, up to (not including) the first whose
-/// amplitude is <= low_m or >= high_m. `windows` is how many were fitted.
-double linear_phase_growth_per_s(const OscillationTrend& trend, double low_m, double high_m,
-                                 std::size_t& windows) {
-    windows = 0;
-    while (windows < trend.amplitude_m.size() && trend.amplitude_m[windows] > low_m &&
-           trend.amplitude_m[windows] < high_m) {
-        ++windows;
-    }
-    return growth_per_s(trend, 0, windows);
-}
-
 struct DelayedContact {
     ContactJudgement judged;
     double growth_per_s = 0.0;  ///< over the linear phase

@@ -89,6 +89,20 @@ inline double growth_per_s(const OscillationTrend& trend, std::size_t begin, std
     return detail::slope(trend.window_mid_s, log_amplitude, begin, end);
 }
 
+/// The growth rate of the envelope over its linear phase: least squares through
+/// log(amplitude) of the windows from the first on, up to (not including) the first whose
+/// amplitude is <= low_m (decayed into the encoder's dither) or >= high_m (grown into a
+/// nonlinearity: the wall letting go, saturation). `windows` is how many were fitted.
+inline double linear_phase_growth_per_s(const OscillationTrend& trend, double low_m, double high_m,
+                                        std::size_t& windows) {
+    windows = 0;
+    while (windows < trend.amplitude_m.size() && trend.amplitude_m[windows] > low_m &&
+           trend.amplitude_m[windows] < high_m) {
+        ++windows;
+    }
+    return growth_per_s(trend, 0, windows);
+}
+
 /// Splits x (sampled every `period_s`, from time 0) from sample `start` on into windows of
 /// `window` samples and fits the trend of their amplitudes (see the file comment).
 inline OscillationTrend oscillation_trend(const std::vector<double>& x, double period_s,

@@ -78,7 +78,10 @@ struct DaemonConfig {
     std::string initial_position = "0.0";  ///< TOML: a number, or an array of `axes`
     std::string humans;                    ///< [device.sim.human] table(s); empty: hands-off
     std::string sim_keys;                  ///< more [device.sim] keys, e.g. "delay = 0.001\n"
-    std::string faults;                    ///< the body of [device.sim.faults]; empty: none
+    /// More [device.model] keys (what the start-up check assumes), e.g. "delay = 0.001\n".
+    std::string model_keys;
+    double counts_per_meter = kCountsPerMeter;  ///< the sim's encoder
+    std::string faults;                         ///< the body of [device.sim.faults]; empty: none
     std::string sim_clock = "lockstep";
     std::string realtime = "off";
     std::string passivity = "observe";
@@ -93,7 +96,7 @@ struct DaemonConfig {
             "[servo]\nrate_hz = " + toml_number(kRateHz) + "\nrealtime = \"" + realtime + "\"\n";
         text += "[device]\nplugin = \"sim\"\naxes = " + std::to_string(axes) + "\n";
         text += "[device.model]\nmass = " + toml_number(kPenMassKg) +
-                "\ndamping = " + toml_number(kPenDampingNsPerM) + "\n";
+                "\ndamping = " + toml_number(kPenDampingNsPerM) + "\n" + model_keys;
         text += coupling;
         text += "[scene]\nfile = \"" + scene_file + "\"\n";
         text += "[safety]\nmax_force = " + toml_number(max_force_n) +
@@ -102,7 +105,7 @@ struct DaemonConfig {
                 passivity + "\"\n";
         text += "[device.sim]\nmass = " + toml_number(kPenMassKg) +
                 "\ndamping = " + toml_number(kPenDampingNsPerM) +
-                "\ncounts_per_meter = " + toml_number(kCountsPerMeter) +
+                "\ncounts_per_meter = " + toml_number(counts_per_meter) +
                 "\nforce_limit = " + toml_number(kForceLimitN) + "\nclock = \"" + sim_clock +
                 "\"\ninitial_position = " + initial_position + "\n";
         text += sim_keys;
