@@ -153,9 +153,13 @@ StartupCheck run_startup_check(const Config& config, std::ostream& log) {
           << " Hz: worst margin " << check.worst_margin << " at " << check.worst_frequency_hz
           << " Hz";
         if (!check.worst_case.empty()) m << " (" << check.worst_case << ")";
+        if (config.device.model_delay_s > 0.0) {
+            m << " with a loop delay of " << config.device.model_delay_s << " s";
+        }
         m << "; size them with haptic-tune size --mass " << *config.device.model_mass_kg
           << " --damping " << *config.device.model_damping_n_s_per_m << " --rate "
           << config.servo.rate_hz;
+        if (config.device.model_delay_s > 0.0) m << " --delay " << config.device.model_delay_s;
         throw StartError(kExitBadInput, m.str());
     }
     log << "hapticd: " << (check.guarantee ? "" : "WARNING: ") << check.describe() << "\n";

@@ -270,6 +270,10 @@ TEST(HilDelayedCoupling, PassiveCheckWithTheDelayRefusesUndelayedGains) {
         kPenDampingNsPerM / (2.0 * kUndelayedGains.stiffness_n_per_m * kPeriodS) - 1.0;
     EXPECT_NEAR(refusal->margin, expected_margin, 1e-5) << refusal->line;
     EXPECT_EQ(refusal->frequency_hz, 0.0) << refusal->line;
+    // The message names the delay it assumed, and its hint sizes with it.
+    EXPECT_NE(refusal->line.find("with a loop delay of 0.001 s"), std::string::npos)
+        << refusal->line;
+    EXPECT_NE(refusal->line.find("--rate 1000 --delay 0.001"), std::string::npos) << refusal->line;
     EXPECT_TRUE(run.summary.is_null());
     EXPECT_EQ(run.log.rows(), 0u);
 }
