@@ -27,10 +27,18 @@ std::vector<double> frequency_grid(int points, double lowest_theta) {
 
 GridMinimum minimize_on_grid(const std::function<double(double)>& f,
                              const std::vector<double>& grid) {
+    std::vector<double> values;
+    values.reserve(grid.size());
+    for (double theta : grid) values.push_back(f(theta));
+    return minimize_tabulated(f, grid, values);
+}
+
+GridMinimum minimize_tabulated(const std::function<double(double)>& f,
+                               const std::vector<double>& grid, const std::vector<double>& values) {
     std::size_t best = 0;
-    double best_value = f(grid[0]);
+    double best_value = values[0];
     for (std::size_t i = 1; i < grid.size(); ++i) {
-        const double v = f(grid[i]);
+        const double v = values[i];
         if (v < best_value) {
             best_value = v;
             best = i;

@@ -47,19 +47,18 @@ double golden_maximum(const F& h, double lo, double hi, double tolerance) {
 /// the search resolves χ to a millionth of min(θ, 1).
 double angle_tolerance(double theta) { return 1e-6 * std::min(theta, 1.0); }
 
-/// Newton's method for a maximum of h near `start`: the root of h' with h' and h'' by central
-/// differences at 1e3 x the tolerance. nullopt when a step leaves start ± `reach`, h is not
-/// concave, or it has not converged to `tolerance` in 12 steps.
-template <typename F>
-std::optional<double> newton_maximum(const F& h, double start, double reach, double tolerance) {
-    const double e = 1e3 * tolerance;
+/// Newton's method on φ (ShiftedHoldSlope) near `start`. nullopt when a step leaves
+/// start ± `reach`, φ' is not negative (not a maximum), or it has not converged to
+/// `tolerance` in 12 steps.
+std::optional<double> newton_maximum(const ShiftedHold<double>& h, double start, double reach,
+                                     double tolerance) {
+    const ShiftedHoldSlope slope(h);
     double x = start;
     for (int i = 0; i < 12; ++i) {
-        const double lo = h(x - e), mid = h(x), hi = h(x + e);
-        const double curvature = (hi - 2.0 * mid + lo) / (e * e);
-        if (!(curvature < 0.0)) return std::nullopt;
-        const double step = -(hi - lo) / (2.0 * e) / curvature;
-        x += step;
+        const auto [phi, dphi] = slope(x);
+        if (!(dphi < 0.0)) return std::nullopt;
+        const double step = phi / dphi;
+        x -= step;
         if (!(std::abs(x - start) <= reach)) return std::nullopt;
         if (std::abs(step) <= tolerance) return x;
     }
@@ -101,23 +100,26 @@ std::vector<double> passive_hold_numerators(const std::vector<double>& thetas,
         for (double theta : thetas) out.push_back(passive_hold_numerator(theta, delay_periods));
         return out;
     }
-    // Warm start from the previous maximiser: Newton steps on h' (central differences) while
-    // they stay within ±0.02 rad of it and h is concave there; otherwise, the full search.
+    // Warm start: the maximiser extrapolated linearly in θ from the previous two, then Newton
+    // steps on h' (analytic, ShiftedHoldSlope) while they stay within ±0.02 rad of it on a
+    // maximum; otherwise, the full search.
     constexpr double kBracket = 0.02;
-    double previous = 0.0;
-    bool have_previous = false;
+    std::size_t known = 0;  // maximisers found so far (the extrapolation needs two)
+    double chi1 = 0.0, chi2 = 0.0, theta1 = 0.0, theta2 = 0.0;  // the last two
     for (double theta : thetas) {
         const passive_detail::ShiftedHold<double> h(theta, d.whole_periods, d.fraction);
-        double chi = 0.0;
-        const std::optional<double> newton =
-            have_previous ? passive_detail::newton_maximum(h, previous, kBracket,
-                                                           passive_detail::angle_tolerance(theta))
-                          : std::nullopt;
-        chi = newton ? *newton
-                     : passive_detail::worst_boundary_angle(theta, d.whole_periods, d.fraction);
-        out.push_back(h(chi));
-        previous = chi;
-        have_previous = true;
+        std::optional<double> chi;
+        if (known > 0) {
+            const double start =
+                known > 1 ? chi1 + (chi1 - chi2) * (theta - theta1) / (theta1 - theta2) : chi1;
+            chi = passive_detail::newton_maximum(h, start, kBracket,
+                                                 passive_detail::angle_tolerance(theta));
+        }
+        if (!chi) chi = passive_detail::worst_boundary_angle(theta, d.whole_periods, d.fraction);
+        out.push_back(h(*chi));
+        chi2 = chi1, theta2 = theta1;
+        chi1 = *chi, theta1 = theta;
+        ++known;
     }
     return out;
 }

@@ -19,5 +19,8 @@ struct GridMinimum {
 };
 GridMinimum minimize_on_grid(const std::function<double(double)>& f,
                              const std::vector<double>& grid);
+/// The same with f already evaluated on the grid (values[i] = f(grid[i])).
+GridMinimum minimize_tabulated(const std::function<double(double)>& f,
+                               const std::vector<double>& grid, const std::vector<double>& values);
 
 }  // namespace hapticd::theory

@@ -34,6 +34,7 @@
 #include <cmath>
 #include <numbers>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "hapticd/theory/unit_circle.hpp"
@@ -91,6 +92,27 @@ struct ShiftedHold {
         // sqrt(p²c² + s²) - pc without cancellation when pc > 0.
         const S g = scalar_value(pc) > 0.0 ? s2 / (root + pc) : root - pc;
         return cos(chi) * g;
+    }
+};
+
+/// The slope of h for Newton's method, in double: h'(χ) = g φ(χ)/sqrt(p²c² + s²) with
+///   φ(χ) = p cos χ sin(χ - α') - sqrt(p²c² + s²) sin χ,
+///   φ'(χ) = p cos(2χ - α') + p² c sin(χ - α') sin χ / sqrt(p²c² + s²) - sqrt(p²c² + s²) cos χ,
+/// so the maximum is the root of φ where φ' < 0. One sincos and one sqrt per step.
+struct ShiftedHoldSlope {
+    double p, s2, cos_alpha, sin_alpha;
+    explicit ShiftedHoldSlope(const ShiftedHold<double>& h)
+        : p(h.p), s2(h.s2), cos_alpha(std::cos(h.alpha)), sin_alpha(std::sin(h.alpha)) {}
+    /// φ and φ' at χ.
+    std::pair<double, double> operator()(double chi) const {
+        const double c0 = std::cos(chi), s0 = std::sin(chi);
+        const double c = c0 * cos_alpha + s0 * sin_alpha;   // cos(χ - α')
+        const double sd = s0 * cos_alpha - c0 * sin_alpha;  // sin(χ - α')
+        const double c2 = c0 * c - s0 * sd;                 // cos(2χ - α')
+        const double root = std::sqrt(p * p * c * c + s2);
+        const double phi = p * c0 * sd - root * s0;
+        const double slope = p * c2 + p * p * c * sd * s0 / root - root * c0;
+        return {phi, slope};
     }
 };
 
