@@ -204,7 +204,9 @@ Config parse_config(std::string_view toml_text, const std::string& source,
             "damping", tune::kMinDeviceDamping, tune::kMaxDeviceDamping, false, "N s/m");
         const double period_s = 1.0 / config.servo.rate_hz;
         config.device.model_delay_s = model.number("delay", 0.0, kInf, false, "s").value_or(0.0);
-        if (!(config.device.model_delay_s < 10.0 * period_s)) {
+        // In periods, as every model checks it (rounding of delay / period must not pass here
+        // and fail there).
+        if (!(config.device.model_delay_s * config.servo.rate_hz < 10.0)) {
             std::ostringstream m;
             m << source << ": [device.model] delay = " << config.device.model_delay_s
               << " s is out of range: allowed >= 0 and < 10 periods (" << 10.0 * period_s
@@ -222,9 +224,9 @@ Config parse_config(std::string_view toml_text, const std::string& source,
     coupling.allow_only({"enabled", "stiffness", "damping", "check"});
     config.coupling.enabled = coupling.boolean("enabled").value_or(true);
     config.coupling.stiffness_n_per_m =
-        coupling.number("stiffness", 0.0, kInf, false, "N/m").value_or(0.0);
+        coupling.number("stiffness", 0.0, tune::kMaxCouplingStiffness, false, "N/m").value_or(0.0);
     config.coupling.damping_n_s_per_m =
-        coupling.number("damping", 0.0, kInf, false, "N s/m").value_or(0.0);
+        coupling.number("damping", 0.0, tune::kMaxCouplingDamping, false, "N s/m").value_or(0.0);
     config.coupling.check =
         coupling.text("check", {"passive", "exact", "paper", "encoder", "off"}).value_or("passive");
     if (!config.coupling.enabled) {

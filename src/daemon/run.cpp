@@ -139,6 +139,8 @@ StartupCheck run_startup_check(const Config& config, std::ostream& log) {
         check = check_coupling_at_startup(config);
     } catch (const ConfigError& e) {
         throw StartError(kExitBadInput, e.what());
+    } catch (const std::invalid_argument& e) {  // a model's own range check
+        throw StartError(kExitBadInput, config.source + ": " + e.what());
     }
     if (check.skipped) {
         log << "hapticd: WARNING: " << check.describe() << "\n";

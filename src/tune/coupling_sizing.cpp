@@ -234,9 +234,8 @@ struct PairSolution {
 /// The best (α, β): saddle points of α_max(θ, β), each confirmed by a fixed-β sizing at its
 /// β; β = 0 is the boundary candidate. If no saddle is confirmed, a golden-section search
 /// over β of the fixed-β answer decides.
-PairSolution size_best_pair(const ConductanceBound& bound, double period,
-                            const Grid& scan, const Grid& dense,
-                            double beta_limit, int* iterations) {
+PairSolution size_best_pair(const ConductanceBound& bound, double period, const Grid& scan,
+                            const Grid& dense, double beta_limit, int* iterations) {
     const FixedBetaSolution at_zero = size_fixed_beta(bound, 0.0, period, scan, dense, iterations);
     PairSolution best{at_zero.alpha, 0.0, at_zero.theta, at_zero.method};
     bool confirmed = false;
@@ -283,8 +282,9 @@ PairSolution size_best_pair(const ConductanceBound& bound, double period,
     }
     const double beta = a1 > a2 ? b1 : b2;
     if (std::max(a1, a2) > best.alpha) {
+        // The search compared scan-grid answers; the dense check may lower this one.
         const FixedBetaSolution s = size_fixed_beta(bound, beta, period, scan, dense, iterations);
-        best = {s.alpha, beta, s.theta, "golden-section"};
+        if (s.alpha > best.alpha) best = {s.alpha, beta, s.theta, "golden-section"};
     }
     return best;
 }
@@ -315,7 +315,8 @@ ConductanceBound admittance_display_bound(const theory::DeviceModel& device,
         return theory::admittance_coupling_bound(device, loop, model, theta, period);
     };
     // (37) is complex arithmetic end to end; its slope is taken by a central difference.
-    return {value, [=](double theta) {
+    return {value,
+            [=](double theta) {
                 const double h = 1e-6 * std::max(theta, 1e-3);
                 return (value(theta + h) - value(theta - h)) / (2.0 * h);
             },

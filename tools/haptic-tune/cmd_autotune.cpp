@@ -28,6 +28,7 @@
 #include "hapticd/daemon/config_editor.hpp"
 #include "hapticd/daemon/startup_check.hpp"
 #include "hapticd/tune/autotune.hpp"
+#include "hapticd/tune/exact_model.hpp"
 
 extern char** environ;
 
@@ -400,11 +401,12 @@ int run_autotune(const AutotuneCliOptions& o) {
     options.delay_periods = o.delay_s.value_or(config.device.model_delay_s) * config.servo.rate_hz;
     options.identification.force_limit_n = config.safety.max_force_n;
     try {
-        options.validate();
+        tune::check_delay_periods(options.delay_periods);
     } catch (const std::invalid_argument& e) {
         throw AutotuneError(std::string(e.what()) +
                             " ([device.model] delay or --delay x [servo] rate_hz)");
     }
+    options.validate();
 
     Outcome outcome;
     outcome.config_path = o.config_path;

@@ -162,8 +162,9 @@ void add_size_command(CLI::App& app, Invocation& invocation) {
                 if (model == theory::HoldModel::passive || input.delay_s != 0.0) {
                     throw UsageError(
                         "--display admittance is sized from (37) with --model encoder or paper "
-                        "and no --delay: the passive model of the admittance display is not "
-                        "built yet (docs/stability-models.md)");
+                        "and no loop delay (pass --delay 0 over a config's [device.model] delay): "
+                        "the passive model of the admittance display is not built yet "
+                        "(docs/stability-models.md)");
                 }
                 return run_admittance(*options, input, model);
             }
