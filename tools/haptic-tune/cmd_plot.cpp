@@ -69,8 +69,10 @@ int run_plot(const ChartOptions& o) {
         per_model[std::string(theory::to_string(model))] =
             model_curve(input, design, model, frequencies);
     }
-    const std::string title =
-        "Design procedure, (21): " + describe_device(input) + "\n" + describe_design(design);
+    const std::string delay =
+        input.delay_s > 0.0 ? ", loop delay " + format_number(input.delay_s * 1e3) + " ms" : "";
+    const std::string title = "Design procedure, (21): " + describe_device(input) + delay + "\n" +
+                              describe_design(design);
     nlohmann::ordered_json chart = {
         {"kind", "design-procedure"},
         {"title", title},
