@@ -206,10 +206,11 @@ Config parse_config(std::string_view toml_text, const std::string& source,
         config.device.model_delay_s = model.number("delay", 0.0, kInf, false, "s").value_or(0.0);
         // In periods, as every model checks it (rounding of delay / period must not pass here
         // and fail there).
-        if (!(config.device.model_delay_s * config.servo.rate_hz < 10.0)) {
+        if (!(config.device.model_delay_s * config.servo.rate_hz < tune::kMaxDelayPeriods)) {
             std::ostringstream m;
             m << source << ": [device.model] delay = " << config.device.model_delay_s
-              << " s is out of range: allowed >= 0 and < 10 periods (" << 10.0 * period_s
+              << " s is out of range: allowed >= 0 and < " << tune::kMaxDelayPeriods << " periods ("
+              << tune::kMaxDelayPeriods * period_s
               << " s at [servo] rate_hz = " << config.servo.rate_hz << ")";
             throw ConfigError(m.str());
         }

@@ -86,10 +86,24 @@ TwoPort impedance_interface(const DeviceModel& device, const SpringDamperCouplin
 double coupling_margin(const DeviceModel& device, const SpringDamperCoupling& coupling,
                        const LoopModel& model, double theta, double sample_period_s) {
     const double bound = conductance_bound(model, device.damping_n_s_per_m, theta);
-    const double conductance = coupling_conductance(
-        coupling.stiffness_n_per_m, coupling.damping_n_s_per_m, theta, sample_period_s);
-    if (bound <= 0.0) return std::numeric_limits<double>::infinity();
-    return conductance / bound - 1.0;
+    return relative_margin(coupling_conductance(coupling.stiffness_n_per_m,
+                                                coupling.damping_n_s_per_m, theta, sample_period_s),
+                           bound);
+}
+
+std::vector<double> conductance_bounds(const LoopModel& model, double device_damping_n_s_per_m,
+                                       const std::vector<double>& thetas) {
+    if (model.hold == HoldModel::passive) {
+        std::vector<double> bounds = passive_hold_numerators(thetas, model.delay_periods);
+        for (double& bound : bounds) bound /= 2.0 * device_damping_n_s_per_m;  // (21)
+        return bounds;
+    }
+    std::vector<double> bounds;
+    bounds.reserve(thetas.size());
+    for (double theta : thetas) {
+        bounds.push_back(conductance_bound(model, device_damping_n_s_per_m, theta));
+    }
+    return bounds;
 }
 
 double coupling_margin_at_dc(const DeviceModel& device, const SpringDamperCoupling& coupling,

@@ -1,7 +1,6 @@
 #include "hapticd/theory/coupling_check.hpp"
 
 #include <cmath>
-#include <limits>
 #include <vector>
 
 #include "hapticd/theory/frequency_grid.hpp"
@@ -15,20 +14,12 @@ CouplingCheck check_coupling(const DeviceModel& device, const SpringDamperCoupli
         return coupling_margin(device, coupling, model, theta, period);
     };
     const std::vector<double> grid = frequency_grid(grid_points);
-    std::vector<double> margins;
-    if (model.hold == HoldModel::passive) {
-        // M(θ) tabulated with warm-started maxima (passive_model.hpp), then the same margin.
-        const std::vector<double> m = passive_hold_numerators(grid, model.delay_periods);
-        margins.reserve(grid.size());
-        for (std::size_t i = 0; i < grid.size(); ++i) {
-            const double bound = m[i] / (2.0 * device.damping_n_s_per_m);
-            const double conductance = coupling_conductance(
-                coupling.stiffness_n_per_m, coupling.damping_n_s_per_m, grid[i], period);
-            margins.push_back(bound <= 0.0 ? std::numeric_limits<double>::infinity()
-                                           : conductance / bound - 1.0);
-        }
-    } else {
-        for (double theta : grid) margins.push_back(margin(theta));
+    std::vector<double> margins = conductance_bounds(model, device.damping_n_s_per_m, grid);
+    for (std::size_t i = 0; i < grid.size(); ++i) {
+        margins[i] =
+            relative_margin(coupling_conductance(coupling.stiffness_n_per_m,
+                                                 coupling.damping_n_s_per_m, grid[i], period),
+                            margins[i]);
     }
     const GridMinimum interior = minimize_tabulated(margin, grid, margins);
     const double dc = coupling_margin_at_dc(device, coupling, model, period);

@@ -12,7 +12,6 @@
 #include <vector>
 
 #include "hapticd/theory/frequency_grid.hpp"
-#include "hapticd/tune/exact_model.hpp"
 #include "hapticd/tune/input_checks.hpp"
 
 namespace hapticd::tune {
@@ -193,10 +192,9 @@ FixedBetaSolution size_fixed_beta(const ConductanceBound& bound, double beta, do
 double verified_margin(double alpha, double beta, double period, const Grid& dense) {
     double worst = kInf;
     for (std::size_t i = 0; i < dense.theta.size(); ++i) {
-        const double theta = dense.theta[i];
-        const double r = dense.r[i];
-        if (r <= 0.0) continue;
-        worst = std::min(worst, theory::coupling_conductance(alpha, beta, theta, period) / r - 1.0);
+        worst = std::min(worst, theory::relative_margin(theory::coupling_conductance(
+                                                            alpha, beta, dense.theta[i], period),
+                                                        dense.r[i]));
     }
     return worst;
 }
@@ -297,14 +295,9 @@ ConductanceBound impedance_display_bound(const theory::DeviceModel& device,
                                using Jet = ceres::Jet<double, 1>;
                                return theory::conductance_bound(model, b, Jet(theta, 0)).v[0];
                            },
-                           nullptr};
-    if (model.hold == theory::HoldModel::passive) {
-        bound.table = [=](const std::vector<double>& thetas) {
-            std::vector<double> r = theory::passive_hold_numerators(thetas, model.delay_periods);
-            for (double& value : r) value /= 2.0 * b;  // (21): M(θ)/(2b)
-            return r;
-        };
-    }
+                           [=](const std::vector<double>& thetas) {
+                               return theory::conductance_bounds(model, b, thetas);
+                           }};
     return bound;
 }
 

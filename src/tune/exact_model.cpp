@@ -471,15 +471,6 @@ std::string EnvironmentModel::describe() const {
     return s.str();
 }
 
-void check_delay_periods(double delay_periods) {
-    if (!(std::isfinite(delay_periods) && delay_periods >= 0.0 && delay_periods < 10.0)) {
-        std::ostringstream message;
-        message << "loop delay = " << delay_periods
-                << " periods is out of range: allowed 0 <= delay < 10 periods";
-        throw std::invalid_argument(message.str());
-    }
-}
-
 ClosedLoopPoles closed_loop_poles(const DeviceModel& device, const SpringDamperCoupling& coupling,
                                   double rate_hz, const OperatorModel& human,
                                   const EnvironmentModel& environment, double delay_periods) {

@@ -55,4 +55,15 @@ void check_coupling_gains(const theory::SpringDamperCoupling& coupling) {
                    "N s/m");
 }
 
+void check_delay_periods(double delay_periods) {
+    if (!(std::isfinite(delay_periods) && delay_periods >= 0.0 &&
+          delay_periods < kMaxDelayPeriods)) {
+        std::ostringstream message;
+        message << "loop delay = " << delay_periods
+                << " periods is out of range: allowed 0 <= delay < " << kMaxDelayPeriods
+                << " periods";
+        throw std::invalid_argument(message.str());
+    }
+}
+
 }  // namespace hapticd::tune

@@ -105,12 +105,14 @@ GuardedRun run_guarded(device::Device& device, Environment& environment,
     return result;
 }
 
-GuardedRun run_scene(const SceneCase& scene_case, const std::string& passivity) {
+GuardedRun run_scene(const SceneCase& scene_case, const std::string& passivity,
+                     double stiffness_n_per_m = 3600.0, const std::string& sim_keys = "") {
     const ScratchDir dir;
     DaemonConfig text;
     text.axes = scene_case.axes;
-    text.coupling =
-        coupling_table({.stiffness_n_per_m = 3600.0, .damping_n_s_per_m = 0.0}, "encoder");
+    text.sim_keys = sim_keys;
+    text.coupling = coupling_table(
+        {.stiffness_n_per_m = stiffness_n_per_m, .damping_n_s_per_m = 0.0}, "encoder");
     text.humans = human_table(
         stiff_grasp(push_toml(scene_case.push_to_m, 0.0, scene_case.push_ramp_s, 1000.0)));
     text.passivity = passivity;
@@ -175,6 +177,17 @@ TEST(HilAllocation, TicksOfTheDaemonLoopDoNotAllocateInAnyShippedScene) {
             EXPECT_GE(run.rows_with_force, kGuardedTicks * 9 / 10);
         }
     }
+}
+
+// The sim's loop delay (1.5 periods: the whole-period pipeline and the split period) is in the
+// tick too; gains inside its passive bound (4000/6.5 = 615 N/m) keep the contact.
+TEST(HilAllocation, TicksWithADelayedSimDoNotAllocate) {
+    const GuardedRun run =
+        run_scene(shipped_scenes().front(), "observe", 500.0, "delay = 0.0015\n");
+    EXPECT_EQ(run.allocations, 0u);
+    EXPECT_EQ(run.faults, 0u);
+    EXPECT_EQ(run.guarded_rows, kGuardedTicks);
+    EXPECT_GE(run.rows_with_force, kGuardedTicks * 9 / 10);
 }
 
 }  // namespace

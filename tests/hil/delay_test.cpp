@@ -190,30 +190,26 @@ void expect_heavy_hand_limit_holds(double delay_periods) {
     }
 }
 
-TEST(HilDelay, OnePeriodLowersTheWallBoundToAThird) {
-    constexpr double kDelayPeriods = 1.0;
-    const double bound = bound_n_per_m(kDelayPeriods);
-    ASSERT_NEAR(bound, 2000.0, 1e-9);  // 2 (b + b_h + B) / 3T
-    expect_heavy_hand_limit_holds(kDelayPeriods);
-    const DelayedContact inside = run_delayed_contact(0.9 * bound, kDelayPeriods);
-    const DelayedContact outside = run_delayed_contact(1.1 * bound, kDelayPeriods);
+/// The bound K* for `delay_periods` is `expected`, and the daemon's loop decays at 0.9 K* and
+/// grows at 1.1 K*.
+void expect_the_bound_is_sharp(double delay_periods, double expected_bound_n_per_m) {
+    const double bound = bound_n_per_m(delay_periods);
+    ASSERT_NEAR(bound, expected_bound_n_per_m, 1e-9);
+    expect_heavy_hand_limit_holds(delay_periods);
+    const DelayedContact inside = run_delayed_contact(0.9 * bound, delay_periods);
+    const DelayedContact outside = run_delayed_contact(1.1 * bound, delay_periods);
     SCOPED_TRACE("0.9 K*");
     expect_decays(inside);
     SCOPED_TRACE("1.1 K*");
     expect_grows(outside);
 }
 
+TEST(HilDelay, OnePeriodLowersTheWallBoundToAThird) {
+    expect_the_bound_is_sharp(1.0, 2000.0);  // 2 (b + b_h + B) / 3T
+}
+
 TEST(HilDelay, HalfAPeriodLowersTheWallBoundToAHalf) {
-    constexpr double kDelayPeriods = 0.5;
-    const double bound = bound_n_per_m(kDelayPeriods);
-    ASSERT_NEAR(bound, 3000.0, 1e-9);  // 2 (b + b_h + B) / 2T
-    expect_heavy_hand_limit_holds(kDelayPeriods);
-    const DelayedContact inside = run_delayed_contact(0.9 * bound, kDelayPeriods);
-    const DelayedContact outside = run_delayed_contact(1.1 * bound, kDelayPeriods);
-    SCOPED_TRACE("0.9 K*");
-    expect_decays(inside);
-    SCOPED_TRACE("1.1 K*");
-    expect_grows(outside);
+    expect_the_bound_is_sharp(0.5, 3000.0);  // 2 (b + b_h + B) / 2T
 }
 
 // The wall that grows with a one-period delay (2200 N/m) is well inside the undelayed bound

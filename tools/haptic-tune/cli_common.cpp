@@ -102,10 +102,11 @@ DesignInput resolve_design_input(const DeviceOptions& options) {
     } catch (const std::invalid_argument& error) {
         throw UsageError(error.what());
     }
-    if (!(input.delay_s >= 0.0 && input.delay_periods() < 10.0)) {
+    if (!(input.delay_s >= 0.0 && input.delay_periods() < tune::kMaxDelayPeriods)) {
         std::ostringstream message;
-        message << "--delay " << input.delay_s << " s is out of range: allowed >= 0 and < 10 "
-                << "periods (" << 10.0 / input.rate_hz << " s at " << input.rate_hz << " Hz)";
+        message << "--delay " << input.delay_s << " s is out of range: allowed >= 0 and < "
+                << tune::kMaxDelayPeriods << " periods (" << tune::kMaxDelayPeriods / input.rate_hz
+                << " s at " << input.rate_hz << " Hz)";
         throw UsageError(message.str());
     }
     return input;

@@ -28,7 +28,7 @@
 #include "hapticd/daemon/config_editor.hpp"
 #include "hapticd/daemon/startup_check.hpp"
 #include "hapticd/tune/autotune.hpp"
-#include "hapticd/tune/exact_model.hpp"
+#include "hapticd/tune/input_checks.hpp"
 
 extern char** environ;
 

@@ -17,8 +17,10 @@
 #pragma once
 
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <string_view>
+#include <vector>
 
 #include "hapticd/theory/passive_model.hpp"
 #include "hapticd/theory/twoport.hpp"
@@ -136,6 +138,17 @@ S coupling_conductance(const S& stiffness_n_per_m, const S& damping_n_s_per_m, c
     const S resistance = damping_n_s_per_m + half_kt;
     const S reactance = half_kt / tan(theta / 2.0);
     return resistance / (resistance * resistance + reactance * reactance);
+}
+
+/// The right side of (21) on an increasing grid of frequencies: conductance_bound at each,
+/// with the passive model's M(θ) tabulated by passive_hold_numerators (warm-started maxima
+/// for a fraction of a period of delay).
+std::vector<double> conductance_bounds(const LoopModel& model, double device_damping_n_s_per_m,
+                                       const std::vector<double>& thetas);
+
+/// Re(1/Z_c) / bound - 1, +inf where the bound is zero: the relative margin of (21).
+inline double relative_margin(double conductance, double bound) {
+    return bound <= 0.0 ? std::numeric_limits<double>::infinity() : conductance / bound - 1.0;
 }
 
 /// Relative margin of (21) at θ: Re(1/Z_c) / bound - 1. Equal to the Llewellyn margin of

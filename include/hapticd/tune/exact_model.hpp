@@ -209,7 +209,4 @@ ExactCheck check_exact(const theory::DeviceModel& device,
                        const theory::SpringDamperCoupling& coupling, double rate_hz,
                        double delay_periods = 0.0);
 
-/// Throws std::invalid_argument unless 0 <= delay_periods < 10 (and finite).
-void check_delay_periods(double delay_periods);
-
 }  // namespace hapticd::tune

@@ -22,6 +22,7 @@ inline constexpr double kMinDeviceDamping = 1e-4, kMaxDeviceDamping = 1e4;  // N
 inline constexpr double kMinRateHz = 10.0, kMaxRateHz = 1e5;
 inline constexpr double kMaxCouplingStiffness = 1e9;  // N/m
 inline constexpr double kMaxCouplingDamping = 1e5;    // N s/m
+inline constexpr double kMaxDelayPeriods = 10.0;      // loop delay beyond the hold, < this
 
 /// m in [1e-4, 1e3] kg, b in [1e-4, 1e4] N s/m.
 void check_device(const theory::DeviceModel& device);
@@ -29,5 +30,7 @@ void check_device(const theory::DeviceModel& device);
 void check_rate(double rate_hz);
 /// k_c in [0, 1e9] N/m, b_c in [0, 1e5] N s/m.
 void check_coupling_gains(const theory::SpringDamperCoupling& coupling);
+/// 0 <= delay < kMaxDelayPeriods periods (and finite).
+void check_delay_periods(double delay_periods);
 
 }  // namespace hapticd::tune
