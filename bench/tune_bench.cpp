@@ -17,7 +17,8 @@ const DeviceModel kPenDisplay{0.1, 2.0};
 void BM_SizeFixedDamping(benchmark::State& state) {
     const double b_c = static_cast<double>(state.range(0)) / 10.0;
     for (auto _ : state) {
-        auto s = hapticd::tune::size_impedance_coupling({kPenDisplay, 1000.0, HoldModel::encoder, b_c});
+        auto s =
+            hapticd::tune::size_impedance_coupling({kPenDisplay, 1000.0, HoldModel::encoder, b_c});
         benchmark::DoNotOptimize(s);
     }
 }
@@ -35,7 +36,8 @@ BENCHMARK(BM_SizeOptimizeDamping)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)
 
 void BM_CheckEncoder(benchmark::State& state) {
     for (auto _ : state) {
-        auto c = hapticd::theory::check_coupling(kPenDisplay, {4000.0, 0.5}, HoldModel::encoder, 1000.0);
+        auto c =
+            hapticd::theory::check_coupling(kPenDisplay, {4000.0, 0.5}, HoldModel::encoder, 1000.0);
         benchmark::DoNotOptimize(c);
     }
 }

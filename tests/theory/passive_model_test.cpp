@@ -139,10 +139,9 @@ TEST_P(EveryDelay, TableEqualsTheValuesOneByOne) {
 // The independent lifted computation (tools/scripts/lifted_passivity.py, no alias sums):
 // its worst case over every passive environment, per frequency, at half a period of delay.
 TEST(PassiveHoldNumerator, MatchesTheLiftedReferenceAtHalfAPeriod) {
-    const std::pair<double, double> lifted[] = {{0.01, 1.24996e-4}, {0.1, 0.01246463},
-                                                {0.5, 0.29105757},  {1.0, 0.93792227},
-                                                {2.0, 1.5348952},   {3.0, 1.0149111},
-                                                {kPi, 1.0}};
+    const std::pair<double, double> lifted[] = {
+        {0.01, 1.24996e-4}, {0.1, 0.01246463}, {0.5, 0.29105757}, {1.0, 0.93792227},
+        {2.0, 1.5348952},   {3.0, 1.0149111},  {kPi, 1.0}};
     for (auto [theta, reference] : lifted) {
         EXPECT_NEAR(passive_hold_numerator(theta, 0.5), reference, 5e-8 * reference + 1e-9)
             << theta;

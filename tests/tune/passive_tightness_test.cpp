@@ -31,9 +31,9 @@ double passive_limit(const DeviceModel& device, double bc, double delay_periods,
     double lo = 0.0, hi = 1e7;
     while (hi - lo > 1e-9 * hi) {
         const double mid = 0.5 * (lo + hi);
-        const bool stable = theory::check_coupling(device, {mid, bc},
-                                                   {HoldModel::passive, delay_periods}, rate_hz)
-                                .unconditionally_stable;
+        const bool stable =
+            theory::check_coupling(device, {mid, bc}, {HoldModel::passive, delay_periods}, rate_hz)
+                .unconditionally_stable;
         (stable ? lo : hi) = mid;
     }
     return lo;
@@ -143,7 +143,8 @@ TEST(OperatorSynthesis, FreeHandleModesSitOnTheAliases) {
     const OperatorModel tuned = alias_tuned_operator(kPen, theta, kRateHz, 4, target);
     const double first = theta * kRateHz, mirror = (2.0 * std::numbers::pi - theta) * kRateHz;
     for (auto [omega, expected] : {std::pair{first, target}, {mirror, -target}}) {
-        double x = (kPen.mass_kg + tuned.hand_mass_kg) * omega - tuned.hand_stiffness_n_per_m / omega;
+        double x =
+            (kPen.mass_kg + tuned.hand_mass_kg) * omega - tuned.hand_stiffness_n_per_m / omega;
         for (const OperatorMode& mode : tuned.modes) {
             const double w2 = mode.stiffness_n_per_m / mode.mass_kg;
             x += mode.mass_kg * omega * w2 / (w2 - omega * omega);
