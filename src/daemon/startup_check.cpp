@@ -17,6 +17,8 @@ std::string StartupCheck::describe() const {
         << " ms): " << (passed ? "unconditionally stable" : "NOT unconditionally stable")
         << ", worst margin " << worst_margin << " at " << worst_frequency_hz << " Hz";
     if (!worst_case.empty()) out << " (" << worst_case << ")";
+    if (model == "passive") out << "; holds for every passive operator and environment";
+    if (model == "exact") out << "; holds for the exact model's sweep and synthesised adversaries";
     if (!guarantee) {
         out << ". The " << model
             << " model is NOT a guarantee: it keeps one term of the hold's alias sum and "

@@ -102,6 +102,13 @@ TEST_F(DaemonRun, LockstepRunOfTheEmbeddedDefaultGivesTheSummary) {
     EXPECT_EQ(s["realtime"]["mode"], "off");  // virtual time has no deadlines
     EXPECT_EQ(s["stability_check"]["model"], "passive");
     EXPECT_TRUE(s["stability_check"]["passed"].get<bool>());
+    // The verdict names the class it rests on.
+    EXPECT_NE(outcome.log.find("(passive model, loop delay 0 ms): unconditionally stable"),
+              std::string::npos)
+        << outcome.log;
+    EXPECT_NE(outcome.log.find("holds for every passive operator and environment"),
+              std::string::npos)
+        << outcome.log;
     // The default's grasp pushes 5 mm past the wall from t = 1 s: the wall pushes back.
     EXPECT_GT(s["max_force_n"].get<double>(), 1.0);
     EXPECT_LT(s["max_force_n"].get<double>(), 20.0);
