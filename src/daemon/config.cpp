@@ -76,6 +76,24 @@ class TableReader {
 
     bool has(const std::string& key) const { return find(key) != nullptr; }
 
+    /// A number, or an array [min, max] of two numbers (ranges are checked by the caller).
+    std::optional<tune::ParameterRange> range(const std::string& key, const char* unit) const {
+        const toml::node* node = find(key);
+        if (node == nullptr) return std::nullopt;
+        const auto as_number = [](const toml::node* n) -> std::optional<double> {
+            if (n == nullptr || n->is_boolean()) return std::nullopt;
+            return n->value<double>();
+        };
+        if (const auto v = as_number(node)) return tune::ParameterRange{*v, *v};
+        const toml::array* array = node->as_array();
+        if (array != nullptr && array->size() == 2) {
+            const auto lo = as_number(array->get(0)), hi = as_number(array->get(1));
+            if (lo && hi) return tune::ParameterRange{*lo, *hi};
+        }
+        throw ConfigError(where(key) + " must be a number or an array [min, max] of two numbers (" +
+                          unit + ")");
+    }
+
     std::optional<std::string> text(const std::string& key,
                                     const std::set<std::string>& choices = {}) const {
         const toml::node* node = find(key);
@@ -96,7 +114,10 @@ class TableReader {
     const toml::node* find(const std::string& key) const {
         return table_ == nullptr ? nullptr : table_->get(key);
     }
+  public:
     std::string where(const std::string& key) const { return source_ + ": [" + name_ + "] " + key; }
+
+  private:
 
     const std::string& source_;
     std::string name_;
@@ -149,6 +170,50 @@ void parse_identify(const toml::table& root, const std::string& source, Config& 
     }
 }
 
+/// [operator]: a declared class (tune/operator_class.hpp). Every bound is required: a class
+/// is a claim about the lab's hands, and a default would make it silently.
+std::optional<tune::OperatorClass> parse_operator_class(const toml::table& root,
+                                                        const std::string& source) {
+    const toml::table* table = sub_table(root, source, "operator");
+    if (table == nullptr) return std::nullopt;
+    const TableReader reader(source, "operator", table);
+    const auto& keys = tune::OperatorClass::kKeys;
+    std::string listed;
+    for (const char* key : keys) listed += (listed.empty() ? "" : ", ") + std::string(key);
+    std::set<std::string> allowed(keys.begin(), keys.end());
+    allowed.insert("max_resonance");
+    reader.allow_only(allowed);
+    if (table->empty()) {
+        throw ConfigError(source + ": [operator] is empty: declare " + listed +
+                          " (each a number or [min, max]), and optionally max_resonance (Hz); "
+                          "or remove the table to hold for every passive operator");
+    }
+    tune::OperatorClass cls;
+    tune::ParameterRange* ranges[] = {&cls.hand_mass_kg, &cls.grip_stiffness_n_per_m,
+                                      &cls.grip_damping_n_s_per_m, &cls.arm_stiffness_n_per_m,
+                                      &cls.arm_damping_n_s_per_m};
+    for (int i = 0; i < tune::kClassParameters; ++i) {
+        const auto r = reader.range(keys[i], tune::OperatorClass::kUnits[i]);
+        if (!r) {
+            throw ConfigError(reader.where(keys[i]) +
+                              " is missing: a class bounds every parameter of the two-mass "
+                              "grasp (" +
+                              listed + "); write 0 for a part the hand does not have");
+        }
+        *ranges[i] = *r;
+    }
+    cls.max_resonance_hz =
+        reader
+            .number("max_resonance", 0.0, tune::OperatorClass::kMaxResonanceLimitHz, true, "Hz")
+            .value_or(0.0);
+    try {
+        tune::validate(cls, source + ": [operator]");
+    } catch (const std::invalid_argument& e) {
+        throw ConfigError(e.what());
+    }
+    return cls;
+}
+
 }  // namespace
 
 Config parse_config(std::string_view toml_text, const std::string& source,
@@ -165,19 +230,19 @@ Config parse_config(std::string_view toml_text, const std::string& source,
     Config config;
     config.source = source;
     config.base_dir = base_dir;
-    const std::set<std::string> tables = {"servo", "device", "coupling",
-                                          "scene", "safety", "identify"};
+    const std::set<std::string> tables = {"servo",  "device",   "coupling", "scene",
+                                          "safety", "identify", "operator"};
     for (const auto& [key, node] : root) {
         const std::string k(key.str());
         if (!node.is_table()) {
             throw ConfigError(source + ": top-level key " + k +
                               " must be inside one of the tables [servo], [device], [coupling], "
-                              "[scene], [safety], [identify]");
+                              "[scene], [safety], [identify], [operator]");
         }
         if (tables.count(k) == 0) {
             throw ConfigError(source + ": unknown table [" + k +
                               "] (allowed: [servo], [device], [coupling], [scene], [safety], "
-                              "[identify])");
+                              "[identify], [operator])");
         }
     }
 
@@ -222,7 +287,7 @@ Config parse_config(std::string_view toml_text, const std::string& source,
     }
 
     const TableReader coupling(source, "coupling", sub_table(root, source, "coupling"));
-    coupling.allow_only({"enabled", "stiffness", "damping", "check"});
+    coupling.allow_only({"enabled", "stiffness", "damping", "check", "environments"});
     config.coupling.enabled = coupling.boolean("enabled").value_or(true);
     config.coupling.stiffness_n_per_m =
         coupling.number("stiffness", 0.0, tune::kMaxCouplingStiffness, false, "N/m").value_or(0.0);
@@ -230,6 +295,23 @@ Config parse_config(std::string_view toml_text, const std::string& source,
         coupling.number("damping", 0.0, tune::kMaxCouplingDamping, false, "N s/m").value_or(0.0);
     config.coupling.check =
         coupling.text("check", {"passive", "exact", "paper", "encoder", "off"}).value_or("passive");
+    config.coupling.environments =
+        coupling.text("environments", {"every-passive", "scene"}).value_or("every-passive");
+    config.operators = parse_operator_class(root, source);
+    const std::string& check = config.coupling.check;
+    if (config.operators && check != "exact") {
+        throw ConfigError(source + ": [operator] declares an operator class, which only [coupling] "
+                          "check = \"exact\" can use, but check = \"" + check + "\"" +
+                          (check == "passive"
+                               ? " (the passive model holds for every passive operator)"
+                               : "") +
+                          ": set check = \"exact\", or remove [operator]");
+    }
+    if (config.coupling.environments == "scene" && check != "passive" && check != "exact") {
+        throw ConfigError(source + ": [coupling] environments = \"scene\" needs check = "
+                          "\"passive\" or \"exact\" (the models that hold for a stated "
+                          "class of environments), but check = \"" + check + "\"");
+    }
     if (!config.coupling.enabled) {
         // The conventional design, for experiments: the daemon will not pretend to check it.
         for (const char* key : {"stiffness", "damping"}) {
@@ -295,6 +377,29 @@ Config load_config(const std::string& path) {
     text << in.rdbuf();
     const std::string dir = std::filesystem::path(path).parent_path().string();
     return parse_config(text.str(), path, dir.empty() ? "." : dir);
+}
+
+tune::OperatorClass load_operator_class(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw ConfigError(path + ": cannot read the operator class file");
+    std::ostringstream text;
+    text << in.rdbuf();
+    toml::table root;
+    try {
+        root = toml::parse(text.str(), path);
+    } catch (const toml::parse_error& e) {
+        std::ostringstream m;
+        m << path << ":" << e.source().begin.line << ":" << e.source().begin.column << ": "
+          << e.description();
+        throw ConfigError(m.str());
+    }
+    const auto cls = parse_operator_class(root, path);
+    if (!cls) {
+        throw ConfigError(path + ": has no [operator] table: an operator class file declares "
+                                 "[operator] with hand_mass, grip_stiffness, grip_damping, "
+                                 "arm_stiffness and arm_damping");
+    }
+    return *cls;
 }
 
 Config default_config() {

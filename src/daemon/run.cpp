@@ -162,6 +162,13 @@ StartupCheck run_startup_check(const Config& config, std::ostream& log) {
           << " --damping " << *config.device.model_damping_n_s_per_m << " --rate "
           << config.servo.rate_hz;
         if (config.device.model_delay_s > 0.0) m << " --delay " << config.device.model_delay_s;
+        if (config.operators) m << " --model exact --operator-class " << config.source;
+        if (config.coupling.environments == "scene") {
+            m << " --scene "
+              << (config.scene_file.empty() ? std::string("config/scenes/demo-wall.toml")
+                                            : config.scene_file);
+        }
+        m << " (the check holds for " << check.holds_for << ")";
         throw StartError(kExitBadInput, m.str());
     }
     log << "hapticd: " << (check.guarantee ? "" : "WARNING: ") << check.describe() << "\n";

@@ -3,7 +3,7 @@
 #include <sstream>
 
 #include "hapticd/theory/coupling_check.hpp"
-#include "hapticd/tune/exact_model.hpp"
+#include "hapticd/tune/class_check.hpp"
 
 namespace hapticd::daemon {
 
@@ -17,9 +17,10 @@ std::string StartupCheck::describe() const {
         << " ms): " << (passed ? "unconditionally stable" : "NOT unconditionally stable")
         << ", worst margin " << worst_margin << " at " << worst_frequency_hz << " Hz";
     if (!worst_case.empty()) out << " (" << worst_case << ")";
-    if (model == "passive") out << "; holds for every passive operator and environment";
-    if (model == "exact") out << "; holds for the exact model's sweep and synthesised adversaries";
-    if (!guarantee) {
+    if (guarantee) {
+        out << "; holds for " << holds_for;
+        if (model == "exact") out << ", as far as the exact model's search reaches";
+    } else {
         out << ". The " << model
             << " model is NOT a guarantee: it keeps one term of the hold's alias sum and "
                "misses operators with several modes (docs/stability-models.md); use check = "
@@ -27,6 +28,52 @@ std::string StartupCheck::describe() const {
     }
     return out.str();
 }
+
+tune::EnvironmentAssumption scene_environments(const env::Scene& scene,
+                                               const std::string& scene_source) {
+    const std::string where = scene_source + " (scene \"" + scene.name + "\")";
+    if (!scene.unmodelled.empty()) {
+        throw ConfigError(where + " cannot be checked against its own objects: " +
+                          scene.unmodelled +
+                          "; check against every passive environment instead ([coupling] "
+                          "environments = \"every-passive\", the default; haptic-tune without "
+                          "--scene)");
+    }
+    if (scene.linear_objects.empty()) {
+        throw ConfigError(where +
+                          " has no objects: in free space the coupling carries no force, so "
+                          "a check against the scene's objects has nothing to check; check "
+                          "against every passive environment instead");
+    }
+    tune::EnvironmentAssumption out;
+    out.scene_name = scene_source;
+    for (const env::LinearObject& o : scene.linear_objects) {
+        out.scene.push_back({o.rigid ? tune::EnvironmentModel::rigid_wall()
+                                     : tune::EnvironmentModel::mass_spring(
+                                           o.mass_kg, o.stiffness_n_per_m, o.damping_n_s_per_m),
+                             o.source});
+    }
+    return out;
+}
+
+namespace {
+
+tune::EnvironmentAssumption configured_environments(const Config& config) {
+    if (config.coupling.environments != "scene") return {};
+    try {
+        if (config.scene_file.empty()) {
+            return scene_environments(env::parse_scene(default_scene_text(), "<embedded demo-wall scene>",
+                                                       config.device.axes),
+                                      "<embedded demo-wall scene>");
+        }
+        return scene_environments(env::load_scene(config.scene_file, config.device.axes),
+                                  config.scene_file);
+    } catch (const env::SceneError& e) {
+        throw ConfigError(e.what());
+    }
+}
+
+}  // namespace
 
 StartupCheck check_coupling_at_startup(const Config& config) {
     if (config.coupling.check == "off") {
@@ -55,9 +102,11 @@ StartupCheck check_coupling_at_startup(const Config& config) {
     check.model = config.coupling.check;
     check.delay_s = config.device.model_delay_s;
     const double delay_periods = config.device.model_delay_s * config.servo.rate_hz;
+    const tune::StabilityAssumption assumption{config.operators, configured_environments(config)};
+    check.holds_for = assumption.describe();
     if (check.model == "exact") {
         const tune::ExactCheck exact =
-            tune::check_exact(device, coupling, config.servo.rate_hz, delay_periods);
+            tune::check_exact(device, coupling, config.servo.rate_hz, assumption, delay_periods);
         check.passed = exact.stable;
         check.worst_margin = exact.worst_margin;
         check.worst_frequency_hz = exact.worst_frequency_hz;
@@ -67,6 +116,16 @@ StartupCheck check_coupling_at_startup(const Config& config) {
     }
     const theory::HoldModel model = *theory::parse_hold_model(check.model);
     check.guarantee = model == theory::HoldModel::passive;
+    if (!assumption.environments.every_passive()) {
+        const tune::SceneCheck scene =
+            tune::check_passive_scene(device, coupling, config.servo.rate_hz,
+                                      assumption.environments.scene, delay_periods);
+        check.passed = scene.stable;
+        check.worst_margin = scene.margin;
+        check.worst_frequency_hz = scene.worst_frequency_hz;
+        check.worst_case = scene.worst_environment;
+        return check;
+    }
     const theory::CouplingCheck result =
         theory::check_coupling(device, coupling, {model, delay_periods}, config.servo.rate_hz);
     check.passed = result.unconditionally_stable;

@@ -86,6 +86,8 @@ class SceneParser {
             scene.causality = Causality::impedance;
             scene.impedance = build_penalty_scene();
         }
+        scene.linear_objects = std::move(linear_);
+        scene.unmodelled = std::move(unmodelled_);
         return scene;
     }
 
@@ -159,7 +161,7 @@ class SceneParser {
         }
     }
 
-    std::unique_ptr<ImpedanceEnvironment> build_penalty_scene() const {
+    std::unique_ptr<ImpedanceEnvironment> build_penalty_scene() {
         PenaltyObjects objects;
         for_each("wall", {"normal", "offset", "stiffness", "damping"}, [&](TableReader& r) {
             Wall wall;
@@ -168,15 +170,20 @@ class SceneParser {
             wall.stiffness_n_per_m = r.number("stiffness", kPositiveStiffness);
             wall.damping_n_s_per_m = r.number("damping", kDamping, 0.0);
             objects.walls.push_back(wall);
+            linear("wall", objects.walls.size(), 0.0, wall.stiffness_n_per_m,
+                   wall.damping_n_s_per_m);
         });
         for_each("spring", {"anchor", "stiffness"}, [&](TableReader& r) {
             Spring spring;
             spring.anchor_m = r.vector("anchor", false, Vec3(0.0));
             spring.stiffness_n_per_m = r.number("stiffness", kPositiveStiffness);
             objects.springs.push_back(spring);
+            linear("spring", objects.springs.size(), 0.0, spring.stiffness_n_per_m, 0.0);
         });
         for_each("damper", {"damping"}, [&](TableReader& r) {
             objects.dampers.push_back(Damper{r.number("damping", kPositiveDamping)});
+            linear("damper", objects.dampers.size(), 0.0, 0.0,
+                   objects.dampers.back().damping_n_s_per_m);
         });
         for_each("detent", {"axis", "center", "period", "peak_force", "periodic"},
                  [&](TableReader& r) {
@@ -187,6 +194,9 @@ class SceneParser {
                      detent.peak_force_n = r.number("peak_force", kPositiveForce);
                      detent.periodic = r.boolean("periodic", true);
                      objects.detents.push_back(detent);
+                     unmodelled("[[detent]] #" + std::to_string(objects.detents.size()) +
+                                ": its force is periodic in position, with a slope that "
+                                "changes sign, so it has no passive linear model");
                  });
         for_each("friction",
                  {"normal_force", "static_coefficient", "kinetic_coefficient", "stiffness"},
@@ -199,7 +209,19 @@ class SceneParser {
                      friction.kinetic_coefficient = r.number("kinetic_coefficient", kinetic);
                      friction.stiffness_n_per_m = r.number("stiffness", kPositiveStiffness);
                      objects.frictions.push_back(friction);
+                     unmodelled("[[friction]] #" + std::to_string(objects.frictions.size()) +
+                                ": stick-slip switches between a spring and a sliding force, "
+                                "so it has no linear model");
                  });
+        if (linear_.size() > 1) {
+            // Every contact at once: the objects' stiffnesses and dampings add.
+            LinearObject all{"all " + std::to_string(linear_.size()) + " objects at once"};
+            for (const LinearObject& o : linear_) {
+                all.stiffness_n_per_m += o.stiffness_n_per_m;
+                all.damping_n_s_per_m += o.damping_n_s_per_m;
+            }
+            linear_.push_back(all);
+        }
         auto scene = std::make_unique<PenaltyScene>(std::move(objects), axes_);
         scene->reset(Vec3(0.0));
         return scene;
@@ -239,9 +261,10 @@ class SceneParser {
         return constraints;
     }
 
-    std::unique_ptr<AdmittanceEnvironment> build_god_object() const {
+    std::unique_ptr<AdmittanceEnvironment> build_god_object() {
         ConstraintSet constraints = read_constraints("proxy_plane", "proxy_sphere", nullptr, "");
         auto god_object = std::make_unique<GodObject>(std::move(constraints), axes_);
+        linear_.push_back({"the god-object in contact with its constraints", 0.0, 0.0, 0.0, true});
         if (!god_object->constraints().is_free(god_object->proxy_m())) {
             throw SceneError(source_ +
                              ": the [[proxy_plane]]/[[proxy_sphere]] constraints leave "
@@ -251,7 +274,7 @@ class SceneParser {
         return god_object;
     }
 
-    std::unique_ptr<AdmittanceEnvironment> build_virtual_mass() const {
+    std::unique_ptr<AdmittanceEnvironment> build_virtual_mass() {
         const toml::node* node = root_.get("virtual_mass");
         const toml::table* table = node->as_table();
         if (table == nullptr) {
@@ -270,12 +293,30 @@ class SceneParser {
             reader.fail("anchor", " = " + detail::format_vector(parameters.anchor_m, axes_) +
                                       " is inside a constraint: allowed a point in free space");
         }
+        linear_.push_back({"[virtual_mass]", parameters.mass_kg, parameters.stiffness_n_per_m,
+                           parameters.damping_n_s_per_m, false});
+        if (!constraints.planes.empty() || !constraints.spheres.empty()) {
+            linear_.push_back(
+                {"[virtual_mass] in contact with its constraints", 0.0, 0.0, 0.0, true});
+        }
         return std::make_unique<VirtualMass>(parameters, std::move(constraints), axes_);
+    }
+
+    void linear(const char* kind, std::size_t index, double mass, double stiffness,
+                double damping) {
+        linear_.push_back({"[[" + std::string(kind) + "]] #" + std::to_string(index), mass,
+                           stiffness, damping, false});
+    }
+    void unmodelled(std::string why) {
+        if (unmodelled_.empty()) unmodelled_ = std::move(why);
     }
 
     const toml::table& root_;
     std::string source_;
     int axes_ = 0;
+    // What the stability check's scene model needs (Scene::linear_objects).
+    std::vector<LinearObject> linear_;
+    std::string unmodelled_;
 };
 
 }  // namespace

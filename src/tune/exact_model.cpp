@@ -338,7 +338,8 @@ void check_operator(const OperatorModel& h) {
 void check_environment(const EnvironmentModel& e) {
     if (e.kind == EnvironmentModel::Kind::rigid_wall) return;
     check_non_negative("environment mass m_e", e.mass_kg, "kg");
-    check_positive("environment stiffness k_e", e.stiffness_n_per_m, "N/m");
+    // A scene's free virtual mass or damper has k_e = 0: the loop keeps a free z = 1.
+    check_non_negative("environment stiffness k_e", e.stiffness_n_per_m, "N/m");
     check_non_negative("environment damping b_e", e.damping_n_s_per_m, "N s/m");
 }
 

@@ -8,6 +8,7 @@
 
 #include "hapticd/theory/coupling_check.hpp"
 #include "hapticd/theory/passive_model.hpp"
+#include "hapticd/tune/environment_assumption.hpp"
 
 namespace hapticd::tune {
 namespace {
@@ -122,22 +123,47 @@ EnvironmentModel lossless_environment_with_admittance(double theta, double rate_
     return EnvironmentModel::lossless_mass_spring(me, (me * mass_gain - reactance) / spring_gain);
 }
 
+namespace {
+
+// Below 0.01 rad (1.6 Hz at 1 kHz) the aliases of θ sit a thousand times apart, and the
+// synthesised modes span masses beyond what the eigenvalue problem resolves; the low band's
+// bound is the θ -> 0 limit, which 0.01 already meets to 1e-5.
+constexpr double kLowestTheta = 0.01;
+
+/// The fixed spread of frequencies every design's adversaries are built at, π among them.
+std::vector<double> spread_of_frequencies() {
+    return {kPi, 2.0 * kPi / 3.0, kPi / 2.0, 0.3, 0.1, 0.03, kLowestTheta};
+}
+
+/// Adds θ (where a bound binds) unless it is below the band or already in the spread.
+void add_if_new(std::vector<double>& thetas, double theta) {
+    const bool known = std::any_of(thetas.begin(), thetas.end(),
+                                   [&](double t) { return std::abs(t - theta) < 1e-3; });
+    if (theta > kLowestTheta && !known) thetas.push_back(theta);
+}
+
+/// Alias-tuned operators with 1, 2, 4, 8 and 16 modes for the reactance x at θ.
+void add_alias_tuned(std::vector<OperatorModel>& out, const theory::DeviceModel& device,
+                     double theta, double rate_hz, double x) {
+    for (const int aliases : {1, 2, 4, 8, 16}) {
+        // Low in the band the 16th alias is 1000 times the first, and the modes' masses then
+        // span more than the eigenvalues resolve (rounding reaches 1e-9).
+        if (aliases > 8 && theta < 0.1) continue;
+        out.push_back(alias_tuned_operator(device, theta, rate_hz, aliases, x));
+    }
+}
+
+}  // namespace
+
 Adversaries synthesize_adversaries(const theory::DeviceModel& device,
                                    const theory::SpringDamperCoupling& coupling, double rate_hz,
                                    double delay_periods) {
     const double period = 1.0 / rate_hz;
     const theory::LoopDelay delay = theory::split_delay(delay_periods);
-    // Below 0.01 rad (1.6 Hz at 1 kHz) the aliases of θ sit a thousand times apart, and the
-    // synthesised modes span masses beyond what the eigenvalue problem resolves; the low
-    // band's bound is the θ -> 0 limit, which 0.01 already meets to 1e-5.
-    constexpr double kLowestTheta = 0.01;
-    std::vector<double> thetas{kPi, 2.0 * kPi / 3.0, kPi / 2.0, 0.3, 0.1, 0.03, kLowestTheta};
+    std::vector<double> thetas = spread_of_frequencies();
     const theory::CouplingCheck passive = theory::check_coupling(
         device, coupling, {theory::HoldModel::passive, delay_periods}, rate_hz, 1024);
-    const double worst = theory::normalized_frequency(passive.worst_frequency_hz, period);
-    const bool known = std::any_of(thetas.begin(), thetas.end(),
-                                   [&](double t) { return std::abs(t - worst) < 1e-3; });
-    if (worst > kLowestTheta && !known) thetas.push_back(worst);
+    add_if_new(thetas, theory::normalized_frequency(passive.worst_frequency_hz, period));
 
     Adversaries out;
     for (const double theta : thetas) {
@@ -161,13 +187,26 @@ Adversaries synthesize_adversaries(const theory::DeviceModel& device,
             }
             reactances.push_back((-z * rotation).imag());
         }
-        for (const double x : reactances) {
-            for (const int aliases : {1, 2, 4, 8, 16}) {
-                // Low in the band the 16th alias is 1000 times the first, and the modes'
-                // masses then span more than the eigenvalues resolve (rounding reaches 1e-9).
-                if (aliases > 8 && theta < 0.1) continue;
-                out.operators.push_back(alias_tuned_operator(device, theta, rate_hz, aliases, x));
-            }
+        for (const double x : reactances) add_alias_tuned(out.operators, device, theta, rate_hz, x);
+    }
+    return out;
+}
+
+std::vector<OperatorModel> synthesize_scene_adversaries(
+    const theory::DeviceModel& device, const theory::SpringDamperCoupling& coupling,
+    double rate_hz, const std::vector<SceneEnvironment>& scene, double delay_periods) {
+    const double period = 1.0 / rate_hz;
+    const theory::LoopDelay delay = theory::split_delay(delay_periods);
+    std::vector<double> thetas = spread_of_frequencies();
+    const SceneCheck passive =
+        check_passive_scene(device, coupling, rate_hz, scene, delay_periods, 1024);
+    add_if_new(thetas, theory::normalized_frequency(passive.worst_frequency_hz, period));
+    std::vector<OperatorModel> out;
+    for (const double theta : thetas) {
+        const Complex rotation = std::polar(1.0, -(1.0 + delay.whole_periods) * theta);
+        for (const SceneEnvironment& env : scene) {
+            const Complex z = port_impedance(coupling, env.model, theta, period);
+            add_alias_tuned(out, device, theta, rate_hz, (-z * rotation).imag());
         }
     }
     return out;

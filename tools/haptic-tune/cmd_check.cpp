@@ -2,9 +2,9 @@
 // Exit 0 when it is, 1 when it is not.
 #include <memory>
 
+#include "assumption_options.hpp"
 #include "commands.hpp"
 #include "hapticd/theory/coupling_check.hpp"
-#include "hapticd/tune/exact_model.hpp"
 #include "hapticd/tune/input_checks.hpp"
 
 namespace hapticd::tools {
@@ -15,18 +15,22 @@ struct CheckOptions {
     std::optional<double> stiffness;
     std::optional<double> coupling_damping;
     std::string model;
+    AssumptionOptions assumption;
     bool json = false;
 };
 
 /// What a verdict rests on: the class of operators and environments it holds for.
-std::string holds_for(const std::string& model) {
+std::string holds_for(const std::string& model, const tune::StabilityAssumption& assumption) {
     if (model == "passive") {
-        return "every passive operator and every passive environment (Colgate and Schenkel's "
-               "sampled-data passivity condition)";
+        return assumption.describe() +
+               " (Colgate and Schenkel's sampled-data passivity condition at the device port)";
     }
     if (model == "exact") {
-        return "the operators and environments of the exact model's sweep and its synthesised "
-               "adversaries (multi-mode operators on the aliases, worst lossless environments)";
+        return assumption.describe() +
+               ", as far as the exact model's search reaches (its sweep, its synthesised "
+               "adversaries: multi-mode operators on the aliases and worst lossless "
+               "environments" +
+               (assumption.operators ? std::string(", and the search of the class)") : ")");
     }
     return "no class: the " + model +
            " model keeps one term of the hold's alias sum and is not a guarantee "
@@ -49,12 +53,13 @@ int run_check(const CheckOptions& o) {
         throw UsageError("--stiffness 0 with --coupling-damping 0 is no coupling at all");
     }
     tune::check_coupling_gains(coupling);
+    const tune::StabilityAssumption assumption = resolve_assumption(o.assumption, o.model);
 
     nlohmann::ordered_json out;
     bool stable = false;
     if (o.model == "exact") {
-        const tune::ExactCheck exact =
-            tune::check_exact(input.device, coupling, input.rate_hz, input.delay_periods());
+        const tune::ExactCheck exact = tune::check_exact(input.device, coupling, input.rate_hz,
+                                                         assumption, input.delay_periods());
         stable = exact.stable;
         out = {{"unconditionally_stable", exact.stable},
                {"worst_margin", exact.worst_margin},
@@ -64,6 +69,17 @@ int run_check(const CheckOptions& o) {
                {"worst_environment", exact.worst_environment.describe()},
                {"worst_spectral_radius", exact.worst_spectral_radius},
                {"cases_checked", exact.cases_checked}};
+    } else if (!assumption.environments.every_passive()) {
+        const tune::SceneCheck scene =
+            tune::check_passive_scene(input.device, coupling, input.rate_hz,
+                                      assumption.environments.scene, input.delay_periods());
+        stable = scene.stable;
+        out = {{"unconditionally_stable", scene.stable},
+               {"worst_margin", scene.margin},
+               {"worst_frequency_hz", scene.worst_frequency_hz},
+               {"model", o.model},
+               {"worst_environment", scene.worst_environment},
+               {"damping_needed", scene.damping_needed}};
     } else {
         const theory::HoldModel model = *theory::parse_hold_model(o.model);
         const theory::CouplingCheck check = theory::check_coupling(
@@ -74,7 +90,7 @@ int run_check(const CheckOptions& o) {
                {"worst_frequency_hz", check.worst_frequency_hz},
                {"model", o.model}};
     }
-    out["holds_for"] = holds_for(o.model);
+    out["holds_for"] = holds_for(o.model, assumption);
     out["delay_s"] = input.delay_s;
     out["delay_periods"] = input.delay_periods();
     out["stiffness"] = coupling.stiffness_n_per_m;
@@ -100,6 +116,7 @@ void add_check_command(CLI::App& app, Invocation& invocation) {
                      "coupling damping b_c (N s/m), default 0")
         ->check(non_negative_finite("N s/m"));
     add_model_option(*command, options->model, {"passive", "exact", "paper", "encoder"});
+    add_assumption_options(*command, options->assumption);
     command->add_flag("--json", options->json, "print the result as JSON");
     command->callback(
         [options, &invocation] { invocation.run = [options] { return run_check(*options); }; });

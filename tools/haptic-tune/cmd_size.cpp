@@ -4,9 +4,10 @@
 #include <iostream>
 #include <memory>
 
+#include "assumption_options.hpp"
 #include "commands.hpp"
 #include "hapticd/tune/coupling_sizing.hpp"
-#include "hapticd/tune/exact_model.hpp"
+#include "hapticd/tune/input_checks.hpp"
 
 namespace hapticd::tools {
 namespace {
@@ -21,6 +22,7 @@ struct SizeOptions {
     std::optional<double> ki;
     bool json = false;
     bool skip_exact_check = false;
+    AssumptionOptions assumption;
 };
 
 nlohmann::ordered_json report_fields(const tune::SizingReport& report) {
@@ -34,9 +36,10 @@ nlohmann::ordered_json report_fields(const tune::SizingReport& report) {
 /// frequency-domain models approximate. Warns on stderr when it disagrees.
 nlohmann::ordered_json exact_cross_check(const DesignInput& input,
                                          const theory::SpringDamperCoupling& coupling,
+                                         const tune::StabilityAssumption& assumption,
                                          bool* stable) {
-    const tune::ExactCheck exact =
-        tune::check_exact(input.device, coupling, input.rate_hz, input.delay_periods());
+    const tune::ExactCheck exact = tune::check_exact(input.device, coupling, input.rate_hz,
+                                                     assumption, input.delay_periods());
     *stable = exact.stable;
     if (!exact.stable) {
         std::cerr << "haptic-tune: the exact sampled-data model finds this design unstable: "
@@ -44,7 +47,8 @@ nlohmann::ordered_json exact_cross_check(const DesignInput& input,
                   << exact.worst_environment.describe()
                   << " grows by |z| = " << exact.worst_spectral_radius << " per tick at "
                   << exact.worst_frequency_hz
-                  << " Hz. Only the passive model (the default) holds for every passive "
+                  << " Hz, for " << assumption.describe()
+                  << ". Only the passive model (the default) holds for every passive "
                      "operator (docs/stability-models.md); exit 1.\n";
     }
     return {{"stable", exact.stable},
@@ -81,7 +85,73 @@ int run_impedance(const SizeOptions& o, const DesignInput& input, theory::HoldMo
     };
     bool stable = true;
     if (!o.skip_exact_check)
-        out["exact_check"] = exact_cross_check(input, sizing.coupling, &stable);
+        out["exact_check"] = exact_cross_check(input, sizing.coupling, {}, &stable);
+    print_result(out, o.json);
+    return stable ? kExitOk : kExitVerdictNo;
+}
+
+/// The largest k_c at b_c for a stated assumption (an operator class, a scene), or by the
+/// exact model: a bisection on the verdict (tune::exact_stiffness_limit; for the passive
+/// model with a scene, on tune::check_passive_scene), not a closed form.
+int run_assumed(const SizeOptions& o, const DesignInput& input,
+                const tune::StabilityAssumption& assumption) {
+    if (o.optimize_damping) {
+        throw UsageError("--optimize-damping sizes under the passive model against every "
+                         "passive environment; with --model exact, --operator-class or --scene, "
+                         "give --coupling-damping and compare values (docs/stability-models.md "
+                         "charts the limit against b_c)");
+    }
+    const double damping = o.coupling_damping.value_or(input.coupling_damping_n_s_per_m.value_or(0.0));
+    tune::check_coupling_gains({0.0, damping});
+    nlohmann::ordered_json out = {{"display", "impedance"}};
+    theory::SpringDamperCoupling coupling{0.0, damping};
+    double rejected = 0.0;
+    int checks = 0;
+    if (o.model == "exact") {
+        const tune::StiffnessLimit limit = tune::exact_stiffness_limit(
+            input.device, damping, input.rate_hz, assumption, input.delay_periods());
+        coupling.stiffness_n_per_m = limit.stiffness_n_per_m;
+        rejected = limit.rejected_n_per_m;
+        checks = limit.checks;
+        out["worst_operator"] = limit.at_limit.worst_operator.describe();
+        out["worst_environment"] = limit.at_limit.worst_environment.describe();
+    } else {
+        // The passive model with a scene: b >= λ is monotone enough in k_c for a bisection
+        // from an accepted 0 to a rejected upper end.
+        const auto stable = [&](double k) {
+            ++checks;
+            return tune::check_passive_scene(input.device, {k, damping}, input.rate_hz,
+                                             assumption.environments.scene,
+                                             input.delay_periods())
+                .stable;
+        };
+        double lo = 0.0, hi = 2.0 * input.device.damping_n_s_per_m * input.rate_hz;
+        if (stable(0.0)) {
+            while (stable(hi) && hi < tune::kMaxCouplingStiffness) {
+                lo = hi;
+                hi = std::min(2.0 * hi, tune::kMaxCouplingStiffness);
+            }
+            while (hi - lo > 1e-4 * hi) (stable(0.5 * (lo + hi)) ? lo : hi) = 0.5 * (lo + hi);
+        } else {
+            hi = 0.0;
+        }
+        coupling.stiffness_n_per_m = lo;
+        rejected = hi;
+    }
+    out["stiffness"] = coupling.stiffness_n_per_m;
+    out["damping"] = damping;
+    out["rejected_stiffness"] = rejected;
+    out["model"] = o.model;
+    out["holds_for"] = assumption.describe();
+    out["delay_s"] = input.delay_s;
+    out["delay_periods"] = input.delay_periods();
+    out["checks"] = checks;
+    out["device"] = {{"mass", input.device.mass_kg}, {"damping", input.device.damping_n_s_per_m}};
+    out["rate_hz"] = input.rate_hz;
+    bool stable = true;
+    if (o.model != "exact" && !o.skip_exact_check) {
+        out["exact_check"] = exact_cross_check(input, coupling, assumption, &stable);
+    }
     print_result(out, o.json);
     return stable ? kExitOk : kExitVerdictNo;
 }
@@ -140,7 +210,8 @@ void add_size_command(CLI::App& app, Invocation& invocation) {
         ->add_flag("--optimize-damping", options->optimize_damping,
                    "find the best (k_c, b_c) pair instead of k_c for a given b_c")
         ->excludes(damping);
-    add_model_option(*command, options->model, {"passive", "paper", "encoder"});
+    add_model_option(*command, options->model, {"passive", "exact", "paper", "encoder"});
+    add_assumption_options(*command, options->assumption);
     command->add_option("--display", options->display, "display causality (default impedance)")
         ->check(CLI::IsMember({"impedance", "admittance"}));
     command->add_option("--kp", options->kp, "admittance display: PI proportional gain (N s/m)")
@@ -157,6 +228,16 @@ void add_size_command(CLI::App& app, Invocation& invocation) {
             options->model = "encoder";
         invocation.run = [options] {
             const DesignInput input = resolve_design_input(options->device);
+            const tune::StabilityAssumption assumption =
+                resolve_assumption(options->assumption, options->model);
+            const bool assumed = options->model == "exact" || assumption.operators ||
+                                 !assumption.environments.every_passive();
+            if (assumed && options->display == "impedance") {
+                return run_assumed(*options, input, assumption);
+            }
+            if (options->model == "exact") {
+                throw UsageError("--model exact sizes the impedance display only");
+            }
             const theory::HoldModel model = *theory::parse_hold_model(options->model);
             if (options->display == "admittance") {
                 if (model == theory::HoldModel::passive || input.delay_s != 0.0) {

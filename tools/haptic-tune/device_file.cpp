@@ -60,7 +60,8 @@ DeviceFile read_device_file(const std::string& path) {
     const toml::table* servo = root["servo"].as_table();
     const toml::table* coupling = root["coupling"].as_table();
     reject_unknown_keys(path, model, "device.model", {"mass", "damping", "delay"});
-    reject_unknown_keys(path, coupling, "coupling", {"stiffness", "damping", "check"});
+    reject_unknown_keys(path, coupling, "coupling",
+                        {"stiffness", "damping", "check", "environments"});
     DeviceFile file;
     file.mass_kg = read_number(path, model, "device.model", "mass", false, "kg");
     file.damping_n_s_per_m = read_number(path, model, "device.model", "damping", false, "N s/m");

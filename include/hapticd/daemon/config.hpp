@@ -13,7 +13,10 @@
 //                  stability model; paper and encoder are not a guarantee and say so),
 //                  enabled (default true; false: no coupling, the scene's forces act on the
 //                  device directly: the conventional design, for experiments; needs
-//                  check = "off" and no gains)
+//                  check = "off" and no gains),
+//                  environments ("every-passive" (default) | "scene": check against the
+//                  scene's own linearised objects instead of every passive environment;
+//                  check passive or exact; a scene with a detent or friction is refused)
 //   [scene]        file (a scene TOML, relative to this file's folder)
 //   [safety]       max_force (N, > 0), max_speed (m/s, > 0),
 //                  soft_start_ramp (s, 0..10, default 0.5: force ramp after a still handle),
@@ -32,6 +35,11 @@
 //                  periods (1..1000), fade (s, 0..60). Unset values are chosen at start-up
 //                  from [device.model] (make_identify_plan, daemon/servo_settings.hpp);
 //                  without [device.model], force_amplitude is required
+//   [operator]     a declared operator class for check = "exact" (tune/operator_class.hpp):
+//                  hand_mass (kg, (0, 1e3]), grip_stiffness, arm_stiffness (N/m, [0, 1e7]),
+//                  grip_damping, arm_damping (N s/m, [0, 1e4]), each a number or [min, max],
+//                  all required; max_resonance (Hz, optional): the hand's own highest
+//                  resonance. Absent: every passive operator
 //
 // Every key is checked for type and range, and unknown keys and tables are errors. Each
 // message names the file, the key, the value and the allowed range.
@@ -41,6 +49,8 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+
+#include "hapticd/tune/operator_class.hpp"
 
 namespace hapticd::daemon {
 
@@ -71,6 +81,8 @@ struct CouplingSection {
     double stiffness_n_per_m = 0.0;
     double damping_n_s_per_m = 0.0;
     std::string check = "passive";
+    /// "every-passive" (default) or "scene": the environments the check holds for.
+    std::string environments = "every-passive";
 };
 
 struct SafetySection {
@@ -104,6 +116,8 @@ struct Config {
     std::string scene_file;  ///< resolved path; empty means the embedded demo scene
     SafetySection safety;
     IdentifySection identify;
+    /// [operator]: a declared operator class; none means every passive operator.
+    std::optional<tune::OperatorClass> operators;
 };
 
 /// Parses and validates config text. `source` names it in messages; `base_dir` resolves
@@ -113,6 +127,10 @@ Config parse_config(std::string_view toml_text, const std::string& source,
 
 /// Reads and parses a config file. Throws ConfigError (also for an unreadable file).
 Config load_config(const std::string& path);
+
+/// The [operator] table of a TOML file (an operator class file, or a hapticd config; its
+/// other tables are not read). Throws ConfigError when it is absent or invalid.
+tune::OperatorClass load_operator_class(const std::string& path);
 
 /// The embedded default: the simulated device and the demo wall scene (config/hapticd.toml
 /// and config/scenes/demo-wall.toml, compiled in).

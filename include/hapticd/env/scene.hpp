@@ -46,6 +46,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "hapticd/env/environment.hpp"
 
@@ -61,6 +62,18 @@ class SceneError : public std::runtime_error {
     using std::runtime_error::runtime_error;
 };
 
+/// One object of a scene, linearised in contact, for the stability check's scene model
+/// (tune/environment_assumption.hpp): a penalty object is a massless spring-damper solved
+/// with the coupling (implicit), a virtual mass the implicit-Euler mass-spring, a
+/// constraint in contact a rigid wall.
+struct LinearObject {
+    std::string source;  ///< e.g. "[[wall]] #2", "all 3 objects at once"
+    double mass_kg = 0.0;
+    double stiffness_n_per_m = 0.0;
+    double damping_n_s_per_m = 0.0;
+    bool rigid = false;
+};
+
 /// A built scene. Exactly one of `impedance` and `admittance` is set, per `causality`.
 struct Scene {
     std::string name;
@@ -68,6 +81,12 @@ struct Scene {
     Causality causality = Causality::impedance;
     std::unique_ptr<ImpedanceEnvironment> impedance;
     std::unique_ptr<AdmittanceEnvironment> admittance;
+    /// Each object linearised, and for several penalty objects all of them at once (their
+    /// stiffnesses and dampings add). Free space needs no entry: the tool follows the
+    /// device and the coupling carries no force.
+    std::vector<LinearObject> linear_objects;
+    /// Empty, or why the scene has no linear model (its first detent or friction).
+    std::string unmodelled;
 };
 
 /// Reads and builds the scene in `path`. `axes` is the device's axis count: the scene's

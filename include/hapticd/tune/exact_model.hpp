@@ -135,7 +135,7 @@ struct EnvironmentModel {
     enum class Kind { rigid_wall, mass_spring, lossless_mass_spring };
     Kind kind = Kind::rigid_wall;
     double mass_kg = 0.0;            ///< m_e >= 0
-    double stiffness_n_per_m = 0.0;  ///< k_e > 0 (grounds the loop)
+    double stiffness_n_per_m = 0.0;  ///< k_e >= 0 (k_e > 0 grounds the loop)
     double damping_n_s_per_m = 0.0;  ///< b_e >= 0
 
     static EnvironmentModel rigid_wall();

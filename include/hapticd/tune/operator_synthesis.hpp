@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "hapticd/theory/benchmark.hpp"
+#include "hapticd/tune/environment_assumption.hpp"
 #include "hapticd/tune/exact_model.hpp"
 
 namespace hapticd::tune {
@@ -54,5 +55,12 @@ struct Adversaries {
 Adversaries synthesize_adversaries(const theory::DeviceModel& device,
                                    const theory::SpringDamperCoupling& coupling, double rate_hz,
                                    double delay_periods);
+
+/// The same for a scene (environment_assumption.hpp): for each of its environments, at the
+/// spread of frequencies and where the passive bound with the scene binds, alias-tuned
+/// operators for the reactance b + jX = -Z e^{-j(1+q)θ} that Z = 1/(1/Z_c + 1/Z_e) needs.
+std::vector<OperatorModel> synthesize_scene_adversaries(
+    const theory::DeviceModel& device, const theory::SpringDamperCoupling& coupling,
+    double rate_hz, const std::vector<SceneEnvironment>& scene, double delay_periods);
 
 }  // namespace hapticd::tune

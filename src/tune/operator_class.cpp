@@ -1,0 +1,132 @@
+#include "hapticd/tune/operator_class.hpp"
+
+#include <cmath>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+
+namespace hapticd::tune {
+namespace {
+
+/// The value at u in [0, 1] of a range: logarithmic over a decade or more, from 0 by an
+/// exponential that puts half the points in the lowest 3% (stiffness and damping matter on a
+/// log scale, and 0 is their most interesting value), linear otherwise.
+double value_at(const ParameterRange& range, double u) {
+    const double lo = range.min, hi = range.max;
+    if (hi <= lo) return lo;
+    if (lo > 0.0 && hi / lo >= 10.0) return lo * std::pow(hi / lo, u);
+    if (lo == 0.0) {
+        constexpr double kDecades = 3.0;
+        return hi * (std::pow(10.0, kDecades * u) - 1.0) / (std::pow(10.0, kDecades) - 1.0);
+    }
+    return lo + (hi - lo) * u;
+}
+
+std::string range_text(const ParameterRange& r) {
+    std::ostringstream out;
+    out << r.min;
+    if (r.max != r.min) out << ".." << r.max;
+    return out.str();
+}
+
+constexpr double kResonanceTolerance = 1e-9;  // relative, for members on the bound itself
+
+}  // namespace
+
+std::array<ParameterRange, kClassParameters> OperatorClass::ranges() const {
+    return {hand_mass_kg, grip_stiffness_n_per_m, grip_damping_n_s_per_m, arm_stiffness_n_per_m,
+            arm_damping_n_s_per_m};
+}
+
+OperatorModel OperatorClass::member(const ClassPoint& point) const {
+    const auto r = ranges();
+    std::array<double, kClassParameters> v{};
+    for (int i = 0; i < kClassParameters; ++i) v[i] = value_at(r[i], point[i]);
+    return OperatorModel::two_mass_grasp(v[1], v[2], v[0], v[3], v[4]);
+}
+
+double OperatorClass::hand_resonance_hz(const OperatorModel& h) {
+    return std::sqrt((h.skin_stiffness_n_per_m + h.arm_stiffness_n_per_m) / h.hand_mass_kg) /
+           (2.0 * std::numbers::pi);
+}
+
+bool OperatorClass::contains(const OperatorModel& h) const {
+    if (h.family == OperatorFamily::hands_off) return true;
+    if (h.family != OperatorFamily::two_mass_grasp) return false;
+    const std::array<double, kClassParameters> v{h.hand_mass_kg, h.skin_stiffness_n_per_m,
+                                                 h.skin_damping_n_s_per_m, h.arm_stiffness_n_per_m,
+                                                 h.arm_damping_n_s_per_m};
+    const auto r = ranges();
+    for (int i = 0; i < kClassParameters; ++i) {
+        const double slack = 1e-12 * std::max(1.0, std::abs(r[i].max));
+        if (v[i] < r[i].min - slack || v[i] > r[i].max + slack) return false;
+    }
+    return max_resonance_hz <= 0.0 ||
+           hand_resonance_hz(h) <= max_resonance_hz * (1.0 + kResonanceTolerance);
+}
+
+std::string OperatorClass::describe() const {
+    const auto r = ranges();
+    static constexpr std::array<const char*, kClassParameters> kSymbols = {"m_h", "k_s", "b_s",
+                                                                           "k_a", "b_a"};
+    std::ostringstream out;
+    out << "two-mass grasps with";
+    for (int i = 0; i < kClassParameters; ++i) {
+        out << (i == 0 ? " " : ", ") << kSymbols[i] << " " << range_text(r[i]) << " " << kUnits[i];
+    }
+    if (max_resonance_hz > 0.0) out << " (hand resonance at most " << max_resonance_hz << " Hz)";
+    out << ", and hands-off";
+    return out.str();
+}
+
+void validate(const OperatorClass& operators, const std::string& source) {
+    const auto r = operators.ranges();
+    for (int i = 0; i < kClassParameters; ++i) {
+        const ParameterRange& limit = OperatorClass::kLimits[i];
+        const bool mass = i == 0;
+        for (const double value : {r[i].min, r[i].max}) {
+            const bool ok = std::isfinite(value) && value <= limit.max &&
+                            (mass ? value > 0.0 : value >= limit.min);
+            if (!ok) {
+                std::ostringstream message;
+                message << source << " " << OperatorClass::kKeys[i] << " = " << value << " "
+                        << OperatorClass::kUnits[i] << " is out of range: allowed "
+                        << (mass ? "> 0" : ">= 0") << " and <= " << limit.max << " "
+                        << OperatorClass::kUnits[i];
+                throw std::invalid_argument(message.str());
+            }
+        }
+        if (r[i].min > r[i].max) {
+            std::ostringstream message;
+            message << source << " " << OperatorClass::kKeys[i] << " = [" << r[i].min << ", "
+                    << r[i].max << "] is an empty range: the first value is the least, so it "
+                    << "must be <= the second";
+            throw std::invalid_argument(message.str());
+        }
+    }
+    const double f = operators.max_resonance_hz;
+    if (!(std::isfinite(f) && f >= 0.0 && f <= OperatorClass::kMaxResonanceLimitHz)) {
+        std::ostringstream message;
+        message << source << " max_resonance = " << f << " Hz is out of range: allowed > 0 and <= "
+                << OperatorClass::kMaxResonanceLimitHz << " Hz (leave it out for no bound)";
+        throw std::invalid_argument(message.str());
+    }
+    if (f > 0.0) {
+        // The least resonance in the box: the softest springs on the heaviest hand.
+        const OperatorModel softest = OperatorModel::two_mass_grasp(
+            r[1].min, r[2].min, r[0].max, r[3].min, r[4].min);
+        const double least = OperatorClass::hand_resonance_hz(softest);
+        if (least > f * (1.0 + kResonanceTolerance)) {
+            std::ostringstream message;
+            message << source << " max_resonance = " << f
+                    << " Hz contradicts the ranges: their softest, heaviest hand (m_h = "
+                    << r[0].max << " kg, k_s = " << r[1].min << " N/m, k_a = " << r[3].min
+                    << " N/m) already resonates at " << least
+                    << " Hz, so the class would hold no hand; raise max_resonance above it or "
+                       "lower the stiffness bounds";
+            throw std::invalid_argument(message.str());
+        }
+    }
+}
+
+}  // namespace hapticd::tune
