@@ -114,11 +114,11 @@ class TableReader {
     const toml::node* find(const std::string& key) const {
         return table_ == nullptr ? nullptr : table_->get(key);
     }
+
   public:
     std::string where(const std::string& key) const { return source_ + ": [" + name_ + "] " + key; }
 
   private:
-
     const std::string& source_;
     std::string name_;
     const toml::table* table_;
@@ -203,8 +203,7 @@ std::optional<tune::OperatorClass> parse_operator_class(const toml::table& root,
         *ranges[i] = *r;
     }
     cls.max_resonance_hz =
-        reader
-            .number("max_resonance", 0.0, tune::OperatorClass::kMaxResonanceLimitHz, true, "Hz")
+        reader.number("max_resonance", 0.0, tune::OperatorClass::kMaxResonanceLimitHz, true, "Hz")
             .value_or(0.0);
     try {
         tune::validate(cls, source + ": [operator]");
@@ -300,17 +299,20 @@ Config parse_config(std::string_view toml_text, const std::string& source,
     config.operators = parse_operator_class(root, source);
     const std::string& check = config.coupling.check;
     if (config.operators && check != "exact") {
-        throw ConfigError(source + ": [operator] declares an operator class, which only [coupling] "
-                          "check = \"exact\" can use, but check = \"" + check + "\"" +
-                          (check == "passive"
-                               ? " (the passive model holds for every passive operator)"
-                               : "") +
-                          ": set check = \"exact\", or remove [operator]");
+        throw ConfigError(
+            source +
+            ": [operator] declares an operator class, which only [coupling] "
+            "check = \"exact\" can use, but check = \"" +
+            check + "\"" +
+            (check == "passive" ? " (the passive model holds for every passive operator)" : "") +
+            ": set check = \"exact\", or remove [operator]");
     }
     if (config.coupling.environments == "scene" && check != "passive" && check != "exact") {
-        throw ConfigError(source + ": [coupling] environments = \"scene\" needs check = "
+        throw ConfigError(source +
+                          ": [coupling] environments = \"scene\" needs check = "
                           "\"passive\" or \"exact\" (the models that hold for a stated "
-                          "class of environments), but check = \"" + check + "\"");
+                          "class of environments), but check = \"" +
+                          check + "\"");
     }
     if (!config.coupling.enabled) {
         // The conventional design, for experiments: the daemon will not pretend to check it.
@@ -395,9 +397,10 @@ tune::OperatorClass load_operator_class(const std::string& path) {
     }
     const auto cls = parse_operator_class(root, path);
     if (!cls) {
-        throw ConfigError(path + ": has no [operator] table: an operator class file declares "
-                                 "[operator] with hand_mass, grip_stiffness, grip_damping, "
-                                 "arm_stiffness and arm_damping");
+        throw ConfigError(path +
+                          ": has no [operator] table: an operator class file declares "
+                          "[operator] with hand_mass, grip_stiffness, grip_damping, "
+                          "arm_stiffness and arm_damping");
     }
     return *cls;
 }

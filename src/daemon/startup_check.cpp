@@ -33,8 +33,8 @@ tune::EnvironmentAssumption scene_environments(const env::Scene& scene,
                                                const std::string& scene_source) {
     const std::string where = scene_source + " (scene \"" + scene.name + "\")";
     if (!scene.unmodelled.empty()) {
-        throw ConfigError(where + " cannot be checked against its own objects: " +
-                          scene.unmodelled +
+        throw ConfigError(where +
+                          " cannot be checked against its own objects: " + scene.unmodelled +
                           "; check against every passive environment instead ([coupling] "
                           "environments = \"every-passive\", the default; haptic-tune without "
                           "--scene)");
@@ -62,9 +62,10 @@ tune::EnvironmentAssumption configured_environments(const Config& config) {
     if (config.coupling.environments != "scene") return {};
     try {
         if (config.scene_file.empty()) {
-            return scene_environments(env::parse_scene(default_scene_text(), "<embedded demo-wall scene>",
-                                                       config.device.axes),
-                                      "<embedded demo-wall scene>");
+            return scene_environments(
+                env::parse_scene(default_scene_text(), "<embedded demo-wall scene>",
+                                 config.device.axes),
+                "<embedded demo-wall scene>");
         }
         return scene_environments(env::load_scene(config.scene_file, config.device.axes),
                                   config.scene_file);
@@ -117,9 +118,8 @@ StartupCheck check_coupling_at_startup(const Config& config) {
     const theory::HoldModel model = *theory::parse_hold_model(check.model);
     check.guarantee = model == theory::HoldModel::passive;
     if (!assumption.environments.every_passive()) {
-        const tune::SceneCheck scene =
-            tune::check_passive_scene(device, coupling, config.servo.rate_hz,
-                                      assumption.environments.scene, delay_periods);
+        const tune::SceneCheck scene = tune::check_passive_scene(
+            device, coupling, config.servo.rate_hz, assumption.environments.scene, delay_periods);
         check.passed = scene.stable;
         check.worst_margin = scene.margin;
         check.worst_frequency_hz = scene.worst_frequency_hz;

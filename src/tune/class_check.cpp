@@ -1,6 +1,7 @@
 #include "hapticd/tune/class_check.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -38,9 +39,8 @@ constexpr double kAdmittanceDecades = 6.0;  // each side of 1/|Z_c|
 
 EnvironmentModel lossless_at(const LosslessCoordinates& c, const SpringDamperCoupling& coupling,
                              double rate_hz) {
-    const double theta =
-        kLosslessLowestTheta * std::pow((std::numbers::pi * 0.999) / kLosslessLowestTheta,
-                                        c.theta_u);
+    const double theta = kLosslessLowestTheta *
+                         std::pow((std::numbers::pi * 0.999) / kLosslessLowestTheta, c.theta_u);
     const double zc = std::abs(theory::coupling_impedance(coupling, theta, 1.0 / rate_hz));
     const double signed_u = 2.0 * c.admittance_u - 1.0;  // -1..1
     const double magnitude =
@@ -54,7 +54,10 @@ class ClassSearch {
   public:
     ClassSearch(const DeviceModel& device, const SpringDamperCoupling& coupling, double rate_hz,
                 const OperatorClass& cls, double delay_periods)
-        : device_(device), coupling_(coupling), rate_hz_(rate_hz), cls_(cls),
+        : device_(device),
+          coupling_(coupling),
+          rate_hz_(rate_hz),
+          cls_(cls),
           delay_periods_(delay_periods) {}
 
     ExactCheck run(const std::vector<EnvironmentModel>& environments, bool every_passive) {
@@ -68,7 +71,7 @@ class ClassSearch {
             ClassPoint point;
             EnvironmentModel environment;
         };
-        std::vector<Seed> seeds;
+        std::array<std::vector<Seed>, kBands.size()> seeds;
         ClassPoint point{};
         for (int index = 0; index < 243; ++index) {
             int rest = index;
@@ -79,13 +82,42 @@ class ClassSearch {
             const ExactCheck c =
                 check_exact(device_, coupling_, rate_hz_, {h}, environments, delay_periods_);
             merge(best_, c);
-            seeds.push_back({c.worst_spectral_radius, point, c.worst_environment});
+            const ClosedLoopPoles poles = closed_loop_poles(device_, coupling_, rate_hz_, h,
+                                                            c.worst_environment, delay_periods_);
+            for (std::size_t band = 0; band < kBands.size(); ++band) {
+                seeds[band].push_back(
+                    {band_radius(poles, kBands[band]), point, c.worst_environment});
+            }
+            // Synthesis inside the class: the members that put a free-handle mode on an
+            // alias of a frequency of the spread (a grid never lands on such a resonance).
+            for (const OperatorModel& tuned : tuned_members(h)) {
+                const ClassPoint tuned_point = cls_.point_of(tuned);
+                for (const EnvironmentModel& e : {c.worst_environment, environments.front()}) {
+                    const ClosedLoopPoles tp =
+                        closed_loop_poles(device_, coupling_, rate_hz_, tuned, e, delay_periods_);
+                    record(tp, tuned, e);
+                    for (std::size_t band = 0; band < kBands.size(); ++band) {
+                        seeds[band].push_back({band_radius(tp, kBands[band]), tuned_point, e});
+                    }
+                }
+            }
         }
-        // Stage 2: a compass search from the six worst (distinct operators).
-        std::sort(seeds.begin(), seeds.end(),
-                  [](const Seed& a, const Seed& b) { return a.radius > b.radius; });
-        for (std::size_t i = 0; i < seeds.size() && i < kClimbs; ++i) {
-            climb(seeds[i].point, seeds[i].environment, every_passive);
+        // Stage 2: compass searches from the worst seeds of each band (the whole circle, and
+        // the low, middle and high bands of arg z: a lightly damped slow mode must not hide a
+        // fast one that the climb could push out of the circle, nor the reverse).
+        for (std::size_t band = 0; band < kBands.size(); ++band) {
+            std::vector<Seed>& s = seeds[band];
+            std::sort(s.begin(), s.end(),
+                      [](const Seed& a, const Seed& b) { return a.radius > b.radius; });
+            const std::size_t climbs = band == 0 ? kClimbs : kBandClimbs;
+            for (std::size_t i = 0; i < s.size() && i < climbs && s[i].radius >= 0.0; ++i) {
+                if (band == 0) {
+                    climb(s[i].point, s[i].environment, every_passive);
+                } else {
+                    ClassPoint p = s[i].point;
+                    climb_operator(p, s[i].environment, kBands[band]);
+                }
+            }
         }
         best_.worst_margin = 1.0 - best_.worst_spectral_radius;
         best_.stable = best_.worst_margin >= -kMarginalTolerance;
@@ -93,12 +125,37 @@ class ClassSearch {
     }
 
   private:
-    static constexpr int kClimbs = 6;
-    static constexpr double kFirstStep = 0.25, kLastStep = 1.0 / 256.0;
+    static constexpr std::size_t kClimbs = 6, kBandClimbs = 3;
+    // Down to 2^-16 of each range: a resonance tuned to an alias is a sharp peak.
+    static constexpr double kFirstStep = 0.25, kLastStep = 1.0 / 65536.0;
 
-    double evaluate(const OperatorModel& h, const EnvironmentModel& e) {
-        const ClosedLoopPoles poles = closed_loop_poles(device_, coupling_, rate_hz_, h, e,
-                                                        delay_periods_);
+    /// A band of arg z, [lo, hi) in rad.
+    struct Band {
+        double lo, hi;
+    };
+    static constexpr std::array<Band, 4> kBands = {Band{0.0, 4.0}, Band{0.0, 0.1},
+                                                   Band{0.1, std::numbers::pi / 2.0},
+                                                   Band{std::numbers::pi / 2.0, 4.0}};
+
+    /// The largest |z| among the eigenvalues in the band; -1 when it holds none.
+    static double band_radius(const ClosedLoopPoles& poles, const Band& band) {
+        double radius = -1.0;
+        for (const theory::Complex& z : poles.eigenvalues) {
+            const double angle = std::abs(std::arg(z));
+            if (angle >= band.lo && angle < band.hi) radius = std::max(radius, std::abs(z));
+        }
+        return radius;
+    }
+
+    double evaluate(const OperatorModel& h, const EnvironmentModel& e,
+                    const Band& band = kBands[0]) {
+        const ClosedLoopPoles poles =
+            closed_loop_poles(device_, coupling_, rate_hz_, h, e, delay_periods_);
+        record(poles, h, e);
+        return band_radius(poles, band);
+    }
+
+    void record(const ClosedLoopPoles& poles, const OperatorModel& h, const EnvironmentModel& e) {
         ++best_.cases_checked;
         if (poles.spectral_radius > best_.worst_spectral_radius) {
             best_.worst_spectral_radius = poles.spectral_radius;
@@ -106,7 +163,39 @@ class ClassSearch {
             best_.worst_operator = h;
             best_.worst_environment = e;
         }
-        return poles.spectral_radius;
+    }
+
+    /// Members like h with one of k_s, k_a, m_h changed so that the undamped handle (the
+    /// device mass m on k_s, the hand m_h on k_a) has a mode at an alias ω of a frequency of
+    /// the spread: det(K - ω² M) = 0 with M = diag(m, m_h), K = [[k_s, -k_s], [-k_s, k_s + k_a]],
+    ///   k_s = ω² m (k_a - ω² m_h) / (k_a - ω² (m + m_h)),
+    ///   k_a = k_s² / (k_s - ω² m) - k_s + ω² m_h,
+    ///   m_h = (k_s + k_a - k_s² / (k_s - ω² m)) / ω².
+    std::vector<OperatorModel> tuned_members(const OperatorModel& h) const {
+        std::vector<OperatorModel> out;
+        const double m = device_.mass_kg;
+        const double t = 1.0 / rate_hz_;
+        const double pi = std::numbers::pi;
+        for (const double theta : {pi, 2.0 * pi / 3.0, pi / 2.0, 0.3, 0.1, 0.03}) {
+            for (const double alias : {theta, 2.0 * pi - theta, 2.0 * pi + theta}) {
+                const double w2 = (alias / t) * (alias / t);
+                OperatorModel k_s = h, k_a = h, m_h = h;
+                k_s.skin_stiffness_n_per_m = w2 * m *
+                                             (h.arm_stiffness_n_per_m - w2 * h.hand_mass_kg) /
+                                             (h.arm_stiffness_n_per_m - w2 * (m + h.hand_mass_kg));
+                const double ks = h.skin_stiffness_n_per_m;
+                k_a.arm_stiffness_n_per_m = ks * ks / (ks - w2 * m) - ks + w2 * h.hand_mass_kg;
+                m_h.hand_mass_kg = (ks + h.arm_stiffness_n_per_m - ks * ks / (ks - w2 * m)) / w2;
+                for (const OperatorModel& candidate : {k_s, k_a, m_h}) {
+                    const bool finite = std::isfinite(candidate.skin_stiffness_n_per_m) &&
+                                        std::isfinite(candidate.arm_stiffness_n_per_m) &&
+                                        std::isfinite(candidate.hand_mass_kg);
+                    if (finite && cls_.contains(candidate)) out.push_back(candidate);
+                }
+                if (alias == pi) break;  // π's aliases pair up
+            }
+        }
+        return out;
     }
 
     /// Compass search over the operator's coordinates, then (for every passive environment)
@@ -148,8 +237,9 @@ class ClassSearch {
         climb_operator(point, lossless_at(best_env, coupling_, rate_hz_));
     }
 
-    double climb_operator(ClassPoint& point, const EnvironmentModel& environment) {
-        double radius = evaluate(cls_.member(point), environment);
+    double climb_operator(ClassPoint& point, const EnvironmentModel& environment,
+                          const Band& band = kBands[0]) {
+        double radius = evaluate(cls_.member(point), environment, band);
         for (double step = kFirstStep; step >= kLastStep; step /= 2.0) {
             bool improved = true;
             while (improved) {
@@ -159,7 +249,7 @@ class ClassSearch {
                         const double saved = u;
                         u = std::clamp(saved + sign * step, 0.0, 1.0);
                         const OperatorModel h = cls_.member(point);
-                        const double r = cls_.contains(h) ? evaluate(h, environment) : -1.0;
+                        const double r = cls_.contains(h) ? evaluate(h, environment, band) : -1.0;
                         if (r > radius) {
                             radius = r;
                             improved = true;
@@ -184,9 +274,9 @@ class ClassSearch {
 }  // namespace
 
 std::string StabilityAssumption::describe() const {
-    const std::string who =
-        operators ? "the declared operator class (" + operators->describe() + ")"
-                  : std::string("every passive operator");
+    const std::string who = operators
+                                ? "the declared operator class (" + operators->describe() + ")"
+                                : std::string("every passive operator");
     return who + " and " + environments.describe();
 }
 
@@ -205,14 +295,14 @@ ExactCheck check_exact(const DeviceModel& device, const SpringDamperCoupling& co
     if (!assumption.operators) {
         // Every passive operator against the scene: the default operators, and the
         // alias-tuned ones built for each of the scene's environments.
-        ExactCheck check = check_exact(device, coupling, rate_hz,
-                                       default_operator_sweep(device, rate_hz), scene,
-                                       delay_periods);
-        merge(check, check_exact(device, coupling, rate_hz,
-                                 synthesize_scene_adversaries(device, coupling, rate_hz,
-                                                              assumption.environments.scene,
-                                                              delay_periods),
-                                 scene, delay_periods));
+        ExactCheck check =
+            check_exact(device, coupling, rate_hz, default_operator_sweep(device, rate_hz), scene,
+                        delay_periods);
+        merge(check, check_exact(
+                         device, coupling, rate_hz,
+                         synthesize_scene_adversaries(device, coupling, rate_hz,
+                                                      assumption.environments.scene, delay_periods),
+                         scene, delay_periods));
         return check;
     }
     std::vector<EnvironmentModel> environments = scene;

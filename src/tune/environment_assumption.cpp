@@ -30,8 +30,8 @@ EnvironmentImpedance environment_impedance(const EnvironmentModel& e, double the
     const Complex difference = (1.0 - z_inv) / period_s;  // the backward difference's "s"
     if (e.kind == EnvironmentModel::Kind::mass_spring) {
         // Implicit Euler: m_e s_b + b_e + k_e/s_b with s_b = (1 - z⁻¹)/T.
-        return {false, e.mass_kg * difference + e.damping_n_s_per_m +
-                           e.stiffness_n_per_m / difference};
+        return {false,
+                e.mass_kg * difference + e.damping_n_s_per_m + e.stiffness_n_per_m / difference};
     }
     // Trapezoidal: m_e s_t + b_e + k_e/s_t, s_t = (2/T)(1 - z⁻¹)/(1 + z⁻¹), on the same
     // velocity (the recurrence in exact_model.cpp).
@@ -70,8 +70,8 @@ SceneCheck check_passive_scene(const theory::DeviceModel& device,
                                                theta, delay_periods);
         };
         // The worst frequency: a grid resolving the low band and Nyquist, then golden section.
-        const theory::GridMinimum worst = theory::minimize_on_grid(
-            [&](double theta) { return -needed(theta); }, grid);
+        const theory::GridMinimum worst =
+            theory::minimize_on_grid([&](double theta) { return -needed(theta); }, grid);
         if (-worst.value > check.damping_needed) {
             check.damping_needed = -worst.value;
             check.worst_frequency_hz = theory::frequency_hz(worst.theta, period);

@@ -1,5 +1,6 @@
 #include "hapticd/tune/operator_class.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <sstream>
@@ -20,6 +21,22 @@ double value_at(const ParameterRange& range, double u) {
         return hi * (std::pow(10.0, kDecades * u) - 1.0) / (std::pow(10.0, kDecades) - 1.0);
     }
     return lo + (hi - lo) * u;
+}
+
+/// The inverse of value_at, clamped to [0, 1].
+double coordinate_of(const ParameterRange& range, double value) {
+    const double lo = range.min, hi = range.max;
+    if (hi <= lo) return 0.0;
+    double u = 0.0;
+    if (lo > 0.0 && hi / lo >= 10.0) {
+        u = std::log(value / lo) / std::log(hi / lo);
+    } else if (lo == 0.0) {
+        constexpr double kDecades = 3.0;
+        u = std::log10(1.0 + (std::pow(10.0, kDecades) - 1.0) * value / hi) / kDecades;
+    } else {
+        u = (value - lo) / (hi - lo);
+    }
+    return std::clamp(u, 0.0, 1.0);
 }
 
 std::string range_text(const ParameterRange& r) {
@@ -43,6 +60,16 @@ OperatorModel OperatorClass::member(const ClassPoint& point) const {
     std::array<double, kClassParameters> v{};
     for (int i = 0; i < kClassParameters; ++i) v[i] = value_at(r[i], point[i]);
     return OperatorModel::two_mass_grasp(v[1], v[2], v[0], v[3], v[4]);
+}
+
+ClassPoint OperatorClass::point_of(const OperatorModel& h) const {
+    const auto r = ranges();
+    const std::array<double, kClassParameters> v{h.hand_mass_kg, h.skin_stiffness_n_per_m,
+                                                 h.skin_damping_n_s_per_m, h.arm_stiffness_n_per_m,
+                                                 h.arm_damping_n_s_per_m};
+    ClassPoint point{};
+    for (int i = 0; i < kClassParameters; ++i) point[i] = coordinate_of(r[i], v[i]);
+    return point;
 }
 
 double OperatorClass::hand_resonance_hz(const OperatorModel& h) {
@@ -107,14 +134,15 @@ void validate(const OperatorClass& operators, const std::string& source) {
     const double f = operators.max_resonance_hz;
     if (!(std::isfinite(f) && f >= 0.0 && f <= OperatorClass::kMaxResonanceLimitHz)) {
         std::ostringstream message;
-        message << source << " max_resonance = " << f << " Hz is out of range: allowed > 0 and <= "
-                << OperatorClass::kMaxResonanceLimitHz << " Hz (leave it out for no bound)";
+        message << source << " max_resonance = " << f
+                << " Hz is out of range: allowed > 0 and <= " << OperatorClass::kMaxResonanceLimitHz
+                << " Hz (leave it out for no bound)";
         throw std::invalid_argument(message.str());
     }
     if (f > 0.0) {
         // The least resonance in the box: the softest springs on the heaviest hand.
-        const OperatorModel softest = OperatorModel::two_mass_grasp(
-            r[1].min, r[2].min, r[0].max, r[3].min, r[4].min);
+        const OperatorModel softest =
+            OperatorModel::two_mass_grasp(r[1].min, r[2].min, r[0].max, r[3].min, r[4].min);
         const double least = OperatorClass::hand_resonance_hz(softest);
         if (least > f * (1.0 + kResonanceTolerance)) {
             std::ostringstream message;

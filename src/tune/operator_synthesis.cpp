@@ -193,8 +193,8 @@ Adversaries synthesize_adversaries(const theory::DeviceModel& device,
 }
 
 std::vector<OperatorModel> synthesize_scene_adversaries(
-    const theory::DeviceModel& device, const theory::SpringDamperCoupling& coupling,
-    double rate_hz, const std::vector<SceneEnvironment>& scene, double delay_periods) {
+    const theory::DeviceModel& device, const theory::SpringDamperCoupling& coupling, double rate_hz,
+    const std::vector<SceneEnvironment>& scene, double delay_periods) {
     const double period = 1.0 / rate_hz;
     const theory::LoopDelay delay = theory::split_delay(delay_periods);
     std::vector<double> thetas = spread_of_frequencies();

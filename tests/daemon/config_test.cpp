@@ -173,6 +173,58 @@ INSTANTIATE_TEST_SUITE_P(
         Bad{"[safety]\nreconnect = false\nreconnect_settle = 1\n",
             "[safety] reconnect_settle has no effect with reconnect = false"}));
 
+// [operator]: a declared operator class (tune/operator_class.hpp), and [coupling]
+// environments. A class needs every bound, the exact model, and a non-empty range.
+const std::string kExact = "[coupling]\ncheck = \"exact\"\n";
+const std::string kClass =
+    "[operator]\nhand_mass = [0.1, 2]\ngrip_stiffness = [0, 3000]\ngrip_damping = [2, 30]\n"
+    "arm_stiffness = [0, 1000]\n";
+
+TEST(DaemonConfig, ReadsAnOperatorClass) {
+    const Config c = parse_config(kExact + kClass + "arm_damping = 5\nmax_resonance = 40\n",
+                                  "lab.toml", "/etc/hapticd");
+    ASSERT_TRUE(c.operators);
+    EXPECT_EQ(c.operators->hand_mass_kg.min, 0.1);
+    EXPECT_EQ(c.operators->hand_mass_kg.max, 2.0);
+    EXPECT_EQ(c.operators->grip_stiffness_n_per_m.max, 3000.0);
+    EXPECT_EQ(c.operators->arm_damping_n_s_per_m.min, 5.0);  // one number: [5, 5]
+    EXPECT_EQ(c.operators->arm_damping_n_s_per_m.max, 5.0);
+    EXPECT_EQ(c.operators->max_resonance_hz, 40.0);
+    EXPECT_EQ(c.coupling.environments, "every-passive");
+    EXPECT_FALSE(parse_config("", "lab.toml", "/etc/hapticd").operators);
+    EXPECT_EQ(parse_config("[coupling]\nenvironments = \"scene\"\n", "lab.toml", "/etc/hapticd")
+                  .coupling.environments,
+              "scene");
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    OperatorClass, DaemonConfigRejects,
+    ::testing::Values(
+        Bad{kExact + "[operator]\n", "[operator] is empty: declare hand_mass, grip_stiffness"},
+        Bad{kExact + kClass, "[operator] arm_damping is missing"},
+        Bad{"[operator]\nhand_mass = [0.1, 2]\n",
+            "[operator] declares an operator class, which only [coupling] check = \"exact\" "
+            "can use, but check = \"passive\" (the passive model holds for every passive "
+            "operator)"},
+        Bad{kExact + kClass + "arm_damping = [20, 0]\n",
+            "[operator] arm_damping = [20, 0] is an empty range"},
+        Bad{kExact + kClass + "arm_damping = nan\n", "[operator] arm_damping = nan N s/m is out"},
+        Bad{kExact + kClass + "arm_damping = [0, 1, 2]\n",
+            "[operator] arm_damping must be a number or an array [min, max] of two numbers"},
+        Bad{kExact + kClass + "arm_damping = \"low\"\n",
+            "[operator] arm_damping must be a number or an array"},
+        Bad{kExact + kClass + "arm_damping = 0\nhand_size = 1\n", "unknown key [operator] hand_size"},
+        Bad{kExact +
+                "[operator]\nhand_mass = [0.1, 2]\ngrip_stiffness = [500, 3000]\n"
+                "grip_damping = 2\narm_stiffness = 0\narm_damping = 0\nmax_resonance = 1\n",
+            "max_resonance = 1 Hz contradicts the ranges"},
+        Bad{kExact + kClass + "arm_damping = 0\nmax_resonance = 0\n",
+            "[operator] max_resonance = 0 is out of range: allowed > 0"},
+        Bad{"[coupling]\nenvironments = \"walls\"\n",
+            "[coupling] environments = \"walls\" is not allowed"},
+        Bad{"[coupling]\ncheck = \"encoder\"\nenvironments = \"scene\"\n",
+            "[coupling] environments = \"scene\" needs check = \"passive\" or \"exact\""}));
+
 // [identify]: the excitation of hapticd --identify; every key is checked like the others.
 TEST(DaemonConfig, ReadsTheIdentifyTable) {
     const Config c = parse_config(R"(

@@ -23,8 +23,7 @@ tune::StabilityAssumption resolve_assumption(const AssumptionOptions& options,
     tune::StabilityAssumption assumption;
     if (!options.operator_class_path.empty()) {
         if (model != "exact") {
-            throw UsageError("--operator-class needs --model exact: the " + model +
-                             " model " +
+            throw UsageError("--operator-class needs --model exact: the " + model + " model " +
                              (model == "passive" ? "holds for every passive operator"
                                                  : "holds for no class of operators") +
                              ", so it cannot use a class");
@@ -33,9 +32,10 @@ tune::StabilityAssumption resolve_assumption(const AssumptionOptions& options,
     }
     if (!options.scene_path.empty()) {
         if (model != "passive" && model != "exact") {
-            throw UsageError("--scene needs --model passive or exact (the models that hold for "
-                             "a stated class of environments), not " +
-                             model);
+            throw UsageError(
+                "--scene needs --model passive or exact (the models that hold for "
+                "a stated class of environments), not " +
+                model);
         }
         try {
             // The scene's own axes: any count up to 3 is accepted here.

@@ -38,16 +38,15 @@ nlohmann::ordered_json exact_cross_check(const DesignInput& input,
                                          const theory::SpringDamperCoupling& coupling,
                                          const tune::StabilityAssumption& assumption,
                                          bool* stable) {
-    const tune::ExactCheck exact = tune::check_exact(input.device, coupling, input.rate_hz,
-                                                     assumption, input.delay_periods());
+    const tune::ExactCheck exact =
+        tune::check_exact(input.device, coupling, input.rate_hz, assumption, input.delay_periods());
     *stable = exact.stable;
     if (!exact.stable) {
         std::cerr << "haptic-tune: the exact sampled-data model finds this design unstable: "
                   << exact.worst_operator.describe() << " against "
                   << exact.worst_environment.describe()
                   << " grows by |z| = " << exact.worst_spectral_radius << " per tick at "
-                  << exact.worst_frequency_hz
-                  << " Hz, for " << assumption.describe()
+                  << exact.worst_frequency_hz << " Hz, for " << assumption.describe()
                   << ". Only the passive model (the default) holds for every passive "
                      "operator (docs/stability-models.md); exit 1.\n";
     }
@@ -96,12 +95,14 @@ int run_impedance(const SizeOptions& o, const DesignInput& input, theory::HoldMo
 int run_assumed(const SizeOptions& o, const DesignInput& input,
                 const tune::StabilityAssumption& assumption) {
     if (o.optimize_damping) {
-        throw UsageError("--optimize-damping sizes under the passive model against every "
-                         "passive environment; with --model exact, --operator-class or --scene, "
-                         "give --coupling-damping and compare values (docs/stability-models.md "
-                         "charts the limit against b_c)");
+        throw UsageError(
+            "--optimize-damping sizes under the passive model against every "
+            "passive environment; with --model exact, --operator-class or --scene, "
+            "give --coupling-damping and compare values (docs/stability-models.md "
+            "charts the limit against b_c)");
     }
-    const double damping = o.coupling_damping.value_or(input.coupling_damping_n_s_per_m.value_or(0.0));
+    const double damping =
+        o.coupling_damping.value_or(input.coupling_damping_n_s_per_m.value_or(0.0));
     tune::check_coupling_gains({0.0, damping});
     nlohmann::ordered_json out = {{"display", "impedance"}};
     theory::SpringDamperCoupling coupling{0.0, damping};
@@ -121,8 +122,7 @@ int run_assumed(const SizeOptions& o, const DesignInput& input,
         const auto stable = [&](double k) {
             ++checks;
             return tune::check_passive_scene(input.device, {k, damping}, input.rate_hz,
-                                             assumption.environments.scene,
-                                             input.delay_periods())
+                                             assumption.environments.scene, input.delay_periods())
                 .stable;
         };
         double lo = 0.0, hi = 2.0 * input.device.damping_n_s_per_m * input.rate_hz;

@@ -56,11 +56,11 @@ theory::Complex port_impedance(const theory::SpringDamperCoupling& coupling,
 
 /// The passive model (every passive operator) against a scene's environments.
 struct SceneCheck {
-    bool stable = false;                ///< device damping >= damping_needed
-    double damping_needed = 0.0;        ///< max over θ and environments of λ(ζ), N s/m
-    double margin = 0.0;                ///< (b - damping_needed)/b
+    bool stable = false;          ///< device damping >= damping_needed
+    double damping_needed = 0.0;  ///< max over θ and environments of λ(ζ), N s/m
+    double margin = 0.0;          ///< (b - damping_needed)/b
     double worst_frequency_hz = 0.0;
-    std::string worst_environment;      ///< its source and model
+    std::string worst_environment;  ///< its source and model
     double delay_periods = 0.0;
 };
 

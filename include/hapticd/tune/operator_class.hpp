@@ -37,12 +37,12 @@ inline constexpr int kClassParameters = 5;
 using ClassPoint = std::array<double, kClassParameters>;  ///< each coordinate in [0, 1]
 
 struct OperatorClass {
-    ParameterRange hand_mass_kg;             ///< m_h, within (0, 1e3] kg
-    ParameterRange grip_stiffness_n_per_m;   ///< k_s, within [0, 1e7] N/m
-    ParameterRange grip_damping_n_s_per_m;   ///< b_s, within [0, 1e4] N s/m
-    ParameterRange arm_stiffness_n_per_m;    ///< k_a, within [0, 1e7] N/m
-    ParameterRange arm_damping_n_s_per_m;    ///< b_a, within [0, 1e4] N s/m
-    double max_resonance_hz = 0.0;           ///< f_max > 0, or 0 for no such bound
+    ParameterRange hand_mass_kg;            ///< m_h, within (0, 1e3] kg
+    ParameterRange grip_stiffness_n_per_m;  ///< k_s, within [0, 1e7] N/m
+    ParameterRange grip_damping_n_s_per_m;  ///< b_s, within [0, 1e4] N s/m
+    ParameterRange arm_stiffness_n_per_m;   ///< k_a, within [0, 1e7] N/m
+    ParameterRange arm_damping_n_s_per_m;   ///< b_a, within [0, 1e4] N s/m
+    double max_resonance_hz = 0.0;          ///< f_max > 0, or 0 for no such bound
 
     /// The keys of the [operator] table, in the order of the ranges.
     static constexpr std::array<const char*, kClassParameters> kKeys = {
@@ -60,6 +60,8 @@ struct OperatorClass {
     /// The member at `point` (each coordinate in [0, 1]: 0 is the range's min, 1 its max;
     /// wide ranges are spaced logarithmically, see operator_class.cpp).
     OperatorModel member(const ClassPoint& point) const;
+    /// The inverse of member() for a two-mass grasp (clamped to the class's ranges).
+    ClassPoint point_of(const OperatorModel& two_mass_grasp) const;
 
     /// Whether a member lies inside the class (the resonance bound, when declared).
     bool contains(const OperatorModel& two_mass_grasp) const;

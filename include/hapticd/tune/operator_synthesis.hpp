@@ -60,7 +60,7 @@ Adversaries synthesize_adversaries(const theory::DeviceModel& device,
 /// spread of frequencies and where the passive bound with the scene binds, alias-tuned
 /// operators for the reactance b + jX = -Z e^{-j(1+q)θ} that Z = 1/(1/Z_c + 1/Z_e) needs.
 std::vector<OperatorModel> synthesize_scene_adversaries(
-    const theory::DeviceModel& device, const theory::SpringDamperCoupling& coupling,
-    double rate_hz, const std::vector<SceneEnvironment>& scene, double delay_periods);
+    const theory::DeviceModel& device, const theory::SpringDamperCoupling& coupling, double rate_hz,
+    const std::vector<SceneEnvironment>& scene, double delay_periods);
 
 }  // namespace hapticd::tune
