@@ -213,10 +213,10 @@ INSTANTIATE_TEST_SUITE_P(
             "[operator] arm_damping must be a number or an array [min, max] of two numbers"},
         Bad{kExact + kClass + "arm_damping = \"low\"\n",
             "[operator] arm_damping must be a number or an array"},
-        Bad{kExact + kClass + "arm_damping = 0\nhand_size = 1\n", "unknown key [operator] hand_size"},
-        Bad{kExact +
-                "[operator]\nhand_mass = [0.1, 2]\ngrip_stiffness = [500, 3000]\n"
-                "grip_damping = 2\narm_stiffness = 0\narm_damping = 0\nmax_resonance = 1\n",
+        Bad{kExact + kClass + "arm_damping = 0\nhand_size = 1\n",
+            "unknown key [operator] hand_size"},
+        Bad{kExact + "[operator]\nhand_mass = [0.1, 2]\ngrip_stiffness = [500, 3000]\n"
+                     "grip_damping = 2\narm_stiffness = 0\narm_damping = 0\nmax_resonance = 1\n",
             "max_resonance = 1 Hz contradicts the ranges"},
         Bad{kExact + kClass + "arm_damping = 0\nmax_resonance = 0\n",
             "[operator] max_resonance = 0 is out of range: allowed > 0"},

@@ -65,7 +65,8 @@ TEST(StartupCheck, TheSceneBuysStiffnessWithADelayAndTheVerdictSaysSo) {
         check_coupling_at_startup(parse_config(kPenOneDelayedPeriod, "lab.toml", ""));
     EXPECT_FALSE(every.passed);
     EXPECT_EQ(every.holds_for, "every passive operator and every passive environment");
-    Config scene = parse_config(kPenOneDelayedPeriod + "environments = \"scene\"\n", "lab.toml", "");
+    Config scene =
+        parse_config(kPenOneDelayedPeriod + "environments = \"scene\"\n", "lab.toml", "");
     const StartupCheck demo = check_coupling_at_startup(scene);
     EXPECT_TRUE(demo.passed) << demo.describe();
     EXPECT_NE(demo.describe().find("holds for every passive operator and the scene <embedded "

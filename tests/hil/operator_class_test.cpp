@@ -9,8 +9,8 @@
 //    "passive" it refuses the same gains.
 // 2. Hands inside the class (corners of the box, and the worst member the class check finds
 //    for these gains) hold the handle in the stiff penalty wall (wall_contact.hpp, 1e5 N/m in
-//    series with the coupling) and a kick of 3 um rings down: the envelope falls below a
-//    twentieth of its start (or to the encoder's dither) within the run, and the exact model
+//    series with the coupling) and a kick of 3 um rings down: the envelope falls at least at
+//    half the predicted rate (or to the encoder's dither) within the run, and the exact model
 //    with the penalty wall in series (the massless tool is its implicit-Euler mass-spring with
 //    m_e = 0, k_e = K + 100 N/m) predicts a spectral radius below 1 for each.
 // 3. An operator outside the class: the lossless steel grip tuned to Nyquist (k_h = m (π/T)²,
@@ -129,14 +129,16 @@ TEST(HilOperatorClass, ClassSizedGainsArmForTheClassAndHoldItsHands) {
     const double rest_depth_m = 0.5 / (kWallStiffnessNPerM + kPreloadStiffnessNPerM);
     for (const OperatorModel& hand : hands) {
         SCOPED_TRACE(hand.describe());
+        // |z| = 1 is a free hand (k_a = 0, held through the grip's damper alone): marginal,
+        // stable by Definition 1.
         const double predicted = spectral_radius(gains, hand);
-        EXPECT_LT(predicted, 1.0);
+        EXPECT_LE(predicted, 1.0 + tune::kMarginalTolerance);
         const ScratchDir dir;
-        const DaemonRun run = run_hapticd(
-            dir, {.config_toml = class_config(gains, "exact", two_mass_human(hand), 1e9,
-                                              toml_number(rest_depth_m + 3e-6)),
-                  .scene_toml = wall_contact_scene(kWallStiffnessNPerM),
-                  .duration_s = 4.0});
+        const DaemonRun run =
+            run_hapticd(dir, {.config_toml = class_config(gains, "exact", two_mass_human(hand), 1e9,
+                                                          toml_number(rest_depth_m + 3e-6)),
+                              .scene_toml = wall_contact_scene(kWallStiffnessNPerM),
+                              .duration_s = 4.0});
         ASSERT_EQ(run.exit_code, 0) << run.err;
         EXPECT_NE(run.err.find("holds for the declared operator class (two-mass grasps with m_h "
                                "0.1..2 kg"),
@@ -148,7 +150,13 @@ TEST(HilOperatorClass, ClassSizedGainsArmForTheClassAndHoldItsHands) {
         std::cout << "[hil] class hand " << hand.describe() << ": exact |z| = " << predicted
                   << ", envelope " << trend.first_amplitude_m * 1e9 << " -> "
                   << trend.last_amplitude_m * 1e9 << " nm p-p\n";
-        EXPECT_LE(trend.last_amplitude_m, std::max(trend.first_amplitude_m / 20.0, 3.0 * 3e-9));
+        // Down at half the predicted rate at least, or to the encoder's dither.
+        const double span_s = trend.window_mid_s.back() - trend.window_mid_s.front();
+        const double bound_m =
+            trend.first_amplitude_m * std::exp(0.5 * std::log(predicted) * kRateHz * span_s);
+        EXPECT_LE(trend.last_amplitude_m,
+                  std::max(std::min(bound_m, trend.first_amplitude_m), 3.0 * 3e-9));
+        EXPECT_LT(trend.last_amplitude_m, trend.first_amplitude_m);
         EXPECT_EQ(run.summary.at("saturated_ticks").get<double>(), 0.0);
     }
     // The passive check, for every operator, refuses these gains.
@@ -174,34 +182,36 @@ TEST(HilOperatorClass, AGripOutsideTheClassGrowsAtNyquist) {
     ASSERT_GT(predicted_growth_per_s, 0.5);
     const ScratchDir dir;
     const DaemonRun run = run_hapticd(
-        dir, {.config_toml = class_config(gains, "exact",
-                                          stiff_grasp("", steel_n_per_m, 0.0, 0.0), 1e10, "0.001"),
+        dir, {.config_toml = class_config(gains, "exact", stiff_grasp("", steel_n_per_m, 0.0, 0.0),
+                                          1e10, "0.001"),
               .scene_toml = wall_contact_scene(kWallStiffnessNPerM),
               .duration_s = 6.0});
     ASSERT_EQ(run.exit_code, 0) << run.err;
     EXPECT_NE(run.err.find("holds for the declared operator class"), std::string::npos) << run.err;
-    // The alternating component y[n] = (-1)^n (x[n] - x[n-1])/2, RMS in 0.1 s windows from
-    // 1 s on, while it is above 100 counts and below a micrometre (the linear loop).
+    // The alternating component y[n] = (-1)^n (x[n] - x[n-1])/2, RMS in 0.05 s windows from
+    // 0.3 s on (the force came on at 0.2 s), while it is above 100 counts and below 0.3 mm
+    // (the force, 5 N plus about 7000 N/m times that at Nyquist, stays below its 20 N limit:
+    // the linear loop).
     const auto& x = run.log.column("x0_m");
     std::vector<double> mid_s, log_rms;
-    for (std::size_t begin = 1000; begin + 100 <= x.size(); begin += 100) {
+    for (std::size_t begin = 300; begin + 50 <= x.size(); begin += 50) {
         double sum = 0.0;
-        for (std::size_t n = begin; n < begin + 100; ++n) {
+        for (std::size_t n = begin; n < begin + 50; ++n) {
             const double y = (n % 2 == 0 ? 0.5 : -0.5) * (x[n] - x[n - 1]);
             sum += y * y;
         }
-        const double rms = std::sqrt(sum / 100.0);
+        const double rms = std::sqrt(sum / 50.0);
         if (rms < 100e-10) continue;
-        if (rms > 1e-6) break;
-        mid_s.push_back((static_cast<double>(begin) + 50.0) * kPeriodS);
+        if (rms > 3e-4) break;
+        mid_s.push_back((static_cast<double>(begin) + 25.0) * kPeriodS);
         log_rms.push_back(std::log(rms));
     }
     ASSERT_GE(mid_s.size(), 10u);
     const double growth_per_s = detail::slope(mid_s, log_rms, 0, mid_s.size());
-    std::cout << "[hil] steel grip outside the class (k_h = " << steel_n_per_m << " N/m) at k_c = "
-              << gains.stiffness_n_per_m << " N/m: Nyquist component grows at " << growth_per_s
-              << " /s over " << mid_s.size() << " windows; exact " << predicted_growth_per_s
-              << " /s\n";
+    std::cout << "[hil] steel grip outside the class (k_h = " << steel_n_per_m
+              << " N/m) at k_c = " << gains.stiffness_n_per_m << " N/m: Nyquist component grows at "
+              << growth_per_s << " /s over " << mid_s.size() << " windows; exact "
+              << predicted_growth_per_s << " /s\n";
     EXPECT_NEAR(growth_per_s, predicted_growth_per_s, 0.02 * predicted_growth_per_s);
 }
 
