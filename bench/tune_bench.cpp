@@ -4,6 +4,7 @@
 #include <benchmark/benchmark.h>
 
 #include "hapticd/theory/coupling_check.hpp"
+#include "hapticd/tune/class_check.hpp"
 #include "hapticd/tune/coupling_sizing.hpp"
 #include "hapticd/tune/exact_model.hpp"
 
@@ -81,6 +82,57 @@ void BM_CheckExact(benchmark::State& state) {
     }
 }
 BENCHMARK(BM_CheckExact)->Arg(0)->Arg(50)->Arg(100)->Unit(benchmark::kMillisecond)->Iterations(3);
+
+/// config/operators/pen-grip.toml.
+hapticd::tune::OperatorClass pen_grip() {
+    hapticd::tune::OperatorClass c;
+    c.hand_mass_kg = {0.1, 2.0};
+    c.grip_stiffness_n_per_m = {0.0, 3000.0};
+    c.grip_damping_n_s_per_m = {2.0, 30.0};
+    c.arm_stiffness_n_per_m = {0.0, 1000.0};
+    c.arm_damping_n_s_per_m = {0.0, 20.0};
+    return c;
+}
+
+hapticd::tune::StabilityAssumption rigid_wall_scene() {
+    hapticd::tune::StabilityAssumption a;
+    a.environments.scene = {{hapticd::tune::EnvironmentModel::rigid_wall(), "proxy plane"}};
+    return a;
+}
+
+// The exact check against the pen-grip class (the class search), every passive environment
+// (arg 0) or a rigid-wall scene (arg 1), at k_c = 5000 N/m, b_c = 1 N s/m.
+void BM_CheckClass(benchmark::State& state) {
+    hapticd::tune::StabilityAssumption a =
+        state.range(0) == 0 ? hapticd::tune::StabilityAssumption{} : rigid_wall_scene();
+    a.operators = pen_grip();
+    for (auto _ : state) {
+        auto c = hapticd::tune::check_exact(kPenDisplay, {5000.0, 1.0}, 1000.0, a, 0.0);
+        benchmark::DoNotOptimize(c);
+    }
+}
+BENCHMARK(BM_CheckClass)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(3);
+
+// Sizing for the class: a bisection on the class check (b_c = 1 N s/m, no delay).
+void BM_SizeClass(benchmark::State& state) {
+    hapticd::tune::StabilityAssumption a;
+    a.operators = pen_grip();
+    for (auto _ : state) {
+        auto l = hapticd::tune::exact_stiffness_limit(kPenDisplay, 1.0, 1000.0, a, 0.0);
+        benchmark::DoNotOptimize(l);
+    }
+}
+BENCHMARK(BM_SizeClass)->Unit(benchmark::kMillisecond)->Iterations(1);
+
+// The passive model against a scene (a rigid wall, one period of delay).
+void BM_CheckPassiveScene(benchmark::State& state) {
+    const auto scene = rigid_wall_scene().environments.scene;
+    for (auto _ : state) {
+        auto c = hapticd::tune::check_passive_scene(kPenDisplay, {1200.0, 0.0}, 1000.0, scene, 1.0);
+        benchmark::DoNotOptimize(c);
+    }
+}
+BENCHMARK(BM_CheckPassiveScene)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 
