@@ -173,6 +173,58 @@ INSTANTIATE_TEST_SUITE_P(
         BadInput{"size --config /nonexistent.toml", "/nonexistent.toml"}),
     bad_input_name);
 
+// An operator class and a scene: the model they need, and their files' errors.
+const std::string kPen = "--mass 0.1 --damping 2 --rate 1000 --stiffness 3000 ";
+INSTANTIATE_TEST_SUITE_P(
+    Assumptions, HapticTuneBadInput,
+    ::testing::Values(
+        BadInput{"check " + kPen +
+                     "--operator-class " HAPTICD_SOURCE_DIR "/config/operators/pen-grip.toml",
+                 "--operator-class needs --model exact: the passive model holds for every "
+                 "passive operator"},
+        BadInput{"check " + kPen +
+                     "--model exact --operator-class " HAPTICD_SOURCE_DIR "/config/hapticd.toml",
+                 "has no [operator] table"},
+        BadInput{"check " + kPen + "--model exact --operator-class /nonexistent.toml",
+                 "/nonexistent.toml: cannot read the operator class file"},
+        BadInput{"check " + kPen +
+                     "--model encoder --scene " HAPTICD_SOURCE_DIR "/config/scenes/demo-wall.toml",
+                 "--scene needs --model passive or exact"},
+        BadInput{
+            "check " + kPen + "--scene " HAPTICD_SOURCE_DIR "/config/scenes/detent-friction.toml",
+            "cannot be checked against its own objects: [[detent]] #1"},
+        BadInput{
+            "size --mass 0.1 --damping 2 --rate 1000 --optimize-damping --scene " HAPTICD_SOURCE_DIR
+            "/config/scenes/demo-wall.toml",
+            "--optimize-damping sizes under the passive model against every passive"}),
+    bad_input_name);
+
+TEST(HapticTuneCheck, AClassAndASceneAreStatedInTheVerdict) {
+    const auto result =
+        run_command(tune("check " + kPen + "--coupling-damping 1 --model exact --operator-class " +
+                         HAPTICD_SOURCE_DIR + "/config/operators/pen-grip.toml --json"));
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    const json out = json::parse(result.out);
+    EXPECT_TRUE(out.at("unconditionally_stable").get<bool>());
+    EXPECT_EQ(out.at("holds_for")
+                  .get<std::string>()
+                  .rfind("the declared operator class (two-mass grasps with m_h 0.1..2 kg", 0),
+              0u)
+        << out.dump();
+    // 3000 N/m at b_c = 1 fails for every passive operator (2000 N/m is the bound).
+    EXPECT_EQ(run_command(tune("check " + kPen + "--coupling-damping 1")).exit_code, 1);
+    const auto scene = run_command(
+        tune("check --mass 0.1 --damping 2 --rate 1000 --stiffness "
+             "1200 --delay 0.001 --json --scene " +
+             std::string(HAPTICD_SOURCE_DIR) + "/config/scenes/god-object-sphere.toml"));
+    ASSERT_EQ(scene.exit_code, 0) << scene.err;
+    EXPECT_NE(json::parse(scene.out)
+                  .at("holds_for")
+                  .get<std::string>()
+                  .find("every passive operator and the scene"),
+              std::string::npos);
+}
+
 TEST(HapticTuneConfig, ErrorsNameTheFileTheKeyAndTheRange) {
     const std::string path = "/tmp/hapticd-cli-test-bad.toml";
     std::FILE* f = std::fopen(path.c_str(), "w");
