@@ -63,10 +63,13 @@ OperatorModel alias_tuned_operator(const theory::DeviceModel& device, double the
     add_free_handle_modes(device.mass_kg, zeros, modes);
     double rigid_mass = 0.0;
     double ground_stiffness = 0.0;
-    // A reactance below a billionth of the device mass's at the first alias is rounding.
-    const double x = std::abs(reactance_n_s_per_m) < 1e-9 * device.mass_kg * zeros[0]
-                         ? 0.0
-                         : reactance_n_s_per_m;
+    // A reactance below a billionth of the device mass's at the first alias, or a millionth
+    // of the device damping that the handle's b + jX is measured against, is rounding: its
+    // tan/cot series would be modes of 1e-13 kg on 1e-3 N/m springs, which change nothing but
+    // the conditioning (one such grasp stalled the eigenvalue solver).
+    const double negligible =
+        std::max(1e-9 * device.mass_kg * zeros[0], 1e-6 * device.damping_n_s_per_m);
+    const double x = std::abs(reactance_n_s_per_m) < negligible ? 0.0 : reactance_n_s_per_m;
     const int terms = aliases / 2 + 2;
     if (x != 0.0 && std::isfinite(x)) {
         const double residue_per_a = 4.0 / period;

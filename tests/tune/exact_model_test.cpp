@@ -387,6 +387,19 @@ TEST(exactSweep, BadlyScaledLoopStillGetsItsEigenvalues) {
     EXPECT_NEAR(poles.spectral_radius, std::abs(Complex(0.437874, 0.899036)), 1e-5);
 }
 
+// Regression (found by a hostile tester): with one period of delay at 4000 N/m the
+// adversary for θ = π/2 had a reactance of 2.8e-7 N s/m, whose tan/cot series became modes of
+// 1e-13 kg on 1e-3 N/m springs, and the eigenvalue solver stalled on them; such a reactance
+// is now zero, and the check gives its verdict.
+TEST(exactSweep, ANegligibleReactanceBuildsNoDegenerateModes) {
+    const OperatorModel tuned =
+        alias_tuned_operator(kDevice, std::numbers::pi / 2.0, kRateHz, 16, 2.81429e-07);
+    for (const OperatorMode& mode : tuned.modes) EXPECT_GT(mode.mass_kg, 1e-6) << tuned.describe();
+    const ExactCheck check = check_exact(kDevice, {4000.0, 0.0}, kRateHz, 1.0);
+    EXPECT_FALSE(check.stable);
+    EXPECT_GT(check.worst_spectral_radius, 1.01);
+}
+
 // ---- Input -----------------------------------------------------------------------------
 
 template <typename F>

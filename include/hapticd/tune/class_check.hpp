@@ -49,7 +49,7 @@ struct StiffnessLimit {
     double stiffness_n_per_m = 0.0;  ///< lo: accepted
     double rejected_n_per_m = 0.0;   ///< hi: rejected (or kMaxCouplingStiffness)
     ExactCheck at_limit;             ///< the check of lo
-    int checks = 0;
+    int checks = 0;                  ///< whole checks (a rejection by a past worst case is not one)
 };
 StiffnessLimit exact_stiffness_limit(const theory::DeviceModel& device,
                                      double coupling_damping_n_s_per_m, double rate_hz,
