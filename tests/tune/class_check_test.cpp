@@ -10,6 +10,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "hapticd/theory/coupling_check.hpp"
 
@@ -165,6 +166,21 @@ TEST(ClassCheck, NoRandomMemberBeatsTheSearch) {
     EXPECT_TRUE(random_check.stable) << random_check.worst_operator.describe();
     EXPECT_LE(random_check.worst_spectral_radius,
               check_exact(kPen, coupling, kRateHz, for_class(c), 1.0).worst_spectral_radius);
+}
+
+TEST(ClassCheck, HandsOffMeetsTheLosslessMassWorstForIt) {
+    // Found by a hostile tester with an independent model (tools/scripts/class_adversary.py):
+    // with one period of delay, the device alone against a lossless virtual mass of about its
+    // own mass on a vanishing spring grows by |z| = 1.000016 per tick at 1010 N/m and b_c = 0,
+    // and by 1.0000162 at 1618.8 N/m and b_c = 0.5 (a 0.42 kg mass). Hands-off is in every
+    // class, so the class check must reject both; the first version called them stable.
+    for (const auto& [k, bc] : {std::pair{1010.0, 0.0}, std::pair{1618.8184, 0.5}}) {
+        const ExactCheck c = check_exact(kPen, {k, bc}, kRateHz, for_class(pen_grip()), 1.0);
+        EXPECT_FALSE(c.stable) << k;
+        EXPECT_EQ(c.worst_operator.family, OperatorFamily::hands_off) << k;
+        EXPECT_EQ(c.worst_environment.kind, EnvironmentModel::Kind::lossless_mass_spring) << k;
+        EXPECT_GT(c.worst_spectral_radius, 1.00001) << k;
+    }
 }
 
 /// The largest k_c at b_c that check_passive_scene accepts.
