@@ -296,9 +296,8 @@ Config parse_config(std::string_view toml_text, const std::string& source,
         coupling.text("check", {"passive", "exact", "paper", "encoder", "off"}).value_or("passive");
     config.coupling.environments =
         coupling.text("environments", {"every-passive", "scene"}).value_or("every-passive");
-    config.operators = parse_operator_class(root, source);
     const std::string& check = config.coupling.check;
-    if (config.operators && check != "exact") {
+    if (root.contains("operator") && check != "exact") {
         throw ConfigError(
             source +
             ": [operator] declares an operator class, which only [coupling] "
@@ -307,6 +306,7 @@ Config parse_config(std::string_view toml_text, const std::string& source,
             (check == "passive" ? " (the passive model holds for every passive operator)" : "") +
             ": set check = \"exact\", or remove [operator]");
     }
+    config.operators = parse_operator_class(root, source);
     if (config.coupling.environments == "scene" && check != "passive" && check != "exact") {
         throw ConfigError(source +
                           ": [coupling] environments = \"scene\" needs check = "

@@ -106,7 +106,7 @@ TEST_F(DaemonRun, LockstepRunOfTheEmbeddedDefaultGivesTheSummary) {
     EXPECT_NE(outcome.log.find("(passive model, loop delay 0 ms): unconditionally stable"),
               std::string::npos)
         << outcome.log;
-    EXPECT_NE(outcome.log.find("holds for every passive operator and environment"),
+    EXPECT_NE(outcome.log.find("holds for every passive operator and every passive environment"),
               std::string::npos)
         << outcome.log;
     // The default's grasp pushes 5 mm past the wall from t = 1 s: the wall pushes back.

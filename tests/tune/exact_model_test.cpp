@@ -443,7 +443,7 @@ TEST(exactInput, RejectsNonPhysicalValuesNamingThem) {
               std::string::npos);
     EXPECT_NE(invalid_argument_message([&] {
                   closed_loop_poles(kDevice, {1000.0, 0.0}, kRateHz, h,
-                                    EnvironmentModel::mass_spring(0.1, 0.0));
+                                    EnvironmentModel::mass_spring(0.1, -1.0));
               }).find("environment stiffness"),
               std::string::npos);
     // A field the family does not use is an error, not silently ignored.
