@@ -1,0 +1,1102 @@
+#!/usr/bin/python3
+"""Hostile, independent check of `haptic-tune ... --model exact --operator-class FILE`.
+
+An independent numpy model of the sampled-data haptic loop (written from the model's
+description, not from src/tune/), a search of a declared operator class x environments for
+a closed-loop spectral radius > 1 + 1e-8, and a comparison with the tool's limits.
+
+The model. Device m dv/dt + b v = F_h - F, sampled every T. The continuous state is the
+handle (x, v) and, for a two-mass grasp, the hand (x_h, v_h):
+    handle --(k_s, b_s)-- hand mass m_h --(k_a, b_a)-- ground        (hands-off: no hand)
+sampled exactly (zero-order hold, scipy.linalg.expm of the augmented matrix). Tick n:
+x_d[n] = x(nT), v_d[n] = (x_d[n] - x_d[n-1])/T,
+F[n] = k_c (x_d[n] - x_e[n]) + b_c (v_d[n] - v_e[n]), v_e the backward difference of x_e,
+F[n] held over [nT + dT, (n+1)T + dT) (d whole periods of delay: a delay line of forces).
+Environments are written as F[n] = H(z) x_e[n] (H = N(z^-1)/D(z^-1)) and the algebraic loop
+with the coupling is solved for x_e[n] every tick:
+    wall           x_e = 0
+    implicit       H = m_e s_b^2 + b_e s_b + k_e,        s_b = (1 - z^-1)/T   (implicit Euler)
+    lossless       H = (m_e s + k_e/s) s_b,              s = (2/T)(1 - z^-1)/(1 + z^-1)
+    lossless2      two lossless mass-springs in parallel (an extra attack, beyond the brief)
+Stability: the spectral radius of the closed-loop transition matrix <= 1 + 1e-8. When
+nothing anchors the position (no wall, k_e = 0, and no hand with k_s > 0 and k_a > 0) the
+loop has one free mode at z = 1; the search's objective drops the eigenvalue nearest 1 in
+that case (and checks it is within 1e-8 of 1), so the landscape is not flat at 1.
+
+Usage (run from the worktree root, /usr/bin/python3, numpy + scipy):
+    tools/scripts/class_adversary.py validate [--tool BIN]
+        hands-off wall limits, and single-point classes compared with `haptic-tune check`
+    tools/scripts/class_adversary.py limits [--tool BIN]
+        the tool's class limits (size) for b_c in {0, 0.5, 1} x delay in {0, 1 ms},
+        all passive environments and --scene god-object-sphere (rigid wall only)
+    tools/scripts/class_adversary.py attack [--tool BIN] [--factor 0.995] [--budget S]
+        [--cases LIST] [--seed N] [--out results.json]
+        search the class box x environments at factor x each limit; every find > 1 + 1e-8
+        is written to a single-point class file (build/class-adversary/) and re-checked
+        with `haptic-tune check --model exact --operator-class FILE`
+    tools/scripts/class_adversary.py point --kc K --bc B [--delay-periods D] --op ... --env ...
+        radius of one configuration (for hand checks)
+    tools/scripts/class_adversary.py mylimits [--budget S]
+        my own class limit per case: bisection on the worst configuration found, a focused
+        search just below it, repeated while that finds more, then a Nelder-Mead polish of
+        that configuration at its critical k_c (the focused search steps 2e-4)
+    tools/scripts/class_adversary.py window [--tool BIN] [--mylimits FILE]
+        where the tool's own `check --operator-class` verdict flips, against mylimits' limits
+        (bisection between my limit and the tool's rejected stiffness)
+Defaults: --tool /tmp/haptic-bin-snapshot2/haptic-tune (the fixed tool), the class
+config/operators/pen-grip.toml, m = 0.1 kg, b = 2 N s/m, 1 kHz. Scratch files (class files, the limit cache) go to
+build/class-adversary/. Every find is re-checked in mpmath before it counts: a near-defective
+pair at z = 1 (a free 1e5 kg virtual mass) or an extreme two-mode lossless environment puts
+double-precision radii up to ~3e-4 off.
+
+Results against the fixed tool, /tmp/haptic-bin-snapshot2/haptic-tune (pen-grip class; attack
+--factors 0.995,1.01 --budget 15: ~15-21 s CPU per case at 0.995, limits ~60 s of the tool's
+CPU, mylimits ~100 s, window ~65 s, validate ~16 s; about 11 min CPU for everything):
+    b_c  delay  environments   tool size   mine       mine/tool  worst (mine)
+    0    0      all passive    4007.81     4013.38    1.00139    hands-off, rigid wall
+    0    0      rigid wall     4007.81     4013.38    1.00139    hands-off, rigid wall
+    0.5  0      all passive    4820.31     4823.50    1.00066    hands-off, lossless spring (m_e -> 0, 23687 N/m)
+    0.5  0      rigid wall     4984.38     4991.95    1.00152    hands-off, rigid wall
+    1    0      all passive    5437.50     5441.43    1.00072    hands-off, lossless spring (m_e -> 0, 15232 N/m)
+    1    0      rigid wall     5953.13     5960.76    1.00128    hands-off, rigid wall
+    0    1T     all passive    1005.86     1006.64    1.00078    hands-off, lossless(0.1017 kg, k_e -> 0)
+    0    1T     rigid wall     1339.84     1340.70    1.00064    hands-off, rigid wall
+    0.5  1T     all passive    1617.19     1616.43    0.99953    hands-off, lossless(0.4205 kg, k_e -> 0)  <- 0.047 % optimistic
+    0.5  1T     rigid wall     1666.02     1666.72    1.00042    hands-off, rigid wall
+    1    1T     all passive    1988.28     1989.08    1.00040    hands-off, rigid wall
+    1    1T     rigid wall     1988.28     1989.08    1.00040    hands-off, rigid wall
+(lossless m_e, k_e at the box's ends, 1e-5 kg and 0.01 N/m: m_e = 0 and k_e = 1e-5 give the same
+limit to 3e-7.) The attack at 0.995 x every limit: no configuration above 1 + 1e-8 (only
+double-precision suspects next to z = 1, all rounding noise in mpmath). At 1.01 x every limit
+the tool's check rejects what the search finds. The fixed tool is not pessimistic anywhere (at
+most 0.15 % below my limit: its size bisection steps ~0.12-0.2 %).
+Still optimistic, but inside the 0.5 % allowance: with one period of delay the class check does
+not see the 22 Hz mode that a free lossless virtual mass (hands-off) drives unstable, until its
+radius passes ~1 + 6e-6; it reports a 7000-7700 kg, 1.4e8-1.5e8 N/m lossless spring at
+~1 + 1e-9 instead (window):
+    b_c = 0.5, delay 1 ms: check accepts k_c up to 1617.34 (0.056 % above my 1616.43), and
+        size returns 1617.1875 itself; there hands-off, lossless m_e = 0.420484 kg,
+        k_e = 0.01 N/m has radius 1.0000051486 (mpmath and a time-domain run agree)
+    b_c = 0, delay 1 ms: size 1005.86 is safe, but check accepts up to 1007.43 (0.078 % above
+        my 1006.64): hands-off, lossless m_e = 0.101682 kg, k_e = 0.01: radius 1.0000038483
+    (the same with a single-point class, build/class-adversary/point-pen-tip.toml: accepted)
+Before the fix (/tmp/haptic-bin-snapshot/haptic-tune): the same limits except with one period of
+delay, all passive, b_c = 0: 1058.59 (5.2 % optimistic) and b_c = 0.5: 1626.95 (0.65 %);
+counterexamples accepted by that tool's check (validate, step 5; the fixed tool rejects both):
+    k_c = 1053.3008, b_c = 0, delay 1 ms, hands-off, lossless trapezoidal m_e = 0.10651 kg,
+        k_e = 0.01 N/m: radius 1.00023041 (mpmath and a time-domain run agree)
+    k_c = 1618.8184, b_c = 0.5, delay 1 ms, hands-off, lossless m_e = 0.421465 kg, k_e = 0.01:
+        radius 1.00001624
+The class search (src/tune/class_check.cpp, read after these numbers) never climbed over
+lossless environments from hands-off in that snapshot: hands-off only met the fixed sweep and
+the synthesised environments, and the lossless climb started from the 3^5 grid's hand-on seeds.
+"""
+import argparse
+import json
+import math
+import os
+import subprocess
+import sys
+import time
+
+import numpy as np
+import scipy.linalg
+import scipy.optimize
+
+M_DEV = 0.1
+B_DEV = 2.0
+T = 1e-3
+TOL = 1e-8
+TOOL = "/tmp/haptic-bin-snapshot2/haptic-tune"
+CLASS_FILE = "config/operators/pen-grip.toml"
+WALL_SCENE = "config/scenes/god-object-sphere.toml"
+
+# The declared class (pen-grip.toml), parsed below; these are the fallback values.
+CLASS = {
+    "hand_mass": (0.1, 2.0),
+    "grip_stiffness": (0.0, 3000.0),
+    "grip_damping": (2.0, 30.0),
+    "arm_stiffness": (0.0, 1000.0),
+    "arm_damping": (0.0, 20.0),
+}
+OP_KEYS = ["hand_mass", "grip_stiffness", "grip_damping", "arm_stiffness", "arm_damping"]
+
+
+def parse_class(path):
+    """A minimal reader for the [operator] table (numbers or [min, max])."""
+    out = {}
+    section = None
+    with open(path) as f:
+        for line in f:
+            line = line.split("#", 1)[0].strip()
+            if not line:
+                continue
+            if line.startswith("["):
+                section = line.strip("[]").strip()
+                continue
+            if section != "operator" or "=" not in line:
+                continue
+            k, v = [s.strip() for s in line.split("=", 1)]
+            if v.startswith("["):
+                lo, hi = [float(s) for s in v.strip("[]").split(",")]
+            else:
+                lo = hi = float(v)
+            out[k] = (lo, hi)
+    return out
+
+
+# ---------------------------------------------------------------------------- the model
+
+_zoh_cache = {}
+
+
+def plant_zoh(op, m=M_DEV, b=B_DEV, T=T):
+    """Exact ZOH sampling of the device (+ hand). op None = hands-off, else
+    (m_h, k_s, b_s, k_a, b_a). State [x, v] or [x, v, x_h, v_h]; input F (the coupling
+    force, opposing the handle)."""
+    key = (op, m, b, T)
+    if key in _zoh_cache:
+        return _zoh_cache[key]
+    if op is None:
+        A = np.array([[0.0, 1.0], [0.0, -b / m]])
+        Bm = np.array([[0.0], [-1.0 / m]])
+    else:
+        mh, ks, bs, ka, ba = op
+        A = np.array([
+            [0.0, 1.0, 0.0, 0.0],
+            [-ks / m, -(b + bs) / m, ks / m, bs / m],
+            [0.0, 0.0, 0.0, 1.0],
+            [ks / mh, bs / mh, -(ks + ka) / mh, -(bs + ba) / mh],
+        ])
+        Bm = np.array([[0.0], [-1.0 / m], [0.0], [0.0]])
+    n = A.shape[0]
+    aug = np.zeros((n + 1, n + 1))
+    aug[:n, :n] = A * T
+    aug[:n, n:] = Bm * T
+    E = scipy.linalg.expm(aug)
+    res = (E[:n, :n], E[:n, n])
+    if len(_zoh_cache) > 4096:
+        _zoh_cache.clear()
+    _zoh_cache[key] = res
+    return res
+
+
+def polymul(p, q):
+    """Polynomial product (works for float and mpmath object arrays)."""
+    out = [0 * p[0] * q[0]] * (len(p) + len(q) - 1)
+    for i, a in enumerate(p):
+        for j, c in enumerate(q):
+            out[i + j] = out[i + j] + a * c
+    return np.array(out)
+
+
+def env_tf(env, T=T):
+    """The environment as F = N(z^-1)/D(z^-1) x_e, coefficients in powers of z^-1
+    (D[0] = 1). None for the rigid wall."""
+    kind = env[0]
+    if kind == "wall":
+        return None
+    if kind == "implicit":
+        _, me, ke, be = env
+        N = np.array([me / T**2 + be / T + ke, -2 * me / T**2 - be / T, me / T**2])
+        return N, np.array([1.0])
+    if kind == "lossless":
+        _, me, ke = env
+        # (m_e s + k_e/s) s_b = [2 m_e/T^2 (1 - z^-1)^2 + k_e/2 (1 + z^-1)^2] / (1 + z^-1)
+        if me == 0.0:
+            return np.array([ke / 2, ke / 2]), np.array([1.0])
+        N = 2 * me / T**2 * np.array([1.0, -2.0, 1.0]) + ke / 2 * np.array([1.0, 2.0, 1.0])
+        return N, np.array([1.0, 1.0])
+    if kind == "lossless2":
+        # m_e s + k_e/s + k_r s/(s^2 + k_r/M_r): a mass-spring plus a resonator (a mass M_r
+        # hung off the contact point on a spring k_r), all trapezoidal: a two-mode Foster form
+        _, me, ke, kr, Mr = env
+        q1m = np.array([1.0, -1.0])
+        q1p = np.array([1.0, 1.0])
+        sq = polymul
+        N1 = 2 * me / T**2 * sq(q1m, q1m) + ke / 2 * sq(q1p, q1p)
+        D2 = 4 / T**2 * sq(q1m, q1m) + kr / Mr * sq(q1p, q1p)
+        N = sq(N1, D2) + 2 * kr / T**2 * sq(sq(q1m, q1m), sq(q1p, q1p))
+        D = sq(q1p, D2)
+        return N / D[0], D / D[0]
+    if kind == "trapdamp":
+        # a lossy trapezoidal mass-spring-damper: m_e s + b_e + k_e/s
+        _, me, ke, be = env
+        N = (2 * me / T**2 * np.array([1.0, -2.0, 1.0]) + ke / 2 * np.array([1.0, 2.0, 1.0])
+             + be / T * np.array([1.0, 0.0, -1.0]))
+        return N, np.array([1.0, 1.0])
+    raise ValueError(kind)
+
+
+def env_anchored(env):
+    kind = env[0]
+    if kind == "wall":
+        return True
+    if kind == "implicit":
+        return env[2] > 0
+    if kind == "lossless":
+        return env[2] > 0
+    if kind in ("lossless2", "trapdamp"):
+        return env[2] > 0
+    raise ValueError(kind)
+
+
+def closed_loop(kc, bc, op, env, d=0, m=M_DEV, b=B_DEV, T=T):
+    """The closed-loop transition matrix. State: plant (np), x_d[n-1], x_e[n-1..n-q],
+    F[n-1..n-r]."""
+    Ad, Bd = plant_zoh(op, m, b, T)
+    return _assemble(kc, bc, Ad, Bd, env_tf(env, T), d, T, np.zeros)
+
+
+def _assemble(kc, bc, Ad, Bd, tf, d, T, zeros):
+    npl = Ad.shape[0]
+    if tf is None:
+        q, nr_env = 0, 0
+    else:
+        N, D = tf
+        q = max(len(N) - 1, 1)
+        nr_env = len(D) - 1
+    r = max(d, nr_env)
+    n = npl + 1 + q + r
+    ixd = npl
+    ixe = npl + 1
+    iF = npl + 1 + q
+    # Lc: F = Lc.S - (k_c + b_c/T) x_e[n]
+    Lc = zeros(n)
+    Lc[0] += kc + bc / T
+    Lc[ixd] -= bc / T
+    if tf is None:
+        Frow = Lc
+        xerow = None
+    else:
+        Lc[ixe] += bc / T
+        # Lh: F = N0 x_e[n] + Lh.S
+        Lh = zeros(n)
+        for i in range(1, len(N)):
+            Lh[ixe + i - 1] += N[i]
+        for i in range(1, len(D)):
+            Lh[iF + i - 1] -= D[i]
+        xerow = (Lc - Lh) / (N[0] + kc + bc / T)
+        Frow = Lc - (kc + bc / T) * xerow
+    Phi = np.array([zeros(n) for _ in range(n)])
+    Phi[:npl, :npl] = Ad
+    if d == 0:
+        Fapp = Frow
+    else:
+        Fapp = zeros(n)
+        Fapp[iF + d - 1] += 1
+    Phi[:npl, :] += np.outer(Bd, Fapp)
+    Phi[ixd, 0] += 1
+    if q:
+        Phi[ixe] = xerow
+        for i in range(1, q):
+            Phi[ixe + i, ixe + i - 1] += 1
+    if r:
+        Phi[iF] = Frow
+        for i in range(1, r):
+            Phi[iF + i, iF + i - 1] += 1
+    return Phi
+
+
+def closed_loop_mp(kc, bc, op, env, d=0, dps=50):
+    """The same closed loop in mpmath at dps digits: the device, the hand, T and every
+    coefficient exact to dps digits, and the eigenvalues. Verifies finds whose eigenvalue
+    is within reach of double-precision rounding (a near-defective pair at z = 1)."""
+    import mpmath as mp
+    mp.mp.dps = dps
+    mpf = mp.mpf
+    Tm, mm, bm = mpf(1) / 1000, mpf(1) / 10, mpf(2)
+    kc, bc = mpf(kc), mpf(bc)
+    if op is None:
+        A = mp.matrix([[0, 1], [0, -bm / mm]])
+        Bm = mp.matrix([[0], [-1 / mm]])
+    else:
+        mh, ks, bs, ka, ba = [mpf(x) for x in op]
+        A = mp.matrix([
+            [0, 1, 0, 0],
+            [-ks / mm, -(bm + bs) / mm, ks / mm, bs / mm],
+            [0, 0, 0, 1],
+            [ks / mh, bs / mh, -(ks + ka) / mh, -(bs + ba) / mh],
+        ])
+        Bm = mp.matrix([[0], [-1 / mm], [0], [0]])
+    npl = A.rows
+    aug = mp.zeros(npl + 1, npl + 1)
+    for i in range(npl):
+        for j in range(npl):
+            aug[i, j] = A[i, j] * Tm
+        aug[i, npl] = Bm[i, 0] * Tm
+    E = mp.expm(aug)
+    Ad = np.array([[E[i, j] for j in range(npl)] for i in range(npl)], dtype=object)
+    Bd = np.array([E[i, npl] for i in range(npl)], dtype=object)
+    envm = (env[0], *[mpf(x) for x in env[1:]])
+    tf = env_tf(envm, Tm)
+    Phi = _assemble(kc, bc, Ad, Bd, tf, d, Tm, lambda n: np.array([mpf(0)] * n, dtype=object))
+    n = Phi.shape[0]
+    lam = mp.eig(mp.matrix(Phi.tolist()), left=False, right=False)
+    return [complex(x) for x in lam], max(abs(x) for x in lam)
+
+
+def simulate_lossless(kc, bc, op, me, ke, d, ticks=60000, seed=3):
+    """A time-domain cross-check, written separately from closed_loop: step the loop tick
+    by tick (the exact ZOH plant; the trapezoidal mass and spring as their own recursions
+    F_m[n] = -F_m[n-1] + (2 m_e/T)(v_e[n] - v_e[n-1]),
+    F_k[n] = F_k[n-1] + (k_e T/2)(v_e[n] + v_e[n-1]);
+    the coupling solved for v_e[n]; a FIFO of forces for the delay) and return the growth
+    per tick of the state's norm over the second half of the run."""
+    Ad, Bd = plant_zoh(op)
+    rng = np.random.default_rng(seed)
+    p = rng.standard_normal(Ad.shape[0]) * 1e-3
+    xd_prev, xe, ve, Fm, Fk = 0.0, 0.0, 0.0, 0.0, 0.0
+    fifo = [0.0] * d
+    a = 2 * me / T + ke * T / 2
+    norms = []
+    peak = 0.0
+    for n in range(ticks):
+        x = p[0]
+        vd = (x - xd_prev) / T
+        # F = a v_e + c (environment) = k_c (x - xe - T v_e) + b_c (vd - v_e) (coupling)
+        c = -Fm - 2 * me / T * ve + Fk + ke * T / 2 * ve
+        v_new = (kc * (x - xe) + bc * vd - c) / (a + kc * T + bc)
+        F = a * v_new + c
+        Fm = -Fm + 2 * me / T * (v_new - ve)
+        Fk = Fk + ke * T / 2 * (v_new + ve)
+        xe += T * v_new
+        ve = v_new
+        xd_prev = x
+        fifo.append(F)
+        Fapp = fifo.pop(0)
+        p = Ad @ p + Bd * Fapp
+        peak = max(peak, abs(p[0]), abs(F) / 1e3)  # the block's peak, free of the phase
+        if n % 1000 == 999:
+            norms.append(math.log(max(peak, 1e-300)))
+            peak = 0.0
+    h = len(norms) // 2
+    return math.exp((norms[-1] - norms[h]) / ((len(norms) - 1 - h) * 1000))
+
+
+def free_modes(op, env):
+    """How many eigenvalues sit at exactly z = 1: spring-connected groups of masses that
+    nothing ties to ground (the coupling k_c always ties device and environment)."""
+    n = 0
+    hand_to_dev = op is not None and op[1] > 0
+    hand_to_gnd = op is not None and op[3] > 0
+    if op is not None and not hand_to_dev and not hand_to_gnd:
+        n += 1  # the hand alone, tied by dampers only
+    if not (env_anchored(env) or (hand_to_dev and hand_to_gnd)):
+        n += 1  # the device and the environment
+    return n
+
+
+def spectral(kc, bc, op, env, d=0):
+    """(spectral radius, radius without the free z = 1 modes, the free-mode eigenvalues)."""
+    Phi = closed_loop(kc, bc, op, env, d)
+    if not np.all(np.isfinite(Phi)):
+        return math.inf, math.inf, []
+    lam = np.linalg.eigvals(Phi)
+    a = np.abs(lam)
+    rho = float(a.max())
+    nf = free_modes(op, env)
+    idx = list(np.argsort(np.abs(lam - 1.0))[:nf])
+    rest = np.delete(a, idx)
+    return rho, float(rest.max()) if rest.size else 0.0, [complex(lam[i]) for i in idx]
+
+
+NEAR_ONE = 2e-3  # eigenvalues this close to z = 1 (below ~0.3 Hz) do not guide the search
+
+
+def objective_radius(kc, bc, op, env, d=0):
+    """What the search maximises, and whether the point is a find. A free or weakly
+    anchored position (k_s, k_a, k_e -> 0) leaves an eigenvalue at or just below z = 1
+    whatever else happens, which would make the landscape flat at 1; so the objective is the
+    largest |z| among the eigenvalues farther than NEAR_ONE from 1. Returns
+    (objective, status): status "find" when an eigenvalue away from 1 exceeds 1 + 1e-8,
+    "suspect" when only one within NEAR_ONE of 1 does (a near-defective pair at z = 1,
+    e.g. a free 1e5 kg virtual mass, puts double-precision eigenvalues ~1e-8 off: these are
+    re-checked in mpmath, closed_loop_mp), else "ok"."""
+    Phi = closed_loop(kc, bc, op, env, d)
+    if not np.all(np.isfinite(Phi)):
+        return math.inf, "find"
+    lam = np.linalg.eigvals(Phi)
+    a = np.abs(lam)
+    near = np.abs(lam - 1.0) <= NEAR_ONE
+    far = a[~near]
+    obj = float(far.max()) if far.size else 0.0
+    if obj > 1 + TOL:
+        return obj, "find"
+    if a.max() > 1 + TOL:
+        return obj, "suspect"
+    return obj, "ok"
+
+
+# ---------------------------------------------------------------------------- coordinates
+
+ALPHA = math.log(1e6)  # resolution near the low end: ~ (hi - lo) * 1e-6
+
+
+def u_to_val(u, lo, hi):
+    """u in [0, 1] -> [lo, hi], log-like: lo reached exactly at u = 0, hi at u = 1."""
+    u = min(max(u, 0.0), 1.0)
+    if hi <= lo:
+        return lo
+    if lo > 0:  # a true log scale
+        return lo * (hi / lo) ** u
+    return lo + (hi - lo) * (math.expm1(ALPHA * u) / math.expm1(ALPHA))
+
+
+def val_to_u(v, lo, hi):
+    if hi <= lo:
+        return 0.0
+    if lo > 0:
+        return math.log(v / lo) / math.log(hi / lo)
+    return math.log1p((v - lo) / (hi - lo) * math.expm1(ALPHA)) / ALPHA
+
+
+def op_from_u(u, cls):
+    return tuple(u_to_val(ui, *cls[k]) for ui, k in zip(u, OP_KEYS))
+
+
+# Environment boxes, in log10 (wide).
+ENV_BOX = {
+    # implicit Euler mass-spring-damper: m_e, k_e, b_e (log10); each may also be 0
+    "implicit": [(-4.0, 6.0), (-2.0, 10.0), (-3.0, 5.0)],
+    # lossless trapezoidal mass-spring: m_e, k_e
+    "lossless": [(-5.0, 7.0), (-2.0, 11.0)],
+    # mass-spring + resonator: m_e, k_e, k_r, M_r
+    # (narrower than lossless: at 1e-5 kg with 1e11 N/m double precision is ~3e-4 off)
+    "lossless2": [(-4.0, 6.0), (-2.0, 9.0), (-2.0, 9.0), (-4.0, 6.0)],
+    # trapezoidal mass-spring-damper: m_e, k_e, b_e
+    "trapdamp": [(-5.0, 7.0), (-2.0, 11.0), (-3.0, 5.0)],
+}
+
+
+def env_from_y(kind, y):
+    """y in [0, 1]^k -> the environment; for implicit, y < 0.02 means exactly 0."""
+    box = ENV_BOX[kind]
+    vals = []
+    for yi, (lo, hi) in zip(y, box):
+        yi = min(max(yi, 0.0), 1.0)
+        if kind == "implicit" and yi < 0.02:
+            vals.append(0.0)
+        else:
+            if kind == "implicit":
+                yi = (yi - 0.02) / 0.98
+            vals.append(10 ** (lo + (hi - lo) * yi))
+    return (kind, *vals)
+
+
+# ---------------------------------------------------------------------------- the tool
+
+
+def run_tool(tool, args):
+    r = subprocess.run([tool] + args, capture_output=True, text=True)
+    try:
+        js = json.loads(r.stdout)
+    except json.JSONDecodeError:
+        js = None
+    return r.returncode, js, r.stderr
+
+
+def device_args(bc, delay_s):
+    return ["--mass", str(M_DEV), "--damping", str(B_DEV), "--rate", str(1.0 / T),
+            "--coupling-damping", repr(bc), "--delay", repr(delay_s), "--model", "exact"]
+
+
+def tool_size(tool, bc, delay_s, cls_file, scene=None):
+    args = ["size"] + device_args(bc, delay_s) + ["--operator-class", cls_file, "--json"]
+    if scene:
+        args += ["--scene", scene]
+    rc, js, err = run_tool(tool, args)
+    if js is None:
+        raise SystemExit("size failed: %s" % err)
+    return js
+
+
+def tool_check(tool, kc, bc, delay_s, cls_file, scene=None):
+    args = ["check"] + device_args(bc, delay_s) + ["--stiffness", repr(kc),
+                                                   "--operator-class", cls_file, "--json"]
+    if scene:
+        args += ["--scene", scene]
+    rc, js, err = run_tool(tool, args)
+    return rc, js, err
+
+
+def write_point_class(path, op):
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    with open(path, "w") as f:
+        f.write("# a single-point operator class written by tools/scripts/class_adversary.py\n")
+        f.write("[operator]\n")
+        for k, v in zip(OP_KEYS, op):
+            f.write("%s = %r\n" % (k, float(v)))
+    return path
+
+
+# ---------------------------------------------------------------------------- limits
+
+
+def my_limit(fn, lo, hi, rel=1e-7):
+    """Largest k with fn(k) stable (fn(lo) stable, fn(hi) unstable assumed)."""
+    while hi - lo > rel * hi:
+        mid = 0.5 * (lo + hi)
+        if fn(mid) <= 1 + TOL:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+# ---------------------------------------------------------------------------- search
+
+
+class Found(Exception):
+    pass
+
+
+class Search:
+    """Every evaluation goes through f(), which keeps the best point and every point above
+    1 + 1e-8 (a find)."""
+
+    def __init__(self, kc, bc, d, cls, rng, stop_on_find=False):
+        self.kc, self.bc, self.d, self.cls = kc, bc, d, cls
+        self.rng = rng
+        self.best = (-math.inf, None, None)
+        self.evals = 0
+        self.finds = []
+        self.suspects = []
+        self.stop_on_find = stop_on_find
+
+    def f(self, op, env):
+        self.evals += 1
+        try:
+            r, status = objective_radius(self.kc, self.bc, op, env, self.d)
+        except (np.linalg.LinAlgError, ValueError, OverflowError, ZeroDivisionError):
+            return -1.0
+        if not math.isfinite(r):
+            r = 1e6
+        if r > self.best[0]:
+            self.best = (r, op, env)
+        if status == "find":
+            self.finds.append((r, op, env))
+            if self.stop_on_find:
+                raise Found()
+        elif status == "suspect" and len(self.suspects) < 100000:
+            self.suspects.append((spectral(self.kc, self.bc, op, env, self.d)[0], op, env))
+        return r
+
+    def verify(self, log, per_key=3, cap=24):
+        """Re-check the largest finds and suspects (up to per_key for each environment kind
+        and hands-on or off) in mpmath; only what mpmath confirms is a find. (Extreme
+        two-mode environments put double-precision radii up to ~3e-4 off.)"""
+        def pick(lst):
+            count, out = {}, []
+            for r, op, env in sorted(lst, key=lambda t: -t[0]):
+                key = (op is None, env[0])
+                if count.get(key, 0) >= per_key:
+                    continue
+                count[key] = count.get(key, 0) + 1
+                out.append((r, op, env))
+                if len(out) >= cap:
+                    break
+            return out
+        confirmed = []
+        noise = 0
+        for label, lst in (("find", self.finds), ("suspect", self.suspects)):
+            for r, op, env in pick(lst):
+                lam, rmp = closed_loop_mp(self.kc, self.bc, op, env, self.d)
+                rmp = float(rmp)
+                ok = rmp > 1 + TOL
+                if ok or noise < 3:
+                    log("    mpmath re-check of a %s: double %.12f, mpmath %.15f -> %s  (%s, %s)"
+                        % (label, r, rmp, "REAL" if ok else "rounding noise", fmt_op(op),
+                           fmt_env(env)))
+                noise += not ok
+                if ok:
+                    confirmed.append((rmp, op, env))
+        log("    mpmath: %d confirmed, %d rounding noise" % (len(confirmed), noise))
+        return confirmed
+
+    @staticmethod
+    def dims(kind):
+        nop = 0 if kind[0] == "handsoff" else len(OP_KEYS)
+        nenv = 0 if kind[1] == "wall" else len(ENV_BOX[kind[1]])
+        return nop, nenv
+
+    def split(self, kind, z):
+        nop, _ = self.dims(kind)
+        op = None if nop == 0 else op_from_u(z[:nop], self.cls)
+        env = ("wall",) if kind[1] == "wall" else env_from_y(kind[1], z[nop:])
+        return op, env
+
+    def fz(self, kind, z):
+        return self.f(*self.split(kind, np.clip(z, 0.0, 1.0)))
+
+    def corners(self, envs):
+        """Hands-off and every corner of the class box, against the wall and a grid of
+        environments."""
+        import itertools
+        env_list = [("wall",)]
+        if "implicit" in envs:
+            for me in [0.0, 1e-3, 0.1, 1.0, 10.0, 1e3, 1e5]:
+                for ke in [0.0, 1.0, 1e3, 1e5, 1e7, 1e9]:
+                    for be in [0.0, 1.0, 100.0]:
+                        env_list.append(("implicit", me, ke, be))
+        if "lossless" in envs:
+            for lm in np.arange(-4, 7.01, 1.0):
+                for lk in np.arange(-1, 11.01, 1.0):
+                    env_list.append(("lossless", 10**lm, 10**lk))
+        ops = [None] + list(dict.fromkeys(itertools.product(*[self.cls[k] for k in OP_KEYS])))
+        for op in ops:
+            for env in env_list:
+                self.f(op, env)
+        n = len(ops) * len(env_list)
+        # hands-off: dense grids of the low-dimensional environment spaces
+        for kind, pts in (("lossless", 90), ("implicit", 22), ("trapdamp", 15),
+                          ("lossless2", 8)):
+            if kind not in envs:
+                continue
+            dim = len(ENV_BOX[kind])
+            g = np.linspace(0.0, 1.0, pts)
+            for y in itertools.product(*([g] * dim)):
+                self.f(None, env_from_y(kind, y))
+                n += 1
+        return n
+
+    def z_of(self, kind, op, env):
+        """The search coordinates of a point (for Nelder-Mead starts)."""
+        z = []
+        if kind[0] != "handsoff":
+            z += [val_to_u(v, *self.cls[k]) for v, k in zip(op, OP_KEYS)]
+        if kind[1] != "wall":
+            for v, (lo, hi) in zip(env[1:], ENV_BOX[kind[1]]):
+                if v <= 0:
+                    z.append(0.0)
+                else:
+                    y = (math.log10(v) - lo) / (hi - lo)
+                    if kind[1] == "implicit":
+                        y = 0.02 + 0.98 * y
+                    z.append(y)
+        return np.clip(np.array(z, dtype=float), 0.0, 1.0)
+
+    def run_kind(self, kind, cpu):
+        """Differential evolution (restarted with new seeds) for ~55 % of cpu, then
+        multi-start Nelder-Mead: from the best points DE met, then random starts."""
+        dim = sum(self.dims(kind))
+        best = (-math.inf, None, None)
+        saved = self.best
+        self.best = best
+        t0 = time.process_time()
+        if dim == 0:
+            self.fz(kind, np.zeros(0))
+        else:
+            pop = max(8, 40 // dim)
+            seed = int(self.rng.integers(1 << 30))
+            elites = []
+            while not elites or time.process_time() - t0 < 0.55 * cpu:
+                res = scipy.optimize.differential_evolution(
+                    lambda z: -self.fz(kind, z), [(0.0, 1.0)] * dim, maxiter=60,
+                    popsize=pop, seed=seed, tol=0, atol=0, mutation=(0.5, 1.0),
+                    recombination=0.7, polish=False, init="sobol")
+                elites.append(np.array(res.x))
+                seed += 1
+            starts = elites[::-1]
+            if self.best[2] is not None:
+                starts.insert(0, self.z_of(kind, self.best[1], self.best[2]))
+            while time.process_time() - t0 < cpu:
+                z0 = starts.pop(0) if starts else self.rng.random(dim)
+                scipy.optimize.minimize(lambda z: -self.fz(kind, z), z0, method="Nelder-Mead",
+                                        options={"maxfev": 250 * dim, "xatol": 1e-10,
+                                                 "fatol": 1e-14, "adaptive": True})
+        kb = self.best
+        if saved[0] > self.best[0]:
+            self.best = saved
+        return kb, time.process_time() - t0
+
+
+def attack_case(kc, bc, d, cls, envs, budget, seed, log, stop_on_find=False):
+    """Maximise the radius over the class x environments at (kc, bc, d): corners, then each
+    (hands-off | hand) x environment kind, with CPU shared by dimension."""
+    S = Search(kc, bc, d, cls, np.random.default_rng(seed), stop_on_find)
+    t0 = time.process_time()
+    per_kind = {}
+    try:
+        n = S.corners(envs)
+        log("    corners: %d cases, best %.12f at %s, %s" % (
+            n, S.best[0], fmt_op(S.best[1]), fmt_env(S.best[2])))
+        per_kind["corners"] = S.best
+        kinds = [(h, e) for e in envs for h in ("handsoff", "hand")]
+        weights = [sum(Search.dims(k)) for k in kinds]
+        for kind, w in zip(kinds, weights):
+            kb, cpu = S.run_kind(kind, budget * w / sum(weights))
+            per_kind["/".join(kind)] = kb
+            log("    %-18s best %.12f at %s, %s (%.1f s)" % (
+                "/".join(kind), kb[0], fmt_op(kb[1]), fmt_env(kb[2]), cpu))
+    except Found:
+        log("    stopped at the first find")
+    confirmed = S.verify(log)
+    return {"best": S.best, "per_kind": per_kind, "finds": confirmed, "evals": S.evals,
+            "n_raw": len(S.finds), "n_suspect": len(S.suspects),
+            "cpu": time.process_time() - t0}
+
+
+def fmt_op(op):
+    if op is None:
+        return "hands-off"
+    return "(m_h=%.6g, k_s=%.6g, b_s=%.6g, k_a=%.6g, b_a=%.6g)" % op
+
+
+def fmt_env(env):
+    if env is None:
+        return "-"
+    if env[0] == "wall":
+        return "wall"
+    return env[0] + "(" + ", ".join("%.6g" % v for v in env[1:]) + ")"
+
+
+# ---------------------------------------------------------------------------- commands
+
+CASES = [(bc, dp, scene) for dp in (0, 1) for bc in (0.0, 0.5, 1.0) for scene in (None, "wall")]
+
+
+def cmd_validate(a):
+    log = print
+    # 1. hands-off device on a rigid wall, b_c = 0: the known limit ~ 2b/T = 4000 N/m.
+    for d in (0, 1):
+        for bc in (0.0, 0.5, 1.0):
+            lim = my_limit(lambda k: spectral(k, bc, None, ("wall",), d)[0], 0.0, 1e5)
+            log("hands-off, rigid wall, b_c = %.1f, delay %d T: k_c limit %.4f N/m" % (bc, d, lim))
+    # 2. a hand-built check: a free mass (k_e = 0, b_e = 0 implicit) in free space (no force).
+    rho = spectral(1000.0, 0.5, None, ("implicit", 0.0, 0.0, 0.0))
+    log("hands-off, free space (implicit m=k=b=0), k_c=1000: rho=%.15f rest=%.6f free=%s"
+        % rho)
+    # 3. single-point classes vs the tool, rigid wall scene (the tool adds hands-off).
+    rng = np.random.default_rng(1)
+    pts = []
+    for _ in range(a.n):
+        op = tuple(u_to_val(u, *CLASS[k]) for u, k in zip(rng.random(5), OP_KEYS))
+        kc = float(rng.uniform(500, 9000))
+        bc = float(rng.choice([0.0, 0.5, 1.0, 2.0]))
+        d = int(rng.choice([0, 1]))
+        pts.append((op, kc, bc, d))
+    pts.append(((0.1, 0.0, 2.0, 0.0, 0.0), 4010.0, 0.0, 0))
+    pts.append(((2.0, 3000.0, 30.0, 1000.0, 20.0), 1339.0, 0.0, 1))
+    worst = 0.0
+    agree = 0
+    for i, (op, kc, bc, d) in enumerate(pts):
+        f = write_point_class("build/class-adversary/validate-%d.toml" % i, op)
+        rc, js, err = tool_check(a.tool, kc, bc, d * T, f, WALL_SCENE)
+        mine = max(spectral(kc, bc, op, ("wall",), d)[0], spectral(kc, bc, None, ("wall",), d)[0])
+        tr = js.get("worst_spectral_radius") if js else None
+        ok_mine = mine <= 1 + TOL
+        ok_tool = rc == 0
+        agree += ok_mine == ok_tool
+        diff = abs(mine - tr) if tr is not None else float("nan")
+        worst = max(worst, diff if math.isfinite(diff) else 0)
+        log("  %2d kc=%7.1f bc=%.1f d=%d %s: mine %.12f (%s), tool %s %s, diff %.2e" % (
+            i, kc, bc, d, fmt_op(op), mine, "stable" if ok_mine else "UNSTABLE",
+            "%.12f" % tr if tr is not None else None, "stable" if ok_tool else "UNSTABLE",
+            diff))
+    log("wall scene: verdicts agree on %d/%d; largest |radius difference| %.3e"
+        % (agree, len(pts), worst))
+    # 4. a virtual-mass scene: the implicit mass-spring (0.5 kg, 20 N/m, 1 N s/m)
+    vm = "config/scenes/virtual-mass.toml"
+    agree = 0
+    for i, (op, kc, bc, d) in enumerate(pts[:8]):
+        f = "build/class-adversary/validate-%d.toml" % i
+        rc, js, err = tool_check(a.tool, kc, bc, d * T, f, vm)
+        env = ("implicit", 0.5, 20.0, 1.0)
+        mine = max(spectral(kc, bc, op, env, d)[0], spectral(kc, bc, None, env, d)[0])
+        tr = js.get("worst_spectral_radius") if js else None
+        log("  vm %2d kc=%7.1f bc=%.1f d=%d: mine %.12f, tool %s (%s; worst env %s)" % (
+            i, kc, bc, d, mine, tr, "stable" if rc == 0 else "UNSTABLE",
+            js.get("worst_environment") if js else err.strip()))
+        agree += (mine <= 1 + TOL) == (rc == 0)
+    log("virtual-mass scene: verdicts agree on %d/8" % agree)
+    # 5. the counterexamples (see the module docstring): hands-off on a lossless trapezoidal
+    # mass, one period of delay, below the tool's class limit. Double, mpmath, a time-domain
+    # run, and the tool's verdict for the class (hands-off belongs to every class).
+    # The last two are against the fixed tool (snapshot2): at its own size limit (b_c = 0.5)
+    # and at the top of its check's window (b_c = 0), a free lossless mass; rejected from
+    # ~1e-5 above the limit, accepted below. (Their radii are ~1 + 5e-6: the time-domain run
+    # needs 5e5 ticks to outlast the slow real mode the weak k_e leaves near z = 1.)
+    for kc, bc, me, ke in ((1053.3008, 0.0, 0.10651, 0.01), (1010.0, 0.0, 0.1, 0.01),
+                           (1618.8184, 0.5, 0.421465, 0.01), (1617.1875, 0.5, 0.420484, 0.01),
+                           (1007.4293, 0.0, 0.101682, 0.01)):
+        env = ("lossless", me, ke)
+        rho = spectral(kc, bc, None, env, 1)[0]
+        rmp = float(closed_loop_mp(kc, bc, None, env, 1)[1])
+        g = simulate_lossless(kc, bc, None, me, ke, 1, ticks=60000 if rho > 1 + 1e-5 else 500000)
+        rc, js, err = tool_check(a.tool, kc, bc, T, a.cls)
+        log("counterexample k_c=%.4f b_c=%.1f delay 1T, hands-off, lossless(m_e=%g, k_e=%g): "
+            "radius %.12f (mpmath %.12f, time-domain growth %.9f/tick); tool --operator-class "
+            "%s: %s (its worst radius %s)" % (kc, bc, me, ke, rho, rmp, g, a.cls,
+                                               {0: "stable", 1: "UNSTABLE"}.get(rc, rc),
+                                               js and js.get("worst_spectral_radius")))
+
+
+def get_limits(a, cls_file):
+    """The tool's class limits for the 12 cases (cached in build/class-adversary/, keyed by
+    the tool's and the class file's modification times)."""
+    key = "%s|%s|%s|%s" % (a.tool, os.path.getmtime(a.tool), cls_file,
+                           os.path.getmtime(cls_file))
+    cache = "build/class-adversary/limits.json"
+    try:
+        with open(cache) as f:
+            c = json.load(f)
+        if c["key"] == key:
+            return {(r["b_c"], r["dp"], r["scene"]): r["js"] for r in c["rows"]}
+    except (OSError, ValueError, KeyError):
+        pass
+    out = {}
+    for bc, dp, scene in CASES:
+        js = tool_size(a.tool, bc, dp * T, cls_file, WALL_SCENE if scene else None)
+        out[(bc, dp, scene)] = js
+    os.makedirs(os.path.dirname(cache), exist_ok=True)
+    with open(cache, "w") as f:
+        json.dump({"key": key, "rows": [{"b_c": k[0], "dp": k[1], "scene": k[2], "js": v}
+                                        for k, v in out.items()]}, f, indent=1)
+    return out
+
+
+def cmd_limits(a):
+    lim = get_limits(a, a.cls)
+    print("| b_c | delay | environments | tool size k_c | rejected | tool's worst case |")
+    print("|---|---|---|---|---|---|")
+    for (bc, dp, scene), js in lim.items():
+        print("| %.1f | %d T | %s | %.4f | %.4f | %s / %s |" % (
+            bc, dp, "rigid wall" if scene else "all passive", js["stiffness"],
+            js["rejected_stiffness"], js["worst_operator"], js["worst_environment"]))
+
+
+def cmd_attack(a):
+    cls = parse_class(a.cls)
+    for k in OP_KEYS:
+        cls.setdefault(k, CLASS[k])
+    log = lambda s: (print(s), sys.stdout.flush())
+    t_all = time.process_time()
+    lim = get_limits(a, a.cls)
+    todo = CASES if a.cases is None else [CASES[int(i)] for i in a.cases.split(",")]
+    results = []
+    for bc, dp, scene in todo:
+        js = lim[(bc, dp, scene)]
+        k_lim = js["stiffness"]
+        envs = ["wall"] if scene else ["wall", "implicit", "lossless"] + (
+            ["lossless2", "trapdamp"] if a.extra else [])
+        for factor in a.factors:
+            kc = factor * k_lim
+            log("case b_c=%.1f delay=%dT %s: tool limit %.4f, attacking k_c = %.4f (x%.3f)" % (
+                bc, dp, "wall only" if scene else "all environments", k_lim, kc, factor))
+            r = attack_case(kc, bc, dp, cls, envs, a.budget * (0.5 if factor > 1 else 1.0),
+                            a.seed, log, stop_on_find=factor > 1)
+            best = r["best"]
+            row = {"b_c": bc, "delay_periods": dp, "scene": "wall" if scene else None,
+                   "tool_limit": k_lim, "factor": factor, "k_c": kc,
+                   "best_radius": best[0], "best_op": best[1], "best_env": best[2],
+                   "evals": r["evals"], "cpu_s": r["cpu"], "n_finds": len(r["finds"])}
+            log("  -> best objective %.12f at %s, %s; %d evals, %.1f s CPU; %d points > 1+1e-8 "
+                "away from z = 1, %d near z = 1 (suspects); %d confirmed in mpmath"
+                % (best[0], fmt_op(best[1]), fmt_env(best[2]), r["evals"], r["cpu"],
+                   r["n_raw"], r["n_suspect"], len(r["finds"])))
+            if r["finds"]:
+                # confirm the worst find with the tool, at this point as a single-point class
+                rr, op, env = max(r["finds"], key=lambda t: t[0])
+                rho_full = (rr,)
+                row["find"] = {"radius": rr, "op": op, "env": env}
+                if op is not None:
+                    f = write_point_class("build/class-adversary/find-bc%.1f-d%d-%s-x%.3f.toml" % (
+                        bc, dp, "wall" if scene else "all", factor), op)
+                else:
+                    f = a.cls  # hands-off belongs to every class
+                rc, tj, err = tool_check(a.tool, kc, bc, dp * T, f, WALL_SCENE if scene else None)
+                row["find"]["class_file"] = f
+                row["find"]["tool_check_rc"] = rc
+                row["find"]["tool_radius"] = tj and tj.get("worst_spectral_radius")
+                log("  find: %s, %s, radius %.12f; tool check --operator-class %s: %s, "
+                    "radius %s at %s / %s" % (
+                        fmt_op(op), fmt_env(env), rho_full[0], f,
+                        {0: "stable", 1: "UNSTABLE"}.get(rc, "rc=%d" % rc),
+                        tj and tj.get("worst_spectral_radius"), tj and tj.get("worst_operator"),
+                        tj and tj.get("worst_environment")))
+            results.append(row)
+    ch = os.times()
+    log("total CPU %.1f s (this process), %.1f s (the tool's runs)" % (
+        time.process_time() - t_all, ch.children_user + ch.children_system))
+    if a.out:
+        with open(a.out, "w") as f:
+            json.dump(results, f, indent=1, default=str)
+
+
+def crit_k(bc, op, env, d, k_hi, k_lo):
+    """Bisection on k_c for one configuration: stable at k_lo, unstable at k_hi."""
+    f = lambda k: objective_radius(k, bc, op, env, d)[0]
+    if f(k_lo) > 1 + TOL:
+        return k_lo
+    while k_hi - k_lo > 1e-6 * k_hi:
+        mid = 0.5 * (k_lo + k_hi)
+        if f(mid) > 1 + TOL:
+            k_hi = mid
+        else:
+            k_lo = mid
+    return k_hi
+
+
+def polish(bc, dp, cls, op, env, kc, k_lo, rounds=3):
+    """Tighten a limit below the focused search's 2e-4 step: Nelder-Mead on the worst
+    configuration's own coordinates at its critical k_c (it is unstable there), then that
+    configuration's critical k_c again; repeat while it drops."""
+    kind = ("handsoff" if op is None else "hand", env[0])
+    for _ in range(rounds):
+        S = Search(kc, bc, dp, cls, np.random.default_rng(0))
+        z0 = S.z_of(kind, op, env)
+        if not len(z0):
+            break
+        r = scipy.optimize.minimize(lambda z: -S.fz(kind, z), z0, method="Nelder-Mead",
+                                    options={"maxfev": 600 * len(z0), "xatol": 1e-12,
+                                             "fatol": 1e-15, "adaptive": True})
+        op2, env2 = S.split(kind, np.clip(r.x, 0.0, 1.0))
+        k2 = crit_k(bc, op2, env2, dp, kc, k_lo)
+        if k2 >= kc * (1 - 1e-7):
+            break
+        kc, op, env = k2, op2, env2
+    return kc, op, env
+
+
+def cmd_window(a):
+    """Where the tool's own `check --operator-class` verdict flips, against my limit
+    (mylimits' output): bisection on the tool's check between my limit and the tool's
+    rejected stiffness. A flip above my limit means check accepts gains that are unstable
+    for a member of the class (the configuration mylimits names)."""
+    with open(a.mylimits) as f:
+        rows = json.load(f)
+    lim = get_limits(a, a.cls)
+    log = lambda s: (print(s), sys.stdout.flush())
+    for r in rows:
+        bc, dp, scene = r["b_c"], r["delay_periods"], r["scene"]
+        mine = r["mine"]
+        js = lim[(bc, dp, scene)]
+        sc = WALL_SCENE if scene else None
+        ok = lambda k: tool_check(a.tool, k, bc, dp * T, a.cls, sc)[0] == 0
+        lo, hi = mine, js["rejected_stiffness"]
+        if not ok(lo):
+            log("b_c=%.1f d=%dT %-11s mine %.4f: the tool's check already rejects my limit"
+                % (bc, dp, "wall" if scene else "all passive", mine))
+            continue
+        while hi - lo > 2e-5 * hi:
+            mid = 0.5 * (lo + hi)
+            if ok(mid):
+                lo = mid
+            else:
+                hi = mid
+        op = None if r["op"] is None else tuple(r["op"])
+        env = tuple(r["env"]) if isinstance(r["env"], list) else r["env"]
+        rho = float(closed_loop_mp(lo, bc, op, env, dp)[1])
+        log("b_c=%.1f d=%dT %-11s mine %.4f  tool size %.4f  tool check accepts up to %.4f "
+            "(%.4f %% above mine; there %s, %s has radius %.9f)" % (
+                bc, dp, "wall" if scene else "all passive", mine, js["stiffness"], lo,
+                100 * (lo / mine - 1), fmt_op(op), fmt_env(env), rho))
+
+
+def cmd_mylimits(a):
+    """My own class limit for each case: start from a find at 1.01 x the tool's limit; the
+    configuration's own critical k_c (bisection); a focused search just below it (corners,
+    grids, every kind, Nelder-Mead from the configuration); repeat while that finds more."""
+    cls = parse_class(a.cls)
+    for k in OP_KEYS:
+        cls.setdefault(k, CLASS[k])
+    log = lambda s: (print(s), sys.stdout.flush())
+    lim = get_limits(a, a.cls)
+    todo = CASES if a.cases is None else [CASES[int(i)] for i in a.cases.split(",")]
+    rows = []
+    t_all = time.process_time()
+    for bc, dp, scene in todo:
+        t0 = time.process_time()
+        k_tool = lim[(bc, dp, scene)]["stiffness"]
+        envs = ["wall"] if scene else ["wall", "implicit", "lossless"]
+        k = 1.01 * k_tool
+        r = attack_case(k, bc, dp, cls, envs, 2.0, a.seed, lambda s: None, stop_on_find=True)
+        if not r["finds"]:
+            log("b_c=%.1f d=%dT %s: nothing at 1.01 x the tool's limit" % (bc, dp, scene))
+            continue
+        _, op, env = r["finds"][0]
+        for it in range(6):
+            kc = crit_k(bc, op, env, dp, k, 0.5 * k_tool)
+            probe = kc * (1 - 2e-4)
+            S = Search(probe, bc, dp, cls, np.random.default_rng(a.seed + it), True)
+            found = None
+            try:
+                kind = ("handsoff" if op is None else "hand", env[0])
+                S.f(op, env)
+                S.corners(envs)
+                z0 = S.z_of(kind, op, env)
+                if len(z0):
+                    scipy.optimize.minimize(lambda z: -S.fz(kind, z), z0, method="Nelder-Mead",
+                                            options={"maxfev": 400 * len(z0),
+                                                     "adaptive": True})
+                for kd in [(h, e) for e in envs for h in ("handsoff", "hand")]:
+                    S.run_kind(kd, a.budget * sum(Search.dims(kd)) / 25.0)
+            except Found:
+                found = S.finds[-1]
+            if found is not None:
+                lam, rmp = closed_loop_mp(probe, bc, found[1], found[2], dp)
+                if float(rmp) <= 1 + TOL:
+                    found = None
+            if found is None:
+                break
+            _, op, env = found
+            k = probe
+        kc, op, env = polish(bc, dp, cls, op, env, kc, 0.5 * k_tool)
+        row = {"b_c": bc, "delay_periods": dp, "scene": scene, "tool": k_tool, "mine": kc,
+               "op": op, "env": env, "ratio": kc / k_tool}
+        rows.append(row)
+        log("b_c=%.1f d=%dT %-11s tool %.4f  mine %.4f  (mine/tool %.5f) worst %s, %s  "
+            "[%.1f s]" % (bc, dp, "wall" if scene else "all passive", k_tool, kc, kc / k_tool,
+                          fmt_op(op), fmt_env(env), time.process_time() - t0))
+    log("total CPU %.1f s" % (time.process_time() - t_all))
+    if a.out:
+        with open(a.out, "w") as f:
+            json.dump(rows, f, indent=1, default=str)
+
+
+def cmd_point(a):
+    op = None if a.op is None else tuple(float(x) for x in a.op.split(","))
+    e = a.env.split(",")
+    env = (e[0], *[float(x) for x in e[1:]])
+    print(spectral(a.kc, a.bc, op, env, a.delay_periods))
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--tool", default=TOOL)
+    p.add_argument("--cls", default=CLASS_FILE)
+    sp = p.add_subparsers(dest="cmd", required=True)
+    v = sp.add_parser("validate")
+    v.add_argument("--n", type=int, default=14)
+    sp.add_parser("limits")
+    w = sp.add_parser("window")
+    w.add_argument("--mylimits", default="build/class-adversary/mylimits.json")
+    ml = sp.add_parser("mylimits")
+    ml.add_argument("--budget", type=float, default=4.0, help="CPU seconds per probe")
+    ml.add_argument("--cases", default=None)
+    ml.add_argument("--seed", type=int, default=0)
+    ml.add_argument("--out", default=None)
+    at = sp.add_parser("attack")
+    at.add_argument("--factors", type=lambda s: [float(x) for x in s.split(",")],
+                    default=[0.995])
+    at.add_argument("--budget", type=float, default=30.0, help="CPU seconds per case")
+    at.add_argument("--cases", default=None, help="indices into the 12 cases, comma-separated")
+    at.add_argument("--seed", type=int, default=0)
+    at.add_argument("--extra", action="store_true",
+                    help="also a two-mode lossless environment (mass-spring + resonator) and "
+                         "a lossy trapezoidal mass-spring-damper (beyond the brief)")
+    at.add_argument("--out", default=None)
+    pt = sp.add_parser("point")
+    pt.add_argument("--kc", type=float, required=True)
+    pt.add_argument("--bc", type=float, default=0.0)
+    pt.add_argument("--delay-periods", type=int, default=0)
+    pt.add_argument("--op", default=None, help="m_h,k_s,b_s,k_a,b_a (omit: hands-off)")
+    pt.add_argument("--env", default="wall", help="wall | implicit,me,ke,be | lossless,me,ke")
+    a = p.parse_args()
+    {"validate": cmd_validate, "limits": cmd_limits, "attack": cmd_attack,
+     "mylimits": cmd_mylimits, "point": cmd_point, "window": cmd_window}[a.cmd](a)
+
+
+if __name__ == "__main__":
+    main()
