@@ -398,24 +398,25 @@ std::string delay_text(const DiagReport& r) {
         }
         const double recommended_periods = periods(r.recommended_delay_s);
         if (recommended_periods < tune::kMaxDelayPeriods) {
-            s << std::setprecision(6) << "  [device.model] delay = " << r.recommended_delay_s
-              << "  # s: the p99 rounded up to the next " << std::setprecision(2)
-              << kDelayRoundingPeriods << " period (" << recommended_periods
-              << " periods), a conservative value\n";
+            s << std::defaultfloat << std::setprecision(6)
+              << "  [device.model] delay = " << r.recommended_delay_s
+              << "  # s: the p99 rounded up to the next " << kDelayRoundingPeriods << " period ("
+              << recommended_periods << " periods), a conservative value\n"
+              << std::fixed;
         } else {
             s << "  no value for [device.model] delay: the p99 is beyond the stability models' "
                  "range (under "
               << std::setprecision(0) << tune::kMaxDelayPeriods << " periods)\n";
         }
         if (!delay_understated(r)) {
-            s << std::setprecision(6)
+            s << std::defaultfloat << std::setprecision(6)
               << "  the config's [device.model] delay = " << r.configured_delay_s << " s ";
-            if (r.configured_delay_s * r.rate_hz >= periods(r.delay_s.p99)) {
+            if (r.configured_delay_s * r.rate_hz >= periods(r.delay_s.p99) - 1e-9) {
                 s << "covers it\n";
             } else {
-                s << "is within " << std::setprecision(2) << kDelayRoundingPeriods
-                  << " period of its p99\n";
+                s << "is within " << kDelayRoundingPeriods << " period of its p99\n";
             }
+            s << std::fixed;
         }
     }
     s << "acknowledgements: " << r.applied_unsupported << " samples without one, " << r.applied_none
@@ -484,12 +485,14 @@ std::string diag_text(const DiagReport& r) {
           << " samples with the device clock going backwards): its firmware clock or its "
              "command bookkeeping is wrong\n";
     } else if (delay_understated(r)) {
-        s << std::setprecision(6) << "WARN: [device.model] delay = " << r.configured_delay_s
+        s << std::defaultfloat << std::setprecision(6)
+          << "WARN: [device.model] delay = " << r.configured_delay_s
           << " s is below the measured loop delay (p99 " << r.delay_s.p99
           << " s): the stability check assumes less delay than the loop has; set delay = "
           << r.recommended_delay_s << "\n";
     } else {
-        s << "ok: the link keeps up with " << std::setprecision(0) << r.rate_hz << " Hz\n";
+        s << std::fixed << "ok: the link keeps up with " << std::setprecision(0) << r.rate_hz
+          << " Hz\n";
     }
     return s.str();
 }
