@@ -101,8 +101,12 @@ DelayStats stats_of(std::vector<double> values) {
     return s;
 }
 
-/// `value` rounded up to a multiple of `step`; a multiple (to 1e-9 of a step) stays.
-double round_up_to(double value, double step) { return std::ceil(value / step - 1e-9) * step; }
+/// `value` (>= 0) rounded up to a multiple of `step`; a multiple (to 1e-9 of a step) stays,
+/// and 0 is 0 (not -0).
+double round_up_to(double value, double step) {
+    const double rounded = std::ceil(value / step - 1e-9) * step;
+    return rounded > 0.0 ? rounded : 0.0;
+}
 
 void summarise_delay(const std::vector<double>& delay_s, const std::vector<double>& host_s,
                      DiagReport& r) {

@@ -119,6 +119,7 @@ TEST(DaemonLinkDiag, JsonCarriesEveryFigure) {
     ASSERT_TRUE(j["loop_delay"]["measured"].get<bool>());
     EXPECT_EQ(j["loop_delay"]["s"]["p99"].get<double>(), 0.0);
     EXPECT_EQ(j["loop_delay"]["recommended_s"].get<double>(), 0.0);
+    EXPECT_FALSE(std::signbit(r.recommended_delay_s));        // 0, not -0: it goes into a config
     EXPECT_TRUE(j["loop_delay"]["link_device_s"].is_null());  // lockstep: not split
 }
 
