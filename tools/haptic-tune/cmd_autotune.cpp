@@ -302,7 +302,8 @@ bool config_states_delay(const std::string& text) {
 }
 
 std::string periods_text(double delay_s, double rate_hz) {
-    return number_text(delay_s * rate_hz, 4) + " periods";
+    const double periods = delay_s * rate_hz;
+    return number_text(periods, 4) + (periods == 1.0 ? " period" : " periods");
 }
 
 /// --delay, else the link's measurement (when autotune runs the device), else the config.

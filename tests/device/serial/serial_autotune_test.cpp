@@ -88,7 +88,7 @@ TEST(SerialAutotune, AVersion1FirmwareWithNoDelayStatedIsRefusedNamingWhatIsMiss
     const CommandResult s = run_command(std::string("'") + HAPTIC_TUNE + "' autotune --config '" +
                                         stated + "' --hapticd /nonexistent/hapticd");
     EXPECT_EQ(s.exit_code, 2) << s.err;
-    EXPECT_NE(s.err.find("loop delay 0.002 s (1 periods): [device.model] delay; not measured: "
+    EXPECT_NE(s.err.find("loop delay 0.002 s (1 period): [device.model] delay; not measured: "
                          "the device speaks protocol version 1"),
               std::string::npos)
         << s.err;
