@@ -149,6 +149,27 @@ std::vector<Seed> device_seeds() {
     }
     out.push_back({"structured_knobs", knobs});
 
+    // Version 2: the session in 1..2, the acknowledgement knobs, commands after quiet spells.
+    std::vector<std::byte> v2{std::byte{0x03}};
+    append_frame_op(v2, MessageType::poll, {});
+    for (std::uint32_t n = 1; n <= 4; ++n) {
+        append_frame_op(v2, MessageType::command,
+                        command_payload(n, kCommandEnable, 500'000, -500'000));
+    }
+    for (std::uint8_t k = 8; k <= 10; ++k) {
+        v2.push_back(std::byte{static_cast<std::uint8_t>(0x40 + k)});
+        append_frame_op(v2, MessageType::command,
+                        command_payload(k - 3u, kCommandEnable, 1'000'000, 0));
+    }
+    v2.push_back(std::byte{0x01});  // two quiet periods
+    append_frame_op(v2, MessageType::poll, {});
+    v2.push_back(std::byte{0x83});  // a version-1 poll in the version-2 session
+    v2.push_back(static_cast<std::byte>(MessageType::poll));
+    v2.push_back(std::byte{0});
+    v2.push_back(std::byte{1});
+    append_frame_op(v2, MessageType::bye, {});
+    out.push_back({"structured_version2", v2});
+
     // Refusals: a new hello, a wrong session, a device-to-host type, a bad version.
     std::vector<std::byte> refusals{std::byte{0x01}};
     std::vector<std::byte> hello_payload{std::byte{1}, std::byte{1}, std::byte{0}, std::byte{0}};

@@ -100,10 +100,24 @@ void check_frame(std::span<const std::byte> bytes) {
     check_typed<ErrorReport>(bytes, message);
 
     if (const auto* sample = std::get_if<EncoderSample>(&message)) {
-        if (g_tracker.session() != sample->session) g_tracker.start(sample->session);
+        if (g_tracker.session() != sample->session || g_tracker.version() != sample->version) {
+            g_tracker.start(sample->session, sample->version);
+        }
+        // As if the host had sent the command the sample answers (and a few before it), so
+        // that the acknowledgement checks are reached.
+        g_tracker.command_sent(sample->command_sequence);
         const ReplyTracker::Result result = g_tracker.check(*sample);
         if (result.verdict == ReplyTracker::Verdict::accept) {
             FUZZ_CHECK(result.missed < 0x80000000u);
+            if (result.applied == ReplyTracker::Applied::reported) {
+                FUZZ_CHECK(sample->version >= kProtocolVersion2);
+                FUZZ_CHECK(result.applied_sequence == sample->applied_sequence());
+                FUZZ_CHECK(result.applied_time_us <= sample->time_us);
+            }
+            if (sample->version == kProtocolVersion1) {
+                FUZZ_CHECK(result.applied == ReplyTracker::Applied::unsupported ||
+                           result.applied == ReplyTracker::Applied::bad_time);
+            }
         }
     }
 }

@@ -4,15 +4,18 @@
 //
 // Input: byte 0 picks the mode.
 //   even  raw: the rest is a serial byte stream, fed to handle_stream() in chunks;
-//   odd   structured: after a valid hello, a list of operations, so that the fuzzer reaches
-//         deep states without having to forge CRCs:
+//   odd   structured: after a valid hello (offering 1..1, or 1..2 when byte 0 has bit 1 set),
+//         a list of operations, so that the fuzzer reaches deep states without having to
+//         forge CRCs:
 //           0x00-0x3F  advance_period() 1..4 times
-//           0x40-0x7F  arm one fault knob (op & 7)
+//           0x40-0x7F  arm one fault knob (op & 15)
 //           0x80-0xFF  a frame: type byte, payload size byte, payload bytes; the current
-//                      session when op bit 0 is set (else 4 session bytes follow), version 1
-//                      unless op bit 1 is set (then a version byte follows); a good CRC.
+//                      session when op bit 0 is set (else 4 session bytes follow), the
+//                      session's version unless op bit 1 is set (then a version byte
+//                      follows); a good CRC.
 // Invariants after every step: each reply decodes and goes device to host (unless a knob
-// corrupted it on purpose); |force| <= the limit; zero force without a session or with a
+// corrupted it on purpose), in the session's version; a version-2 sample names only a
+// command it has received; |force| <= the limit; zero force without a session or with a
 // latched fault.
 #include <algorithm>
 #include <array>
@@ -78,17 +81,27 @@ void check_force(const DeviceEmulator& device) {
     }
 }
 
-void check_reply_frame(std::span<const std::byte> frame, bool may_be_corrupt) {
+void check_reply_frame(std::span<const std::byte> frame, bool may_be_corrupt,
+                       const DeviceEmulator* device = nullptr) {
     Message message;
     const Error error = decode(frame, message);
     if (may_be_corrupt) return;
     FUZZ_CHECK(error == Error::none);
     FUZZ_CHECK(!is_host_to_device(type_of(message)));
+    if (device == nullptr) return;
+    if (const auto* sample = std::get_if<EncoderSample>(&message)) {
+        FUZZ_CHECK(sample->version == device->version());
+        // What it names arrived: a command no further back than the commands it applied.
+        if (sample->names_applied()) {
+            FUZZ_CHECK(sample->applied_lag < device->counters().commands_applied);
+        }
+    }
 }
 
 void handle_and_check(DeviceEmulator& device, std::span<const std::byte> frame) {
     const std::uint32_t knobs_before = corrupting(device.faults());
     const bool delayed_before = device.delayed_reply_pending();
+    const bool unsent_before = device.faults().applied_unsent != 0u;  // names one on purpose
     std::array<std::byte, DeviceEmulator::kMaxReplySize> out{};
     const DeviceEmulator::Reply reply = device.handle(frame, out);
     FUZZ_CHECK(reply.frames <= DeviceEmulator::kMaxReplyFrames);
@@ -98,7 +111,7 @@ void handle_and_check(DeviceEmulator& device, std::span<const std::byte> frame) 
     std::size_t offset = 0;
     for (std::size_t i = 0; i < reply.frames; ++i) {
         check_reply_frame(std::span<const std::byte>(out).subspan(offset, reply.frame_sizes[i]),
-                          may_be_corrupt);
+                          may_be_corrupt || unsent_before, &device);
         offset += reply.frame_sizes[i];
     }
     FUZZ_CHECK(offset == reply.size);
@@ -120,7 +133,7 @@ void run_raw(DeviceEmulator& device, std::span<const std::byte> bytes, std::size
 }
 
 void arm_knob(EmulatorFaults& faults, std::uint8_t which) {
-    switch (which & 7u) {
+    switch (which & 15u) {
         case 0:
             faults.corrupt_crc = 1;
             break;
@@ -142,15 +155,25 @@ void arm_knob(EmulatorFaults& faults, std::uint8_t which) {
         case 6:
             faults.stall = 2;
             break;
+        case 8:
+            faults.applied_unsent = 1;
+            break;
+        case 9:
+            faults.clock_back_us = 1500;
+            break;
+        case 10:
+            faults.applied_early_us = 700;
+            break;
         default:
             faults.device_faults = kDeviceFaultOverTemperature;
             break;
     }
 }
 
-void run_structured(DeviceEmulator& device, Reader& in) {
+void run_structured(DeviceEmulator& device, Reader& in, std::uint8_t max_version) {
     Hello hello;
     hello.session = kSession;
+    hello.max_version = max_version;
     std::array<std::byte, kMaxFrameSize> frame{};
     handle_and_check(device, std::span<const std::byte>(frame).first(encode(hello, frame).size));
     FUZZ_CHECK(device.session_open());
@@ -172,7 +195,7 @@ void run_structured(DeviceEmulator& device, Reader& in) {
             session = 0;
             for (int i = 0; i < 4; ++i) session |= static_cast<std::uint32_t>(in.u8()) << (8 * i);
         }
-        const std::uint8_t version = (op & 2u) != 0u ? in.u8() : kProtocolVersion;
+        const std::uint8_t version = (op & 2u) != 0u ? in.u8() : device.version();
         frame.fill(std::byte{0});
         wire::store_u8(frame, kOffsetMagic, kMagic);
         wire::store_u8(frame, kOffsetVersion, version);
@@ -200,7 +223,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         run_raw(device, bytes.subspan(1), 1 + (mode >> 1) % 16);
     } else {
         Reader in(bytes.subspan(1));
-        run_structured(device, in);
+        run_structured(device, in, (mode & 2u) != 0u ? kProtocolVersion2 : kProtocolVersion1);
     }
     return 0;
 }

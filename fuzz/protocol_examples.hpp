@@ -38,7 +38,8 @@ inline std::vector<std::byte> encode_or_throw(const Message& message) {
 
 inline constexpr std::uint32_t kExampleSession = 0x5EC7A3B1u;
 
-/// Valid frames of every message type: a session as a host and a firmware would hold it.
+/// Valid frames of every message type: a session as a host and a firmware would hold it, in
+/// protocol version 2 (what hapticd offers), and a version-1 firmware's sample.
 inline std::vector<Example> frame_examples() {
     std::vector<Example> out;
     auto add = [&out](std::string name, std::string title, std::string description,
@@ -50,8 +51,11 @@ inline std::vector<Example> frame_examples() {
     Hello hello;
     hello.session = kExampleSession;
     hello.min_version = 1;
-    hello.max_version = 1;
-    add("hello", "hello", "The host opens session 0x5EC7A3B1 and offers versions 1..1.", hello);
+    hello.max_version = 2;
+    add("hello", "hello",
+        "The host opens session 0x5EC7A3B1 and offers versions 1..2 (the header says 1: hello "
+        "is frozen).",
+        hello);
 
     Identity identity;
     identity.session = kExampleSession;
@@ -62,24 +66,29 @@ inline std::vector<Example> frame_examples() {
     identity.watchdog_timeout_us = 20'000;
     identity.firmware_version = 0x00010203;
     identity.set_serial_number("HD3-000042");
+    identity.version = kProtocolVersion2;
     add("identity", "identity",
-        "A 3-axis device, 20 N per axis, 1e5 counts/m, 1 kHz, watchdog 20 ms, firmware "
-        "0x00010203, serial \"HD3-000042\".",
+        "The device picks version 2 (the header's version byte; every later frame of the "
+        "session has it): a 3-axis device, 20 N per axis, 1e5 counts/m, 1 kHz, watchdog 20 ms, "
+        "firmware 0x00010203, serial \"HD3-000042\".",
         identity);
 
     Configure configure;
     configure.session = kExampleSession;
     configure.watchdog_timeout_us = 50'000;
+    configure.version = kProtocolVersion2;
     add("configure", "configure", "Set the watchdog timeout to 50 ms.", configure);
 
     ConfigureAck ack;
     ack.session = kExampleSession;
     ack.watchdog_timeout_us = 50'000;
+    ack.version = kProtocolVersion2;
     add("configure_ack", "configure_ack", "The device now trips after 50 ms without a command.",
         ack);
 
     Poll poll;
     poll.session = kExampleSession;
+    poll.version = kProtocolVersion2;
     add("poll", "poll", "Ask for a sample without commanding anything.", poll);
 
     EncoderSample first;
@@ -89,9 +98,10 @@ inline std::vector<Example> frame_examples() {
     first.time_us = 5'000'000;
     first.axes = 3;
     first.counts = {1000, -250, 0};
+    first.version = kProtocolVersion2;
     add("sample_poll", "sample (answer to poll)",
-        "No command applied yet (command_sequence 0); sample 0 at device time 5 s; "
-        "counts 1000, -250, 0.",
+        "No command yet (command_sequence 0; applied_lag 0xFF and applied_age_us 0xFFFF: none "
+        "in effect); sample 0 at device time 5 s; counts 1000, -250, 0.",
         first);
 
     ForceCommand command;
@@ -100,6 +110,7 @@ inline std::vector<Example> frame_examples() {
     command.flags = kCommandEnable;
     command.axes = 3;
     command.force_un = {1'500'000, -250'000, 0};
+    command.version = kProtocolVersion2;
     add("command_3axis", "command (3 axes)", "Command 1, enabled: +1.5 N, -0.25 N, 0 N.", command);
 
     EncoderSample sample;
@@ -110,9 +121,28 @@ inline std::vector<Example> frame_examples() {
     sample.status = kSampleForceActive;
     sample.axes = 3;
     sample.counts = {1003, -251, 0};
+    sample.version = kProtocolVersion2;
+    sample.applied_lag = 0;
+    sample.applied_age_us = 1000;
     add("sample_3axis", "sample (3 axes)",
-        "The answer to command 1: sample 1, 1 ms later, force active; counts 1003, -251, 0.",
+        "The answer to command 1: sample 1, 1 ms later, force active; command 1 (applied_lag 0) "
+        "in effect for 1000 us (applied_age_us 0x03e8), so since device time 5 s: it took "
+        "effect on arrival; counts 1003, -251, 0.",
         sample);
+
+    EncoderSample pipelined = sample;
+    pipelined.command_sequence = 2;
+    pipelined.sample_sequence = 2;
+    pipelined.time_us = 5'002'000;
+    pipelined.applied_lag = 1;
+    pipelined.applied_age_us = 500;
+    pipelined.counts = {1006, -252, 0};
+    add("sample_3axis_pipelined", "sample (3 axes, a device 1.5 periods behind)",
+        "A device whose force takes effect 1.5 ms after a command arrives answers command 2 "
+        "before command 2 acts: command 1 (applied_lag 1) is in effect, for 500 us "
+        "(applied_age_us 0x01f4), since device time 5.0015 s, 1.5 ms after sample 0 that it "
+        "was computed from.",
+        pipelined);
 
     ForceCommand command1;
     command1.session = kExampleSession;
@@ -120,6 +150,7 @@ inline std::vector<Example> frame_examples() {
     command1.flags = kCommandEnable;
     command1.axes = 1;
     command1.force_un = {-2'000'000, 0, 0};
+    command1.version = kProtocolVersion2;
     add("command_1axis", "command (1 axis)",
         "A 1-axis device: command 0xFFFFFFFF (the next is 0: sequences wrap), -2 N.", command1);
 
@@ -132,34 +163,50 @@ inline std::vector<Example> frame_examples() {
     sample1.faults = kDeviceFaultWatchdog;
     sample1.axes = 1;
     sample1.counts = {-5'000'000'000ll, 0, 0};
+    sample1.version = kProtocolVersion2;
+    sample1.applied_lag = 0;
+    sample1.applied_age_us = 0;
     add("sample_1axis_fault", "sample (1 axis, watchdog tripped)",
         "The command came after the watchdog had tripped: command_late, fault watchdog (force "
-        "zero); counts -5e9 (beyond int32); device time 2^32 us.",
+        "zero; the command is still the one in effect, applied_lag 0, latched at once, "
+        "applied_age_us 0); counts -5e9 (beyond int32); device time 2^32 us.",
         sample1);
+
+    EncoderSample old = sample;
+    old.version = kProtocolVersion1;
+    old.applied_lag = kAppliedLagNone;
+    old.applied_age_us = kAppliedAgeUnknown;
+    add("sample_3axis_version1", "sample (3 axes, a version-1 firmware)",
+        "The answer to command 1 from a device that speaks only version 1: version byte 1, and "
+        "bytes 29..31 reserved (zero): it does not say when the command took effect.",
+        old);
 
     ForceCommand clear;
     clear.session = kExampleSession;
     clear.sequence = 2;
     clear.flags = kCommandClearFaults;
     clear.axes = 3;
+    clear.version = kProtocolVersion2;
     add("command_clear_faults", "command (clear faults)",
         "Enable off and clear_faults: the device clears its latched faults and holds zero.", clear);
 
     Bye bye;
     bye.session = kExampleSession;
+    bye.version = kProtocolVersion2;
     add("bye", "bye", "The host closes the session.", bye);
 
     ByeAck bye_ack;
     bye_ack.session = kExampleSession;
+    bye_ack.version = kProtocolVersion2;
     add("bye_ack", "bye_ack", "The device holds zero force and has closed the session.", bye_ack);
 
     ErrorReport unsupported;
     unsupported.session = kExampleSession;
     unsupported.code = ErrorCode::unsupported_version;
     unsupported.request_type = static_cast<std::uint8_t>(MessageType::hello);
-    unsupported.detail = 0x0302;
+    unsupported.detail = 0x0403;
     add("error_unsupported_version", "error (unsupported_version)",
-        "A device that speaks versions 2..3 refuses a hello offering 1..1: detail = min | max << "
+        "A device that speaks versions 3..4 refuses a hello offering 1..2: detail = min | max << "
         "8.",
         unsupported);
 

@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "hapticd/device/plugin_loader.hpp"
+#include "hapticd/tune/input_checks.hpp"
 
 namespace hapticd::daemon {
 namespace {
@@ -72,6 +73,84 @@ void fit_clock(const std::vector<double>& host_s, const std::vector<double>& dev
     report.clock_fit = true;
 }
 
+/// The sample a command is computed from.
+struct Basis {
+    bool sound = false;            ///< a sample, with a device time not behind the last one
+    double device_s = 0.0;         ///< its device time
+    std::int64_t returned_ns = 0;  ///< when read() returned it (host clock)
+};
+
+/// A command written, until the device says when it took effect.
+struct PendingWrite {
+    std::uint64_t write = 0;  ///< the write() call, from 1 (0: an empty slot)
+    Basis from;
+    std::int64_t written_ns = 0;  ///< when write() was called (host clock)
+    bool measured = false;
+};
+/// Commands whose acknowledgement may still come: more than any device names back (the open
+/// protocol's applied_lag: 254; the sim: 10 periods).
+constexpr std::size_t kPendingWrites = 1024;
+
+DelayStats stats_of(std::vector<double> values) {
+    DelayStats s;
+    if (values.empty()) return s;
+    std::sort(values.begin(), values.end());
+    s.p50 = percentile(values, 0.50);
+    s.p99 = percentile(values, 0.99);
+    s.max = values.back();
+    return s;
+}
+
+/// `value` (>= 0) rounded up to a multiple of `step`; a multiple (to 1e-9 of a step) stays,
+/// and 0 is 0 (not -0).
+double round_up_to(double value, double step) {
+    const double rounded = std::ceil(value / step - 1e-9) * step;
+    return rounded > 0.0 ? rounded : 0.0;
+}
+
+void summarise_delay(const std::vector<double>& delay_s, const std::vector<double>& host_s,
+                     DiagReport& r) {
+    r.delay_commands = delay_s.size();
+    r.delay_measured = !delay_s.empty();
+    if (!r.delay_measured) {
+        std::ostringstream why;
+        const std::uint64_t bad = r.bad_ack_command + r.bad_ack_time + r.acausal;
+        if (r.replies == 0) {
+            why << "no sample arrived";
+        } else if (r.applied_unsupported > 0 && bad == 0 && r.applied_none == 0) {
+            if (r.protocol_version == 1) {
+                why << "the device speaks protocol version 1, whose samples do not say when a "
+                       "command took effect: version 2's applied_lag and applied_age_us "
+                       "(docs/protocol.md 4.6) are missing; a firmware on version 2 makes it "
+                       "measurable";
+            } else {
+                why << "the " << r.plugin
+                    << " device does not say when a command took effect (Sample::applied)";
+            }
+        } else if (bad > 0) {
+            why << "no acknowledgement of the device could be used: " << bad
+                << " were bad (counted below)";
+        } else {
+            why << "the device never named a command in effect";
+        }
+        r.delay_missing = why.str();
+        return;
+    }
+    std::vector<double> link_s(delay_s.size());
+    double least_link_s = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < delay_s.size(); ++i) {
+        link_s[i] = delay_s[i] - host_s[i];
+        least_link_s = std::min(least_link_s, link_s[i]);
+    }
+    r.delay_s = stats_of(delay_s);
+    r.host_s = stats_of(host_s);
+    r.link_s = stats_of(link_s);
+    // A link and a device take time: a real-time device clock never shows less delay than
+    // the host held the sample (1 us for the two clocks' resolutions).
+    r.delay_split = !r.lockstep && least_link_s >= -1e-6;
+    r.recommended_delay_s =
+        round_up_to(r.delay_s.p99 * r.rate_hz, kDelayRoundingPeriods) / r.rate_hz;
+}
 }  // namespace
 
 DiagReport run_link_diag(const Config& config, const DiagOptions& options, std::ostream& log) {
@@ -100,26 +179,117 @@ DiagReport run_link_diag(const Config& config, const DiagOptions& options, std::
     report.serial = info.serial;
     report.axes = info.axes;
     report.rate_hz = config.servo.rate_hz;
+    report.lockstep = options.lockstep;
+    report.samples_at_read = info.samples_at_read;
+    report.protocol_version = info.protocol_version;
+    report.configured_delay_s = config.device.model_delay_s;
     const auto period_ns = static_cast<std::int64_t>(std::llround(1e9 / config.servo.rate_hz));
     const auto exchanges =
         static_cast<std::uint64_t>(std::llround(options.duration_s * config.servo.rate_hz));
     std::vector<double> rtt_us;
     std::vector<double> host_s;
     std::vector<double> device_s;
+    std::vector<double> delay_s;       // per measured command: D, device clock
+    std::vector<double> delay_host_s;  // ... and its host part, host clock
     rtt_us.reserve(exchanges);
     host_s.reserve(exchanges);
     device_s.reserve(exchanges);
+    delay_s.reserve(exchanges);
+    delay_host_s.reserve(exchanges);
+    std::vector<PendingWrite> pending(kPendingWrites);
     log << "haptic-tune diag: " << info.name
         << (info.serial.empty() ? "" : " serial " + info.serial) << ", " << exchanges
         << " exchanges at " << config.servo.rate_hz << " Hz, zero force\n";
 
     const servo::Command zero{};  // disabled: the device outputs no force
     servo::Sample sample;
-    (void)device->read(sample);  // the first sample, before the first command
-    bool have_sequence = (sample.status & servo::kStatusDropped) == 0u;
+    bool have_sequence = false;
     bool previous_no_reply = false;
     std::uint64_t late_after_no_reply = 0;  // no-reply exchanges that a late reply explains
-    std::uint64_t last_sequence = sample.sequence;
+    std::uint64_t last_sequence = 0;
+    bool have_time = false;
+    double last_device_s = 0.0;
+    Basis basis;               // the sample the next command is computed from
+    std::uint64_t writes = 0;  // write() calls: Sample::applied_write counts them the same way
+
+    // A command's delay, once the device says when it took effect.
+    const auto measure = [&](std::uint64_t write, double applied_s) {
+        if (write == 0 || write > writes) {
+            ++report.bad_ack_command;  // a command diag never wrote
+            return;
+        }
+        PendingWrite& p = pending[write % kPendingWrites];
+        if (p.write != write || p.measured || !p.from.sound) return;
+        p.measured = true;
+        const double d = applied_s - p.from.device_s;
+        if (d < 0.0) {
+            ++report.acausal;  // in effect before the sample it was computed from was taken
+            return;
+        }
+        delay_s.push_back(d);
+        delay_host_s.push_back(static_cast<double>(p.written_ns - p.from.returned_ns) * 1e-9);
+    };
+    // One read's outcome: the counts, the device's clock and acknowledgement, the next basis.
+    // True when a sample arrived.
+    const auto take = [&](IoResult read, std::int64_t returned_ns) {
+        if (read != IoResult::ok || (sample.status & servo::kStatusDropped) != 0u) {
+            if (read != IoResult::disconnected) ++report.no_reply;
+            previous_no_reply = read != IoResult::disconnected;
+            basis = Basis{};  // the next command has no fresh sample behind it
+            return false;
+        }
+        if ((sample.status & servo::kStatusLate) != 0u) {
+            ++report.late;
+            // A protocol device flags the sample after the one that missed its deadline.
+            if (previous_no_reply) ++late_after_no_reply;
+        }
+        previous_no_reply = false;
+        if (have_sequence && sample.sequence > last_sequence + 1) {
+            report.sequence_gaps += sample.sequence - last_sequence - 1;
+        }
+        have_sequence = true;
+        last_sequence = sample.sequence;
+        bool sound = true;
+        if (have_time && sample.device_time_s < last_device_s) {
+            ++report.clock_backwards;
+            sound = false;  // compared with the last sound sample from now on
+        } else {
+            have_time = true;
+            last_device_s = sample.device_time_s;
+        }
+        switch (sample.applied) {
+            case servo::AppliedReport::unsupported:
+                ++report.applied_unsupported;
+                break;
+            case servo::AppliedReport::none:
+                ++report.applied_none;
+                break;
+            case servo::AppliedReport::bad_command:
+                ++report.bad_ack_command;
+                break;
+            case servo::AppliedReport::bad_time:
+                ++report.bad_ack_time;
+                break;
+            case servo::AppliedReport::reported:
+                if (sound) measure(sample.applied_write, sample.applied_time_s);
+                break;
+        }
+        basis = Basis{sound, sample.device_time_s, returned_ns};
+        return true;
+    };
+    const auto write_zero = [&](std::int64_t written_ns) {
+        ++writes;
+        pending[writes % kPendingWrites] = PendingWrite{writes, basis, written_ns, false};
+        return device->write(zero);
+    };
+
+    if (!info.samples_at_read) {
+        // The first sample, before the first command (a protocol device polls for it).
+        (void)take(device->read(sample), now_ns());
+        report.no_reply = 0;
+        report.applied_unsupported = report.applied_none = 0;
+        previous_no_reply = false;
+    }
     const std::int64_t start_ns = now_ns();
     std::int64_t deadline_ns = start_ns;
     for (std::uint64_t i = 0; i < exchanges; ++i) {
@@ -132,34 +302,38 @@ DiagReport run_link_diag(const Config& config, const DiagOptions& options, std::
                 sleep_until_ns(deadline_ns);
             }
         }
-        const std::int64_t sent_ns = now_ns();
-        const IoResult written = device->write(zero);
-        const IoResult read = device->read(sample);
-        const std::int64_t answered_ns = now_ns();
+        IoResult written = IoResult::ok;
+        IoResult read = IoResult::ok;
+        bool replied = false;
+        std::int64_t began_ns = 0;
+        std::int64_t answered_ns = 0;
+        if (info.samples_at_read) {
+            // The daemon's order: a fresh sample, then the command computed from it.
+            began_ns = now_ns();
+            read = device->read(sample);
+            answered_ns = now_ns();
+            replied = take(read, answered_ns);
+            written = write_zero(now_ns());
+        } else {
+            // Write, then wait for its answer: the round trip. The answer is the sample the
+            // next command is computed from, as in the daemon, whose tick reads it then.
+            began_ns = now_ns();
+            written = write_zero(began_ns);
+            read = device->read(sample);
+            answered_ns = now_ns();
+            replied = take(read, answered_ns);
+        }
+        const std::int64_t done_ns = now_ns();
         ++report.exchanges;
         if (written == IoResult::disconnected || read == IoResult::disconnected) {
             ++report.disconnects;
         } else if (written == IoResult::error || read == IoResult::error) {
             ++report.errors;
         }
-        if (read != IoResult::ok || (sample.status & servo::kStatusDropped) != 0u) {
-            if (read != IoResult::disconnected) ++report.no_reply;
-            previous_no_reply = read != IoResult::disconnected;
-            continue;
-        }
+        if (!replied) continue;
         ++report.replies;
-        if ((sample.status & servo::kStatusLate) != 0u) {
-            ++report.late;
-            // A protocol device flags the sample after the one that missed its deadline.
-            if (previous_no_reply) ++late_after_no_reply;
-        }
-        previous_no_reply = false;
-        if (have_sequence && sample.sequence > last_sequence + 1) {
-            report.sequence_gaps += sample.sequence - last_sequence - 1;
-        }
-        have_sequence = true;
-        last_sequence = sample.sequence;
-        rtt_us.push_back(static_cast<double>(answered_ns - sent_ns) * 1e-3);
+        rtt_us.push_back(
+            static_cast<double>((info.samples_at_read ? done_ns : answered_ns) - began_ns) * 1e-3);
         host_s.push_back(static_cast<double>(answered_ns - start_ns) * 1e-9);
         device_s.push_back(sample.device_time_s);
     }
@@ -185,8 +359,79 @@ DiagReport run_link_diag(const Config& config, const DiagOptions& options, std::
         report.rtt_histogram.push_back(bin);
     }
     if (!options.lockstep) fit_clock(host_s, device_s, report);
+    summarise_delay(delay_s, delay_host_s, report);
     return report;
 }
+
+namespace {
+
+/// The configured delay is more than kDelayRoundingPeriods below the measured p99.
+bool delay_understated(const DiagReport& r) {
+    return r.delay_measured &&
+           r.delay_s.p99 * r.rate_hz > r.configured_delay_s * r.rate_hz + kDelayRoundingPeriods;
+}
+
+std::string delay_text(const DiagReport& r) {
+    std::ostringstream s;
+    s << std::fixed;
+    if (!r.delay_measured) {
+        s << "loop delay: not measured: " << r.delay_missing
+          << ". No value for [device.model] delay can be given from this run: set it from "
+             "the device's documentation (docs/stability-models.md)\n";
+    } else {
+        const auto ms = [](double seconds) { return seconds * 1e3; };
+        const auto periods = [&r](double seconds) { return seconds * r.rate_hz; };
+        s << std::setprecision(3)
+          << "loop delay (encoder sample -> force in effect, device clock), " << r.delay_commands
+          << " commands: p50 " << ms(r.delay_s.p50) << " ms (" << periods(r.delay_s.p50)
+          << " periods), p99 " << ms(r.delay_s.p99) << " ms (" << periods(r.delay_s.p99)
+          << " periods), max " << ms(r.delay_s.max) << " ms\n";
+        s << "  host (read() of the sample -> write() of its command, host clock): p50 "
+          << ms(r.host_s.p50) << " ms, p99 " << ms(r.host_s.p99) << " ms\n";
+        if (r.delay_split) {
+            s << "  link and device (the rest: the reply's and the command's trips, the device's "
+                 "processing): p50 "
+              << ms(r.link_s.p50) << " ms, p99 " << ms(r.link_s.p99) << " ms\n";
+        } else {
+            s << "  link and device: not split: "
+              << (r.lockstep ? "virtual time (--lockstep), the host's part is not physical"
+                             : "some delays are shorter than the host held their sample, so "
+                               "the device's clock does not run with the host's (a virtual-"
+                               "time device such as the reference emulator)")
+              << "\n";
+        }
+        const double recommended_periods = periods(r.recommended_delay_s);
+        if (recommended_periods < tune::kMaxDelayPeriods) {
+            s << std::defaultfloat << std::setprecision(6)
+              << "  [device.model] delay = " << r.recommended_delay_s
+              << "  # s: the p99 rounded up to the next " << kDelayRoundingPeriods << " period ("
+              << recommended_periods << " periods), a conservative value\n"
+              << std::fixed;
+        } else {
+            s << "  no value for [device.model] delay: the p99 is beyond the stability models' "
+                 "range (under "
+              << std::setprecision(0) << tune::kMaxDelayPeriods << " periods)\n";
+        }
+        if (!delay_understated(r)) {
+            s << std::defaultfloat << std::setprecision(6)
+              << "  the config's [device.model] delay = " << r.configured_delay_s << " s ";
+            if (r.configured_delay_s * r.rate_hz >= periods(r.delay_s.p99) - 1e-9) {
+                s << "covers it\n";
+            } else {
+                s << "is within " << kDelayRoundingPeriods << " period of its p99\n";
+            }
+            s << std::fixed;
+        }
+    }
+    s << "acknowledgements: " << r.applied_unsupported << " samples without one, " << r.applied_none
+      << " naming no command yet; bad: " << r.bad_ack_command << " naming a command never sent, "
+      << r.bad_ack_time << " with inconsistent times, " << r.acausal
+      << " with a force before its sample; device clock going backwards: " << r.clock_backwards
+      << "\n";
+    return s.str();
+}
+
+}  // namespace
 
 std::string diag_text(const DiagReport& r) {
     std::ostringstream s;
@@ -225,7 +470,9 @@ std::string diag_text(const DiagReport& r) {
     } else {
         s << "device clock: not enough samples for a drift estimate\n";
     }
+    s << delay_text(r);
     // Verdicts: what a 1 kHz servo needs from the link.
+    const std::uint64_t bad_acks = r.bad_ack_command + r.bad_ack_time + r.acausal;
     s << "verdict: ";
     if (r.replies == 0) {
         s << "FAIL: the device never answered\n";
@@ -236,8 +483,20 @@ std::string diag_text(const DiagReport& r) {
           << "docs/transport-serial.md)\n";
     } else if (percent(r.lost + r.late) > 0.1) {
         s << "WARN: more than 0.1 % of exchanges lost or late\n";
+    } else if (bad_acks + r.clock_backwards > 0) {
+        s << "WARN: the device's timestamps or acknowledgements contradict themselves (" << bad_acks
+          << " bad acknowledgements, " << r.clock_backwards
+          << " samples with the device clock going backwards): its firmware clock or its "
+             "command bookkeeping is wrong\n";
+    } else if (delay_understated(r)) {
+        s << std::defaultfloat << std::setprecision(6)
+          << "WARN: [device.model] delay = " << r.configured_delay_s
+          << " s is below the measured loop delay (p99 " << r.delay_s.p99
+          << " s): the stability check assumes less delay than the loop has; set delay = "
+          << r.recommended_delay_s << "\n";
     } else {
-        s << "ok: the link keeps up with " << std::setprecision(0) << r.rate_hz << " Hz\n";
+        s << std::fixed << "ok: the link keeps up with " << std::setprecision(0) << r.rate_hz
+          << " Hz\n";
     }
     return s.str();
 }
@@ -274,6 +533,34 @@ std::string diag_json(const DiagReport& r) {
         r.clock_fit ? nlohmann::ordered_json(r.clock_drift_ppm) : nlohmann::ordered_json(nullptr);
     j["clock_jitter_us"] =
         r.clock_fit ? nlohmann::ordered_json(r.clock_jitter_us) : nlohmann::ordered_json(nullptr);
+    const auto stats = [](const DelayStats& d, double scale) {
+        return nlohmann::ordered_json{
+            {"p50", d.p50 * scale}, {"p99", d.p99 * scale}, {"max", d.max * scale}};
+    };
+    const auto null = nlohmann::ordered_json(nullptr);
+    nlohmann::ordered_json delay;
+    delay["measured"] = r.delay_measured;
+    delay["missing"] = r.delay_measured ? null : nlohmann::ordered_json(r.delay_missing);
+    delay["protocol_version"] =
+        r.protocol_version > 0 ? nlohmann::ordered_json(r.protocol_version) : null;
+    delay["commands"] = r.delay_commands;
+    delay["s"] = r.delay_measured ? stats(r.delay_s, 1.0) : null;
+    delay["periods"] = r.delay_measured ? stats(r.delay_s, r.rate_hz) : null;
+    delay["host_s"] = r.delay_measured ? stats(r.host_s, 1.0) : null;
+    delay["split"] = r.delay_split;
+    delay["link_device_s"] = r.delay_measured && r.delay_split ? stats(r.link_s, 1.0) : null;
+    const bool in_range =
+        r.delay_measured && r.recommended_delay_s * r.rate_hz < tune::kMaxDelayPeriods;
+    delay["recommended_s"] = in_range ? nlohmann::ordered_json(r.recommended_delay_s) : null;
+    delay["recommended_rule"] = "p99 rounded up to the next 0.05 period";
+    delay["configured_s"] = r.configured_delay_s;
+    delay["samples_without_acknowledgement"] = r.applied_unsupported;
+    delay["naming_no_command"] = r.applied_none;
+    delay["bad_command"] = r.bad_ack_command;
+    delay["bad_time"] = r.bad_ack_time;
+    delay["acausal"] = r.acausal;
+    delay["clock_backwards"] = r.clock_backwards;
+    j["loop_delay"] = delay;
     return j.dump(2);
 }
 

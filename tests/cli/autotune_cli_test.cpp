@@ -33,7 +33,8 @@ using nlohmann::json;
 
 /// A lab's config: comments everywhere, a wrong guess in [device.model], and the sim device
 /// whose truth (m = 0.1 kg, b = 2 N s/m, 0.2 N Coulomb friction) the run should find.
-std::string lab_config(int axes = 1, const std::string& identify = "") {
+std::string lab_config(int axes = 1, const std::string& identify = "",
+                       const std::string& sim_extra = "") {
     std::ostringstream out;
     out << "# Bench 3: the pen display, on the sim until the hardware arrives.\n"
            "# Every comment here must survive haptic-tune autotune.\n"
@@ -73,7 +74,8 @@ std::string lab_config(int axes = 1, const std::string& identify = "") {
            "counts_per_meter = 1e5  # 10 um per count\n"
            "force_limit = 20.0      # N\n"
            "coulomb = 0.2           # N\n"
-           "clock = \"lockstep\"\n";
+           "clock = \"lockstep\"\n"
+        << sim_extra;
     if (!identify.empty()) out << "\n[identify]\n" << identify;
     return out.str();
 }
@@ -93,6 +95,15 @@ std::vector<std::string> lines(const std::string& text) {
 }
 
 std::string quoted(const std::string& s) { return "'" + s + "'"; }
+
+/// `text` without its lines equal to `line`.
+std::string without_line(const std::string& text, const std::string& line) {
+    std::string out;
+    for (const std::string& l : lines(text)) {
+        if (l != line) out += l + "\n";
+    }
+    return out;
+}
 
 /// A 10 s open-loop run of the sim (tune/identification_sim_run.hpp), as the daemon's CSV.
 std::string write_sim_log(const ScratchDir& dir, tune::testing::SimulatedRun run = {},
@@ -427,7 +438,16 @@ TEST(AutotuneCli, RunsHapticdIdentifyWhenNoLogIsGiven) {
               std::string::npos)
         << r.err;
     EXPECT_TRUE(fs::exists(record));
-    expect_only_the_four_values_changed(bench.original, read(bench.config));
+    // Before the run it measured the loop delay over the link: the sim has none, and that is
+    // written beside the gains sized for it.
+    EXPECT_NE(r.err.find("measuring the loop delay over the link"), std::string::npos) << r.err;
+    EXPECT_NE(r.out.find("loop delay measured over the link (1999 commands at zero force): "
+                         "p50 0 periods, p99 0 periods; sized for 0 s"),
+              std::string::npos)
+        << r.out;
+    const std::string tuned = read(bench.config);
+    EXPECT_NE(tuned.find("\ndelay = 0.0\n"), std::string::npos) << tuned;
+    expect_only_the_four_values_changed(bench.original, without_line(tuned, "delay = 0.0"));
     // hapticd plans the excitation from [device.model]; from the guess (m 20 % heavy, b 25 %
     // light) against 0.2 N of friction it is weaker than it could be: a few %.
     expect_tuned(bench.config, 0.9, 0.05);
@@ -442,6 +462,46 @@ TEST(AutotuneCli, RunsHapticdIdentifyWhenNoLogIsGiven) {
     // Without --record the run's log was temporary and is gone.
     EXPECT_NE(again.out.find("identified from the identification run"), std::string::npos)
         << again.out;
+}
+
+TEST(AutotuneCli, MeasuresTheLoopDelayAndSizesTheGainsForIt) {
+    // The sim lands each command a quarter period after its sample: autotune measures it over
+    // the link (the sim's lockstep clock: exactly), sizes for it and writes it.
+    const Bench bench(lab_config(1, "force_amplitude = 0.7\n", "delay = 0.00025\n"));
+    const CommandResult r = bench.autotune("--json");
+    ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
+    const json j = json::parse(r.out);
+    EXPECT_EQ(j.at("delay_source"), "measured");
+    EXPECT_DOUBLE_EQ(j.at("delay_s").get<double>(), 0.00025);
+    EXPECT_TRUE(j.at("delay_measurement").at("measured").get<bool>());
+    EXPECT_NEAR(j.at("delay_measurement").at("p99_s").get<double>(), 0.00025, 1e-12);
+    const daemon::Config config = daemon::load_config(bench.config);
+    EXPECT_DOUBLE_EQ(config.device.model_delay_s, 0.00025);
+    // Sized with the quarter period, for the device it identified.
+    const double bound = passive_bound(*config.device.model_mass_kg,
+                                       *config.device.model_damping_n_s_per_m, 1000.0, 0.25);
+    EXPECT_NEAR(config.coupling.stiffness_n_per_m, 0.9 * bound, 5e-6 * 0.9 * bound);
+    EXPECT_TRUE(daemon::check_coupling_at_startup(config).passed);
+
+    // --delay overrides the measurement (and nothing is measured).
+    const Bench given(lab_config(1, "force_amplitude = 0.7\n", "delay = 0.00025\n"));
+    const CommandResult g = given.autotune("--json --delay 0.001");
+    ASSERT_EQ(g.exit_code, 0) << g.err;
+    EXPECT_EQ(json::parse(g.out).at("delay_source"), "--delay");
+    EXPECT_TRUE(json::parse(g.out).at("delay_measurement").is_null());
+    EXPECT_EQ(g.err.find("measuring the loop delay"), std::string::npos) << g.err;
+}
+
+TEST(AutotuneCli, FromALogTheDelayIsNotMeasuredAndSaysSo) {
+    const Bench bench;
+    const std::string log = write_sim_log(bench.dir);
+    const CommandResult r = bench.autotune("--log " + quoted(log));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.out.find("loop delay 0: not measured (from --log there is no device to run)"),
+              std::string::npos)
+        << r.out;
+    EXPECT_NE(r.out.find("warning: sized for no loop delay"), std::string::npos) << r.out;
+    EXPECT_EQ(r.err.find("measuring the loop delay"), std::string::npos) << r.err;
 }
 
 TEST(AutotuneCli, AMissingHapticdIsNamed) {

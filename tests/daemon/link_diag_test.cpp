@@ -12,7 +12,8 @@
 namespace hapticd::daemon {
 namespace {
 
-Config sim_config(const std::string& faults) {
+Config sim_config(const std::string& faults, const std::string& model = "",
+                  const std::string& sim = "") {
     return parse_config(R"(
 [servo]
 rate_hz = 1000
@@ -22,10 +23,11 @@ plugin = "sim"
 [device.model]
 mass = 0.1
 damping = 2.0
+)" + model + R"(
 [device.sim]
 mass = 0.1
 damping = 2.0
-)" + faults + R"(
+)" + sim + faults + R"(
 [coupling]
 stiffness = 3000
 )",
@@ -89,7 +91,12 @@ TEST(DaemonLinkDiag, RealtimeSimHasNoDriftAndAFastRoundTrip) {
     }
     // On a quiet machine the verdict is ok; a loaded one may preempt the host between the
     // write and the read, which the verdict rightly calls a slow round trip.
-    if (r.rtt_p99_us < 300.0) {
+    // The sim has no delay of its own: its commands land as they are written, right after
+    // the sample (the daemon's order), so the loop delay is the host's few microseconds.
+    ASSERT_TRUE(r.delay_measured) << r.delay_missing;
+    EXPECT_LT(r.delay_s.p50, 50e-6);
+    EXPECT_TRUE(r.delay_split);
+    if (r.rtt_p99_us < 300.0 && r.delay_s.p99 < 50e-6) {
         EXPECT_NE(diag_text(r).find("verdict: ok"), std::string::npos) << diag_text(r);
     } else {
         EXPECT_NE(diag_text(r).find("verdict: WARN: p99 round trip"), std::string::npos)
@@ -108,6 +115,75 @@ TEST(DaemonLinkDiag, JsonCarriesEveryFigure) {
     EXPECT_TRUE(j["clock_drift_ppm"].is_null());
     EXPECT_DOUBLE_EQ(j["rtt_us"]["p99"].get<double>(), r.rtt_p99_us);
     EXPECT_NE(diag_text(r).find("WARN"), std::string::npos);  // 1 % lost
+    // The sim says when each command took effect: no delay of its own, none measured.
+    ASSERT_TRUE(j["loop_delay"]["measured"].get<bool>());
+    EXPECT_EQ(j["loop_delay"]["s"]["p99"].get<double>(), 0.0);
+    EXPECT_EQ(j["loop_delay"]["recommended_s"].get<double>(), 0.0);
+    EXPECT_FALSE(std::signbit(r.recommended_delay_s));        // 0, not -0: it goes into a config
+    EXPECT_TRUE(j["loop_delay"]["link_device_s"].is_null());  // lockstep: not split
+}
+
+TEST(DaemonLinkDiag, MeasuresTheSimsLoopDelayExactlyInLockstep) {
+    // [device.sim] delay = 1.5 periods: every command lands 1.5 ms after the sample it was
+    // computed from, in virtual time, exactly.
+    const DiagReport r = diagnose(sim_config("", "", "delay = 0.0015\n"), 0.5, true);
+    ASSERT_TRUE(r.delay_measured) << r.delay_missing;
+    EXPECT_TRUE(r.samples_at_read);
+    EXPECT_EQ(r.protocol_version, 0);
+    EXPECT_EQ(r.delay_commands, 498u);  // the last two land after the run
+    EXPECT_NEAR(r.delay_s.p50, 1.5e-3, 1e-12);
+    EXPECT_NEAR(r.delay_s.p99, 1.5e-3, 1e-12);
+    EXPECT_NEAR(r.delay_s.max, 1.5e-3, 1e-12);
+    EXPECT_NEAR(r.recommended_delay_s, 1.5e-3, 1e-12);  // on the 0.05-period grid already
+    EXPECT_FALSE(r.delay_split);                        // lockstep: host time is not physical
+    EXPECT_EQ(r.bad_ack_command + r.bad_ack_time + r.acausal + r.clock_backwards, 0u);
+    const std::string text = diag_text(r);
+    EXPECT_NE(text.find("p50 1.500 ms (1.500 periods)"), std::string::npos) << text;
+    EXPECT_NE(text.find("[device.model] delay = 0.0015  # s: the p99 rounded up"),
+              std::string::npos)
+        << text;
+    // The config assumed no delay: the verdict says so and what to set.
+    EXPECT_NE(text.find("verdict: WARN: [device.model] delay = 0 s is below the measured loop "
+                        "delay (p99 0.0015 s)"),
+              std::string::npos)
+        << text;
+    EXPECT_NE(text.find("set delay = 0.0015"), std::string::npos) << text;
+
+    // With the delay in the config the verdict is ok.
+    const DiagReport stated =
+        diagnose(sim_config("", "delay = 0.0015\n", "delay = 0.0015\n"), 0.2, true);
+    EXPECT_NE(diag_text(stated).find("covers it"), std::string::npos) << diag_text(stated);
+    EXPECT_NE(diag_text(stated).find("verdict: ok"), std::string::npos) << diag_text(stated);
+}
+
+TEST(DaemonLinkDiag, AFractionalDelayIsRoundedUpToTheNextTwentiethOfAPeriod) {
+    const DiagReport r = diagnose(sim_config("", "", "delay = 0.00062\n"), 0.2, true);
+    ASSERT_TRUE(r.delay_measured);
+    EXPECT_NEAR(r.delay_s.p99, 0.62e-3, 1e-9);
+    EXPECT_NEAR(r.recommended_delay_s, 0.65e-3, 1e-12);
+}
+
+TEST(DaemonLinkDiag, MeasuresTheSimsLoopDelayOnTheRealtimeClock) {
+    // Half a period: the daemon's order (read, then write) leaves the sim's own delay to
+    // show, and the host's part is the few microseconds between the two calls.
+    const DiagReport r =
+        diagnose(sim_config("", "delay = 0.0005\n", "delay = 0.0005\n"), 0.5, false);
+    ASSERT_TRUE(r.delay_measured) << r.delay_missing;
+    // The sim lands each command 0.5 ms after its sample, to 2^-20 period, unless the write
+    // came later than that (a preempted host): then at the write.
+    EXPECT_NEAR(r.delay_s.p50, 0.5e-3, 2e-9);
+    EXPECT_GE(r.delay_s.p99, 0.5e-3 - 2e-9);
+    EXPECT_LT(r.host_s.p50, 100e-6);
+    EXPECT_TRUE(r.delay_split);
+    EXPECT_NEAR(r.link_s.p50, r.delay_s.p50 - r.host_s.p50, 50e-6);
+    const nlohmann::json j = nlohmann::json::parse(diag_json(r));
+    const nlohmann::json& d = j.at("loop_delay");
+    EXPECT_TRUE(d.at("measured").get<bool>());
+    EXPECT_NEAR(d.at("periods").at("p50").get<double>(), 0.5, 2e-6);
+    EXPECT_TRUE(d.at("split").get<bool>());
+    EXPECT_TRUE(d.at("protocol_version").is_null());
+    EXPECT_EQ(d.at("bad_command"), 0);
+    EXPECT_EQ(d.at("configured_s").get<double>(), 0.0005);
 }
 
 TEST(DaemonLinkDiag, RefusesADurationOutOfRange) {

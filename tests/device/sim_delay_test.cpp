@@ -3,6 +3,7 @@
 // fractional delay is the exact solution of (10) under the shifted zero-order hold; and the
 // commands in flight land, or do not, as docs/sim-device.md says.
 #include <gtest/gtest.h>
+#include <time.h>
 
 #include <cmath>
 #include <cstdint>
@@ -422,6 +423,76 @@ TEST(SimDelay, ARefusedCommandCutsTheForceAtOnce) {
     EXPECT_EQ(dev.held_force_n()[0], 0.0);
     dev.write(force(2.0));
     EXPECT_EQ(dev.held_force_n()[0], 2.0);
+}
+
+// ---------------------------------------------------------------------------------------
+// Each sample says which write() is in effect and since when: what the link diagnosis
+// measures the delay from.
+
+TEST(SimDelay, SamplesSayWhichCommandActsAndSinceWhenExactly) {
+    for (const double periods : {0.0, 0.5, 1.0, 1.5, 9.75}) {
+        SimDevice dev;
+        dev.open(lockstep_config(periods * kPeriodS));
+        EXPECT_TRUE(dev.info().samples_at_read);
+        Sample s;
+        ASSERT_EQ(dev.read(s), IoResult::ok);
+        EXPECT_EQ(s.applied, servo::AppliedReport::none);  // nothing written yet
+        int reported = 0;
+        for (std::uint64_t n = 1; n <= 30; ++n) {
+            const double sample_s = s.device_time_s;  // the sample write n is computed from
+            ASSERT_EQ(dev.write(force(0.1)), IoResult::ok);
+            ASSERT_EQ(dev.read(s), IoResult::ok);
+            if (s.applied == servo::AppliedReport::none) continue;
+            ASSERT_EQ(s.applied, servo::AppliedReport::reported);
+            // The newest landed: write n - q for the q whole periods still in flight.
+            const auto in_flight = static_cast<std::uint64_t>(std::floor(periods));
+            ASSERT_EQ(s.applied_write, n - in_flight) << periods;
+            // It landed D after the sample it was computed from, n - q - 1 periods ago.
+            const double computed_from_s = sample_s - static_cast<double>(in_flight) * kPeriodS;
+            EXPECT_NEAR(s.applied_time_s - computed_from_s, periods * kPeriodS, 1e-12)
+                << periods << " write " << n;
+            ++reported;
+        }
+        EXPECT_EQ(reported, 30 - static_cast<int>(std::floor(periods))) << periods;
+    }
+}
+
+TEST(SimDelay, ARefusedCommandTakesEffectAtOnceAsZero) {
+    SimDevice dev;
+    dev.open(lockstep_config(2 * kPeriodS));
+    for (int n = 0; n < 5; ++n) dev.write(force(1.0));
+    Sample s;
+    dev.read(s);
+    EXPECT_EQ(s.applied_write, 3u);
+    EXPECT_EQ(dev.write(force(std::nan(""))), IoResult::error);  // write 6, at t = 5 ms
+    dev.read(s);
+    EXPECT_EQ(s.applied_write, 6u);
+    EXPECT_DOUBLE_EQ(s.applied_time_s, 5 * kPeriodS);
+}
+
+TEST(SimDelay, TheRealtimeClockReportsWhenEachCommandLanded) {
+    SimConfig c = lockstep_config(1.5 * kPeriodS);
+    c.clock = SimClock::realtime;
+    SimDevice dev;
+    dev.open(c);
+    EXPECT_TRUE(dev.info().samples_at_read);
+    Sample s;
+    dev.read(s);
+    const double first_sample_s = s.device_time_s;
+    dev.write(force(0.5));  // lands 1.5 ms after that sample
+    timespec pause{0, 3'000'000};
+    nanosleep(&pause, nullptr);
+    dev.read(s);
+    ASSERT_EQ(s.applied, servo::AppliedReport::reported);
+    EXPECT_EQ(s.applied_write, 1u);
+    // Quantised to 2^-20 period.
+    EXPECT_NEAR(s.applied_time_s - first_sample_s, 1.5 * kPeriodS, 2e-9);
+    // Written after its landing time had passed, it lands at once.
+    nanosleep(&pause, nullptr);
+    dev.write(force(0.5));
+    dev.read(s);
+    EXPECT_EQ(s.applied_write, 2u);
+    EXPECT_GE(s.applied_time_s - first_sample_s, 3e-3);
 }
 
 TEST(SimDelay, APipelineThatOverflowsKeepsTheNewestCommand) {

@@ -4,9 +4,17 @@
 // config (read, edited keeping comments, checked at start-up, written with a backup) and
 // its executable (`hapticd --identify` when no --log is given).
 //
+// The loop delay the gains are sized for: --delay; else, when it runs the device, the delay
+// measured over the link at zero force before the identification run (daemon/link_diag.hpp,
+// as `haptic-tune diag`), when the device reports when its commands take effect; else
+// [device.model] delay. A device that cannot report it with no delay stated anywhere is
+// refused (a guess of none would size gains past the limit of every real device). From
+// --log there is no device: [device.model] delay, else none, with a warning.
+//
 // Exit 0 written (or would be, --dry-run); 1 the exact model rejects the gains (nothing
 // written); 2 bad usage or input, a log that cannot identify the device, a failed
-// identification run, or a config that cannot be edited or written (nothing changed).
+// identification run, an unknown loop delay, or a config that cannot be edited or written
+// (nothing changed).
 #include <fcntl.h>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -26,6 +34,7 @@
 #include "commands.hpp"
 #include "hapticd/daemon/config.hpp"
 #include "hapticd/daemon/config_editor.hpp"
+#include "hapticd/daemon/link_diag.hpp"
 #include "hapticd/daemon/startup_check.hpp"
 #include "hapticd/tune/autotune.hpp"
 #include "hapticd/tune/input_checks.hpp"
@@ -254,6 +263,130 @@ nlohmann::ordered_json axis_json(const tune::AutotuneAxis& a) {
             {"exact_check", exact_json(a.exact)}};
 }
 
+/// Where the loop delay came from.
+enum class DelaySource { option, measured, config, none };
+
+const char* to_string(DelaySource source) {
+    switch (source) {
+        case DelaySource::option:
+            return "--delay";
+        case DelaySource::measured:
+            return "measured";
+        case DelaySource::config:
+            return "config";
+        case DelaySource::none:
+            break;
+    }
+    return "none";
+}
+
+/// How long the link is run at zero force to measure the delay: 2000 commands at 1 kHz, so
+/// that the p99 rests on 20 of them.
+constexpr double kDelayMeasurementS = 2.0;
+
+struct LoopDelay {
+    double delay_s = 0.0;
+    DelaySource source = DelaySource::none;
+    std::optional<daemon::DiagReport> measurement;  ///< when it ran the link
+    std::string note;  ///< one line for the report: how the delay was found
+};
+
+/// [device.model] delay is written in the config (its parsed value defaults to 0 when not).
+bool config_states_delay(const std::string& text) {
+    try {
+        const toml::table table = toml::parse(text);
+        return table["device"]["model"]["delay"].is_value();
+    } catch (const toml::parse_error&) {
+        return false;  // load_config() has read it already; not reached
+    }
+}
+
+std::string periods_text(double delay_s, double rate_hz) {
+    const double periods = delay_s * rate_hz;
+    return number_text(periods, 4) + (periods == 1.0 ? " period" : " periods");
+}
+
+/// --delay, else the link's measurement (when autotune runs the device), else the config.
+LoopDelay find_loop_delay(const AutotuneCliOptions& o, const daemon::Config& config,
+                          const std::string& original) {
+    LoopDelay out;
+    const double rate_hz = config.servo.rate_hz;
+    const bool stated = config_states_delay(original);
+    if (o.delay_s) {
+        out.delay_s = *o.delay_s;
+        out.source = DelaySource::option;
+        out.note = "loop delay " + number_text(out.delay_s) + " s (" +
+                   periods_text(out.delay_s, rate_hz) + "): --delay";
+        return out;
+    }
+    if (!o.log_path.empty()) {
+        out.delay_s = config.device.model_delay_s;
+        out.source = stated ? DelaySource::config : DelaySource::none;
+        out.note = stated ? "loop delay " + number_text(out.delay_s) + " s (" +
+                                periods_text(out.delay_s, rate_hz) +
+                                "): [device.model] delay (not measured: from --log there is no "
+                                "device to run)"
+                          : "loop delay 0: not measured (from --log there is no device to run) "
+                            "and neither --delay nor [device.model] delay states one";
+        return out;
+    }
+    // Measure it, as haptic-tune diag does: zero force, the daemon's schedule.
+    daemon::DiagOptions diag;
+    diag.duration_s = kDelayMeasurementS;
+    diag.lockstep = sim_lockstep(config);
+    std::cerr << "haptic-tune: autotune: measuring the loop delay over the link ("
+              << kDelayMeasurementS << " s at zero force)\n";
+    try {
+        out.measurement = daemon::run_link_diag(config, diag, std::cerr);
+    } catch (const std::exception& e) {
+        throw AutotuneError(std::string("cannot measure the loop delay: device error: ") +
+                            e.what() + " (give --delay SECONDS to skip the measurement)");
+    }
+    const daemon::DiagReport& m = *out.measurement;
+    std::string why_not;
+    if (!m.delay_measured) {
+        why_not = m.delay_missing;
+    } else if (m.bad_ack_command + m.bad_ack_time + m.acausal + m.clock_backwards > 0) {
+        why_not =
+            "the device's acknowledgements or timestamps contradicted themselves (" +
+            std::to_string(m.bad_ack_command + m.bad_ack_time + m.acausal + m.clock_backwards) +
+            " times; haptic-tune diag shows which)";
+    } else if (!(m.recommended_delay_s * rate_hz < tune::kMaxDelayPeriods)) {
+        why_not = "the measured p99 " + number_text(m.delay_s.p99) +
+                  " s is beyond the stability models' range (under 10 periods)";
+    }
+    if (why_not.empty()) {
+        out.delay_s = m.recommended_delay_s;
+        out.source = DelaySource::measured;
+        out.note = "loop delay measured over the link (" + std::to_string(m.delay_commands) +
+                   " commands at zero force): p50 " + periods_text(m.delay_s.p50, rate_hz) +
+                   ", p99 " + periods_text(m.delay_s.p99, rate_hz) + "; sized for " +
+                   number_text(out.delay_s) + " s (" + periods_text(out.delay_s, rate_hz) +
+                   ": the p99 rounded up to the next 0.05 period)";
+        if (stated && config.device.model_delay_s != out.delay_s) {
+            out.note +=
+                ", replacing [device.model] delay = " + number_text(config.device.model_delay_s);
+        }
+        std::cerr << "haptic-tune: autotune: " << out.note << '\n';  // before the long run
+        return out;
+    }
+    if (stated) {
+        out.delay_s = config.device.model_delay_s;
+        out.source = DelaySource::config;
+        out.note = "loop delay " + number_text(out.delay_s) + " s (" +
+                   periods_text(out.delay_s, rate_hz) +
+                   "): [device.model] delay; not measured: " + why_not;
+        std::cerr << "haptic-tune: autotune: " << out.note << '\n';
+        return out;
+    }
+    throw AutotuneError("the loop delay is unknown: it could not be measured over the link (" +
+                        why_not +
+                        "), and neither --delay nor [device.model] delay states it. Gains sized "
+                        "for no delay would be past the limit of a real loop; give --delay "
+                        "SECONDS (docs/autotune.md, docs/stability-models.md); nothing was "
+                        "written");
+}
+
 struct Outcome {
     std::string config_path;
     std::string log_path;
@@ -263,6 +396,7 @@ struct Outcome {
     std::optional<daemon::StartupCheck> startup;
     std::string backup_path;  ///< empty: nothing written
     bool dry_run = false;
+    LoopDelay delay;
 };
 
 nlohmann::ordered_json outcome_json(const Outcome& o) {
@@ -289,6 +423,16 @@ nlohmann::ordered_json outcome_json(const Outcome& o) {
         {"model", "passive"},
         {"rate_hz", r.rate_hz},
         {"delay_s", r.delay_periods / r.rate_hz},
+        {"delay_source", to_string(o.delay.source)},
+        {"delay_measurement",
+         [&]() -> nlohmann::ordered_json {
+             if (!o.delay.measurement) return nullptr;
+             const daemon::DiagReport& m = *o.delay.measurement;
+             if (!m.delay_measured) return {{"measured", false}, {"missing", m.delay_missing}};
+             return {{"measured", true},       {"commands", m.delay_commands},
+                     {"p50_s", m.delay_s.p50}, {"p99_s", m.delay_s.p99},
+                     {"max_s", m.delay_s.max}, {"recommended_s", m.recommended_delay_s}};
+         }()},
         {"margin", r.margin},
         {"optimize_damping", r.optimize_damping},
         {"binding_axis", r.binding().identified.axis},
@@ -337,6 +481,7 @@ void print_text(const Outcome& o) {
                   << number_text(id.estimate.offset_n, 3) << " +- "
                   << number_text(id.std_error.offset_n, 2) << " N\n";
     }
+    std::cout << o.delay.note << '\n';
     std::cout << "largest stable coupling (passive model, "
               << (r.optimize_damping ? "optimised damping" : "b_c = 0") << ", [servo] rate_hz "
               << number_text(r.rate_hz) << " Hz, loop delay "
@@ -398,19 +543,29 @@ int run_autotune(const AutotuneCliOptions& o) {
     }
     const std::string original = read_file(o.config_path);
     options.rate_hz = config.servo.rate_hz;
-    options.delay_periods = o.delay_s.value_or(config.device.model_delay_s) * config.servo.rate_hz;
     options.identification.force_limit_n = config.safety.max_force_n;
-    try {
-        tune::check_delay_periods(options.delay_periods);
-    } catch (const std::invalid_argument& e) {
-        throw AutotuneError(std::string(e.what()) +
-                            " ([device.model] delay or --delay x [servo] rate_hz)");
+    if (o.delay_s) {
+        // A --delay out of range is bad input before anything runs.
+        try {
+            tune::check_delay_periods(*o.delay_s * config.servo.rate_hz);
+        } catch (const std::invalid_argument& e) {
+            throw AutotuneError(std::string(e.what()) + " (--delay x [servo] rate_hz)");
+        }
     }
-    options.validate();
 
     Outcome outcome;
     outcome.config_path = o.config_path;
     outcome.dry_run = o.dry_run;
+    outcome.delay = find_loop_delay(o, config, original);
+    options.delay_periods = outcome.delay.delay_s * config.servo.rate_hz;
+    try {
+        tune::check_delay_periods(options.delay_periods);
+    } catch (const std::invalid_argument& e) {
+        throw AutotuneError(std::string(e.what()) +
+                            " ([device.model] delay, the measured one or --delay x [servo] "
+                            "rate_hz)");
+    }
+    options.validate();
     bool temporary = false;
     if (!o.log_path.empty()) {
         outcome.log_path = o.log_path;
@@ -452,6 +607,12 @@ int run_autotune(const AutotuneCliOptions& o) {
         throw keep_log(outcome.log_path + ": cannot identify the device: " + e.what() + " [" +
                        std::string(tune::to_string(e.reason())) + "]");
     }
+    if (outcome.delay.source == DelaySource::none) {
+        outcome.result.warnings.push_back(
+            "sized for no loop delay: none was measured (from --log there is no device to run) "
+            "or stated; a device on the open protocol has at least one period "
+            "(docs/stability-models.md): measure it with haptic-tune diag and give --delay");
+    }
     if (temporary) {
         fs::remove(outcome.log_path);
         outcome.log_kept = false;
@@ -477,9 +638,9 @@ int run_autotune(const AutotuneCliOptions& o) {
             {"device.model", "damping", result.device.damping_n_s_per_m},
             {"coupling", "stiffness", result.coupling.stiffness_n_per_m},
             {"coupling", "damping", result.coupling.damping_n_s_per_m}};
-        // The delay the gains were sized for goes with them (a zero delay that neither the
-        // config nor --delay stated is not added).
-        if (o.delay_s || options.delay_periods > 0.0) {
+        // The delay the gains were sized for goes with them (a zero delay that nothing
+        // stated or measured is not added).
+        if (outcome.delay.source != DelaySource::none || options.delay_periods > 0.0) {
             edits.push_back({"device.model", "delay", options.delay_periods / options.rate_hz});
         }
         edited = daemon::edit_config_text(original, edits, o.config_path);
@@ -532,7 +693,8 @@ void add_autotune_command(CLI::App& app, Invocation& invocation) {
     auto options = std::make_shared<AutotuneCliOptions>();
     CLI::App* command = app.add_subcommand(
         "autotune",
-        "Identify the device (from --log, or from a `hapticd --identify` run it starts), size "
+        "Identify the device (from --log, or from a `hapticd --identify` run it starts), "
+        "measure the loop delay over the link (unless --delay or --log), size "
         "the coupling with the passive model (with the loop delay) and a safety margin, verify "
         "it with the exact model, and write [device.model] mass, damping, delay and [coupling] "
         "stiffness, damping into "
@@ -579,8 +741,10 @@ void add_autotune_command(CLI::App& app, Invocation& invocation) {
     command
         ->add_option("--delay", options->delay_s,
                      "loop delay (s) from the encoder sample to the force taking effect, "
-                     "beyond the hold (default [device.model] delay, else 0; measure it with "
-                     "haptic-tune diag); written to [device.model] delay")
+                     "beyond the hold (default: measured over the link before the "
+                     "identification run when the device reports it, else [device.model] "
+                     "delay; from --log, [device.model] delay, else 0); written to "
+                     "[device.model] delay")
         ->check(non_negative_finite("s"));
     command->add_flag("--dry-run", options->dry_run,
                       "identify, size, verify and print the changes, but do not write");

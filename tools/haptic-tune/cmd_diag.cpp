@@ -1,6 +1,8 @@
 // haptic-tune diag: the first command a lab runs on new hardware. Drives the configured
-// device at zero force and reports round-trip times, lost and late frames, and the device
-// clock's drift (hapticd/daemon/link_diag.hpp, docs/link-diagnostics.md).
+// device at zero force and reports round-trip times, lost and late frames, the device
+// clock's drift, and the loop delay from the encoder sample to the force taking effect when
+// the device says when its commands take effect (hapticd/daemon/link_diag.hpp,
+// docs/link-diagnostics.md).
 #include <iostream>
 #include <memory>
 
@@ -50,8 +52,11 @@ void add_diag_command(CLI::App& app, Invocation& invocation) {
     CLI::App* command = app.add_subcommand(
         "diag",
         "Diagnose the device link: run the configured device at zero force and report the "
-        "round-trip time histogram, lost and late frames, and the device clock's drift. "
-        "Exit 0 if the link keeps up with [servo] rate_hz, 1 if not, 2 on bad input");
+        "round-trip time histogram, lost and late frames, the device clock's drift, and the "
+        "loop delay (sample to force, median and p99, host and link parts, and the value for "
+        "[device.model] delay) when the device reports when commands take effect (protocol "
+        "version 2). Exit 0 if the link keeps up with [servo] rate_hz and the config's delay "
+        "covers the measured one, 1 if not, 2 on bad input");
     command->add_option("--config", options->config_path, "hapticd config file (TOML)")
         ->required()
         ->check(CLI::ExistingFile);

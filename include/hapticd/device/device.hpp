@@ -29,9 +29,17 @@ struct DeviceInfo {
     /// (or, on a lockstep clock, returns the next virtual-time sample at once), so the loop
     /// must not also sleep to a deadline.
     bool paces_loop = false;
-    bool lockstep = false;          ///< virtual time: sample times are exact multiples of T
-    std::string name;               ///< e.g. "sim", "usb"
-    std::string serial;             ///< device serial number, if it has one
+    bool lockstep = false;  ///< virtual time: sample times are exact multiples of T
+    /// When the sample is taken. true: when read() is called (the sim): a loop that reads at
+    /// the start of its tick computes each command from a fresh sample. false: when the
+    /// device answers a command (the open protocol latches right after the command, or at
+    /// its next period boundary), and read() returns it later.
+    bool samples_at_read = false;
+    /// The open protocol's version this session speaks (docs/protocol.md 3.2); 0 for a
+    /// device that is not on the open protocol.
+    int protocol_version = 0;
+    std::string name;    ///< e.g. "sim", "usb"
+    std::string serial;  ///< device serial number, if it has one
 };
 
 /// What the daemon passes to Device::open.
@@ -46,7 +54,7 @@ struct DeviceConfig {
 };
 
 class Device {
-public:
+  public:
     virtual ~Device() = default;
     /// Outside the tick. Throws std::runtime_error naming the file, key, value and allowed
     /// range on bad configuration, or saying why the device could not be opened.

@@ -13,17 +13,17 @@
 #include "hapticd/device/device.hpp"
 
 namespace hapticd::device {
-inline constexpr std::uint32_t kDeviceAbiVersion = 1;
+inline constexpr std::uint32_t kDeviceAbiVersion = 2;
 }  // namespace hapticd::device
 
 extern "C" {
 
 struct hapticd_device_plugin {
-    std::uint32_t abi_version;  ///< must equal hapticd::device::kDeviceAbiVersion
-    const char* name;           ///< the plugin's name, e.g. "sim"
-    const char* description;    ///< one line for `hapticd --list-plugins`
-    hapticd::device::Device* (*create)();          ///< a new, unopened device
-    void (*destroy)(hapticd::device::Device*);     ///< deletes what create() returned
+    std::uint32_t abi_version;                  ///< must equal hapticd::device::kDeviceAbiVersion
+    const char* name;                           ///< the plugin's name, e.g. "sim"
+    const char* description;                    ///< one line for `hapticd --list-plugins`
+    hapticd::device::Device* (*create)();       ///< a new, unopened device
+    void (*destroy)(hapticd::device::Device*);  ///< deletes what create() returned
 };
 
 /// The one symbol a plugin exports.

@@ -90,6 +90,9 @@ void ProtocolDevice::open(const DeviceConfig& config) {
     info_.lockstep = config.lockstep;
     info_.name = plugin_;
     info_.serial = std::string(identity_.serial_number());
+    info_.samples_at_read = false;  // the device latches when it answers a command
+    info_.protocol_version = version_;
+    write_calls_ = 0;
 
     stop_.store(false);
     state_.store(LinkState::connected, std::memory_order_release);
@@ -182,17 +185,20 @@ void ProtocolDevice::handshake() {
             identified = true;
         }
     }
+    // 3.2: the identity's header carries the chosen version; the session speaks it.
+    const std::uint8_t version = pending_identity_.version;
     if (!identified) {
-        throw std::runtime_error(
-            "no identity from " + where + " after " + std::to_string(kHelloAttempts) +
-            " hello messages " + std::to_string(settings_.handshake_timeout_us / 1000) +
-            " ms apart: is it a hapticd protocol device (on a serial line: at the right baud rate)? "
-            "(docs/protocol.md 5.1)");
+        throw std::runtime_error("no identity from " + where + " after " +
+                                 std::to_string(kHelloAttempts) + " hello messages " +
+                                 std::to_string(settings_.handshake_timeout_us / 1000) +
+                                 " ms apart: is it a hapticd protocol device (on a serial line: at "
+                                 "the right baud rate)? "
+                                 "(docs/protocol.md 5.1)");
     }
     check_identity(pending_identity_);  // 5.1 step 4
 
     // Step 5: the watchdog.
-    send(proto::Configure{session, settings_.watchdog_us}, "configure");
+    send(proto::Configure{session, settings_.watchdog_us, version}, "configure");
     const proto::Message ack =
         await([&](const proto::Message& m) { return is_reply<proto::ConfigureAck>(m, session); },
               "configure");
@@ -202,10 +208,11 @@ void ProtocolDevice::handshake() {
     }
 
     // Step 6: the first sample; it seeds the reply tracker.
-    tracker_.start(session);
+    tracker_.start(session, version);
     session_ = session;
+    version_ = version;
     command_sequence_ = 0;
-    send(proto::Poll{session}, "poll");
+    send(proto::Poll{session, version}, "poll");
     const proto::Message first =
         await([&](const proto::Message& m) { return is_reply<proto::EncoderSample>(m, session); },
               "poll");
@@ -242,6 +249,32 @@ IoResult ProtocolDevice::send_frame(std::span<const std::byte> frame) noexcept {
     return IoResult::error;
 }
 
+void ProtocolDevice::pass_on_applied(const proto::ReplyTracker::Result& verdict,
+                                     Sample& sample) const noexcept {
+    using Applied = proto::ReplyTracker::Applied;
+    switch (verdict.applied) {
+        case Applied::unsupported:
+            sample.applied = servo::AppliedReport::unsupported;
+            return;
+        case Applied::none:
+            sample.applied = servo::AppliedReport::none;
+            return;
+        case Applied::bad_command:
+            sample.applied = servo::AppliedReport::bad_command;
+            return;
+        case Applied::bad_time:
+            sample.applied = servo::AppliedReport::bad_time;
+            return;
+        case Applied::reported:
+            break;
+    }
+    // The tracker vouched that it is one of this session's commands, at most 254 behind the
+    // last: the ring still holds the write() call that sent it.
+    sample.applied = servo::AppliedReport::reported;
+    sample.applied_write = write_of_sequence_[verdict.applied_sequence % write_of_sequence_.size()];
+    sample.applied_time_s = proto::time_from_microseconds(verdict.applied_time_us);
+}
+
 IoResult ProtocolDevice::read(Sample& sample) noexcept {
     sample = Sample{};
     if (state_.load(std::memory_order_acquire) != LinkState::connected && !adopt_if_ready()) {
@@ -249,7 +282,7 @@ IoResult ProtocolDevice::read(Sample& sample) noexcept {
         return IoResult::disconnected;
     }
     if (!reply_outstanding_) {
-        const proto::Encoded poll = proto::encode(proto::Poll{session_}, tx_);
+        const proto::Encoded poll = proto::encode(proto::Poll{session_, version_}, tx_);
         const IoResult sent = send_frame(std::span<const std::byte>(tx_.data(), poll.size));
         if (sent != IoResult::ok) {
             sample.status =
@@ -287,6 +320,7 @@ IoResult ProtocolDevice::read(Sample& sample) noexcept {
             const proto::ReplyTracker::Result verdict = tracker_.check(*reply);
             if (verdict.verdict != proto::ReplyTracker::Verdict::accept) continue;
             sample = proto::to_servo_sample(*reply, verdict.sequence, verdict.host_status);
+            pass_on_applied(verdict, sample);
             device_faulted_ = reply->faults != 0;
             reply_outstanding_ = false;
             counts_.samples_accepted.fetch_add(1, std::memory_order_relaxed);
@@ -313,9 +347,11 @@ IoResult ProtocolDevice::write(const Command& command) noexcept {
     if (state_.load(std::memory_order_acquire) != LinkState::connected) {
         return IoResult::disconnected;
     }
+    ++write_calls_;
     proto::ForceCommand frame;
     const bool finite =
         proto::make_force_command(command, config_.axes, session_, command_sequence_ + 1, frame);
+    frame.version = version_;
     // 5.5: latched device faults are cleared only by a disabled command. When the servo
     // enables force again (its operator reset its own latch), this period holds zero force
     // and clears the device; the next command applies force.
@@ -327,6 +363,7 @@ IoResult ProtocolDevice::write(const Command& command) noexcept {
     const IoResult sent = send_frame(std::span<const std::byte>(tx_.data(), encoded.size));
     if (sent != IoResult::ok) return sent;
     ++command_sequence_;
+    write_of_sequence_[command_sequence_ % write_of_sequence_.size()] = write_calls_;
     tracker_.command_sent(command_sequence_);
     reply_outstanding_ = true;
     counts_.commands_sent.fetch_add(1, std::memory_order_relaxed);
@@ -384,7 +421,7 @@ void ProtocolDevice::close() noexcept {
         state_.store(LinkState::connected);
         (void)write(Command{});
         state_.store(LinkState::closed);
-        const proto::Encoded bye = proto::encode(proto::Bye{session_}, tx_);
+        const proto::Encoded bye = proto::encode(proto::Bye{session_, version_}, tx_);
         if (link_->send(std::span<const std::byte>(tx_.data(), bye.size)) == LinkResult::ok) {
             const std::int64_t deadline = monotonic_now_ns() + kByeTimeoutNs;
             std::size_t size = 0;
@@ -418,6 +455,9 @@ ProtocolCounters ProtocolDevice::counters() const noexcept {
     c.late = t.late;
     c.duplicate = t.duplicate;
     c.missed_samples = t.missed;
+    c.applied_reported = t.applied_reported;
+    c.applied_bad_command = t.applied_bad_command;
+    c.applied_bad_time = t.applied_bad_time;
     return c;
 }
 

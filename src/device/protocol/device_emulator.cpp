@@ -110,6 +110,7 @@ void DeviceEmulator::close_session() noexcept {
     zero_force();
     session_open_ = false;
     command_seen_ = false;
+    current_tag_ = 0;
 }
 
 void DeviceEmulator::check_watchdog() noexcept {
@@ -123,7 +124,8 @@ void DeviceEmulator::check_watchdog() noexcept {
 
 void DeviceEmulator::step_period() noexcept {
     if (gone_) return;
-    if (sim_.write(held_) == servo::IoResult::disconnected) {  // lockstep: one period, ZOH
+    // Lockstep: one period, ZOH; the command lands sim.delay_s after it arrived.
+    if (sim_.write_tagged(held_, current_tag_) == servo::IoResult::disconnected) {
         gone_ = true;
         zero_force();
         return;
@@ -208,6 +210,12 @@ void DeviceEmulator::dispatch(std::span<const std::byte> request, Outbox& outbox
         send_error(frame.header, ErrorCode::wrong_session, 0, outbox);
         return;
     }
+    // Section 3.2: the session speaks the version its hello chose, and nothing else.
+    if (frame.header.version != version_) {
+        send_error(frame.header, ErrorCode::bad_version,
+                   version_range_detail(min_version_, max_version_), outbox);
+        return;
+    }
     if (const auto* configure = std::get_if<Configure>(&message)) {
         on_configure(*configure, outbox);
     } else if (const auto* command = std::get_if<ForceCommand>(&message)) {
@@ -231,6 +239,10 @@ void DeviceEmulator::on_hello(const FrameView& frame, const Hello& hello, Outbox
     }
     session_open_ = true;
     session_ = hello.session;
+    version_ = high;
+    ++session_epoch_;
+    current_tag_ = 0;
+    commands_in_session_ = 0;
     watchdog_timeout_us_ = default_watchdog_timeout_us_;
     last_command_sequence_ = 0;
     periods_since_command_ = 0;
@@ -239,6 +251,7 @@ void DeviceEmulator::on_hello(const FrameView& frame, const Hello& hello, Outbox
     latched_faults_ &= static_cast<std::uint16_t>(~kDeviceFaultWatchdog);  // that host is gone
     identity_.session = session_;
     identity_.watchdog_timeout_us = watchdog_timeout_us_;
+    identity_.version = version_;
     send(identity_, outbox);
 }
 
@@ -260,6 +273,7 @@ void DeviceEmulator::on_configure(const Configure& configure, Outbox& outbox) no
     ConfigureAck ack;
     ack.session = session_;
     ack.watchdog_timeout_us = watchdog_timeout_us_;
+    ack.version = version_;
     send(ack, outbox);
 }
 
@@ -292,6 +306,8 @@ void DeviceEmulator::on_command(const ForceCommand& command, Outbox& outbox) noe
     command_seen_ = true;
     last_command_sequence_ = command.sequence;
     last_command_us_ = time_us();
+    current_tag_ = (std::uint64_t{session_epoch_} << 32) | command.sequence;
+    ++commands_in_session_;
     periods_since_command_ = 0;
     ++counters_.commands_applied;
 
@@ -306,6 +322,7 @@ void DeviceEmulator::on_bye(const Bye& bye, Outbox& outbox) noexcept {
     close_session();
     ByeAck ack;
     ack.session = bye.session;
+    ack.version = version_;
     send(ack, outbox);
 }
 
@@ -332,6 +349,7 @@ void DeviceEmulator::send_sample(std::uint16_t status, Outbox& outbox) noexcept 
     }
     EncoderSample message;
     message.session = session_;
+    message.version = version_;
     message.command_sequence = command_seen_ ? last_command_sequence_ : 0;
     sample_sequence_ += faults_.sequence_gap;
     faults_.sequence_gap = 0;
@@ -343,10 +361,57 @@ void DeviceEmulator::send_sample(std::uint16_t status, Outbox& outbox) noexcept 
     if (held_.enable) message.status |= kSampleForceActive;
     if (last_clamped_) message.status |= kSampleForceClamped;
     message.faults = latched_faults_;
+    if (version_ >= kProtocolVersion2) fill_applied(sample, message);
+    damage_sample(message);
     if (result == servo::IoResult::timeout) return;  // the simulated device dropped it
     ++counters_.samples_sent;
     if ((sample.status & servo::kStatusLate) != 0u) ++faults_.delay;  // a late sample
     send(message, outbox);
+}
+
+void DeviceEmulator::fill_applied(const servo::Sample& sample,
+                                  EncoderSample& message) const noexcept {
+    // What landed last, by the simulated device's own account; a command of this session
+    // (an older session's might still land after a hello: it is not this host's to hear of).
+    if (!command_seen_ || sample.applied != servo::AppliedReport::reported ||
+        (sample.applied_write >> 32) != session_epoch_) {
+        return;  // kAppliedLagNone, kAppliedAgeUnknown
+    }
+    const auto applied = static_cast<std::uint32_t>(sample.applied_write & 0xFFFFFFFFu);
+    const std::uint32_t lag = message.command_sequence - applied;
+    const auto applied_us = static_cast<std::uint64_t>(std::llround(sample.applied_time_s * 1e6));
+    if (lag > kMaxAppliedLag || applied_us > message.time_us) return;
+    message.applied_lag = static_cast<std::uint8_t>(lag);
+    const std::uint64_t age_us = message.time_us - applied_us;
+    message.applied_age_us =
+        age_us >= kAppliedAgeUnknown ? kAppliedAgeUnknown : static_cast<std::uint16_t>(age_us);
+}
+
+void DeviceEmulator::damage_sample(EncoderSample& message) noexcept {
+    const bool v2 = message.version >= kProtocolVersion2;
+    if (v2 && faults_.applied_unsent > 0) {
+        --faults_.applied_unsent;
+        // One before the session's first command (or, before any, the "command 0"): a
+        // command this host never sent.
+        message.applied_lag = static_cast<std::uint8_t>(
+            command_seen_ ? std::min<std::uint64_t>(kMaxAppliedLag, commands_in_session_) : 0);
+        message.applied_age_us = 0;
+    }
+    if (v2 && faults_.applied_early_us > 0 && message.applied_age_us != kAppliedAgeUnknown) {
+        const std::uint64_t age = std::min<std::uint64_t>(
+            {std::uint64_t{message.applied_age_us} + faults_.applied_early_us,
+             kAppliedAgeUnknown - 1u, message.time_us});
+        message.applied_age_us = static_cast<std::uint16_t>(age);
+        faults_.applied_early_us = 0;
+    }
+    if (faults_.clock_back_us > 0) {
+        message.time_us -= std::min<std::uint64_t>(message.time_us, faults_.clock_back_us);
+        if (message.applied_age_us != kAppliedAgeUnknown &&
+            message.applied_age_us > message.time_us) {
+            message.applied_age_us = static_cast<std::uint16_t>(message.time_us);
+        }
+        faults_.clock_back_us = 0;
+    }
 }
 
 template <typename M>

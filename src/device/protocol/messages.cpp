@@ -1,5 +1,6 @@
-// Encoders and decoders of the ten messages (docs/protocol.md section 4). Offsets below are
-// payload offsets; the document's tables give frame offsets (payload offset + 8).
+// Encoders and decoders of the ten messages (docs/protocol.md section 4), versions 1 and 2.
+// Offsets below are payload offsets; the document's tables give frame offsets (payload offset
+// + 8).
 #include "hapticd/device/protocol/messages.hpp"
 
 #include <cmath>
@@ -163,9 +164,24 @@ Error read(Payload p, ForceCommand& m) noexcept {
 }
 
 // ---- 4.6 sample ----
+// Version 2 uses the three bytes that version 1 reserves (payload 21..23) for applied_lag and
+// applied_age_us; a version-1 struct holds their "nothing said" values.
 Error check(const EncoderSample& m) noexcept {
     if ((m.status & ~kSampleStatusMask) != 0u || (m.faults & ~kDeviceFaultAllowedMask) != 0u ||
         !valid_axes(m.axes) || !unused_axes_zero(m.counts, m.axes)) {
+        return Error::bad_field;
+    }
+    if (m.version == kProtocolVersion1) {
+        if (m.applied_lag != kAppliedLagNone || m.applied_age_us != kAppliedAgeUnknown) {
+            return Error::bad_field;  // version 1 cannot say it
+        }
+        return Error::none;
+    }
+    // No command named: no age. An age: the command took effect after the clock started.
+    if (m.applied_lag == kAppliedLagNone && m.applied_age_us != kAppliedAgeUnknown) {
+        return Error::bad_field;
+    }
+    if (m.applied_age_us != kAppliedAgeUnknown && m.applied_age_us > m.time_us) {
         return Error::bad_field;
     }
     return Error::none;
@@ -178,8 +194,13 @@ void write(const EncoderSample& m, PayloadOut p) noexcept {
     wire::store_u16(p, 16, m.status);
     wire::store_u16(p, 18, m.faults);
     wire::store_u8(p, 20, m.axes);
-    wire::store_u8(p, 21, 0);
-    wire::store_u16(p, 22, 0);
+    if (m.version == kProtocolVersion1) {
+        wire::store_u8(p, 21, 0);
+        wire::store_u16(p, 22, 0);
+    } else {
+        wire::store_u8(p, 21, m.applied_lag);
+        wire::store_u16(p, 22, m.applied_age_us);
+    }
     for (std::size_t i = 0; i < m.axes; ++i) wire::store_i64(p, 24 + 8 * i, m.counts[i]);
 }
 Error read(Payload p, EncoderSample& m) noexcept {
@@ -193,10 +214,15 @@ Error read(Payload p, EncoderSample& m) noexcept {
     m.status = wire::load_u16(p, 16);
     m.faults = wire::load_u16(p, 18);
     m.axes = wire::load_u8(p, 20);
-    if (wire::load_u8(p, 21) != 0 || wire::load_u16(p, 22) != 0 || !valid_axes(m.axes) ||
-        p.size() != sample_payload_size(m.axes)) {
-        return Error::bad_field;
+    if (m.version == kProtocolVersion1) {
+        if (wire::load_u8(p, 21) != 0 || wire::load_u16(p, 22) != 0) return Error::bad_field;
+        m.applied_lag = kAppliedLagNone;
+        m.applied_age_us = kAppliedAgeUnknown;
+    } else {
+        m.applied_lag = wire::load_u8(p, 21);
+        m.applied_age_us = wire::load_u16(p, 22);
     }
+    if (!valid_axes(m.axes) || p.size() != sample_payload_size(m.axes)) return Error::bad_field;
     m.counts.fill(0);
     for (std::size_t i = 0; i < m.axes; ++i) m.counts[i] = wire::load_i64(p, 24 + 8 * i);
     return check(m);
@@ -284,15 +310,27 @@ struct TypeOf<ErrorReport> {
     static constexpr MessageType value = MessageType::error;
 };
 
+/// The header version a struct is laid out in: its own, or the frozen version of hello and
+/// error (which have no version member).
+template <typename M>
+constexpr std::uint8_t version_of(const M& m) noexcept {
+    if constexpr (requires { m.version; }) {
+        return m.version;
+    } else {
+        return kFrozenVersion;
+    }
+}
+
 template <typename M>
 Encoded encode_message(const M& m, std::span<std::byte> out) noexcept {
+    if (!is_spoken_version(version_of(m))) return {0, Error::bad_version};
     if (const Error error = check(m); error != Error::none) return {0, error};
     const std::size_t size = payload_size(m);
     if (out.size() < kMinFrameSize + size) return {0, Error::no_space};
     write(m, out.subspan(kHeaderSize, size));
     FrameHeader header;
     header.type = TypeOf<M>::value;
-    header.version = is_frozen_type(header.type) ? kFrozenVersion : kProtocolVersion;
+    header.version = version_of(m);
     header.payload_size = static_cast<std::uint8_t>(size);
     header.session = m.session;
     return finish_frame(header, out);
@@ -302,6 +340,7 @@ template <typename M>
 Error read_message(const FrameView& frame, M& m) noexcept {
     m = M{};
     m.session = frame.header.session;
+    if constexpr (requires { m.version; }) m.version = frame.header.version;
     return read(frame.payload, m);
 }
 

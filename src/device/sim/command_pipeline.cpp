@@ -33,13 +33,14 @@ void CommandPipeline::configure(std::size_t capacity) {
     size_ = 0;
 }
 
-void CommandPipeline::push(std::uint64_t due,
-                           const std::array<double, kMaxAxes>& force_n) noexcept {
+void CommandPipeline::push(std::uint64_t due, const std::array<double, kMaxAxes>& force_n,
+                           std::uint64_t tag) noexcept {
     if (ring_.empty()) return;           // not configured: a device that was never opened
     if (size_ == ring_.size()) --size_;  // full: the newest in flight is replaced
     PendingCommand& slot = ring_[(head_ + size_) % ring_.size()];
     slot.due = due;
     slot.force_n = force_n;
+    slot.tag = tag;
     ++size_;
 }
 

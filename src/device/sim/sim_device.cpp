@@ -53,6 +53,9 @@ void SimDevice::open(const SimConfig& config) {
     sample_units_ = 0;
     samples_produced_ = 0;
     previous_sample_time_s_ = kMinusInfinity;
+    writes_ = 0;
+    applied_tag_ = 0;
+    applied_time_s_ = 0.0;
     for (int i = 0; i < config_.axes; ++i) last_fresh_counts_[i] = encoder_counts(i);
     open_time_ns_ = monotonic_ns();
     open_ = true;
@@ -65,6 +68,7 @@ DeviceInfo SimDevice::info() const {
     info.force_limit_n = config_.force_limit_n;
     info.lockstep = config_.clock == SimClock::lockstep;
     info.paces_loop = info.lockstep;
+    info.samples_at_read = true;
     info.name = "sim";
     info.serial = "sim-0";
     return info;
@@ -92,6 +96,7 @@ void SimDevice::advance_to(std::uint64_t units) noexcept {
     while (const PendingCommand* landing = pipeline_.due(units)) {
         advance_held_to(landing->due);
         held_force_n_ = landing->force_n;
+        took_effect(landing->tag, units_to_s(landing->due));
         pipeline_.pop();
     }
     advance_held_to(units);
@@ -123,6 +128,7 @@ void SimDevice::step_lockstep_period() noexcept {
     const std::array<double, kMaxAxes> lead_force_n = held_force_n_;
     if (const PendingCommand* landing = pipeline_.due(period)) {
         held_force_n_ = landing->force_n;
+        took_effect(landing->tag, units_to_s(units_) + delay_.fraction * config_.period_s());
         pipeline_.pop();
     }
     const double end_s = units_to_s(units_ + kUnitsPerPeriod);
@@ -136,6 +142,12 @@ void SimDevice::step_lockstep_period() noexcept {
 void SimDevice::cut_force() noexcept {
     held_force_n_.fill(0.0);
     pipeline_.clear();
+}
+
+void SimDevice::took_effect(std::uint64_t tag, double time_s) noexcept {
+    if (tag == applied_tag_) return;  // the same command again: it acts since its first landing
+    applied_tag_ = tag;
+    applied_time_s_ = time_s;
 }
 
 std::int64_t SimDevice::encoder_counts(int axis) const noexcept {
@@ -165,6 +177,10 @@ IoResult SimDevice::read(Sample& sample) noexcept {
     sample.device_time_s = time_s;
     sample.sequence = sequence;
     sample.status = verdict.status;
+    sample.applied_write = applied_tag_;
+    sample.applied_time_s = applied_time_s_;
+    sample.applied =
+        applied_tag_ != 0 ? servo::AppliedReport::reported : servo::AppliedReport::none;
     sample.encoder_counts.fill(0);
     if (verdict.disconnected) {
         cut_force();  // the device's watchdog: no host, no force, nothing in flight lands
@@ -184,6 +200,11 @@ IoResult SimDevice::read(Sample& sample) noexcept {
 
 IoResult SimDevice::write(const Command& command) noexcept {
     if (!open_) return IoResult::disconnected;
+    return write_tagged(command, ++writes_);
+}
+
+IoResult SimDevice::write_tagged(const Command& command, std::uint64_t tag) noexcept {
+    if (!open_) return IoResult::disconnected;
     const bool lockstep = config_.clock == SimClock::lockstep;
     if (!lockstep) advance_to(now_units());  // the old force held until now
     const bool disconnected = faults_.disconnected(time_s());
@@ -198,12 +219,13 @@ IoResult SimDevice::write(const Command& command) noexcept {
     }
     if (!finite || disconnected) {
         cut_force();  // refused, or no device: zero now, whatever was in flight
+        if (!disconnected) took_effect(tag, time_s());  // the refusal's zero acts at once
     } else if (lockstep) {
         // Written in tick n: starts to act in period n + q, at φT into it.
-        pipeline_.push((units_ >> kFractionBits) + delay_.whole_periods, force_n);
+        pipeline_.push((units_ >> kFractionBits) + delay_.whole_periods, force_n, tag);
     } else {
         // D after the sample it was computed from, and never before now.
-        pipeline_.push(std::max(sample_units_ + delay_.units, units_), force_n);
+        pipeline_.push(std::max(sample_units_ + delay_.units, units_), force_n, tag);
     }
     if (lockstep) {
         step_lockstep_period();  // exactly one period, the commands landing in it

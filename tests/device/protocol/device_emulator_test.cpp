@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 #include <stdexcept>
 #include <vector>
 
@@ -90,12 +91,15 @@ class Host {
         return std::get<R>(received[0].message);
     }
 
-    Identity hello(std::uint32_t session = kSession) {
+    /// Opens a session offering versions 1..max_version; later frames use the chosen one.
+    Identity hello(std::uint32_t session = kSession, std::uint8_t max_version = kProtocolVersion1) {
         Hello hello;
         hello.session = session;
+        hello.max_version = max_version;
         session_ = session;
         const Identity identity = ask<Identity>(hello);
-        tracker_.start(session);
+        version_ = identity.version;
+        tracker_.start(session, version_);
         return identity;
     }
 
@@ -108,6 +112,7 @@ class Host {
         EXPECT_TRUE(make_force_command(command, device_.identity().axes, session_, next_sequence_++,
                                        frame));
         frame.flags |= extra_flags;
+        frame.version = version_;
         return frame;
     }
 
@@ -121,6 +126,7 @@ class Host {
     EncoderSample poll() {
         Poll poll;
         poll.session = session_;
+        poll.version = version_;
         return ask<EncoderSample>(poll);
     }
 
@@ -131,6 +137,7 @@ class Host {
   private:
     DeviceEmulator& device_;
     std::uint32_t session_ = 0;
+    std::uint8_t version_ = kProtocolVersion1;
     std::uint32_t next_sequence_ = 1;
     ReplyTracker tracker_;
 };
@@ -180,16 +187,20 @@ TEST(ProtocolEmulator, VersionNegotiation) {
     Hello hello;
     hello.session = 5;
     hello.min_version = 1;
-    hello.max_version = 9;  // a newer host: the device picks 1
+    hello.max_version = 9;  // a newer host: the device picks its newest, 2
     const std::vector<Received> ok = host.send(hello);
     ASSERT_EQ(ok.size(), 1u);
     EXPECT_TRUE(std::holds_alternative<Identity>(ok[0].message));
-    EXPECT_EQ(ok[0].bytes[1], std::byte{1});
+    EXPECT_EQ(ok[0].bytes[1], std::byte{2});
+    EXPECT_EQ(device.version(), 2);
+    hello.max_version = 1;  // a version-1 host
+    ASSERT_EQ(host.send(hello).size(), 1u);
+    EXPECT_EQ(device.version(), 1);
 
-    hello.min_version = 2;
-    hello.max_version = 3;  // no version in common
+    hello.min_version = 3;
+    hello.max_version = 4;  // no version in common
     const ErrorReport report = expect_error(host.send(hello), ErrorCode::unsupported_version);
-    EXPECT_EQ(report.detail, 0x0101u);  // the device speaks 1..1
+    EXPECT_EQ(report.detail, 0x0201u);  // the device speaks 1..2
     EXPECT_EQ(report.request_type, 0x01);
     EXPECT_EQ(report.session, 5u);
     EXPECT_FALSE(device.session_open());  // a refused hello still ended the old session
@@ -202,6 +213,31 @@ TEST(ProtocolEmulator, VersionNegotiation) {
     hello.min_version = 1;
     hello.max_version = 1;
     EXPECT_EQ(expect_error(host2.send(hello), ErrorCode::unsupported_version).detail, 0x0302u);
+
+    // A firmware from before version 2 answers a new host in version 1.
+    EmulatorConfig older = config();
+    older.max_version = 1;
+    DeviceEmulator device3(older);
+    Host host3(device3);
+    EXPECT_EQ(host3.hello(kSession, kProtocolVersion2).version, 1);
+    const EncoderSample sample = host3.command({0, 0, 0});
+    EXPECT_EQ(sample.version, 1);
+    EXPECT_FALSE(sample.names_applied());
+}
+
+TEST(ProtocolEmulator, ASessionSpeaksOnlyItsVersion) {
+    DeviceEmulator device(config());
+    Host host(device);
+    EXPECT_EQ(host.hello(kSession, kProtocolVersion2).version, 2);
+    EXPECT_EQ(host.poll().version, 2);
+    ConfigureAck ack = host.ask<ConfigureAck>(Configure{kSession, 5000, kProtocolVersion2});
+    EXPECT_EQ(ack.version, 2);
+    // A version-1 frame in a version-2 session: refused, nothing applied.
+    ForceCommand command = host.command_frame({1.0, 0, 0});
+    command.version = kProtocolVersion1;
+    EXPECT_EQ(expect_error(host.send(command), ErrorCode::bad_version).detail, 0x0201u);
+    EXPECT_EQ(device.counters().commands_applied, 0u);
+    EXPECT_EQ(host.ask<ByeAck>(Bye{kSession, kProtocolVersion2}).version, 2);
 }
 
 TEST(ProtocolEmulator, RefusesRequestsOutsideASession) {
@@ -249,9 +285,12 @@ TEST(ProtocolEmulator, AnswersMessageLevelErrorsAndDropsFrameLevelOnes) {
     };
     // Message-level: an error message naming the problem.
     Bytes version = frame;
-    version[1] = std::byte{2};
+    version[1] = std::byte{3};  // not spoken
     EXPECT_EQ(expect_error(host.send_bytes(refit(version)), ErrorCode::bad_version).detail,
-              0x0101u);
+              0x0201u);
+    version[1] = std::byte{2};  // spoken, but not this version-1 session's
+    EXPECT_EQ(expect_error(host.send_bytes(refit(version)), ErrorCode::bad_version).detail,
+              0x0201u);
     Bytes type = frame;
     type[2] = std::byte{0x42};
     EXPECT_EQ(expect_error(host.send_bytes(refit(type)), ErrorCode::unknown_type).request_type,
@@ -667,6 +706,121 @@ TEST(ProtocolEmulatorFaults, SimulatedDeviceFaultsShowThrough) {
 }
 
 // ---- transport adapters ----
+
+// ---- version 2: which command is in effect, and since when ----
+
+/// The delay of each command as a host measures it from version-2 samples: the device time
+/// its force took effect minus that of the sample it was computed from (the answer to the
+/// command before it), in microseconds.
+std::vector<std::int64_t> measured_delays_us(double delay_periods, int commands) {
+    EmulatorConfig c = config(1);
+    c.sim.delay_s = delay_periods / c.sim.rate_hz;
+    DeviceEmulator device(c);
+    Host host(device);
+    host.hello(kSession, kProtocolVersion2);
+    std::map<std::uint32_t, std::uint64_t> basis_us;  // command -> its sample's time
+    std::map<std::uint32_t, std::uint64_t> applied_us;
+    std::uint64_t latest_us = host.poll().time_us;
+    for (int n = 0; n < commands; ++n) {
+        const ForceCommand frame = host.command_frame({0.1, 0, 0});
+        host.tracker().command_sent(frame.sequence);
+        basis_us[frame.sequence] = latest_us;
+        const EncoderSample answer = host.ask<EncoderSample>(frame);
+        const ReplyTracker::Result r = host.tracker().check(answer);
+        EXPECT_EQ(r.verdict, Verdict::accept);
+        EXPECT_NE(r.applied, ReplyTracker::Applied::bad_command);
+        EXPECT_NE(r.applied, ReplyTracker::Applied::bad_time);
+        if (r.applied == ReplyTracker::Applied::reported) {
+            applied_us.emplace(r.applied_sequence, r.applied_time_us);
+        }
+        latest_us = answer.time_us;
+    }
+    std::vector<std::int64_t> delays;
+    for (const auto& [command, at_us] : applied_us) {
+        delays.push_back(static_cast<std::int64_t>(at_us) -
+                         static_cast<std::int64_t>(basis_us.at(command)));
+    }
+    return delays;
+}
+
+TEST(ProtocolEmulator, Version2SamplesSayWhichCommandIsInEffectAndSinceWhen) {
+    DeviceEmulator device(config(1));
+    Host host(device);
+    host.hello(kSession, kProtocolVersion2);
+    EncoderSample s = host.poll();
+    EXPECT_EQ(s.applied_lag, kAppliedLagNone);  // no command yet
+    EXPECT_EQ(s.applied_age_us, kAppliedAgeUnknown);
+    // No processing delay: each command acts from its arrival, held a period, then latched.
+    s = host.command({1.0, 0, 0});
+    EXPECT_EQ(s.version, 2);
+    EXPECT_EQ(s.applied_lag, 0);
+    EXPECT_EQ(s.applied_age_us, 1000u);
+    EXPECT_EQ(s.time_us, 1000u);
+    // A quiet period: the same command, a period older; a poll says the same.
+    device.advance_period();
+    s = host.poll();
+    EXPECT_EQ(s.applied_lag, 0);
+    EXPECT_EQ(s.applied_age_us, 2000u);
+    // A new session does not hear of the old one's commands.
+    host.hello(kSession + 1, kProtocolVersion2);
+    EXPECT_FALSE(host.poll().names_applied());
+}
+
+TEST(ProtocolEmulator, ItsProcessingDelayIsWhatAHostMeasures) {
+    // sim.delay_s is the time from a command's arrival to its force. In the emulator's
+    // virtual time a command arrives at the instant the sample it was computed from (the
+    // answer to the command before) was latched, so a host measures exactly the processing
+    // delay, to the wire's microsecond.
+    for (const double periods : {0.0, 0.25, 0.5, 1.0, 1.5, 3.0, 9.5}) {
+        const std::vector<std::int64_t> delays = measured_delays_us(periods, 40);
+        const auto lag_commands = static_cast<std::size_t>(std::ceil(periods));
+        EXPECT_GE(delays.size(), 40u - lag_commands - 1) << periods;
+        for (const std::int64_t d : delays) {
+            ASSERT_EQ(d, std::llround(periods * 1000.0)) << periods;
+        }
+    }
+    // Beyond a period the answer to command n names command n - 1 (1.5 periods: in effect
+    // for half a period when the answer to the next command is latched).
+    EmulatorConfig c = config(1);
+    c.sim.delay_s = 1.5e-3;
+    DeviceEmulator device(c);
+    Host host(device);
+    host.hello(kSession, kProtocolVersion2);
+    EXPECT_FALSE(host.command({1.0, 0, 0}).names_applied());  // command 1 acts at 1.5 ms
+    const EncoderSample s = host.command({1.0, 0, 0});        // latched at 2 ms
+    EXPECT_EQ(s.command_sequence, 2u);
+    EXPECT_EQ(s.applied_lag, 1);
+    EXPECT_EQ(s.applied_age_us, 500u);
+}
+
+TEST(ProtocolEmulatorFaults, BadAcknowledgementsAreCountedByTheHost) {
+    DeviceEmulator device(config(1));
+    Host host(device);
+    host.hello(kSession, kProtocolVersion2);
+    for (int i = 0; i < 3; ++i) {
+        ASSERT_EQ(host.tracker().check(host.command({0, 0, 0})).applied,
+                  ReplyTracker::Applied::reported);
+    }
+    using Applied = ReplyTracker::Applied;
+    // A command never sent.
+    device.faults().applied_unsent = 1;
+    ReplyTracker::Result r = host.tracker().check(host.command({0, 0, 0}));
+    EXPECT_EQ(r.verdict, Verdict::accept);
+    EXPECT_EQ(r.applied, Applied::bad_command);
+    // The device clock jumping back.
+    device.faults().clock_back_us = 2500;
+    r = host.tracker().check(host.command({0, 0, 0}));
+    EXPECT_EQ(r.verdict, Verdict::accept);
+    EXPECT_EQ(r.applied, Applied::bad_time);
+    // A command that took effect earlier than it did before.
+    ASSERT_EQ(host.tracker().check(host.poll()).applied, Applied::reported);
+    device.faults().applied_early_us = 300;
+    EXPECT_EQ(host.tracker().check(host.poll()).applied, Applied::bad_time);
+    // And it recovers: every knob fired once.
+    EXPECT_EQ(host.tracker().check(host.command({0, 0, 0})).applied, Applied::reported);
+    EXPECT_EQ(host.tracker().counters().applied_bad_command, 1u);
+    EXPECT_EQ(host.tracker().counters().applied_bad_time, 2u);
+}
 
 TEST(ProtocolEmulator, SerialAdapterResynchronisesAndAnswersInCobs) {
     DeviceEmulator device(config());

@@ -121,7 +121,7 @@ TEST(ProtocolFrame, BadCrcOnAnySingleBitFlip) {
 
 TEST(ProtocolFrame, BadVersion) {
     FrameView view;
-    for (const int version : {0, 2, 255}) {
+    for (const int version : {0, 3, 255}) {
         Bytes frame = command_frame();
         frame[1] = static_cast<std::byte>(version);
         fix_crc(frame);
@@ -130,6 +130,21 @@ TEST(ProtocolFrame, BadVersion) {
         EXPECT_EQ(view.header.session, 0x01020304u);
         EXPECT_EQ(view.header.type, MessageType::command);
     }
+}
+
+TEST(ProtocolFrame, VersionsOneAndTwoAreSpoken) {
+    FrameView view;
+    for (const int version : {1, 2}) {
+        Bytes frame = command_frame();
+        frame[1] = static_cast<std::byte>(version);
+        fix_crc(frame);
+        EXPECT_EQ(decode_frame(frame, view), Error::none) << version;
+        EXPECT_EQ(view.header.version, version);
+    }
+    EXPECT_TRUE(is_spoken_version(1));
+    EXPECT_TRUE(is_spoken_version(2));
+    EXPECT_FALSE(is_spoken_version(0));
+    EXPECT_FALSE(is_spoken_version(3));
 }
 
 TEST(ProtocolFrame, HelloAndErrorAreFrozenAtVersionOne) {

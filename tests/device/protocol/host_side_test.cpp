@@ -212,6 +212,103 @@ TEST(ProtocolReplyTracker, GapsDuplicatesAndWrap) {
     EXPECT_EQ(tracker.counters().duplicate, 1u);
 }
 
+/// A version-2 reply at `time_us` naming command `command - lag`, in effect `age_us`.
+EncoderSample reply2(std::uint32_t command, std::uint32_t sample, std::uint64_t time_us,
+                     std::uint8_t lag, std::uint16_t age_us) {
+    EncoderSample s = reply(1, command, sample);
+    s.version = kProtocolVersion2;
+    s.time_us = time_us;
+    s.applied_lag = lag;
+    s.applied_age_us = age_us;
+    return s;
+}
+
+using Applied = ReplyTracker::Applied;
+
+TEST(ProtocolReplyTracker, Version1SamplesSayNothingAboutTheCommandInEffect) {
+    ReplyTracker tracker;
+    tracker.start(1);  // version 1
+    tracker.command_sent(1);
+    EncoderSample s = reply(1, 1, 1);
+    s.time_us = 1000;
+    const ReplyTracker::Result r = tracker.check(s);
+    EXPECT_EQ(r.verdict, Verdict::accept);
+    EXPECT_EQ(r.applied, Applied::unsupported);
+}
+
+TEST(ProtocolReplyTracker, Version2AcknowledgementsGiveWhenEachCommandTookEffect) {
+    ReplyTracker tracker;
+    tracker.start(1, kProtocolVersion2);
+    EXPECT_EQ(tracker.version(), kProtocolVersion2);
+    // Before any command: nothing in effect.
+    ReplyTracker::Result r = tracker.check(reply2(0, 0, 5000, kAppliedLagNone, kAppliedAgeUnknown));
+    EXPECT_EQ(r.verdict, Verdict::accept);
+    EXPECT_EQ(r.applied, Applied::none);
+    // A device 1.5 periods behind: the answer to command 1 names none yet, that to command 2
+    // names command 1 (in effect 500 us), and so on.
+    tracker.command_sent(1);
+    r = tracker.check(reply2(1, 1, 6000, kAppliedLagNone, kAppliedAgeUnknown));
+    EXPECT_EQ(r.applied, Applied::none);
+    for (std::uint32_t n = 2; n <= 5; ++n) {
+        tracker.command_sent(n);
+        r = tracker.check(reply2(n, n, 5000 + 1000 * n, 1, 500));
+        EXPECT_EQ(r.verdict, Verdict::accept);
+        ASSERT_EQ(r.applied, Applied::reported) << n;
+        EXPECT_EQ(r.applied_sequence, n - 1);
+        EXPECT_EQ(r.applied_time_us, 4500u + 1000 * n);
+    }
+    // The same command named again (a poll): the same moment is fine.
+    r = tracker.check(reply2(5, 6, 10'200, 1, 700));
+    EXPECT_EQ(r.applied, Applied::reported);
+    EXPECT_EQ(r.applied_sequence, 4u);
+    EXPECT_EQ(r.applied_time_us, 9500u);
+    // Too long ago to say: none, not bad.
+    r = tracker.check(reply2(5, 7, 80'000, 1, kAppliedAgeUnknown));
+    EXPECT_EQ(r.applied, Applied::none);
+    EXPECT_EQ(tracker.counters().applied_reported, 5u);  // 4 answers and the poll
+    EXPECT_EQ(tracker.counters().applied_bad_command + tracker.counters().applied_bad_time, 0u);
+}
+
+TEST(ProtocolReplyTracker, BadAcknowledgementsAreCountedAndNotUsedButTheSampleIs) {
+    ReplyTracker tracker;
+    tracker.start(1, kProtocolVersion2);
+    for (std::uint32_t n = 1; n <= 3; ++n) {
+        tracker.command_sent(n);
+        ASSERT_EQ(tracker.check(reply2(n, n, 1000 * n, 0, 0)).applied, Applied::reported);
+    }
+    tracker.command_sent(4);
+    // A command never sent: four sent, so a lag of 4 names command 0.
+    ReplyTracker::Result r = tracker.check(reply2(4, 4, 4000, 4, 0));
+    EXPECT_EQ(r.verdict, Verdict::accept);  // the counts are as good as any
+    EXPECT_EQ(r.applied, Applied::bad_command);
+    // Command 2, older than command 3 named before.
+    EXPECT_EQ(tracker.check(reply2(4, 5, 4000, 2, 0)).applied, Applied::bad_command);
+    // "Nothing in effect" after command 3 was.
+    EXPECT_EQ(tracker.check(reply2(4, 6, 4000, kAppliedLagNone, kAppliedAgeUnknown)).applied,
+              Applied::bad_command);
+    // The device clock going backwards (the last sound sample was at 3000 us).
+    EXPECT_EQ(tracker.check(reply2(4, 7, 2999, 0, 0)).applied, Applied::bad_time);
+    // Command 3 took effect at 3000 us: it cannot have done so at 2500 us as well ...
+    EXPECT_EQ(tracker.check(reply2(4, 8, 4000, 1, 1500)).applied, Applied::bad_time);
+    // ... and command 4 not before command 3.
+    EXPECT_EQ(tracker.check(reply2(4, 9, 4000, 0, 1100)).applied, Applied::bad_time);
+    // What is sound is still used: command 4 at 3900 us.
+    r = tracker.check(reply2(4, 10, 4000, 0, 100));
+    EXPECT_EQ(r.applied, Applied::reported);
+    EXPECT_EQ(r.applied_sequence, 4u);
+    EXPECT_EQ(r.applied_time_us, 3900u);
+    EXPECT_EQ(tracker.counters().accepted, 10u);
+    EXPECT_EQ(tracker.counters().applied_bad_command, 3u);
+    EXPECT_EQ(tracker.counters().applied_bad_time, 3u);
+    EXPECT_EQ(tracker.counters().applied_reported, 4u);
+}
+
+TEST(ProtocolReplyTracker, AnAcknowledgementBeforeAnyCommandIsBad) {
+    ReplyTracker tracker;
+    tracker.start(1, kProtocolVersion2);
+    EXPECT_EQ(tracker.check(reply2(0, 0, 10, 0, 0)).applied, Applied::bad_command);
+}
+
 TEST(ProtocolReplyTracker, SerialNumberCheck) {
     Identity identity;
     ASSERT_TRUE(identity.set_serial_number("HD3-000042"));

@@ -195,6 +195,88 @@ TEST(ProtocolMessages, SampleRoundTripEveryAxisCount) {
     EXPECT_EQ(encoded(a_sample(3)).size(), 60u);  // the largest frame
 }
 
+TEST(ProtocolMessages, Version2SampleNamesTheCommandInEffect) {
+    for (int axes = 1; axes <= 3; ++axes) {
+        EncoderSample m = a_sample(axes);
+        m.version = kProtocolVersion2;
+        m.applied_lag = 1;
+        m.applied_age_us = 500;
+        Bytes frame = round_trip(m, 8 + sample_payload_size(axes) + 4);
+        EXPECT_EQ(frame[1], std::byte{2});  // the header says version 2
+        EXPECT_EQ(wire::load_u8(frame, 29), 1);
+        EXPECT_EQ(wire::load_u16(frame, 30), 500u);
+        EXPECT_EQ(m.applied_sequence(), 4u);  // command 5 answered, command 4 in effect
+        // Boundaries: the largest lag and age, an age equal to the clock, nothing named.
+        m.applied_lag = kMaxAppliedLag;
+        m.applied_age_us = kAppliedAgeUnknown - 1;
+        m.time_us = kAppliedAgeUnknown - 1;
+        frame = round_trip(m, 8 + sample_payload_size(axes) + 4);
+        EXPECT_EQ(wire::load_u8(frame, 29), 0xFE);
+        m.applied_age_us = kAppliedAgeUnknown;  // named, but too long ago to say
+        round_trip(m, 8 + sample_payload_size(axes) + 4);
+        m.applied_lag = kAppliedLagNone;
+        frame = round_trip(m, 8 + sample_payload_size(axes) + 4);
+        EXPECT_EQ(wire::load_u8(frame, 29), 0xFF);
+        EXPECT_EQ(wire::load_u16(frame, 30), 0xFFFFu);
+        EXPECT_FALSE(m.names_applied());
+    }
+    // The applied command wraps with the sequences.
+    EncoderSample m = a_sample(1);
+    m.version = kProtocolVersion2;
+    m.command_sequence = 2;
+    m.applied_lag = 3;
+    m.applied_age_us = 0;
+    EXPECT_EQ(m.applied_sequence(), 0xFFFFFFFFu);
+    round_trip(m, 44);
+    // Version 1 has no such fields: its struct says "nothing", its bytes are zero.
+    EncoderSample v1 = a_sample(1);
+    const Bytes frame = round_trip(v1, 44);
+    EXPECT_EQ(frame[1], std::byte{1});
+    EXPECT_EQ(wire::load_u8(frame, 29), 0);
+    EXPECT_EQ(wire::load_u16(frame, 30), 0u);
+    EncoderSample decoded;
+    ASSERT_EQ(decode(frame, decoded), Error::none);
+    EXPECT_EQ(decoded.applied_lag, kAppliedLagNone);
+    EXPECT_EQ(decoded.applied_age_us, kAppliedAgeUnknown);
+}
+
+TEST(ProtocolMessages, EveryVersionedMessageRoundTripsInVersion2) {
+    // The layouts do not change; the header carries the session's version.
+    Identity identity = an_identity();
+    identity.version = kProtocolVersion2;
+    EXPECT_EQ(round_trip(identity, 56)[1], std::byte{2});
+    Configure configure;
+    configure.session = 3;
+    configure.version = kProtocolVersion2;
+    EXPECT_EQ(round_trip(configure, 16)[1], std::byte{2});
+    ConfigureAck ack;
+    ack.session = 3;
+    ack.version = kProtocolVersion2;
+    EXPECT_EQ(round_trip(ack, 16)[1], std::byte{2});
+    ForceCommand command = a_command(3);
+    command.version = kProtocolVersion2;
+    EXPECT_EQ(round_trip(command, 32)[1], std::byte{2});
+    Poll poll;
+    poll.version = kProtocolVersion2;
+    EXPECT_EQ(round_trip(poll, 12)[1], std::byte{2});
+    Bye bye;
+    bye.version = kProtocolVersion2;
+    EXPECT_EQ(round_trip(bye, 12)[1], std::byte{2});
+    ByeAck bye_ack;
+    bye_ack.version = kProtocolVersion2;
+    EXPECT_EQ(round_trip(bye_ack, 12)[1], std::byte{2});
+    // A version-2 command frame is the version-1 frame but for the version byte (and CRC).
+    const Bytes v2 = encoded(command);
+    command.version = kProtocolVersion1;
+    const Bytes v1 = encoded(command);
+    ASSERT_EQ(v1.size(), v2.size());
+    for (std::size_t i = 0; i + kCrcSize < v1.size(); ++i) {
+        if (i != kOffsetVersion) {
+            EXPECT_EQ(v1[i], v2[i]) << i;
+        }
+    }
+}
+
 TEST(ProtocolMessages, EmptyMessagesRoundTrip) {
     Poll p;
     p.session = 77;
@@ -277,6 +359,32 @@ TEST(ProtocolMessages, EncoderRefusesWhatTheDecoderWouldRefuse) {
     sample = a_sample(2);
     sample.faults = 0x0100;  // reserved
     EXPECT_EQ(encode(sample, out).error, Error::bad_field);
+
+    // Version 1 cannot name an applied command; version 2 names none without an age, and
+    // no command took effect before the device's clock started.
+    sample = a_sample(2);
+    sample.applied_lag = 0;
+    EXPECT_EQ(encode(sample, out).error, Error::bad_field);
+    sample = a_sample(2);
+    sample.applied_age_us = 0;
+    EXPECT_EQ(encode(sample, out).error, Error::bad_field);
+    sample = a_sample(2);
+    sample.version = kProtocolVersion2;
+    sample.applied_age_us = 10;  // lag: none
+    EXPECT_EQ(encode(sample, out).error, Error::bad_field);
+    sample.applied_lag = 0;
+    sample.time_us = 9;
+    EXPECT_EQ(encode(sample, out).error, Error::bad_field);
+    sample.time_us = 10;
+    EXPECT_EQ(encode(sample, out).error, Error::none);
+    // A version this codec does not speak.
+    for (const std::uint8_t version : {0, 3, 255}) {
+        sample.version = version;
+        EXPECT_EQ(encode(sample, out).error, Error::bad_version) << int{version};
+        ForceCommand c = a_command(1);
+        c.version = version;
+        EXPECT_EQ(encode(c, out).error, Error::bad_version) << int{version};
+    }
 
     Configure configure;
     configure.watchdog_timeout_us = 0;
@@ -407,6 +515,28 @@ TEST(ProtocolMessages, BadFieldForEveryFieldRule) {
     EXPECT_EQ(decode(edited(sample, 28, 1), m), Error::bad_field);     // axes vs payload size
     EXPECT_EQ(decode(edited(sample, 29, 1), m), Error::bad_field);     // reserved
     EXPECT_EQ(decode(edited(sample, 31, 1), m), Error::bad_field);     // reserved
+
+    // Version 2's applied_lag and applied_age_us (frame 29, 30..31).
+    EncoderSample v2 = a_sample(2);
+    v2.version = kProtocolVersion2;
+    v2.applied_lag = 0;
+    v2.applied_age_us = 500;
+    const Bytes named = encoded(v2);
+    EXPECT_EQ(decode(edited(named, 29, 0xFE), m), Error::none);
+    EXPECT_EQ(decode(edited(named, 29, 0xFF), m), Error::bad_field);  // none, with an age
+    Bytes old_age = named;  // took effect before the clock started: age > time_us
+    wire::store_u16(old_age, 30, 0xFFFE);
+    wire::store_u64(old_age, 16, 0xFFFD);
+    fix_crc(old_age);
+    EXPECT_EQ(decode(old_age, m), Error::bad_field);
+    wire::store_u64(old_age, 16, 0xFFFE);
+    fix_crc(old_age);
+    EXPECT_EQ(decode(old_age, m), Error::none);
+    Bytes unknown_age = named;  // 0xFFFF: unknown, whatever the clock says
+    wire::store_u16(unknown_age, 30, 0xFFFF);
+    wire::store_u64(unknown_age, 16, 3);
+    fix_crc(unknown_age);
+    EXPECT_EQ(decode(unknown_age, m), Error::none);
 
     ErrorReport report;
     report.session = 1;

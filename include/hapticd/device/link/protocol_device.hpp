@@ -11,6 +11,12 @@
 //   the deadline is IoResult::timeout with kStatusDropped (the servo latches read_timeout
 //   after [safety] read_timeouts_allowed of them and zeroes force in that tick).
 //
+// Versions: the hello offers 1..2; the device's identity picks one and every later frame of
+// the session is in it. In version 2 each sample says which command is in effect and since
+// when; read() passes that on as Sample::applied_write (the write() call it came from) and
+// Sample::applied_time_s, after ReplyTracker's checks (a command never sent, times going
+// backwards: AppliedReport::bad_command / bad_time, counted, never used).
+//
 // Disconnects: when the link reports the device gone, read() and write() return
 // IoResult::disconnected (the servo latches device_lost and zeroes force) and, with
 // `reconnect = true`, a background thread closes the link and reopens it every
@@ -65,7 +71,10 @@ struct ProtocolCounters {
     std::uint64_t device_errors = 0;   ///< error messages from the device
     std::uint64_t disconnects = 0;
     std::uint64_t reconnects = 0;
-    std::uint64_t refused_devices = 0;  ///< reconnect attempts answered by another device
+    std::uint64_t refused_devices = 0;      ///< reconnect attempts answered by another device
+    std::uint64_t applied_reported = 0;     ///< version-2 acknowledgements passed on
+    std::uint64_t applied_bad_command = 0;  ///< ... naming a command never sent
+    std::uint64_t applied_bad_time = 0;     ///< ... with device times going backwards
 };
 
 class ProtocolDevice final : public Device {
@@ -98,6 +107,9 @@ class ProtocolDevice final : public Device {
     void reconnect_loop();
     bool adopt_if_ready() noexcept;
     IoResult lost() noexcept;
+    /// Sample::applied* from the tracker's verdict on a version-2 acknowledgement.
+    void pass_on_applied(const protocol::ReplyTracker::Result& verdict,
+                         Sample& sample) const noexcept;
     IoResult send_frame(std::span<const std::byte> frame) noexcept;
     std::int64_t reply_deadline_ns() const noexcept;
 
@@ -118,7 +130,12 @@ class ProtocolDevice final : public Device {
     // Tick state (the tick thread, or the reconnect thread while it owns the link).
     protocol::ReplyTracker tracker_;
     std::uint32_t session_ = 0;
+    std::uint8_t version_ = protocol::kProtocolVersion1;  ///< the session's
     std::uint32_t command_sequence_ = 0;
+    /// write() calls since open(); and, by command sequence modulo the ring's size, the call
+    /// each command of the session was sent by (enough for any applied_lag).
+    std::uint64_t write_calls_ = 0;
+    std::array<std::uint64_t, 256> write_of_sequence_{};
     bool reply_outstanding_ = false;  ///< a command or poll was sent and not yet answered
     bool device_faulted_ = false;     ///< the last sample reported latched device faults
     std::int64_t reply_timeout_ns_ = 0;

@@ -5,7 +5,16 @@
 //
 // Time is the simulated device's lockstep clock: virtual, advanced one period by each command
 // (the command is held for that period, ZOH) and by advance_period() (a period in which no
-// command arrived; the last force is still held). The watchdog counts in that time base.
+// command arrived; the last force is still held). The watchdog counts in that time base. It
+// stands still between requests: in its time a command arrives at the instant the sample it
+// answers was latched, however long the host took.
+//
+// Processing delay: EmulatorConfig::sim.delay_s (the simulated device's loop delay) is the
+// time from a command's arrival to its force taking effect; 0 applies it on arrival. It may
+// exceed a period: the device still answers every command at once, and in protocol version 2
+// each sample says which command is in effect and since when (applied_lag, applied_age_us),
+// read from the simulated device's own record of what landed when. A version-1 session says
+// nothing of it (and its command_sequence then names a command whose force may not act yet).
 //
 // There is no I/O inside: handle() takes one request frame and writes the reply frames into a
 // buffer, so the same object serves
@@ -40,7 +49,9 @@ struct EmulatorConfig {
     sim::SimConfig sim;
     std::string serial_number = "EMU-0001";  ///< 1..16 printable ASCII characters
     std::uint32_t firmware_version = 0x00010000;
-    std::uint8_t min_version = kMinVersion;  ///< versions it speaks (tests may narrow them)
+    /// Versions it speaks (tests narrow them: max_version = 1 is a firmware from before the
+    /// applied_* fields). It answers a hello with the highest version in common.
+    std::uint8_t min_version = kMinVersion;
     std::uint8_t max_version = kMaxVersion;
     std::uint32_t default_watchdog_timeout_us = kDefaultWatchdogTimeoutUs;  ///< section 5.4
     std::uint32_t max_watchdog_timeout_us = kMaxWatchdogTimeoutUs;          ///< <= 1 s
@@ -56,6 +67,11 @@ struct EmulatorFaults {
     std::uint32_t delay = 0;          ///< next n replies: held back, sent before the next one
     std::uint32_t stall = 0;          ///< next n requests: ignored (a period passes for each)
     std::uint16_t device_faults = 0;  ///< fault bits raised (latched) at the next request
+    // Version 2's acknowledgements, wrong in the ways a host must count and survive:
+    std::uint32_t applied_unsent = 0;    ///< next n samples: name a command never sent
+    std::uint32_t clock_back_us = 0;     ///< next sample: time_us this much in the past
+    std::uint32_t applied_early_us = 0;  ///< next sample: its command took effect this much
+                                         ///< earlier than it did (the moment moves back)
 };
 
 class DeviceEmulator {
@@ -109,6 +125,8 @@ class DeviceEmulator {
     std::uint64_t time_us() const noexcept;
     bool session_open() const noexcept { return session_open_; }
     std::uint32_t session() const noexcept { return session_; }
+    /// The version the current (or last) session speaks.
+    std::uint8_t version() const noexcept { return version_; }
     std::uint32_t watchdog_timeout_us() const noexcept { return watchdog_timeout_us_; }
     std::uint16_t latched_faults() const noexcept { return latched_faults_; }
     /// The force the device holds from now on, N per axis (zero when disabled or faulted).
@@ -137,6 +155,10 @@ class DeviceEmulator {
                     Outbox& outbox) noexcept;
     /// Reads the simulated device and sends a sample with these extra status bits.
     void send_sample(std::uint16_t status, Outbox& outbox) noexcept;
+    /// Version 2: applied_lag and applied_age_us from what the simulated device says landed.
+    void fill_applied(const servo::Sample& sample, EncoderSample& message) const noexcept;
+    /// The fault knobs on a sample's time and acknowledgement.
+    void damage_sample(EncoderSample& message) noexcept;
     /// Encodes a reply, applies the knobs, and puts it in the outbox.
     template <typename M>
     void send(M message, Outbox& outbox) noexcept;
@@ -158,6 +180,12 @@ class DeviceEmulator {
 
     bool session_open_ = false;
     std::uint32_t session_ = 0;
+    std::uint8_t version_ = kProtocolVersion1;  ///< the session's (the last hello's)
+    std::uint32_t session_epoch_ = 0;           ///< +1 per session
+    /// What the device writes into the simulated device each period: (session_epoch_ << 32)
+    /// | the sequence of the command it holds; 0 before the session's first command.
+    std::uint64_t current_tag_ = 0;
+    std::uint64_t commands_in_session_ = 0;
     std::uint32_t watchdog_timeout_us_ = 0;
     servo::Command held_;        ///< what the device outputs (ZOH)
     bool command_seen_ = false;  ///< a command arrived in this session

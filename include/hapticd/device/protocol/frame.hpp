@@ -26,12 +26,23 @@
 namespace hapticd::device::protocol {
 
 inline constexpr std::uint8_t kMagic = 0x48;  ///< 'H'
-/// The protocol versions this codec speaks. Version 1 is the only one so far.
-inline constexpr std::uint8_t kProtocolVersion = 1;
-inline constexpr std::uint8_t kMinVersion = 1;
-inline constexpr std::uint8_t kMaxVersion = 1;
+/// The protocol versions this codec speaks (docs/protocol.md 3.2). Version 2 is version 1
+/// with the sample's reserved bytes used to say which command is in effect and since when
+/// (applied_lag, applied_age_us: section 4.6), so that the host can measure the loop delay;
+/// every other layout is the same.
+inline constexpr std::uint8_t kProtocolVersion1 = 1;
+inline constexpr std::uint8_t kProtocolVersion2 = 2;
+inline constexpr std::uint8_t kMinVersion = kProtocolVersion1;
+inline constexpr std::uint8_t kMaxVersion = kProtocolVersion2;
+/// The version of a message struct that does not say otherwise.
+inline constexpr std::uint8_t kProtocolVersion = kProtocolVersion1;
 /// The header version of hello and error frames, in every protocol version (section 3.2).
 inline constexpr std::uint8_t kFrozenVersion = 1;
+
+/// A version this codec speaks.
+constexpr bool is_spoken_version(std::uint8_t version) noexcept {
+    return version >= kMinVersion && version <= kMaxVersion;
+}
 
 inline constexpr std::size_t kHeaderSize = 8;
 inline constexpr std::size_t kCrcSize = 4;

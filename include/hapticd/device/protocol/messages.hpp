@@ -1,5 +1,10 @@
-// The ten messages of protocol version 1, their encoders and their decoders
+// The ten messages of protocol versions 1 and 2, their encoders and their decoders
 // (docs/protocol.md section 4; each struct names its section).
+//
+// Every message but the frozen hello and error carries `version`: the header version it is
+// laid out in, which is the session's negotiated version (section 3.2). The layouts of the two
+// versions are the same except the sample's, whose reserved bytes become applied_lag and
+// applied_age_us in version 2 (section 4.6).
 //
 // Encoders write one whole frame (header, payload, CRC) into the caller's buffer and return
 // its size; decoders check one whole frame and fill the struct. Neither allocates nor throws.
@@ -68,6 +73,15 @@ inline constexpr std::uint16_t kDeviceFaultDefinedMask = 0x00FFu;
 inline constexpr std::uint16_t kDeviceFaultAllowedMask =
     kDeviceFaultDefinedMask | kDeviceFaultVendorMask;
 
+/// sample.applied_lag (version 2): no command of this session is in effect yet, or the one in
+/// effect is more than kMaxAppliedLag commands behind command_sequence. applied_age_us is then
+/// kAppliedAgeUnknown. Also what a version-1 sample says (it has no such fields).
+inline constexpr std::uint8_t kAppliedLagNone = 0xFF;
+inline constexpr std::uint8_t kMaxAppliedLag = 0xFE;
+/// sample.applied_age_us (version 2): the command in effect took effect kAppliedAgeUnknown us
+/// (65.535 ms) or more before time_us, or applied_lag is kAppliedLagNone.
+inline constexpr std::uint16_t kAppliedAgeUnknown = 0xFFFF;
+
 /// 4.1 hello, host -> device. Opens a session; header version is always 1.
 struct Hello {
     std::uint32_t session = 0;     ///< the new session id, != 0, chosen at random by the host
@@ -77,7 +91,7 @@ struct Hello {
     bool operator==(const Hello&) const = default;
 };
 
-/// 4.2 identity, device -> host: the answer to hello, in the chosen version.
+/// 4.2 identity, device -> host: the answer to hello, in the chosen version (`version`).
 struct Identity {
     std::uint32_t session = 0;              ///< the hello's session
     std::uint8_t axes = 1;                  ///< 1..3
@@ -95,6 +109,8 @@ struct Identity {
     /// printable ASCII.
     bool set_serial_number(std::string_view text) noexcept;
 
+    std::uint8_t version = kProtocolVersion;  ///< header version: the session's (1 or 2)
+
     bool operator==(const Identity&) const = default;
 };
 
@@ -103,6 +119,8 @@ struct Configure {
     std::uint32_t session = 0;
     std::uint32_t watchdog_timeout_us = 1;  ///< > 0; the device's range: section 5.4
 
+    std::uint8_t version = kProtocolVersion;  ///< header version: the session's (1 or 2)
+
     bool operator==(const Configure&) const = default;
 };
 
@@ -110,6 +128,8 @@ struct Configure {
 struct ConfigureAck {
     std::uint32_t session = 0;
     std::uint32_t watchdog_timeout_us = 1;
+
+    std::uint8_t version = kProtocolVersion;  ///< header version: the session's (1 or 2)
 
     bool operator==(const ConfigureAck&) const = default;
 };
@@ -124,19 +144,37 @@ struct ForceCommand {
 
     bool enable() const noexcept { return (flags & kCommandEnable) != 0u; }
 
+    std::uint8_t version = kProtocolVersion;  ///< header version: the session's (1 or 2)
+
     bool operator==(const ForceCommand&) const = default;
 };
 
 /// 4.6 sample, device -> host: the answer to command and poll.
 struct EncoderSample {
     std::uint32_t session = 0;
-    std::uint32_t command_sequence = 0;  ///< sequence of the last command applied (0: none)
-    std::uint32_t sample_sequence = 0;   ///< +1 per sample produced; wraps modulo 2^32
-    std::uint64_t time_us = 0;           ///< device clock when the counts were latched, us
-    std::uint16_t status = 0;            ///< SampleStatus
-    std::uint16_t faults = 0;            ///< SampleFault
-    std::uint8_t axes = 1;               ///< 1..3
+    /// The command this sample answers: the last one received in this session (0: none).
+    /// Version 1 also promises that its force is in effect (section 5.2); version 2 says
+    /// which one is in applied_lag.
+    std::uint32_t command_sequence = 0;
+    std::uint32_t sample_sequence = 0;  ///< +1 per sample produced; wraps modulo 2^32
+    std::uint64_t time_us = 0;          ///< device clock when the counts were latched, us
+    std::uint16_t status = 0;           ///< SampleStatus
+    std::uint16_t faults = 0;           ///< SampleFault
+    std::uint8_t axes = 1;              ///< 1..3
     std::array<std::int64_t, kMaxProtocolAxes> counts{};  ///< [axes..] unused (zero)
+    /// Version 2: the command in effect at time_us is command_sequence - applied_lag (mod
+    /// 2^32), 0..kMaxAppliedLag; kAppliedLagNone: none (section 4.6). Version 1: always
+    /// kAppliedLagNone (the bytes are reserved).
+    std::uint8_t applied_lag = kAppliedLagNone;
+    /// Version 2: it took effect applied_age_us before time_us, 0..0xFFFE us and <= time_us;
+    /// kAppliedAgeUnknown: longer ago, or no command (section 4.6). Version 1: always
+    /// kAppliedAgeUnknown.
+    std::uint16_t applied_age_us = kAppliedAgeUnknown;
+    std::uint8_t version = kProtocolVersion;  ///< header version: the session's (1 or 2)
+
+    /// Version 2 and a command named: the sequence of the command in effect.
+    bool names_applied() const noexcept { return applied_lag != kAppliedLagNone; }
+    std::uint32_t applied_sequence() const noexcept { return command_sequence - applied_lag; }
 
     bool operator==(const EncoderSample&) const = default;
 };
@@ -145,6 +183,8 @@ struct EncoderSample {
 struct Poll {
     std::uint32_t session = 0;
 
+    std::uint8_t version = kProtocolVersion;  ///< header version: the session's (1 or 2)
+
     bool operator==(const Poll&) const = default;
 };
 
@@ -152,12 +192,16 @@ struct Poll {
 struct Bye {
     std::uint32_t session = 0;
 
+    std::uint8_t version = kProtocolVersion;  ///< header version: the session's (1 or 2)
+
     bool operator==(const Bye&) const = default;
 };
 
 /// 4.9 bye_ack, device -> host.
 struct ByeAck {
     std::uint32_t session = 0;
+
+    std::uint8_t version = kProtocolVersion;  ///< header version: the session's (1 or 2)
 
     bool operator==(const ByeAck&) const = default;
 };
@@ -195,8 +239,10 @@ MessageType type_of(const Message& message) noexcept;
 std::uint32_t session_of(const Message& message) noexcept;
 
 // Encoders: one whole frame into `out` (at least the frame's size; kMaxFrameSize always
-// suffices). Error::bad_field if a field is outside its range (the frame would not decode),
-// Error::no_space if `out` is too small; nothing useful is in `out` then.
+// suffices). Error::bad_version if `version` is not one this codec speaks, Error::bad_field if
+// a field is outside its range (the frame would not decode; a version-1 sample that names an
+// applied command, for instance), Error::no_space if `out` is too small; nothing useful is in
+// `out` then.
 Encoded encode(const Hello& message, std::span<std::byte> out) noexcept;
 Encoded encode(const Identity& message, std::span<std::byte> out) noexcept;
 Encoded encode(const Configure& message, std::span<std::byte> out) noexcept;

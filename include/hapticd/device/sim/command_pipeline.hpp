@@ -49,6 +49,7 @@ struct PendingCommand {
     /// it); realtime, the device time in units of T 2^-kFractionBits since open().
     std::uint64_t due = 0;
     std::array<double, kMaxAxes> force_n{};  ///< after clamping; zero for a disabled command
+    std::uint64_t tag = 0;  ///< the writer's name for it (SimDevice: the write() call)
 };
 
 class CommandPipeline {
@@ -65,7 +66,8 @@ class CommandPipeline {
     /// the ring is full (a host that writes more than capacity() commands within one loop
     /// delay), the newest command in flight is replaced by this one, which lands at its own
     /// time: like a device's command mailbox that keeps the latest value.
-    void push(std::uint64_t due, const std::array<double, kMaxAxes>& force_n) noexcept;
+    void push(std::uint64_t due, const std::array<double, kMaxAxes>& force_n,
+              std::uint64_t tag = 0) noexcept;
 
     /// The oldest command in flight if it lands at or before `now`, else nullptr.
     const PendingCommand* due(std::uint64_t now) const noexcept;

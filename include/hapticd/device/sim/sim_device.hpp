@@ -25,6 +25,11 @@
 // returns IoResult::error. After a disconnect, and after close(), the force is zero at once
 // and nothing in flight ever lands: the device's own watchdog.
 //
+// What took effect when: every sample reports the command in effect (Sample::applied_write,
+// the write() call it came from) and the device time it landed (Sample::applied_time_s), so
+// that the link diagnosis measures [device.sim] delay as it would a device's. It samples at
+// read() (DeviceInfo::samples_at_read).
+//
 // Real-time: read() and write() do not allocate, lock, log or throw. The realtime clock's late
 // replies sleep (clock_nanosleep) in read(), as a late device would keep the caller waiting.
 #pragma once
@@ -51,6 +56,11 @@ class SimDevice final : public Device {
     IoResult read(Sample& sample) noexcept override;
     IoResult write(const Command& command) noexcept override;
     void close() noexcept override;
+    /// write() under the caller's own name for the command, `tag` != 0 (DeviceEmulator: its
+    /// session and sequence), which Sample::applied_write then reports instead of the call's
+    /// count. A command landing with the tag of the one in effect (the same command written
+    /// again, as a device holds it period after period) keeps the moment the first took effect.
+    IoResult write_tagged(const Command& command, std::uint64_t tag) noexcept;
 
     // Inspection, for tests and benchmarks (not part of Device).
     const SimConfig& config() const noexcept { return config_; }
@@ -76,6 +86,8 @@ class SimDevice final : public Device {
     void step_lockstep_period() noexcept;
     /// Zero force at once, nothing in flight: the watchdog, close(), a refused command.
     void cut_force() noexcept;
+    /// The command named `tag` acts from `time_s` on (unless it already did).
+    void took_effect(std::uint64_t tag, double time_s) noexcept;
     /// Realtime: the current CLOCK_MONOTONIC time in units since open.
     std::uint64_t now_units() const noexcept;
     double units_to_s(std::uint64_t units) const noexcept;
@@ -93,6 +105,9 @@ class SimDevice final : public Device {
     std::int64_t open_time_ns_ = 0;        ///< realtime: CLOCK_MONOTONIC at open()
     std::uint64_t samples_produced_ = 0;   ///< realtime: sequence of the next sample
     double previous_sample_time_s_ = 0.0;  ///< realtime: device time of the last sample
+    std::uint64_t writes_ = 0;             ///< write() calls since open()
+    std::uint64_t applied_tag_ = 0;        ///< the command in effect (0: none yet)
+    double applied_time_s_ = 0.0;          ///< ... since this device time
     bool open_ = false;
 };
 
