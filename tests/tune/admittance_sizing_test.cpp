@@ -1,0 +1,123 @@
+// The admittance display's models held against the exact admittance loop (issue 9): where
+// (37) is optimistic, the passive model's resonance count reached by alias-tuned operators,
+// and the exact sizing never optimistic and tight.
+#include "hapticd/tune/admittance_sizing.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <string>
+
+#include "hapticd/theory/admittance_passive.hpp"
+#include "hapticd/tune/operator_synthesis.hpp"
+
+namespace hapticd::tune {
+namespace {
+
+using theory::DeviceModel;
+using theory::HoldModel;
+using theory::MassDamperCoupling;
+using theory::PiVelocityLoop;
+
+const DeviceModel kArm{2.0, 5.0};  // the heavy admittance-type manipulator of the theory tests
+constexpr double kRateHz = 1000.0;
+
+AdmittanceSizing size_37(const DeviceModel& device, const PiVelocityLoop& loop, HoldModel model) {
+    AdmittanceSizingRequest request;
+    request.device = device;
+    request.loop = loop;
+    request.rate_hz = kRateHz;
+    request.model = model;
+    request.coupling_damping_n_s_per_m = INFINITY;  // a pure-mass coupling
+    return size_admittance_coupling(request);
+}
+
+// "Where each fails": the coupling mass (37) gives, under either hold term, is unstable in
+// the exact loop, and the operator that shows it is named (a steel grip resonating with the
+// handle at Nyquist, in free space: section IV's worst case, with the aliases the paper
+// leaves out).
+TEST(AdmittanceModels, ThirtySevenIsOptimisticAgainstTheExactLoop) {
+    for (const HoldModel model : {HoldModel::paper, HoldModel::encoder}) {
+        const AdmittanceSizing s = size_37(kArm, {2.0, 0.0}, model);
+        const AdmittanceExactCheck exact =
+            check_exact_admittance({kArm, {2.0, 0.0}, s.coupling, kRateHz});
+        EXPECT_FALSE(exact.stable) << theory::to_string(model) << " m_c = " << s.coupling.mass_kg;
+        EXPECT_GT(exact.worst_spectral_radius, 1.0 + 1e-6);
+        EXPECT_FALSE(exact.worst_operator.describe().empty());
+        // The exact limit is heavier than (37)'s answer.
+        ExactAdmittanceSizingRequest request{kArm, {2.0, 0.0}, kRateHz};
+        EXPECT_GT(size_admittance_coupling_exact(request).limit_mass_kg, s.coupling.mass_kg);
+    }
+}
+
+// The passive model's count of resonant aliases is what the exact loop needs: the
+// alias-tuned operator with that many free-handle modes at Nyquist (two signed aliases per
+// mode there) makes free space unstable, one mode fewer does not.
+TEST(AdmittanceModels, TheResonanceCountIsReachedByAliasTunedOperators) {
+    for (const double mass : {10.0, 30.0}) {
+        const AdmittanceDesign d{kArm, {2.0, 0.0}, {mass, INFINITY}, kRateHz};
+        const double signed_aliases =
+            theory::free_space_alias_reach(kArm, d.loop, d.coupling, std::numbers::pi,
+                                           1.0 / kRateHz, 0)
+                .resonant_aliases_needed;
+        const int modes = static_cast<int>(std::ceil(signed_aliases / 2.0));
+        ASSERT_GE(modes, 2) << mass;
+        const auto radius = [&](int n) {
+            return admittance_closed_loop_poles(
+                       d, alias_tuned_operator(kArm, std::numbers::pi, kRateHz, n, 0.0),
+                       AdmittanceEnvironment::free_space())
+                .spectral_radius;
+        };
+        EXPECT_GT(radius(modes), 1.0 + 1e-7) << "m_c " << mass << ", " << modes << " modes";
+        EXPECT_LE(radius(modes - 1), 1.0 + kMarginalTolerance)
+            << "m_c " << mass << ", " << modes - 1 << " modes";
+    }
+}
+
+// The passive model sizes nothing, and says why with its numbers.
+TEST(AdmittanceModels, ThePassiveVerdictNamesBothConditions) {
+    const PassiveAdmittanceVerdict ok = passive_admittance_verdict(kArm, {2.0, 0.0}, kRateHz, 0.0);
+    EXPECT_TRUE(ok.velocity_loop_passive);
+    EXPECT_DOUBLE_EQ(ok.velocity_loop_damping_needed, 2.0);
+    EXPECT_GT(ok.resonant_aliases_needed, 0.0);
+    EXPECT_NE(ok.explanation.find("every passive operator"), std::string::npos);
+    const PassiveAdmittanceVerdict hot = passive_admittance_verdict(kArm, {8.0, 0.0}, kRateHz, 0.0);
+    EXPECT_FALSE(hot.velocity_loop_passive);
+    EXPECT_NE(hot.explanation.find("b >= 8"), std::string::npos) << hot.explanation;
+}
+
+// Never optimistic on a grid of devices: the sized coupling passes the exact check, and the
+// limit is tight: 3 % lighter the exact loop names an unstable operator, at the limit none.
+struct Grid {
+    DeviceModel device;
+    PiVelocityLoop loop;
+    double coupling_damping;
+    double delay_periods;
+};
+class ExactAdmittanceSizingGrid : public ::testing::TestWithParam<Grid> {};
+INSTANTIATE_TEST_SUITE_P(Devices, ExactAdmittanceSizingGrid,
+                         ::testing::Values(Grid{{2.0, 5.0}, {2.0, 0.0}, INFINITY, 0.0},
+                                           Grid{{2.0, 5.0}, {1.0, 200.0}, 40.0, 0.0},
+                                           Grid{{0.5, 3.0}, {1.0, 0.0}, INFINITY, 1.0},
+                                           Grid{{8.0, 20.0}, {10.0, 1000.0}, INFINITY, 0.0}));
+
+TEST_P(ExactAdmittanceSizingGrid, NeverOptimisticAndTight) {
+    const Grid g = GetParam();
+    ExactAdmittanceSizingRequest request{g.device, g.loop, kRateHz, g.delay_periods,
+                                         g.coupling_damping};
+    const ExactAdmittanceSizing s = size_admittance_coupling_exact(request);
+    EXPECT_TRUE(s.check.stable) << s.check.worst_operator.describe();
+    EXPECT_DOUBLE_EQ(s.coupling.mass_kg, request.safety_factor * s.limit_mass_kg);
+    const auto design = [&](double mass) {
+        return AdmittanceDesign{g.device, g.loop, {mass, g.coupling_damping}, kRateHz,
+                                g.delay_periods};
+    };
+    EXPECT_TRUE(check_exact_admittance(design(s.limit_mass_kg)).stable);
+    const AdmittanceExactCheck lighter = check_exact_admittance(design(s.limit_mass_kg / 1.03));
+    EXPECT_FALSE(lighter.stable);
+    EXPECT_FALSE(lighter.worst_operator.describe().empty());
+}
+
+}  // namespace
+}  // namespace hapticd::tune
