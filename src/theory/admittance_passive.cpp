@@ -1,10 +1,10 @@
 #include "hapticd/theory/admittance_passive.hpp"
 
 #include <algorithm>
-#include <functional>
-#include <vector>
 #include <cmath>
+#include <functional>
 #include <numbers>
+#include <vector>
 
 #include "hapticd/theory/passive_model.hpp"
 
@@ -58,9 +58,9 @@ AliasReach free_space_alias_reach(const DeviceModel& device, const PiVelocityLoo
     for (int k = -kTerms; k <= kTerms; ++k) {
         const double theta_k = theta + 2.0 * std::numbers::pi * k;
         const double s_k = 4.0 * half_sine * half_sine / (theta_k * theta_k);
-        const Complex beta = k_pi * delay *
-                             (y_v * (1.0 - z_inv) * (m / t + b / Complex(0.0, theta_k)) -
-                              z_inv * s_k);
+        const Complex beta =
+            k_pi * delay *
+            (y_v * (1.0 - z_inv) * (m / t + b / Complex(0.0, theta_k)) - z_inv * s_k);
         const double projection = (std::conj(direction) * beta).real();
         defect += std::abs(beta) - projection;
         along_each.push_back(projection);

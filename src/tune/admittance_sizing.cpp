@@ -31,27 +31,49 @@ PassiveAdmittanceVerdict passive_admittance_verdict(
     check_rate(rate_hz);
     check_delay_periods(delay_periods);
     const double period = 1.0 / rate_hz;
-    const theory::MassDamperCoupling c = coupling.value_or(theory::MassDamperCoupling{
-        kHeaviestCouplingPerDeviceMass * device.mass_kg, std::numeric_limits<double>::infinity()});
     PassiveAdmittanceVerdict v;
-    v.velocity_loop_damping_needed = theory::velocity_loop_damping_bound(loop, period, delay_periods);
+    v.velocity_loop_damping_needed =
+        theory::velocity_loop_damping_bound(loop, period, delay_periods);
     v.velocity_loop_passive = device.damping_n_s_per_m > v.velocity_loop_damping_needed;
     // (P2) in free space: the frequency that needs the fewest resonant aliases. A fraction of
     // a period of delay only makes it worse (the shifted hold rotates each alias's weight
     // differently); the whole periods give the form the derivation states.
     const int whole = theory::split_delay(delay_periods).whole_periods;
-    double fewest = std::numeric_limits<double>::infinity();
-    constexpr int kPoints = 256;
-    for (int i = 1; i < kPoints; ++i) {
-        const double theta = std::numbers::pi * i / kPoints;
-        const theory::AliasReach r =
-            theory::free_space_alias_reach(device, loop, c, theta, period, whole);
-        if (r.reach >= 0.0 && r.resonant_aliases_needed < fewest) {
-            fewest = r.resonant_aliases_needed;
-            v.alias_frequency_hz = theory::frequency_hz(theta, period);
+    const auto fewest_for = [&](const theory::MassDamperCoupling& c, double* frequency_hz) {
+        double fewest = std::numeric_limits<double>::infinity();
+        constexpr int kPoints = 256;
+        for (int i = 1; i <= kPoints; ++i) {
+            const double theta = std::numbers::pi * i / kPoints;
+            const theory::AliasReach r =
+                theory::free_space_alias_reach(device, loop, c, theta, period, whole);
+            if (r.reach >= 0.0 && r.resonant_aliases_needed < fewest) {
+                fewest = r.resonant_aliases_needed;
+                *frequency_hz = theory::frequency_hz(theta, period);
+            }
         }
+        return fewest;
+    };
+    const double inf = std::numeric_limits<double>::infinity();
+    std::ostringstream counts;
+    if (coupling) {
+        v.resonant_aliases_needed = fewest_for(*coupling, &v.alias_frequency_hz);
+        counts << " (for m_c = " << coupling->mass_kg << " kg: " << v.resonant_aliases_needed
+               << " resonant aliases of " << v.alias_frequency_hz << " Hz)";
+    } else {
+        // How the count grows with a pure-mass coupling of 1, 10 and 100 device masses.
+        counts << " (with a pure-mass coupling of";
+        for (const double ratio : {1.0, 10.0, 100.0}) {
+            double frequency = 0.0;
+            const double n = fewest_for({ratio * device.mass_kg, inf}, &frequency);
+            if (ratio == 1.0) {
+                v.resonant_aliases_needed = n;
+                v.alias_frequency_hz = frequency;
+            }
+            counts << (ratio == 1.0 ? " " : ", ") << ratio * device.mass_kg << " kg: " << n
+                   << " resonant aliases of " << frequency << " Hz";
+        }
+        counts << ")";
     }
-    v.resonant_aliases_needed = fewest;
     std::ostringstream why;
     why << "no coupling (32) makes this admittance display stable for every passive operator "
            "(the passive model, docs/stability-models.md): ";
@@ -66,10 +88,7 @@ PassiveAdmittanceVerdict passive_admittance_verdict(
            "free-handle resonance alike, so in free space a passive operator with enough "
            "lossless resonances on the aliases of some frequency reaches the unit circle for "
            "every coupling mass and damping";
-    if (std::isfinite(fewest)) {
-        why << " (for m_c = " << c.mass_kg << " kg: about " << std::ceil(fewest)
-            << " resonant aliases of " << v.alias_frequency_hz << " Hz)";
-    }
+    why << counts.str();
     why << ". Size for the operators the exact admittance model checks with --model exact, or "
            "filter the force sensor before it is sampled";
     v.explanation = why.str();
@@ -78,12 +97,13 @@ PassiveAdmittanceVerdict passive_admittance_verdict(
 
 ExactAdmittanceSizing size_admittance_coupling_exact(const ExactAdmittanceSizingRequest& request) {
     const auto start = std::chrono::steady_clock::now();
-    check_positive_or_infinite("coupling damping b_c", request.coupling_damping_n_s_per_m,
-                               "N s/m");
+    check_positive_or_infinite("coupling damping b_c", request.coupling_damping_n_s_per_m, "N s/m");
     check_in_range("safety factor", request.safety_factor, 1.0, 100.0, "");
     const auto design_with = [&](double mass) {
-        return AdmittanceDesign{request.device, request.loop,
-                                {mass, request.coupling_damping_n_s_per_m}, request.rate_hz,
+        return AdmittanceDesign{request.device,
+                                request.loop,
+                                {mass, request.coupling_damping_n_s_per_m},
+                                request.rate_hz,
                                 request.delay_periods};
     };
     const double heaviest = kHeaviestCouplingPerDeviceMass * request.device.mass_kg;
@@ -105,8 +125,8 @@ ExactAdmittanceSizing size_admittance_coupling_exact(const ExactAdmittanceSizing
             why << " with b_c = " << request.coupling_damping_n_s_per_m << " N s/m";
         }
         why << " is stable in the exact admittance model: " << at_heaviest.worst_operator.describe()
-            << " against " << at_heaviest.worst_environment.describe() << " grows by |z| = "
-            << at_heaviest.worst_spectral_radius << " per tick at "
+            << " against " << at_heaviest.worst_environment.describe()
+            << " grows by |z| = " << at_heaviest.worst_spectral_radius << " per tick at "
             << at_heaviest.worst_frequency_hz << " Hz";
         const double needed = theory::velocity_loop_damping_bound(
             request.loop, 1.0 / request.rate_hz, request.delay_periods);
@@ -118,22 +138,36 @@ ExactAdmittanceSizing size_admittance_coupling_exact(const ExactAdmittanceSizing
         }
         throw InfeasibleCoupling(why.str());
     }
-    // Bracket: masses in geometric steps down from the heaviest until one is unstable.
+    // Bracket [lo, hi], lo unstable, hi stable: geometric steps of 4 from the device mass.
+    std::vector<Case> active;
     double hi = heaviest;
     double lo = 0.0;
-    std::vector<Case> active;
-    for (double mass = heaviest / 8.0; mass >= 1e-6 * request.device.mass_kg; mass /= 8.0) {
-        const AdmittanceExactCheck c = full(mass);
-        if (!c.stable) {
+    const double lightest = 1e-6 * request.device.mass_kg;
+    const AdmittanceExactCheck at_device = full(request.device.mass_kg);
+    if (at_device.stable) {
+        hi = request.device.mass_kg;
+        for (double mass = hi / 4.0; mass >= lightest; mass /= 4.0) {
+            const AdmittanceExactCheck c = full(mass);
+            if (!c.stable) {
+                lo = mass;
+                active.push_back({c.worst_operator, c.worst_environment});
+                break;
+            }
+            hi = mass;
+        }
+        if (lo == 0.0) lo = hi;  // stable down to a millionth of the device mass
+    } else {
+        lo = request.device.mass_kg;
+        active.push_back({at_device.worst_operator, at_device.worst_environment});
+        for (double mass = 4.0 * lo; mass < heaviest; mass *= 4.0) {
+            const AdmittanceExactCheck c = full(mass);
+            if (c.stable) {
+                hi = mass;
+                break;
+            }
             lo = mass;
             active.push_back({c.worst_operator, c.worst_environment});
-            break;
         }
-        hi = mass;
-    }
-    if (lo == 0.0) {
-        // Stable down to a millionth of the device mass: the coupling hardly matters.
-        lo = hi;
     }
     const auto active_stable = [&](double mass) {
         for (const Case& c : active) {

@@ -31,8 +31,8 @@ struct SensedPlant {
     VectorXd translation;    ///< 1 on every position state, or empty when the handle is grounded
 };
 
-SensedPlant sense_plant(const theory::DeviceModel& device, const OperatorModel& h,
-                        double period_s, double delay_fraction) {
+SensedPlant sense_plant(const theory::DeviceModel& device, const OperatorModel& h, double period_s,
+                        double delay_fraction) {
     MatrixXd a;
     VectorXd b;
     detail::operator_plant(device, h, a, b);
@@ -154,9 +154,8 @@ MatrixXd closed_loop(const AdmittanceDesign& d, const AdmittanceEnvironment& env
         if (l.env_velocity >= 0) r += (ke * t / 2.0 - 2.0 * me / t) * e(l.env_velocity);
         if (l.env_position >= 0) r += ke * e(l.env_position);
     }
-    const double inv_bc = std::isfinite(d.coupling.damping_n_s_per_m)
-                              ? 1.0 / d.coupling.damping_n_s_per_m
-                              : 0.0;
+    const double inv_bc =
+        std::isfinite(d.coupling.damping_n_s_per_m) ? 1.0 / d.coupling.damping_n_s_per_m : 0.0;
     const double per_mass =
         std::isfinite(d.coupling.mass_kg) ? t / d.coupling.mass_kg : 0.0;  // T/m_c
     const double g = inv_bc + per_mass;
@@ -266,8 +265,9 @@ void check_design(const AdmittanceDesign& d) {
 void check_environment(const AdmittanceEnvironment& env) {
     if (env.kind == Kind::free_space || env.kind == Kind::rigid_wall) {
         if (env.mass_kg != 0.0 || env.stiffness_n_per_m != 0.0 || env.damping_n_s_per_m != 0.0) {
-            throw std::invalid_argument("free space and the rigid wall take no mass, stiffness "
-                                        "or damping: leave them 0");
+            throw std::invalid_argument(
+                "free space and the rigid wall take no mass, stiffness "
+                "or damping: leave them 0");
         }
         return;
     }
@@ -358,7 +358,8 @@ std::vector<AdmittanceEnvironment> default_admittance_environment_sweep(
                                              AdmittanceEnvironment::rigid_wall()};
     for (double mass_ratio : log_grid(0.01, 100.0, 5)) {
         for (double be : {0.0, 1.0, 30.0}) {
-            sweep.push_back(AdmittanceEnvironment::mass_spring(mass_ratio * device.mass_kg, 0.0, be));
+            sweep.push_back(
+                AdmittanceEnvironment::mass_spring(mass_ratio * device.mass_kg, 0.0, be));
         }
         for (double ke : log_grid(1.0, 1e6, 7)) {
             for (double be : {0.0, 30.0}) {

@@ -32,20 +32,23 @@ TEST(HapticTuneSizeAdmittance, ThePassiveDefaultExplainsWhyNoCouplingHolds) {
     EXPECT_NE(hot.err.find("needs device damping b >= 8"), std::string::npos) << hot.err;
 }
 
-// (37) under the encoder model is optimistic: its coupling fails the exact admittance loop,
+// (37) under the encoder model is optimistic: its best pair fails the exact admittance loop,
 // and size says so and exits 1 (as the impedance display's size does).
 TEST(HapticTuneSizeAdmittance, ThirtySevenIsHeldAgainstTheExactLoop) {
-    const auto r = run_command(tune(kDevice + "--kp 2 --ki 0 --model encoder --json"));
+    const auto r =
+        run_command(tune(kDevice + "--kp 2 --ki 0 --model encoder --optimize-damping --json"));
     EXPECT_EQ(r.exit_code, 1) << r.err;
     const json j = json::parse(r.out);
     EXPECT_EQ(j.at("model"), "encoder");
     EXPECT_GT(j.at("coupling_mass").get<double>(), 0.0);
+    EXPECT_GT(j.at("damping").get<double>(), 0.0);
     EXPECT_FALSE(j.at("exact_check").at("stable").get<bool>());
     EXPECT_NE(r.err.find("the exact admittance model finds this design unstable"),
               std::string::npos)
         << r.err;
     const auto skipped =
-        run_command(tune(kDevice + "--kp 2 --ki 0 --model encoder --json --no-exact-check"));
+        run_command(tune(kDevice + "--kp 2 --ki 0 --model encoder --optimize-damping --json "
+                                   "--no-exact-check"));
     EXPECT_EQ(skipped.exit_code, 0) << skipped.err;
     EXPECT_FALSE(json::parse(skipped.out).contains("exact_check"));
     // (37) has no delay.

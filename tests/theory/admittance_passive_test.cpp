@@ -22,13 +22,11 @@ TEST(AdmittancePassive, TheVelocityLoopAtARigidWallIsAVirtualWall) {
         const double expected =
             loop.proportional_gain_n_s_per_m + loop.integral_gain_n_per_m * kT / 2.0;
         EXPECT_NEAR(velocity_loop_damping_bound(loop, kT, 0.0), expected, 1e-12);
-        EXPECT_NEAR(velocity_loop_damping_needed(loop, std::numbers::pi, kT, 0.0), expected,
-                    1e-9);
+        EXPECT_NEAR(velocity_loop_damping_needed(loop, std::numbers::pi, kT, 0.0), expected, 1e-9);
         double grid_max = 0.0;
         for (int i = 1; i <= 1000; ++i) {
-            grid_max = std::max(grid_max,
-                                velocity_loop_damping_needed(loop, std::numbers::pi * i / 1000,
-                                                             kT, 0.0));
+            grid_max = std::max(
+                grid_max, velocity_loop_damping_needed(loop, std::numbers::pi * i / 1000, kT, 0.0));
         }
         EXPECT_NEAR(grid_max, expected, 1e-9);
     }
@@ -44,8 +42,7 @@ TEST(AdmittancePassive, NoCouplingHoldsForEveryPassiveOperatorInFreeSpace) {
     std::uniform_real_distribution<double> unit(0.0, 1.0);
     for (int i = 0; i < 40; ++i) {
         const DeviceModel device{0.2 + 5.0 * unit(random), 0.5 + 20.0 * unit(random)};
-        const PiVelocityLoop loop{0.01 + 5.0 * unit(random),
-                                  i % 2 == 0 ? 0.0 : 1e3 * unit(random)};
+        const PiVelocityLoop loop{0.01 + 5.0 * unit(random), i % 2 == 0 ? 0.0 : 1e3 * unit(random)};
         const double damping = i % 3 == 0 ? INFINITY : 0.1 + 100.0 * unit(random);
         const MassDamperCoupling coupling{0.01 + 50.0 * unit(random), damping};
         const int delay = i % 4 == 3 ? 1 : 0;
@@ -56,8 +53,8 @@ TEST(AdmittancePassive, NoCouplingHoldsForEveryPassiveOperatorInFreeSpace) {
         }
         EXPECT_TRUE(reached) << "m " << device.mass_kg << " b " << device.damping_n_s_per_m
                              << " k_p " << loop.proportional_gain_n_s_per_m << " k_i "
-                             << loop.integral_gain_n_per_m << " m_c " << coupling.mass_kg
-                             << " b_c " << coupling.damping_n_s_per_m << " q " << delay;
+                             << loop.integral_gain_n_per_m << " m_c " << coupling.mass_kg << " b_c "
+                             << coupling.damping_n_s_per_m << " q " << delay;
     }
     const DeviceModel device{2.0, 5.0};
     const PiVelocityLoop loop{2.0, 0.0};

@@ -84,9 +84,9 @@ TEST(ExactAdmittanceLoop, HandsOffIsThePiLoopOnTheSampledDevice) {
                 admittance_closed_loop_poles(d, OperatorModel::hands_off(), env);
             int roots_found = 0;
             for (const Complex& z : poles.eigenvalues) {
-                const Complex value = b * t * std::pow(z, 1 + q) * (z - a) * (z - 1.0) +
-                                      (kp * (z - 1.0) + ki * t * z) *
-                                          (t * (z - a) - (m / b) * (1.0 - a) * (z - 1.0));
+                const Complex value =
+                    b * t * std::pow(z, 1 + q) * (z - a) * (z - 1.0) +
+                    (kp * (z - 1.0) + ki * t * z) * (t * (z - a) - (m / b) * (1.0 - a) * (z - 1.0));
                 // Scale: the polynomial's coefficients are O(kp m/b (1-a)) ~ 1e-2.
                 if (std::abs(value) < 1e-12) ++roots_found;
             }
@@ -103,8 +103,8 @@ TEST(ExactAdmittanceLoop, DeflatingTheTranslationModeRemovesOnlyZEqualsOne) {
         admittance_closed_loop_poles(d, OperatorModel::heavy_hand(1.0, 0.5),
                                      AdmittanceEnvironment::mass_spring(0.2, 300.0, 1.0));
     OperatorModel grounded = OperatorModel::stiff_grasp(1.0, 1e-9, 0.5);
-    const ClosedLoopPoles near =
-        admittance_closed_loop_poles(d, grounded, AdmittanceEnvironment::mass_spring(0.2, 300.0, 1.0));
+    const ClosedLoopPoles near = admittance_closed_loop_poles(
+        d, grounded, AdmittanceEnvironment::mass_spring(0.2, 300.0, 1.0));
     ASSERT_EQ(near.eigenvalues.size(), free.eigenvalues.size() + 1);
     std::vector<Complex> remaining = near.eigenvalues;
     // Remove the pole nearest 1 and match the rest.

@@ -100,8 +100,9 @@ nlohmann::ordered_json exact_admittance_fields(const tune::AdmittanceExactCheck&
 void warn_exact_admittance_rejects(const tune::AdmittanceExactCheck& exact) {
     std::cerr << "haptic-tune: the exact admittance model finds this design unstable: "
               << exact.worst_operator.describe() << " against "
-              << exact.worst_environment.describe() << " grows by |z| = "
-              << exact.worst_spectral_radius << " per tick at " << exact.worst_frequency_hz
+              << exact.worst_environment.describe()
+              << " grows by |z| = " << exact.worst_spectral_radius << " per tick at "
+              << exact.worst_frequency_hz
               << " Hz. (37) leaves out the aliasing of the hold and of the force sensor "
                  "(docs/stability-models.md); exit 1.\n";
 }
@@ -194,8 +195,8 @@ int run_admittance(const SizeOptions& o, const DesignInput& input, const std::st
     };
     bool stable = true;
     if (!o.skip_exact_check) {
-        const tune::AdmittanceExactCheck exact = tune::check_exact_admittance(
-            {input.device, loop, sizing.coupling, input.rate_hz, 0.0});
+        const tune::AdmittanceExactCheck exact =
+            tune::check_exact_admittance({input.device, loop, sizing.coupling, input.rate_hz, 0.0});
         stable = exact.stable;
         out["exact_check"] = exact_admittance_fields(exact);
         if (!stable) warn_exact_admittance_rejects(exact);

@@ -10,6 +10,7 @@
 // and no wider one.
 #pragma once
 
+#include <limits>
 #include <optional>
 #include <string>
 
@@ -31,8 +32,8 @@ struct PassiveAdmittanceVerdict {
     std::string explanation;  ///< one paragraph, for an error message
 };
 
-/// The verdict for `coupling` (or, when none is given, for a coupling ten thousand times
-/// the device mass with no damper: the heaviest the ranges allow).
+/// The verdict for `coupling`, or with none given for pure-mass couplings of 1, 10 and 100
+/// device masses (the fields hold the first).
 PassiveAdmittanceVerdict passive_admittance_verdict(
     const theory::DeviceModel& device, const theory::PiVelocityLoop& loop, double rate_hz,
     double delay_periods, std::optional<theory::MassDamperCoupling> coupling = std::nullopt);

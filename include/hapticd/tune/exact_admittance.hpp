@@ -32,9 +32,9 @@
 //             This realises v_com = F_h / (Z_cA(z) + Z_e(z)), the paper's (39) terminated
 //             (Y_P = 1/Z_dA + T/(Z_cA + Z_e)).
 //   e[n]    = v_d[n] - v_com[n],   I[n] = I[n-1] + T e[n]
-//   F[n]    = k_p e[n] + k_i I[n]                                    (27), K_PI = k_p + k_i T z/(z-1)
-//   F[n] acts on [nT + D, (n+1)T + D), D = (q + φ) T (q whole periods, 0 <= φ < 1), the exact
-//   ZOH shifted by the loop delay, sampled exactly (two matrix exponentials for φ > 0), as in
+//   F[n]    = k_p e[n] + k_i I[n]                                    (27), K_PI = k_p + k_i T
+//   z/(z-1) F[n] acts on [nT + D, (n+1)T + D), D = (q + φ) T (q whole periods, 0 <= φ < 1), the
+//   exact ZOH shifted by the loop delay, sampled exactly (two matrix exponentials for φ > 0), as in
 //   the impedance exact model.
 //
 // Environments (all passive; z_e and r as above):
