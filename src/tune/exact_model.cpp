@@ -7,10 +7,10 @@
 #include <stdexcept>
 #include <unsupported/Eigen/MatrixFunctions>
 
+#include "exact_model_detail.hpp"
 #include "hapticd/theory/passive_model.hpp"
 #include "hapticd/tune/input_checks.hpp"
 #include "hapticd/tune/operator_synthesis.hpp"
-#include "exact_model_detail.hpp"
 
 namespace hapticd::tune {
 namespace {
