@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <numbers>
 #include <vector>
 
@@ -69,10 +68,15 @@ AliasReach free_space_alias_reach(const DeviceModel& device, const PiVelocityLoo
     AliasReach out;
     out.reach = along + defect / (2.0 * b);
     if (along > 0.0) {
-        std::sort(along_each.begin(), along_each.end(), std::greater<>());
+        // The largest first, off a heap: the count is small next to the terms.
+        std::make_heap(along_each.begin(), along_each.end());
         double sum = 0.0;
         std::size_t n = 0;
-        while (n < along_each.size() && sum < b * along) sum += along_each[n++];
+        for (auto end = along_each.end(); end != along_each.begin() && sum < b * along; --end) {
+            std::pop_heap(along_each.begin(), end);
+            sum += *(end - 1);
+            ++n;
+        }
         out.resonant_aliases_needed = static_cast<double>(n);
     }
     return out;

@@ -41,7 +41,7 @@ PassiveAdmittanceVerdict passive_admittance_verdict(
     const int whole = theory::split_delay(delay_periods).whole_periods;
     const auto fewest_for = [&](const theory::MassDamperCoupling& c, double* frequency_hz) {
         double fewest = std::numeric_limits<double>::infinity();
-        constexpr int kPoints = 256;
+        constexpr int kPoints = 128;
         for (int i = 1; i <= kPoints; ++i) {
             const double theta = std::numbers::pi * i / kPoints;
             const theory::AliasReach r =
