@@ -46,7 +46,8 @@ PassiveAdmittanceVerdict passive_admittance_verdict(
             const double theta = std::numbers::pi * i / kPoints;
             const theory::AliasReach r =
                 theory::free_space_alias_reach(device, loop, c, theta, period, whole);
-            if (r.reach >= 0.0 && r.resonant_aliases_needed < fewest) {
+            // Ties go to the higher frequency: nearer Nyquist the count is exact.
+            if (r.reach >= 0.0 && r.resonant_aliases_needed <= fewest) {
                 fewest = r.resonant_aliases_needed;
                 *frequency_hz = theory::frequency_hz(theta, period);
             }

@@ -30,8 +30,10 @@
 // unconditionally stable for every passive operator. What remains finite is how many
 // resonances it takes: a resonant alias (u_k = 1/b) moves Σ β_k u_k by Re(conj(β̂_∞) β_k)/b
 // along β̂_∞, so reaching R takes N(θ) of them, the fewest whose moves add up to
-// Re(conj(β̂_∞) R); a heavier coupling mass raises N. The exact loop's alias-tuned operators
-// (all resonant aliases at reactance 0) go unstable at that N (tests/tune).
+// Re(conj(β̂_∞) R); a heavier coupling mass raises N. At Nyquist the exact loop's alias-tuned
+// operators (every resonance at reactance 0) go unstable at exactly that N (tests/tune);
+// elsewhere N is an estimate, and they cross within two of it (the non-resonant aliases they
+// leave add a little).
 #pragma once
 
 #include "hapticd/theory/admittance.hpp"
