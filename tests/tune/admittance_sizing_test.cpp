@@ -84,6 +84,26 @@ TEST(AdmittanceModels, TheResonanceCountIsReachedByAliasTunedOperators) {
     }
 }
 
+// (P1) is reached: at a rigid wall the velocity loop is the impedance display's controller
+// K_PI, and 3 % past b = k_p + k_i T/2 the alias-tuned operator with 16 free-handle modes at
+// 500, 1500, ... Hz grows; 1 % inside it, stable. (One mode, the sweep's steel grip, reaches
+// only (π²/8)/S_1 of it, as for the impedance display.)
+TEST(AdmittanceModels, TheVelocityLoopBoundIsReachedAtARigidWall) {
+    const OperatorModel adversary = alias_tuned_operator(kArm, std::numbers::pi, kRateHz, 16, 0.0);
+    for (const double ki : {0.0, 2000.0}) {
+        const auto radius = [&](double factor) {
+            const double kp = factor * kArm.damping_n_s_per_m - ki / kRateHz / 2.0;
+            const AdmittanceDesign d{kArm, {kp, ki}, {10.0, INFINITY}, kRateHz};
+            EXPECT_NEAR(theory::velocity_loop_damping_bound(d.loop, 1.0 / kRateHz, 0.0),
+                        factor * kArm.damping_n_s_per_m, 1e-9);
+            return admittance_closed_loop_poles(d, adversary, AdmittanceEnvironment::rigid_wall())
+                .spectral_radius;
+        };
+        EXPECT_GT(radius(1.03), 1.0 + 1e-7) << "k_i " << ki << ": " << adversary.describe();
+        EXPECT_LT(radius(0.99), 1.0) << "k_i " << ki;
+    }
+}
+
 // The passive model sizes nothing, and says why with its numbers.
 TEST(AdmittanceModels, ThePassiveVerdictNamesBothConditions) {
     const PassiveAdmittanceVerdict ok = passive_admittance_verdict(kArm, {2.0, 0.0}, kRateHz, 0.0);
