@@ -86,8 +86,8 @@ TEST(AdmittanceModels, TheResonanceCountIsReachedByAliasTunedOperators) {
 
 // (P1) is reached: at a rigid wall the velocity loop is the impedance display's controller
 // K_PI, and 3 % past b = k_p + k_i T/2 the alias-tuned operator with 16 free-handle modes at
-// 500, 1500, ... Hz grows; 1 % inside it, stable. (One mode, the sweep's steel grip, reaches
-// only (π²/8)/S_1 of it, as for the impedance display.)
+// 500, 1500, ... Hz grows; 1 % inside it, stable. (One mode, the sweep's steel grip at
+// Nyquist, is not enough, as for the impedance display.)
 TEST(AdmittanceModels, TheVelocityLoopBoundIsReachedAtARigidWall) {
     const OperatorModel adversary = alias_tuned_operator(kArm, std::numbers::pi, kRateHz, 16, 0.0);
     for (const double ki : {0.0, 2000.0}) {
