@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <ostream>
 #include <string>
 
 #include "hapticd/theory/admittance_passive.hpp"
@@ -124,12 +125,27 @@ struct Grid {
     double coupling_damping;
     double delay_periods;
 };
+void PrintTo(const Grid& g, std::ostream* os) {
+    *os << "m " << g.device.mass_kg << " b " << g.device.damping_n_s_per_m << " k_p "
+        << g.loop.proportional_gain_n_s_per_m << " k_i " << g.loop.integral_gain_n_per_m << " b_c "
+        << g.coupling_damping << " delay " << g.delay_periods;
+}
 class ExactAdmittanceSizingGrid : public ::testing::TestWithParam<Grid> {};
 INSTANTIATE_TEST_SUITE_P(Devices, ExactAdmittanceSizingGrid,
                          ::testing::Values(Grid{{2.0, 5.0}, {2.0, 0.0}, INFINITY, 0.0},
                                            Grid{{2.0, 5.0}, {1.0, 200.0}, 4000.0, 0.0},
                                            Grid{{0.5, 3.0}, {1.0, 0.0}, INFINITY, 1.0},
-                                           Grid{{8.0, 20.0}, {10.0, 0.0}, INFINITY, 0.0}));
+                                           Grid{{8.0, 20.0}, {10.0, 0.0}, INFINITY, 0.0}),
+                         [](const ::testing::TestParamInfo<Grid>& param_info) {
+                             const Grid& g = param_info.param;
+                             std::string name =
+                                 "m" + std::to_string(int(g.device.mass_kg * 10)) + "_kp" +
+                                 std::to_string(int(g.loop.proportional_gain_n_s_per_m));
+                             if (g.loop.integral_gain_n_per_m > 0.0) name += "_integral";
+                             if (std::isfinite(g.coupling_damping)) name += "_damper";
+                             if (g.delay_periods > 0.0) name += "_delay";
+                             return name;
+                         });
 
 TEST_P(ExactAdmittanceSizingGrid, NeverOptimisticAndTight) {
     const Grid g = GetParam();
