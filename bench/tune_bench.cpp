@@ -3,9 +3,13 @@
 // recorded in docs/benchmarks.md.
 #include <benchmark/benchmark.h>
 
+#include <cmath>
+
 #include "hapticd/theory/coupling_check.hpp"
+#include "hapticd/tune/admittance_sizing.hpp"
 #include "hapticd/tune/class_check.hpp"
 #include "hapticd/tune/coupling_sizing.hpp"
+#include "hapticd/tune/exact_admittance.hpp"
 #include "hapticd/tune/exact_model.hpp"
 
 namespace {
@@ -133,6 +137,37 @@ void BM_CheckPassiveScene(benchmark::State& state) {
     }
 }
 BENCHMARK(BM_CheckPassiveScene)->Unit(benchmark::kMillisecond);
+
+// The admittance display (issue 9): the exact admittance check of one design (the default
+// sweep, 637 operators x 87 environments) with a delay in hundredths of a period, and the
+// exact sizing (a bisection on it with cutting planes). Device: m = 2 kg, b = 5 N s/m,
+// k_p = 2 N s/m, a pure-mass coupling, 1 kHz.
+const DeviceModel kArm{2.0, 5.0};
+
+void BM_CheckExactAdmittance(benchmark::State& state) {
+    const hapticd::tune::AdmittanceDesign design{
+        kArm, {2.0, 0.0}, {30.0, INFINITY}, 1000.0, state.range(0) / 100.0};
+    for (auto _ : state) {
+        auto c = hapticd::tune::check_exact_admittance(design);
+        benchmark::DoNotOptimize(c);
+    }
+}
+BENCHMARK(BM_CheckExactAdmittance)
+    ->Arg(0)
+    ->Arg(50)
+    ->Arg(100)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(3);
+
+void BM_SizeAdmittanceExact(benchmark::State& state) {
+    const hapticd::tune::ExactAdmittanceSizingRequest request{
+        kArm, {2.0, 0.0}, 1000.0, state.range(0) / 100.0};
+    for (auto _ : state) {
+        auto s = hapticd::tune::size_admittance_coupling_exact(request);
+        benchmark::DoNotOptimize(s);
+    }
+}
+BENCHMARK(BM_SizeAdmittanceExact)->Arg(0)->Arg(100)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 }  // namespace
 

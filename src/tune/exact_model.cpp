@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <unsupported/Eigen/MatrixFunctions>
 
+#include "exact_model_detail.hpp"
 #include "hapticd/theory/passive_model.hpp"
 #include "hapticd/tune/input_checks.hpp"
 #include "hapticd/tune/operator_synthesis.hpp"
@@ -598,3 +599,23 @@ ExactCheck check_exact(const DeviceModel& device, const SpringDamperCoupling& co
 }
 
 }  // namespace hapticd::tune
+
+// ---- shared with the exact admittance loop (exact_model_detail.hpp) ------------------------
+
+namespace hapticd::tune::detail {
+
+void operator_plant(const DeviceModel& device, const OperatorModel& human, Eigen::MatrixXd& a,
+                    Eigen::VectorXd& b) {
+    continuous_plant(device, human, a, b);
+}
+
+std::pair<Eigen::MatrixXd, Eigen::VectorXd> zoh_sample(const Eigen::MatrixXd& a,
+                                                       const Eigen::VectorXd& b, double t) {
+    return sample_over(a, b, t);
+}
+
+void validate_operator(const OperatorModel& human) { check_operator(human); }
+
+void balance_loop(Eigen::MatrixXd& loop) { balance(loop); }
+
+}  // namespace hapticd::tune::detail

@@ -6,6 +6,7 @@
 
 #include "assumption_options.hpp"
 #include "commands.hpp"
+#include "hapticd/tune/admittance_sizing.hpp"
 #include "hapticd/tune/coupling_sizing.hpp"
 #include "hapticd/tune/input_checks.hpp"
 
@@ -156,29 +157,105 @@ int run_assumed(const SizeOptions& o, const DesignInput& input,
     return stable ? kExitOk : kExitVerdictNo;
 }
 
-int run_admittance(const SizeOptions& o, const DesignInput& input, theory::HoldModel model) {
+/// The admittance design held against the exact admittance loop (exact_admittance.hpp).
+nlohmann::ordered_json exact_admittance_fields(const tune::AdmittanceExactCheck& exact) {
+    return {{"stable", exact.stable},
+            {"worst_spectral_radius", exact.worst_spectral_radius},
+            {"worst_frequency_hz", exact.worst_frequency_hz},
+            {"worst_operator", exact.worst_operator.describe()},
+            {"worst_environment", exact.worst_environment.describe()},
+            {"cases_checked", exact.cases_checked}};
+}
+
+void warn_exact_admittance_rejects(const tune::AdmittanceExactCheck& exact) {
+    std::cerr << "haptic-tune: the exact admittance model finds this design unstable: "
+              << exact.worst_operator.describe() << " against "
+              << exact.worst_environment.describe()
+              << " grows by |z| = " << exact.worst_spectral_radius << " per tick at "
+              << exact.worst_frequency_hz
+              << " Hz. (37) leaves out the aliasing of the hold and of the force sensor "
+                 "(docs/stability-models.md); exit 1.\n";
+}
+
+nlohmann::ordered_json null_if_infinite(double value) {
+    return std::isinf(value) ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(value);
+}
+
+int run_admittance(const SizeOptions& o, const DesignInput& input, const std::string& model) {
     if (!o.kp || !o.ki) {
         throw UsageError("--display admittance needs the PI velocity-loop gains --kp and --ki");
     }
+    const theory::PiVelocityLoop loop{*o.kp, *o.ki};
+    const double damping = o.coupling_damping.value_or(std::numeric_limits<double>::infinity());
+    if (model == "passive") {
+        // The passive model has no coupling to offer (admittance_passive.hpp): say why.
+        const tune::PassiveAdmittanceVerdict verdict = tune::passive_admittance_verdict(
+            input.device, loop, input.rate_hz, input.delay_periods());
+        throw tune::InfeasibleCoupling(verdict.explanation);
+    }
+    if (model == "exact") {
+        if (o.optimize_damping) {
+            throw UsageError(
+                "--model exact sizes m_c for a given --coupling-damping (default none): "
+                "--optimize-damping is for (37)");
+        }
+        tune::ExactAdmittanceSizingRequest request;
+        request.device = input.device;
+        request.loop = loop;
+        request.rate_hz = input.rate_hz;
+        request.delay_periods = input.delay_periods();
+        request.coupling_damping_n_s_per_m = damping;
+        const tune::ExactAdmittanceSizing sizing = tune::size_admittance_coupling_exact(request);
+        nlohmann::ordered_json out = {
+            {"display", "admittance"},
+            {"coupling_mass", sizing.coupling.mass_kg},
+            {"damping", null_if_infinite(sizing.coupling.damping_n_s_per_m)},
+            {"binding_frequency_hz", sizing.binding_frequency_hz},
+            {"model", "exact"},
+            {"limit_coupling_mass", sizing.limit_mass_kg},
+            {"safety_factor", request.safety_factor},
+            {"binding_operator", sizing.binding_operator.describe()},
+            {"binding_environment", sizing.binding_environment.describe()},
+            {"holds_for",
+             "the operators and environments the exact admittance model checks (its sweep: "
+             "hands-off, heavy hands, stiff grasps, two-mass grasps, steel grips resonating "
+             "with the handle at up to the Nyquist frequency; free space, rigid wall, virtual "
+             "masses and mass-springs), not every passive operator"},
+            {"delay_s", input.delay_s},
+            {"delay_periods", input.delay_periods()},
+            {"solver_time_s", sizing.report.solver_time_s},
+            {"device",
+             {{"mass", input.device.mass_kg}, {"damping", input.device.damping_n_s_per_m}}},
+            {"pi_gains", {{"kp", *o.kp}, {"ki", *o.ki}}},
+            {"rate_hz", input.rate_hz},
+            {"solver", report_fields(sizing.report)},
+            {"exact_check", exact_admittance_fields(sizing.check)},
+        };
+        if (!sizing.check.stable) warn_exact_admittance_rejects(sizing.check);
+        print_result(out, o.json);
+        return sizing.check.stable ? kExitOk : kExitVerdictNo;
+    }
+    if (input.delay_s != 0.0) {
+        throw UsageError(
+            "(37) has no loop delay: --display admittance --model " + model +
+            " needs --delay 0 (over a config's [device.model] delay); --model exact takes it");
+    }
+    const theory::HoldModel hold = *theory::parse_hold_model(model);
     tune::AdmittanceSizingRequest request;
     request.device = input.device;
-    request.loop = {*o.kp, *o.ki};
+    request.loop = loop;
     request.rate_hz = input.rate_hz;
-    request.model = model;
-    if (!o.optimize_damping) {
-        request.coupling_damping_n_s_per_m =
-            o.coupling_damping.value_or(std::numeric_limits<double>::infinity());
-    }
+    request.model = hold;
+    if (!o.optimize_damping) request.coupling_damping_n_s_per_m = damping;
     const tune::AdmittanceSizing sizing = tune::size_admittance_coupling(request);
     const double b_c = sizing.coupling.damping_n_s_per_m;
     nlohmann::ordered_json out = {
         {"display", "admittance"},
         {"coupling_mass", sizing.coupling.mass_kg},
         // null: no series damper (b_c = inf), the coupling is a pure mass.
-        {"damping",
-         std::isinf(b_c) ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(b_c)},
+        {"damping", null_if_infinite(b_c)},
         {"binding_frequency_hz", sizing.binding_frequency_hz},
-        {"model", std::string(theory::to_string(model))},
+        {"model", model},
         {"solver_time_s", sizing.report.solver_time_s},
         {"verified_worst_margin", sizing.verified_worst_margin},
         {"device", {{"mass", input.device.mass_kg}, {"damping", input.device.damping_n_s_per_m}}},
@@ -186,8 +263,16 @@ int run_admittance(const SizeOptions& o, const DesignInput& input, theory::HoldM
         {"rate_hz", input.rate_hz},
         {"solver", report_fields(sizing.report)},
     };
+    bool stable = true;
+    if (!o.skip_exact_check) {
+        const tune::AdmittanceExactCheck exact =
+            tune::check_exact_admittance({input.device, loop, sizing.coupling, input.rate_hz, 0.0});
+        stable = exact.stable;
+        out["exact_check"] = exact_admittance_fields(exact);
+        if (!stable) warn_exact_admittance_rejects(exact);
+    }
     print_result(out, o.json);
-    return kExitOk;
+    return stable ? kExitOk : kExitVerdictNo;
 }
 
 }  // namespace
@@ -220,36 +305,25 @@ void add_size_command(CLI::App& app, Invocation& invocation) {
         ->check(non_negative_finite("N/m"));
     command->add_flag("--json", options->json, "print the result as JSON");
     command->add_flag("--no-exact-check", options->skip_exact_check,
-                      "impedance display: skip holding the answer against the exact model");
-    CLI::Option* model_option = command->get_option("--model");
-    command->callback([options, model_option, &invocation] {
-        // The admittance display has no passive model yet: its default is encoder.
-        if (options->display == "admittance" && model_option->count() == 0)
-            options->model = "encoder";
+                      "skip holding a (21) or (37) answer against the exact model");
+    command->callback([options, &invocation] {
         invocation.run = [options] {
             const DesignInput input = resolve_design_input(options->device);
             const tune::StabilityAssumption assumption =
                 resolve_assumption(options->assumption, options->model);
-            const bool assumed = options->model == "exact" || assumption.operators ||
-                                 !assumption.environments.every_passive();
-            if (assumed && options->display == "impedance") {
+            const bool declared = assumption.operators || !assumption.environments.every_passive();
+            if (options->display == "admittance") {
+                if (declared) {
+                    throw UsageError(
+                        "--operator-class and --scene size the impedance display "
+                        "only");
+                }
+                return run_admittance(*options, input, options->model);
+            }
+            if (declared || options->model == "exact") {
                 return run_assumed(*options, input, assumption);
             }
-            if (options->model == "exact") {
-                throw UsageError("--model exact sizes the impedance display only");
-            }
-            const theory::HoldModel model = *theory::parse_hold_model(options->model);
-            if (options->display == "admittance") {
-                if (model == theory::HoldModel::passive || input.delay_s != 0.0) {
-                    throw UsageError(
-                        "--display admittance is sized from (37) with --model encoder or paper "
-                        "and no loop delay (pass --delay 0 over a config's [device.model] delay): "
-                        "the passive model of the admittance display is not built yet "
-                        "(docs/stability-models.md)");
-                }
-                return run_admittance(*options, input, model);
-            }
-            return run_impedance(*options, input, model);
+            return run_impedance(*options, input, *theory::parse_hold_model(options->model));
         };
     });
 }
