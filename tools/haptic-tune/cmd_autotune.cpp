@@ -399,6 +399,7 @@ int run_autotune(const AutotuneCliOptions& o) {
     const std::string original = read_file(o.config_path);
     options.rate_hz = config.servo.rate_hz;
     options.delay_periods = o.delay_s.value_or(config.device.model_delay_s) * config.servo.rate_hz;
+    options.velocity_filter_hz = config.coupling.velocity_filter_hz;  // checked by the config
     options.identification.force_limit_n = config.safety.max_force_n;
     try {
         tune::check_delay_periods(options.delay_periods);
