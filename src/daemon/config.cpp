@@ -135,6 +135,26 @@ const toml::table* sub_table(const toml::table& parent, const std::string& sourc
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
+// [coupling] velocity_filter: 0 (none), or the range every model checks
+// (tune::check_velocity_filter): 1 Hz and up, below Nyquist.
+double velocity_filter(const TableReader& coupling, const std::string& source, double rate_hz) {
+    std::ostringstream range;
+    range << "Hz; 0: no filter, or >= " << tune::kMinVelocityFilterHz << " and < " << rate_hz / 2.0
+          << ", below Nyquist";
+    const std::string unit = range.str();
+    const double f_c =
+        coupling.number("velocity_filter", 0.0, kInf, false, unit.c_str()).value_or(0.0);
+    if (f_c != 0.0 && !(f_c >= tune::kMinVelocityFilterHz && f_c < rate_hz / 2.0)) {
+        std::ostringstream m;
+        m << source << ": [coupling] velocity_filter = " << f_c
+          << " is out of range: allowed 0 (no filter) or >= " << tune::kMinVelocityFilterHz
+          << " and < " << rate_hz / 2.0 << " (Hz, below Nyquist: [servo] rate_hz = " << rate_hz
+          << ")";
+        throw ConfigError(m.str());
+    }
+    return f_c;
+}
+
 // [identify], after [servo] and [safety], which bound it.
 void parse_identify(const toml::table& root, const std::string& source, Config& config) {
     const TableReader identify(source, "identify", sub_table(root, source, "identify"));
@@ -286,12 +306,14 @@ Config parse_config(std::string_view toml_text, const std::string& source,
     }
 
     const TableReader coupling(source, "coupling", sub_table(root, source, "coupling"));
-    coupling.allow_only({"enabled", "stiffness", "damping", "check", "environments"});
+    coupling.allow_only(
+        {"enabled", "stiffness", "damping", "velocity_filter", "check", "environments"});
     config.coupling.enabled = coupling.boolean("enabled").value_or(true);
     config.coupling.stiffness_n_per_m =
         coupling.number("stiffness", 0.0, tune::kMaxCouplingStiffness, false, "N/m").value_or(0.0);
     config.coupling.damping_n_s_per_m =
         coupling.number("damping", 0.0, tune::kMaxCouplingDamping, false, "N s/m").value_or(0.0);
+    config.coupling.velocity_filter_hz = velocity_filter(coupling, source, config.servo.rate_hz);
     config.coupling.check =
         coupling.text("check", {"passive", "exact", "paper", "encoder", "off"}).value_or("passive");
     config.coupling.environments =
@@ -316,7 +338,7 @@ Config parse_config(std::string_view toml_text, const std::string& source,
     }
     if (!config.coupling.enabled) {
         // The conventional design, for experiments: the daemon will not pretend to check it.
-        for (const char* key : {"stiffness", "damping"}) {
+        for (const char* key : {"stiffness", "damping", "velocity_filter"}) {
             if (coupling.has(key)) {
                 throw ConfigError(source + ": [coupling] " + key +
                                   " has no effect with enabled = false (no coupling); remove it");

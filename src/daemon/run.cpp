@@ -150,8 +150,11 @@ StartupCheck run_startup_check(const Config& config, std::ostream& log) {
         std::ostringstream m;
         m << config.source
           << ": refusing to arm: [coupling] stiffness = " << config.coupling.stiffness_n_per_m
-          << " N/m, damping = " << config.coupling.damping_n_s_per_m << " N s/m fail the "
-          << check.model << " model for [device.model] at " << config.servo.rate_hz
+          << " N/m, damping = " << config.coupling.damping_n_s_per_m << " N s/m";
+        if (config.coupling.velocity_filter_hz > 0.0) {
+            m << ", velocity_filter = " << config.coupling.velocity_filter_hz << " Hz";
+        }
+        m << " fail the " << check.model << " model for [device.model] at " << config.servo.rate_hz
           << " Hz: worst margin " << check.worst_margin << " at " << check.worst_frequency_hz
           << " Hz";
         if (!check.worst_case.empty()) m << " (" << check.worst_case << ")";
@@ -162,6 +165,9 @@ StartupCheck run_startup_check(const Config& config, std::ostream& log) {
           << " --damping " << *config.device.model_damping_n_s_per_m << " --rate "
           << config.servo.rate_hz;
         if (config.device.model_delay_s > 0.0) m << " --delay " << config.device.model_delay_s;
+        if (config.coupling.velocity_filter_hz > 0.0) {
+            m << " --velocity-filter " << config.coupling.velocity_filter_hz;
+        }
         if (config.operators) m << " --model exact --operator-class " << config.source;
         if (config.coupling.environments == "scene") {
             m << " --scene "

@@ -24,7 +24,8 @@ servo::ServoConfig make_servo_config(const Config& config, const device::DeviceI
     servo.counts_per_meter = info.counts_per_meter;
     servo.coupling_enabled = config.coupling.enabled;
     servo.coupling = {.stiffness_n_per_m = config.coupling.stiffness_n_per_m,
-                      .damping_n_s_per_m = config.coupling.damping_n_s_per_m};
+                      .damping_n_s_per_m = config.coupling.damping_n_s_per_m,
+                      .velocity_filter_hz = config.coupling.velocity_filter_hz};
     servo.safety.max_force_n = info.force_limit_n > 0.0
                                    ? std::min(config.safety.max_force_n, info.force_limit_n)
                                    : config.safety.max_force_n;

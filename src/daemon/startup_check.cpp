@@ -13,8 +13,9 @@ std::string StartupCheck::describe() const {
         return "stability check OFF ([coupling] check = \"off\"): these gains are not checked "
                "against any model";
     }
-    out << "stability check (" << model << " model, loop delay " << delay_s * 1e3
-        << " ms): " << (passed ? "unconditionally stable" : "NOT unconditionally stable")
+    out << "stability check (" << model << " model, loop delay " << delay_s * 1e3 << " ms";
+    if (velocity_filter_hz > 0.0) out << ", velocity filter " << velocity_filter_hz << " Hz";
+    out << "): " << (passed ? "unconditionally stable" : "NOT unconditionally stable")
         << ", worst margin " << worst_margin << " at " << worst_frequency_hz << " Hz";
     if (!worst_case.empty()) out << " (" << worst_case << ")";
     if (guarantee) {
@@ -93,7 +94,8 @@ StartupCheck check_coupling_at_startup(const Config& config) {
     const theory::DeviceModel device{*config.device.model_mass_kg,
                                      *config.device.model_damping_n_s_per_m};
     const theory::SpringDamperCoupling coupling{config.coupling.stiffness_n_per_m,
-                                                config.coupling.damping_n_s_per_m};
+                                                config.coupling.damping_n_s_per_m,
+                                                config.coupling.velocity_filter_hz};
     if (coupling.stiffness_n_per_m == 0.0 && coupling.damping_n_s_per_m == 0.0) {
         throw ConfigError(config.source +
                           ": [coupling] stiffness and damping are both 0: no coupling to "
@@ -102,6 +104,7 @@ StartupCheck check_coupling_at_startup(const Config& config) {
     StartupCheck check;
     check.model = config.coupling.check;
     check.delay_s = config.device.model_delay_s;
+    check.velocity_filter_hz = coupling.velocity_filter_hz;
     const double delay_periods = config.device.model_delay_s * config.servo.rate_hz;
     const tune::StabilityAssumption assumption{config.operators, configured_environments(config)};
     check.holds_for = assumption.describe();

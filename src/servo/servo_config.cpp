@@ -32,6 +32,10 @@ void ServoConfig::validate() const {
         reject("coupling.stiffness_n_per_m", k_c, "finite, >= 0");
     if (!(b_c >= 0.0) || !std::isfinite(b_c))
         reject("coupling.damping_n_s_per_m", b_c, "finite, >= 0");
+    const double f_c = coupling.velocity_filter_hz;
+    if (!(f_c >= 0.0 && f_c < rate_hz / 2.0)) {  // false for NaN
+        reject("coupling.velocity_filter_hz", f_c, "0 (none) or > 0 and below rate_hz/2");
+    }
     if (coupling_enabled && k_c == 0.0 && b_c == 0.0) {
         reject("coupling.stiffness_n_per_m", k_c,
                "> 0 or damping > 0 (a coupling of zero renders nothing)");

@@ -36,7 +36,14 @@ Complex device_impedance(const DeviceModel& device, HoldModel model, double thet
 
 Complex coupling_impedance(const SpringDamperCoupling& coupling, double theta,
                            double sample_period_s) {
-    const Complex s = backward_difference_s(unit_circle_point(theta), sample_period_s);
+    const Complex z = unit_circle_point(theta);
+    const Complex s = backward_difference_s(z, sample_period_s);
+    if (coupling.velocity_filter_hz > 0.0) {
+        // The damper on the filtered velocity: b_c (1 - a)/(1 - a z⁻¹) (velocity_filter.hpp).
+        const double a = velocity_filter_pole(coupling.velocity_filter_hz, sample_period_s);
+        return coupling.damping_n_s_per_m * (1.0 - a) / (1.0 - a / z) +
+               coupling.stiffness_n_per_m / s;
+    }
     return coupling.damping_n_s_per_m + coupling.stiffness_n_per_m / s;  // (16)
 }
 
@@ -86,9 +93,7 @@ TwoPort impedance_interface(const DeviceModel& device, const SpringDamperCouplin
 double coupling_margin(const DeviceModel& device, const SpringDamperCoupling& coupling,
                        const LoopModel& model, double theta, double sample_period_s) {
     const double bound = conductance_bound(model, device.damping_n_s_per_m, theta);
-    return relative_margin(coupling_conductance(coupling.stiffness_n_per_m,
-                                                coupling.damping_n_s_per_m, theta, sample_period_s),
-                           bound);
+    return relative_margin(coupling_conductance(coupling, theta, sample_period_s), bound);
 }
 
 std::vector<double> conductance_bounds(const LoopModel& model, double device_damping_n_s_per_m,

@@ -16,10 +16,7 @@ CouplingCheck check_coupling(const DeviceModel& device, const SpringDamperCoupli
     const std::vector<double> grid = frequency_grid(grid_points);
     std::vector<double> margins = conductance_bounds(model, device.damping_n_s_per_m, grid);
     for (std::size_t i = 0; i < grid.size(); ++i) {
-        margins[i] =
-            relative_margin(coupling_conductance(coupling.stiffness_n_per_m,
-                                                 coupling.damping_n_s_per_m, grid[i], period),
-                            margins[i]);
+        margins[i] = relative_margin(coupling_conductance(coupling, grid[i], period), margins[i]);
     }
     const GridMinimum interior = minimize_tabulated(margin, grid, margins);
     const double dc = coupling_margin_at_dc(device, coupling, model, period);
@@ -33,8 +30,8 @@ CouplingCheck check_coupling(const DeviceModel& device, const SpringDamperCoupli
         result.worst_margin = interior.value;
         result.worst_frequency_hz = frequency_hz(interior.theta, period);
     }
-    // (19): Re Z_dI = b > 0 and Re(1/Z_cI) = R/(R²+X²) >= 0 for non-negative gains; (20)-(21)
-    // is the margin.
+    // (19): Re Z_dI = b > 0 and Re(1/Z_cI) = R/(R²+X²) >= 0 for non-negative gains (with a
+    // velocity filter too: Re B > 0, velocity_filter.hpp); (20)-(21) is the margin.
     result.unconditionally_stable = device.damping_n_s_per_m > 0.0 && result.worst_margin >= 0.0;
     return result;
 }

@@ -21,6 +21,7 @@ ImpedanceSizingRequest sizing_request(const theory::DeviceModel& device,
     request.device = device;
     request.rate_hz = options.rate_hz;
     request.model = {theory::HoldModel::passive, options.delay_periods};
+    request.velocity_filter_hz = options.velocity_filter_hz;
     request.coupling_damping_n_s_per_m =
         options.optimize_damping ? std::nullopt : std::optional<double>(0.0);
     return request;
@@ -92,6 +93,7 @@ void AutotuneOptions::validate() const {
         throw std::invalid_argument(message.str());
     }
     check_delay_periods(delay_periods);
+    check_velocity_filter(velocity_filter_hz, rate_hz);
     identification.validate();
 }
 
@@ -144,7 +146,8 @@ AutotuneResult autotune(std::vector<IdentifiedAxis> axes, const AutotuneOptions&
                                       /*down=*/true);
     }
     result.coupling = {
-        stiffness, round_significant(result.bound.damping_n_s_per_m, kAutotuneSignificantDigits)};
+        stiffness, round_significant(result.bound.damping_n_s_per_m, kAutotuneSignificantDigits),
+        options.velocity_filter_hz};
 
     for (std::size_t i = 0; i < result.axes.size(); ++i) {
         AutotuneAxis& axis = result.axes[i];

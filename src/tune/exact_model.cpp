@@ -141,27 +141,46 @@ Controller make_controller(const SpringDamperCoupling& coupling, const Environme
     const double kc = coupling.stiffness_n_per_m;
     const double bc = coupling.damping_n_s_per_m;
     const double t = period_s;
+    // The velocity filter (velocity_filter.hpp): u[n] = a u[n-1] + (1 - a)(v_d - v_e), and the
+    // damper's force b_c u[n] = (1 - a) b_c (v_d - v_e) + a b_c u[n-1]. Without it (a = 0) the
+    // loop has no u state and bw = b_c: the unfiltered controller, to the bit.
+    const double a = theory::velocity_filter_pole(coupling.velocity_filter_hz, t);
+    const bool filtered = a > 0.0;
+    const double bw = (1.0 - a) * bc;  // the damper's weight on this tick's v_d - v_e
     Controller ctl;
     if (env.kind == EnvironmentModel::Kind::rigid_wall) {
         // w = (x_d[n], x_d[n-1]); (16) with x_e = v_e = 0: F = k_c x_d + b_c (x_d[n] - x_d[n-1])/T.
-        ctl.force.resize(2);
-        ctl.force << kc + bc / t, -bc / t;
-        ctl.next.resize(1, 2);
-        ctl.next << 1.0, 0.0;
+        if (!filtered) {
+            ctl.force.resize(2);
+            ctl.force << kc + bc / t, -bc / t;
+            ctl.next.resize(1, 2);
+            ctl.next << 1.0, 0.0;
+            return ctl;
+        }
+        // w = (x_d[n], x_d[n-1], u[n-1]): F = k_c x_d + b_c u[n],
+        // u[n] = a u[n-1] + (1 - a)(x_d[n] - x_d[n-1])/T.
+        ctl.force.resize(3);
+        ctl.force << kc + bw / t, -bw / t, a * bc;
+        ctl.next.resize(2, 3);
+        ctl.next << 1.0, 0.0, 0.0,  //
+            (1.0 - a) / t, -(1.0 - a) / t, a;
         return ctl;
     }
-    // w = (x_d[n], x_d[n-1], x_e[n-1], x_e[n-2]) and, when the environment remembers its
-    // force (a1 != 0), F[n-1]. The coupling (16),
-    //   F = P - g x_e[n],  P = k_c x_d + b_c (x_d - x_d[n-1])/T + (b_c/T) x_e[n-1],  g = k_c +
-    //   b_c/T,
+    // w = (x_d[n], x_d[n-1], x_e[n-1], x_e[n-2]), then F[n-1] when the environment remembers
+    // its force (a1 != 0), then u[n-1] with the velocity filter. The coupling (16),
+    //   F = P - g x_e[n],  g = k_c + b_w/T,  b_w = (1 - a) b_c,
+    //   P = k_c x_d + b_w (x_d - x_d[n-1])/T + (b_w/T) x_e[n-1] + a b_c u[n-1],
     // solved together with the environment's recurrence for x_e[n] and F[n].
     const EnvironmentRecurrence r = recurrence_of(env, t);
-    const Eigen::Index w = r.a1 != 0.0 ? 5 : 4;
+    const Eigen::Index force_memory = r.a1 != 0.0 ? 1 : 0;
+    const Eigen::Index w = 4 + force_memory + (filtered ? 1 : 0);
+    const Eigen::Index u_index = 4 + force_memory;  // only when filtered
     RowVectorXd p = RowVectorXd::Zero(w), rhs = RowVectorXd::Zero(w);
-    p.head(3) << kc + bc / t, -bc / t, bc / t;
+    p.head(3) << kc + bw / t, -bw / t, bw / t;
+    if (filtered) p(u_index) = a * bc;
     rhs.segment(2, 2) << r.c1, r.c2;  // c1 x_e[n-1] + c2 x_e[n-2] - a1 F[n-1]
-    if (w == 5) rhs(4) = -r.a1;
-    const double g = kc + bc / t;
+    if (force_memory != 0) rhs(4) = -r.a1;
+    const double g = kc + bw / t;
     const RowVectorXd x_e = (p - rhs) / (g + r.c0);
     const RowVectorXd f = p - g * x_e;
     ctl.force = f;
@@ -169,10 +188,18 @@ Controller make_controller(const SpringDamperCoupling& coupling, const Environme
     x_d(0) = 1.0;
     x_e1(2) = 1.0;
     ctl.next.resize(w - 1, w);
-    if (w == 5) {
-        ctl.next << x_d, x_e, x_e1, f;
-    } else {
-        ctl.next << x_d, x_e, x_e1;
+    ctl.next.row(0) = x_d;
+    ctl.next.row(1) = x_e;
+    ctl.next.row(2) = x_e1;
+    if (force_memory != 0) ctl.next.row(3) = f;
+    if (filtered) {
+        // u[n] = a u[n-1] + ((1 - a)/T)(x_d[n] - x_d[n-1] - x_e[n] + x_e[n-1]).
+        RowVectorXd u = -((1.0 - a) / t) * x_e;
+        u(0) += (1.0 - a) / t;
+        u(1) -= (1.0 - a) / t;
+        u(2) += (1.0 - a) / t;
+        u(u_index) += a;
+        ctl.next.row(w - 2) = u;
     }
     return ctl;
 }
@@ -349,6 +376,7 @@ void check_loop(const DeviceModel& device, const SpringDamperCoupling& coupling,
     check_device(device);
     check_rate(rate_hz);
     check_coupling_gains(coupling);
+    check_velocity_filter(coupling.velocity_filter_hz, rate_hz);
     check_delay_periods(delay_periods);
 }
 

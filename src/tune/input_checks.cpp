@@ -66,4 +66,15 @@ void check_delay_periods(double delay_periods) {
     }
 }
 
+void check_velocity_filter(double cutoff_hz, double rate_hz) {
+    if (cutoff_hz == 0.0 || (cutoff_hz >= kMinVelocityFilterHz && cutoff_hz < rate_hz / 2.0)) {
+        return;
+    }
+    std::ostringstream message;
+    message << "velocity filter cutoff f_c = " << cutoff_hz << " Hz is out of range: allowed 0 "
+            << "(no filter) or " << kMinVelocityFilterHz << " Hz <= f_c < " << rate_hz / 2.0
+            << " Hz (below Nyquist, rate/2 at " << rate_hz << " Hz)";
+    throw std::invalid_argument(message.str());
+}
+
 }  // namespace hapticd::tune

@@ -276,6 +276,83 @@ TEST(HapticTuneCheck, ExactModelNamesTheWorstOperator) {
     EXPECT_FALSE(j.at("worst_operator").get<std::string>().empty());
 }
 
+// The coupling damper on a filtered velocity: every model sees it through Z_c. With no delay
+// the passive bound is k_c T/2 + b_c (1 - a)/(1 + a) <= b, a = exp(-2π f_c T): 3695.78 N/m
+// for b_c = 0.5 N s/m on a 100 Hz filter, against 3000 N/m unfiltered.
+TEST(HapticTuneVelocityFilter, SizeCheckAndPlotPassItToTheModels) {
+    const std::string device = "--mass 0.1 --damping 2 --rate 1000";
+    const auto sized = run_command(
+        tune("size " + device + " --coupling-damping 0.5 --velocity-filter 100 --json"));
+    ASSERT_EQ(sized.exit_code, 0) << sized.err;
+    const json s = json::parse(sized.out);
+    EXPECT_NEAR(s.at("stiffness").get<double>(), 3695.78381, 1e-4);
+    EXPECT_EQ(s.at("velocity_filter_hz").get<double>(), 100.0);
+    EXPECT_NEAR(s.at("binding_frequency_hz").get<double>(), 500.0, 1e-6);
+    EXPECT_TRUE(s.at("exact_check").at("stable").get<bool>());
+    const auto unfiltered = run_command(tune("size " + device + " --coupling-damping 0.5 --json"));
+    ASSERT_EQ(unfiltered.exit_code, 0) << unfiltered.err;
+    EXPECT_NEAR(json::parse(unfiltered.out).at("stiffness").get<double>(), 3000.0, 1e-4);
+    EXPECT_EQ(json::parse(unfiltered.out).at("velocity_filter_hz").get<double>(), 0.0);
+
+    const std::string design = "check " + device + " --stiffness 3600 --coupling-damping 0.5";
+    EXPECT_EQ(run_command(tune(design)).exit_code, 1);
+    for (const char* model : {"passive", "exact"}) {
+        const auto check =
+            run_command(tune(design + " --velocity-filter 100 --json --model " + model));
+        EXPECT_EQ(check.exit_code, 0) << model << check.err;
+        EXPECT_EQ(json::parse(check.out).at("velocity_filter_hz").get<double>(), 100.0);
+    }
+    const auto encoder =
+        run_command(tune(design + " --velocity-filter 100 --json --model encoder"));
+    EXPECT_NE(json::parse(encoder.out).at("worst_margin").get<double>(),
+              json::parse(run_command(tune(design + " --json --model encoder")).out)
+                  .at("worst_margin")
+                  .get<double>());
+
+    const auto plot = run_command(tune("plot " + device +
+                                       " --stiffness 3600 --coupling-damping 0.5 "
+                                       "--velocity-filter 100 --json --points 50"));
+    ASSERT_EQ(plot.exit_code, 0) << plot.err;
+    const json p = json::parse(plot.out);
+    EXPECT_EQ(p.at("design").at("velocity_filter_hz").get<double>(), 100.0);
+    EXPECT_TRUE(p.at("models").at("passive").at("unconditionally_stable").get<bool>());
+    EXPECT_NE(p.at("title").get<std::string>().find("100 Hz velocity filter"), std::string::npos);
+}
+
+TEST(HapticTuneVelocityFilter, ReadsItFromAConfigAndRejectsCutoffsOutOfRange) {
+    const std::string path = "/tmp/hapticd-cli-test-filter.toml";
+    std::FILE* f = std::fopen(path.c_str(), "w");
+    std::fputs(
+        "[servo]\nrate_hz = 1000\n[device.model]\nmass = 0.1\ndamping = 2\n"
+        "[coupling]\nstiffness = 3600\ndamping = 0.5\nvelocity_filter = 100\n",
+        f);
+    std::fclose(f);
+    const auto from_file = run_command(tune("check --config " + path + " --json"));
+    EXPECT_EQ(from_file.exit_code, 0) << from_file.err;
+    EXPECT_EQ(json::parse(from_file.out).at("velocity_filter_hz").get<double>(), 100.0);
+    // The flag overrides the file: 0 is no filter, and 3600 N/m at 0.5 N s/m fails.
+    EXPECT_EQ(run_command(tune("check --config " + path + " --velocity-filter 0")).exit_code, 1);
+    std::remove(path.c_str());
+    struct Bad {
+        const char* args;
+        const char* message;
+    };
+    for (const Bad bad :
+         {Bad{"--velocity-filter 500",
+              "velocity filter cutoff f_c = 500 Hz is out of range: allowed 0 (no "
+              "filter) or 1 Hz <= f_c < 500 Hz"},
+          Bad{"--velocity-filter 0.5", "f_c = 0.5 Hz is out of range"},
+          Bad{"--velocity-filter -3", "--velocity-filter: value -3 is out of range"},
+          Bad{"--velocity-filter abc", "--velocity-filter: value 'abc' is not a number"}}) {
+        for (const char* command : {"size", "check --stiffness 100", "plot --json"}) {
+            const auto r = run_command(
+                tune(std::string(command) + " --mass 0.1 --damping 2 --rate 1000 " + bad.args));
+            EXPECT_EQ(r.exit_code, 2) << command << " " << bad.args;
+            EXPECT_NE(r.err.find(bad.message), std::string::npos) << command << ": " << r.err;
+        }
+    }
+}
+
 TEST(HapticTune, HelpExitsZero) {
     const auto result = run_command(tune("size --help"));
     EXPECT_EQ(result.exit_code, 0);

@@ -35,6 +35,7 @@ mass = 0.25
 [coupling]
 stiffness = 5000
 damping = 0.5
+velocity_filter = 300
 check = "exact"
 [scene]
 file = "scenes/box.toml"
@@ -59,6 +60,7 @@ reconnect_timeout = 30
     EXPECT_NE(c.device.plugin_table_toml.find("mass = 0.25"), std::string::npos);
     EXPECT_EQ(c.coupling.stiffness_n_per_m, 5000.0);
     EXPECT_EQ(c.coupling.damping_n_s_per_m, 0.5);
+    EXPECT_EQ(c.coupling.velocity_filter_hz, 300.0);
     EXPECT_EQ(c.coupling.check, "exact");
     EXPECT_EQ(c.scene_file, "/etc/hapticd/scenes/box.toml");
     EXPECT_EQ(c.safety.max_force_n, 12.0);
@@ -99,6 +101,7 @@ TEST(DaemonConfig, DefaultsFillWhatIsMissing) {
     EXPECT_FALSE(c.servo.cpu.has_value());
     EXPECT_EQ(c.device.plugin, "sim");
     EXPECT_EQ(c.coupling.check, "passive");
+    EXPECT_EQ(c.coupling.velocity_filter_hz, 0.0);  // no filter: the damper on v_d - v_e
     EXPECT_EQ(c.device.model_delay_s, 0.0);
     EXPECT_TRUE(c.scene_file.empty());
 }
@@ -153,6 +156,21 @@ INSTANTIATE_TEST_SUITE_P(
         Bad{"[coupling]\nenabled = false\ncheck = \"off\"\nstiffness = 100\n",
             "[coupling] stiffness has no effect with enabled = false"},
         Bad{"[coupling]\nenabled = 1\n", "[coupling] enabled must be true or false"},
+        Bad{"[coupling]\nvelocity_filter = 500\n",
+            "[coupling] velocity_filter = 500 is out of range: allowed 0 (no filter) or >= 1 and "
+            "< 500 (Hz, below Nyquist: [servo] rate_hz = 1000)"},
+        Bad{"[coupling]\nvelocity_filter = 0.5\n",
+            "[coupling] velocity_filter = 0.5 is out of range: allowed 0 (no filter) or >= 1"},
+        Bad{"[servo]\nrate_hz = 400\n[coupling]\nvelocity_filter = 250\n",
+            "[coupling] velocity_filter = 250 is out of range: allowed 0 (no filter) or >= 1 and "
+            "< 200 (Hz, below Nyquist: [servo] rate_hz = 400)"},
+        Bad{"[coupling]\nvelocity_filter = -5\n",
+            "[coupling] velocity_filter = -5 is out of range: allowed >= 0 (Hz; 0: no filter, or "
+            ">= 1 and < 500, below Nyquist)"},
+        Bad{"[coupling]\nvelocity_filter = \"fast\"\n",
+            "[coupling] velocity_filter must be a number"},
+        Bad{"[coupling]\nenabled = false\ncheck = \"off\"\nvelocity_filter = 100\n",
+            "[coupling] velocity_filter has no effect with enabled = false"},
         Bad{"[safety]\nsoft_start_ramp = 20\n",
             "[safety] soft_start_ramp = 20 is out of range: allowed >= 0 and <= 10 (s)"},
         Bad{"[safety]\npassivity = \"on\"\n", "[safety] passivity = \"on\" is not allowed"},

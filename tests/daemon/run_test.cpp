@@ -137,6 +137,38 @@ TEST_F(DaemonRun, RefusesGainsThatFailTheCheckNamingMarginAndFrequency) {
     EXPECT_TRUE(outcome.out.empty());
 }
 
+TEST_F(DaemonRun, TheCheckSeesTheVelocityFilter) {
+    // k_c = 3600 N/m, b_c = 0.5 N s/m: the passive bound is k_c T/2 + b_c <= b unfiltered
+    // (3000 N/m), k_c T/2 + b_c (1 - a)/(1 + a) <= b on a 100 Hz filter (3695.8 N/m).
+    RunOptions options;
+    options.config_path = config("[coupling]\nstiffness = 3600\ndamping = 0.5\n");
+    Outcome outcome = run(options);
+    EXPECT_EQ(outcome.exit_code, kExitBadInput) << outcome.log;
+    EXPECT_NE(outcome.log.find("fail the passive model"), std::string::npos) << outcome.log;
+
+    options.config_path =
+        config("[coupling]\nstiffness = 3600\ndamping = 0.5\nvelocity_filter = 100\n");
+    options.duration_s = 0.5;
+    options.lockstep = true;
+    outcome = run(options);
+    EXPECT_EQ(outcome.exit_code, kExitOk) << outcome.log;
+    EXPECT_NE(outcome.log.find("(passive model, loop delay 0 ms, velocity filter 100 Hz): "
+                               "unconditionally stable, worst margin 0.0"),
+              std::string::npos)
+        << outcome.log;
+
+    options.config_path =
+        config("[coupling]\nstiffness = 3800\ndamping = 0.5\nvelocity_filter = 100\n");
+    outcome = run(options);
+    EXPECT_EQ(outcome.exit_code, kExitBadInput) << outcome.log;
+    EXPECT_NE(outcome.log.find("damping = 0.5 N s/m, velocity_filter = 100 Hz fail the passive "
+                               "model"),
+              std::string::npos)
+        << outcome.log;
+    EXPECT_NE(outcome.log.find("--rate 1000 --velocity-filter 100"), std::string::npos)
+        << outcome.log;
+}
+
 TEST_F(DaemonRun, ThePaperModelCheckLetsThePaperGainsRun) {
     RunOptions options;
     options.config_path = config("[coupling]\nstiffness = 16000\ncheck = \"paper\"\n");
@@ -284,12 +316,17 @@ TEST_P(DaemonRunRefuses, WithExitTwoAndAMessageNamingTheProblem) {
 
 INSTANTIATE_TEST_SUITE_P(
     Cases, DaemonRunRefuses,
-    ::testing::Values(BadStart{"unknown key", kEncoderGains, "[safety]\nmax_torque = 3\n",
-                               "lab.toml: unknown key [safety] max_torque"},
-                      BadStart{"sim table", kEncoderGains, "[device.sim.faults]\nseed = -1\n",
-                               "device.sim.faults.seed"},
-                      BadStart{"no gains", "[coupling]\ncheck = \"encoder\"\n", "",
-                               "[coupling] stiffness and damping are both 0"}),
+    ::testing::Values(
+        BadStart{"unknown key", kEncoderGains, "[safety]\nmax_torque = 3\n",
+                 "lab.toml: unknown key [safety] max_torque"},
+        BadStart{"sim table", kEncoderGains, "[device.sim.faults]\nseed = -1\n",
+                 "device.sim.faults.seed"},
+        BadStart{"no gains", "[coupling]\ncheck = \"encoder\"\n", "",
+                 "[coupling] stiffness and damping are both 0"},
+        BadStart{"velocity filter above Nyquist",
+                 "[coupling]\nstiffness = 3600\ndamping = 0.5\nvelocity_filter = 600\n", "",
+                 "lab.toml: [coupling] velocity_filter = 600 is out of range: "
+                 "allowed 0 (no filter) or >= 1 and < 500"}),
     [](const ::testing::TestParamInfo<BadStart>& param_info) {
         std::string name = param_info.param.what;
         for (char& c : name) c = std::isalnum(static_cast<unsigned char>(c)) ? c : '_';

@@ -106,13 +106,16 @@ GuardedRun run_guarded(device::Device& device, Environment& environment,
 }
 
 GuardedRun run_scene(const SceneCase& scene_case, const std::string& passivity,
-                     double stiffness_n_per_m = 3600.0, const std::string& sim_keys = "") {
+                     double stiffness_n_per_m = 3600.0, const std::string& sim_keys = "",
+                     double damping_n_s_per_m = 0.0, double velocity_filter_hz = 0.0) {
     const ScratchDir dir;
     DaemonConfig text;
     text.axes = scene_case.axes;
     text.sim_keys = sim_keys;
-    text.coupling = coupling_table(
-        {.stiffness_n_per_m = stiffness_n_per_m, .damping_n_s_per_m = 0.0}, "encoder");
+    text.coupling = coupling_table({.stiffness_n_per_m = stiffness_n_per_m,
+                                    .damping_n_s_per_m = damping_n_s_per_m,
+                                    .velocity_filter_hz = velocity_filter_hz},
+                                   "encoder");
     text.humans = human_table(
         stiff_grasp(push_toml(scene_case.push_to_m, 0.0, scene_case.push_ramp_s, 1000.0)));
     text.passivity = passivity;
@@ -188,6 +191,21 @@ TEST(HilAllocation, TicksWithADelayedSimDoNotAllocate) {
     EXPECT_EQ(run.faults, 0u);
     EXPECT_EQ(run.guarded_rows, kGuardedTicks);
     EXPECT_GE(run.rows_with_force, kGuardedTicks * 9 / 10);
+}
+
+// The coupling damper on a filtered velocity ([coupling] velocity_filter), in the series solve
+// (17) of the demo wall and the admittance step (22) of the virtual mass: its state and the
+// equivalent gains handed to the environment are in the coupling, nothing on the heap.
+TEST(HilAllocation, TicksWithAFilteredCouplingDoNotAllocate) {
+    for (const SceneCase& scene : shipped_scenes()) {
+        if (scene.file != "demo-wall.toml" && scene.file != "virtual-mass.toml") continue;
+        SCOPED_TRACE(scene.file);
+        const GuardedRun run = run_scene(scene, "observe", 3000.0, "", 0.5, 100.0);
+        EXPECT_EQ(run.allocations, 0u);
+        EXPECT_EQ(run.faults, 0u);
+        EXPECT_EQ(run.guarded_rows, kGuardedTicks);
+        EXPECT_GE(run.rows_with_force, kGuardedTicks * 9 / 10);
+    }
 }
 
 }  // namespace

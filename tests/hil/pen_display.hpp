@@ -41,15 +41,20 @@ inline std::string toml_vector(const std::vector<double>& values) {
 }
 
 struct CouplingGains {
-    double stiffness_n_per_m = 0.0;  ///< k_c of (16)
-    double damping_n_s_per_m = 0.0;  ///< b_c of (16)
+    double stiffness_n_per_m = 0.0;   ///< k_c of (16)
+    double damping_n_s_per_m = 0.0;   ///< b_c of (16)
+    double velocity_filter_hz = 0.0;  ///< [coupling] velocity_filter; 0: none (not written)
 };
 
 /// [coupling] with the virtual coupling (16) and the start-up check `check`.
 inline std::string coupling_table(const CouplingGains& gains, std::string_view check) {
-    return "[coupling]\nstiffness = " + toml_number(gains.stiffness_n_per_m) +
-           "\ndamping = " + toml_number(gains.damping_n_s_per_m) + "\ncheck = \"" +
-           std::string(check) + "\"\n";
+    std::string text = "[coupling]\nstiffness = " + toml_number(gains.stiffness_n_per_m) +
+                       "\ndamping = " + toml_number(gains.damping_n_s_per_m) + "\ncheck = \"" +
+                       std::string(check) + "\"\n";
+    if (gains.velocity_filter_hz > 0.0) {
+        text += "velocity_filter = " + toml_number(gains.velocity_filter_hz) + "\n";
+    }
+    return text;
 }
 
 /// [coupling] without a coupling: the scene's penalty force acts on the handle directly.

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <glm/geometric.hpp>
 
+#include "hapticd/theory/velocity_filter.hpp"
 #include "servo_fakes.hpp"
 
 namespace hapticd::servo {
@@ -194,6 +195,178 @@ TEST(ServoCoupling, IterationCapReportsNonConvergenceWithoutThrowing) {
     EXPECT_FALSE(step.converged);
     EXPECT_EQ(step.evaluations, 1);
     EXPECT_GT(step.residual_n, 1.0);
+}
+
+// ---- The damper's velocity filter (theory/velocity_filter.hpp) ------------------------------
+
+/// f_c with a = exp(-2π f_c T) = 1/2 (to rounding) at T = 1 ms: ln 2 / (2π T).
+const double kHalfPoleHz = std::log(2.0) / (2.0 * M_PI * kPeriod);
+
+TEST(ServoCouplingFilter, FollowsTheHandComputedSequence) {
+    // The tool held at 0 (v_e = 0), the handle at 1, 2, 2, 2, 0 mm from rest at 0: v_d = 1, 1,
+    // 0, 0, -2 m/s, and with a = 1/2 the damper's velocity u[n] = u[n-1]/2 + v_d[n]/2 is
+    // 0.5, 0.75, 0.375, 0.1875, -0.90625 m/s. F = k_c x_d + b_c u with k_c = 1000 N/m,
+    // b_c = 2 N s/m: 2, 3.5, 2.75, 2.375, -1.8125 N on the tool; the handle gets -F.
+    fakes::FixedPoint environment{.tool_m = Vec3(0.0)};
+    VirtualCoupling coupling(
+        {.stiffness_n_per_m = 1000.0, .damping_n_s_per_m = 2.0, .velocity_filter_hz = kHalfPoleHz});
+    EXPECT_NEAR(theory::velocity_filter_pole(kHalfPoleHz, kPeriod), 0.5, 1e-15);
+    coupling.reset(Vec3(0.0));
+    const double x_mm[] = {1.0, 2.0, 2.0, 2.0, 0.0};
+    const double u_expected[] = {0.5, 0.75, 0.375, 0.1875, -0.90625};
+    const double f_expected[] = {2.0, 3.5, 2.75, 2.375, -1.8125};
+    for (int n = 0; n < 5; ++n) {
+        const CouplingStep step =
+            coupling.step(environment, Vec3(x_mm[n] * 1e-3, 0.0, 0.0), kPeriod);
+        ASSERT_TRUE(step.finite);
+        EXPECT_NEAR(step.damper_velocity_mps.x, u_expected[n], 1e-12) << "tick " << n;
+        EXPECT_NEAR(step.tool_force_n.x, f_expected[n], 1e-12) << "tick " << n;
+        EXPECT_EQ(step.handle_force_n.x, -step.tool_force_n.x);
+        EXPECT_EQ(coupling.previous_damper_velocity_mps().x, step.damper_velocity_mps.x);
+    }
+}
+
+TEST(ServoCouplingFilter, SeriesSolveSatisfiesTheFilteredBalanceOf17) {
+    // The handle in and out of a damped wall; each tick the committed x_e must balance
+    //   k_c (x_d - x_e) + b_c u[n] + f_env(x_e, v_e) = 0,  u[n] = a u[n-1] + (1 - a)(v_d - v_e),
+    // with u[n-1] the filter state recomputed here from the steps.
+    const double k_c = 3000.0;
+    const double b_c = 4.0;
+    const double f_c = 100.0;
+    const double a = std::exp(-2.0 * M_PI * f_c * kPeriod);
+    fakes::PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 20000.0};
+    VirtualCoupling coupling(
+        {.stiffness_n_per_m = k_c, .damping_n_s_per_m = b_c, .velocity_filter_hz = f_c});
+    coupling.reset(Vec3(0.005, 0.0, 0.0));
+    double u = 0.0;
+    int in_contact_ticks = 0;
+    for (int n = 1; n <= 1000; ++n) {
+        const Vec3 x_d(0.005 - 0.01 * std::sin(2.0 * M_PI * 2.0 * n * kPeriod), 0.0, 0.0);
+        const Vec3 previous_x_d = coupling.previous_device_position_m();
+        const Vec3 previous_x_e = coupling.previous_tool_position_m();
+        const CouplingStep step = coupling.step(wall, x_d, kPeriod);
+        ASSERT_TRUE(step.finite);
+        ASSERT_TRUE(step.converged) << "tick " << n;
+        const double v_d = (x_d.x - previous_x_d.x) / kPeriod;
+        const double v_e = (step.tool_position_m.x - previous_x_e.x) / kPeriod;
+        u = a * u + (1.0 - a) * (v_d - v_e);
+        EXPECT_NEAR(step.damper_velocity_mps.x, u, 1e-12 * (1.0 + std::abs(u))) << "tick " << n;
+        const double coupling_force = k_c * (x_d.x - step.tool_position_m.x) + b_c * u;
+        const double balance =
+            coupling_force + wall.evaluate(step.tool_position_m, Vec3(v_e, 0, 0)).force_n.x;
+        EXPECT_NEAR(balance, 0.0, 1e-9) << "tick " << n;
+        EXPECT_NEAR(step.handle_force_n.x, -coupling_force, 1e-9) << "tick " << n;
+        if (step.tool_position_m.x < 0.0) ++in_contact_ticks;
+    }
+    EXPECT_GT(in_contact_ticks, 100);
+}
+
+TEST(ServoCouplingFilter, NoFilterIsTheUnfilteredForceToTheBit) {
+    // f_c = 0: F_c = k_c (x_d - x_e) + b_c (v_d - v_e) exactly, tick after tick.
+    const double k_c = 3000.0;
+    const double b_c = 4.0;
+    fakes::PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 20000.0, .damping_n_s_per_m = 3.0};
+    VirtualCoupling coupling({.stiffness_n_per_m = k_c, .damping_n_s_per_m = b_c});
+    coupling.reset(Vec3(0.005, 0.0, 0.0));
+    for (int n = 1; n <= 500; ++n) {
+        const Vec3 x_d(0.005 - 0.01 * std::sin(2.0 * M_PI * 3.0 * n * kPeriod), 0.0, 0.0);
+        const Vec3 previous_x_d = coupling.previous_device_position_m();
+        const Vec3 previous_x_e = coupling.previous_tool_position_m();
+        const CouplingStep step = coupling.step(wall, x_d, kPeriod);
+        const Vec3 v_d = (x_d - previous_x_d) * (1.0 / kPeriod);
+        const Vec3 v_e = (step.tool_position_m - previous_x_e) * (1.0 / kPeriod);
+        const Vec3 force = k_c * (x_d - step.tool_position_m) + b_c * (v_d - v_e);
+        ASSERT_EQ(step.tool_force_n.x, force.x) << "tick " << n;
+        ASSERT_EQ(step.damper_velocity_mps.x, (v_d - v_e).x) << "tick " << n;
+    }
+}
+
+/// Admittance: a free virtual mass integrated by implicit Euler with the gains it is handed
+/// (env::VirtualMass without spring, damper or constraints): it sees only the unfiltered
+/// equivalent of the filtered coupling.
+struct ImplicitMass {
+    double mass_kg = 0.05;
+    Vec3 x{0.0}, v{0.0};
+    CouplingGains last_gains{};
+    Vec3 step(const Vec3& x_d, const Vec3& v_d, const CouplingGains& g, double t) noexcept {
+        last_gains = g;
+        const double d = mass_kg + t * g.damping_n_s_per_m + t * t * g.stiffness_n_per_m;
+        v = (mass_kg * v + t * (g.stiffness_n_per_m * (x_d - x) + g.damping_n_s_per_m * v_d)) / d;
+        x += t * v;
+        return x;
+    }
+    void reset(const Vec3& position) noexcept {
+        x = position;
+        v = Vec3(0.0);
+    }
+};
+static_assert(AdmittancePort<ImplicitMass>);
+
+TEST(ServoCouplingFilter, AdmittanceMassFeelsTheFilteredForceAtTheEndOfTheStep) {
+    // The mass's implicit update must be driven by the filtered coupling force of the same
+    // tick: m_e (v_e[n] - v_e[n-1]) / T = k_c (x_d - x_e[n]) + b_c u[n] (exact_model.hpp).
+    const double k_c = 2000.0, b_c = 3.0, f_c = 50.0;
+    ImplicitMass mass;
+    mass.reset(Vec3(0.0));
+    VirtualCoupling coupling(
+        {.stiffness_n_per_m = k_c, .damping_n_s_per_m = b_c, .velocity_filter_hz = f_c});
+    coupling.reset(Vec3(0.0));
+    const double a = std::exp(-2.0 * M_PI * f_c * kPeriod);
+    for (int n = 1; n <= 300; ++n) {
+        const Vec3 x_d(0.002 * std::sin(2.0 * M_PI * 7.0 * n * kPeriod), 0.0, 0.0);
+        const Vec3 v_before = mass.v;
+        const CouplingStep step = coupling.step(mass, x_d, kPeriod);
+        ASSERT_TRUE(step.finite);
+        EXPECT_EQ(mass.last_gains.velocity_filter_hz, 0.0);
+        EXPECT_NEAR(mass.last_gains.damping_n_s_per_m, (1.0 - a) * b_c, 1e-15);
+        EXPECT_NEAR(mass.mass_kg * (mass.v.x - v_before.x) / kPeriod, step.tool_force_n.x,
+                    1e-9 * (1.0 + std::abs(step.tool_force_n.x)))
+            << "tick " << n;
+        EXPECT_NEAR(step.tool_velocity_mps.x, mass.v.x, 1e-12);
+    }
+}
+
+TEST(ServoCouplingFilter, ResetAndTrackingEmptyTheFilterAndFailuresCommitNothing) {
+    fakes::FixedPoint environment{.tool_m = Vec3(0.0)};
+    VirtualCoupling coupling(
+        {.stiffness_n_per_m = 1000.0, .damping_n_s_per_m = 2.0, .velocity_filter_hz = 100.0});
+    coupling.reset(Vec3(0.0));
+    (void)coupling.step(environment, Vec3(0.001, 0.0, 0.0), kPeriod);
+    EXPECT_GT(coupling.previous_damper_velocity_mps().x, 0.0);
+    coupling.track_device(Vec3(0.002, 0.0, 0.0));
+    EXPECT_EQ(coupling.previous_damper_velocity_mps().x, 0.0);
+    (void)coupling.step(environment, Vec3(0.003, 0.0, 0.0), kPeriod);
+    EXPECT_NE(coupling.previous_damper_velocity_mps().x, 0.0);
+    coupling.reset(Vec3(0.003, 0.0, 0.0));
+    EXPECT_EQ(coupling.previous_damper_velocity_mps(), Vec3(0.0));
+
+    // A non-finite solve commits nothing, the filter's state included.
+    fakes::PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 5000.0};
+    VirtualCoupling series(
+        {.stiffness_n_per_m = 1000.0, .damping_n_s_per_m = 2.0, .velocity_filter_hz = 100.0});
+    series.reset(Vec3(0.0));
+    (void)series.step(wall, Vec3(-0.001, 0.0, 0.0), kPeriod);
+    const Vec3 state = series.previous_damper_velocity_mps();
+    EXPECT_NE(state.x, 0.0);
+    fakes::NanAfter nan{.after_evaluations = 0};
+    const CouplingStep failed = series.step(nan, Vec3(-0.002, 0.0, 0.0), kPeriod);
+    EXPECT_FALSE(failed.finite);
+    EXPECT_EQ(series.previous_damper_velocity_mps(), state);
+}
+
+TEST(ServoCouplingFilter, AnOverrunSamplesTheLowPassOverTheWholeInterval) {
+    // A step spanning 3 T uses a = exp(-2π f_c 3T): u = (1 - a) v_d from rest.
+    const double f_c = 80.0;
+    fakes::FixedPoint environment{.tool_m = Vec3(0.0)};
+    VirtualCoupling coupling(
+        {.stiffness_n_per_m = 0.0, .damping_n_s_per_m = 1.0, .velocity_filter_hz = f_c});
+    coupling.reset(Vec3(0.0));
+    const CouplingStep late = coupling.step(environment, Vec3(0.003, 0.0, 0.0), 3.0 * kPeriod);
+    const double a3 = std::exp(-2.0 * M_PI * f_c * 3.0 * kPeriod);
+    EXPECT_NEAR(late.damper_velocity_mps.x, (1.0 - a3) * 1.0, 1e-14);
+    const CouplingStep next = coupling.step(environment, Vec3(0.003, 0.0, 0.0), kPeriod);
+    const double a1 = std::exp(-2.0 * M_PI * f_c * kPeriod);
+    EXPECT_NEAR(next.damper_velocity_mps.x, a1 * (1.0 - a3), 1e-14);
 }
 
 }  // namespace

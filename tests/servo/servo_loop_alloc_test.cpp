@@ -30,11 +30,14 @@ struct SweepingDevice {
     IoResult write(const Command& command) noexcept { return inner.write(command); }
 };
 
-ServoConfig alloc_config() {
+/// `velocity_filter_hz` > 0 puts the coupling damper on a filtered velocity.
+ServoConfig alloc_config(double velocity_filter_hz = 0.0) {
     ServoConfig config;
     config.axes = 3;
     config.counts_per_meter = 1e6;
-    config.coupling = {.stiffness_n_per_m = 2000.0, .damping_n_s_per_m = 2.0};
+    config.coupling = {.stiffness_n_per_m = 2000.0,
+                       .damping_n_s_per_m = 2.0,
+                       .velocity_filter_hz = velocity_filter_hz};
     config.safety.max_force_n = 5.0;  // the sweep saturates sometimes
     config.safety.soft_start = {.still_speed_mps = 1.0, .still_time_s = 0.01, .ramp_time_s = 0.05};
     config.safety.passivity.mode = PassivityMode::control;
@@ -56,12 +59,13 @@ TEST(ServoAllocationGuard, SeesAnAllocation) {
 }
 
 template <typename Environment>
-void expect_ticks_do_not_allocate(Environment& environment, int ticks) {
+void expect_ticks_do_not_allocate(Environment& environment, int ticks,
+                                  double velocity_filter_hz = 0.0) {
     VirtualTime time;
     SweepingDevice device;
     TelemetryRing ring(64);  // small: it overflows, and dropping must not allocate either
-    ServoLoop<SweepingDevice, Environment, FakeClock> loop(device, environment, alloc_config(),
-                                                           &ring, FakeClock{&time});
+    ServoLoop<SweepingDevice, Environment, FakeClock> loop(
+        device, environment, alloc_config(velocity_filter_hz), &ring, FakeClock{&time});
     hapticd::testing::AllocationGuard guard;  // from the very first tick (environment reset)
     double max_force = 0.0;
     for (int n = 0; n < ticks; ++n) {
@@ -94,6 +98,15 @@ TEST(ServoAllocation, ImpedanceWallTicksDoNotAllocate) {
 TEST(ServoAllocation, AdmittanceProxyTicksDoNotAllocate) {
     fakes::ProxyPlane proxy{.wall_m = 0.0};
     expect_ticks_do_not_allocate(proxy, 10'000);
+}
+
+// The damper on a filtered velocity: the filter's state, its pole and the equivalent gains
+// handed to an admittance environment live in the coupling, nothing on the heap.
+TEST(ServoAllocation, FilteredCouplingTicksDoNotAllocate) {
+    fakes::PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 8000.0, .damping_n_s_per_m = 5.0};
+    expect_ticks_do_not_allocate(wall, 10'000, 100.0);
+    fakes::ProxyPlane proxy{.wall_m = 0.0};
+    expect_ticks_do_not_allocate(proxy, 10'000, 100.0);
 }
 
 TEST(ServoAllocation, FaultPathDoesNotAllocate) {

@@ -170,6 +170,24 @@ TEST(Autotune, OptimisedDampingIsNoneWithoutDelayAndVerifiedWithIt) {
     }
 }
 
+// The config's velocity filter goes into the sizing and the exact check: with one period of
+// delay the filtered best pair is softer (1240.64 N/m at 0.4670 N s/m on a 100 Hz filter,
+// against 1539.60 N/m at 0.5635 unfiltered; docs/stability-models.md).
+TEST(Autotune, SizesAndVerifiesWithTheVelocityFilter) {
+    AutotuneOptions options;
+    options.optimize_damping = true;
+    options.delay_periods = 1.0;
+    options.velocity_filter_hz = 100.0;
+    const AutotuneResult r = autotune({identified(0, 0.1, 2.0)}, options);
+    EXPECT_EQ(r.coupling.velocity_filter_hz, 100.0);
+    EXPECT_EQ(r.bound.velocity_filter_hz, 100.0);
+    EXPECT_NEAR(r.bound.stiffness_n_per_m, 1240.64, 0.01);
+    EXPECT_NEAR(r.bound.damping_n_s_per_m, 0.4670, 1e-3);
+    EXPECT_TRUE(r.verified) << r.verdict;
+    options.velocity_filter_hz = 600.0;  // above Nyquist at 1 kHz
+    EXPECT_THROW(options.validate(), std::invalid_argument);
+}
+
 TEST(Autotune, RejectsADelayOutsideZeroToTenPeriods) {
     for (double d : {-0.1, 10.0, std::nan("")}) {
         AutotuneOptions options;

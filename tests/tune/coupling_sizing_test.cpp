@@ -9,6 +9,7 @@
 #include <complex>
 #include <numbers>
 #include <ostream>
+#include <sstream>
 #include <vector>
 
 namespace hapticd::tune {
@@ -191,6 +192,149 @@ TEST(ImpedanceSizing, NonPhysicalInputNamesTheValue) {
     EXPECT_NE(message({{0.1, 2.0}, NAN}).find("rate = nan"), std::string::npos);
     EXPECT_NE(message({{0.1, 2.0}, 1000, HoldModel::encoder, -1.0}).find("b_c = -1"),
               std::string::npos);
+}
+
+// ---- The damper on a filtered velocity (theory/velocity_filter.hpp) ----
+
+/// (21) with Z_c = b_c (1 - a)/(1 - a z⁻¹) + k_c T z/(z - 1), complex arithmetic only; the
+/// passive model without delay is the hold term e^{-jθ}.
+bool filtered_satisfies_21(const DeviceModel& d, double k, double b_c, double cutoff_hz,
+                           HoldModel model, double period, const std::vector<double>& grid) {
+    const double a = std::exp(-2.0 * std::numbers::pi * cutoff_hz * period);
+    for (double theta : grid) {
+        const Complex z = std::exp(Complex(0, theta));
+        const Complex z_minus_1 =
+            2.0 * Complex(0, std::sin(theta / 2)) * std::exp(Complex(0, theta / 2));
+        const Complex zc = b_c * (1.0 - a) / (1.0 - a / z) + k * period * z / z_minus_1;
+        const Complex h =
+            model == HoldModel::passive ? std::exp(Complex(0, -theta)) : hold(model, theta);
+        const double half = std::sin(std::arg(h) / 2.0);
+        const double bound = std::abs(h) * 2.0 * half * half / (2.0 * d.damping_n_s_per_m);
+        if ((1.0 / zc).real() < bound) return false;
+    }
+    return true;
+}
+
+double bisect_filtered_stiffness(const DeviceModel& d, double b_c, double cutoff_hz,
+                                 HoldModel model, double period) {
+    static const std::vector<double> grid = dense_grid(200000);
+    double lo = 0.0;
+    double hi = 100.0 * d.damping_n_s_per_m / period;
+    while (hi - lo > 1e-10 * hi) {
+        const double mid = 0.5 * (lo + hi);
+        (filtered_satisfies_21(d, mid, b_c, cutoff_hz, model, period, grid) ? lo : hi) = mid;
+    }
+    return lo;
+}
+
+struct FilteredCase {
+    DeviceModel device;
+    double rate_hz;
+    double b_c;
+    double cutoff_hz;
+    HoldModel model;
+};
+
+class FilteredAgainstBisection : public ::testing::TestWithParam<FilteredCase> {};
+INSTANTIATE_TEST_SUITE_P(
+    Devices, FilteredAgainstBisection,
+    ::testing::Values(FilteredCase{{0.1, 2.0}, 1000, 0.5, 100.0, HoldModel::passive},
+                      FilteredCase{{0.1, 2.0}, 1000, 2.0, 300.0, HoldModel::passive},
+                      FilteredCase{{0.1, 2.0}, 1000, 0.5, 100.0, HoldModel::encoder},
+                      FilteredCase{{0.1, 2.0}, 1000, 3.0, 30.0, HoldModel::encoder},
+                      FilteredCase{{0.1, 2.0}, 1000, 1.0, 100.0, HoldModel::paper},
+                      FilteredCase{{0.5, 0.4}, 2000, 0.2, 50.0, HoldModel::encoder}));
+
+TEST_P(FilteredAgainstBisection, StiffnessAgreesToOnePartPerMillion) {
+    const FilteredCase c = GetParam();
+    ImpedanceSizingRequest request{c.device, c.rate_hz, c.model, c.b_c};
+    request.velocity_filter_hz = c.cutoff_hz;
+    const ImpedanceSizing s = size_impedance_coupling(request);
+    const double reference =
+        bisect_filtered_stiffness(c.device, c.b_c, c.cutoff_hz, c.model, 1.0 / c.rate_hz);
+    EXPECT_NEAR(s.coupling.stiffness_n_per_m, reference, 1e-6 * reference)
+        << "method " << s.report.method;
+    EXPECT_EQ(s.coupling.damping_n_s_per_m, c.b_c);
+    EXPECT_EQ(s.coupling.velocity_filter_hz, c.cutoff_hz);
+    EXPECT_GE(s.verified_worst_margin, 0.0);
+    EXPECT_LT(s.verified_worst_margin, 1e-4);
+    const theory::CouplingCheck check =
+        theory::check_coupling(c.device, s.coupling, c.model, c.rate_hz);
+    EXPECT_TRUE(check.unconditionally_stable) << check.worst_margin;
+    EXPECT_LT(check.worst_margin, 1e-4);
+    if (c.model == HoldModel::passive) {
+        // The closed form without delay: k_c T/2 + b_c (1 - a)/(1 + a) = b, at Nyquist.
+        const double a = std::exp(-2.0 * std::numbers::pi * c.cutoff_hz / c.rate_hz);
+        EXPECT_NEAR(s.coupling.stiffness_n_per_m,
+                    2.0 * (c.device.damping_n_s_per_m - c.b_c * (1.0 - a) / (1.0 + a)) * c.rate_hz,
+                    1e-8 * reference);
+        EXPECT_NEAR(s.binding_frequency_hz, c.rate_hz / 2.0, 1e-6);
+    }
+}
+
+TEST(FilteredSizing, WithADelayItIsThePassiveBisection) {
+    // One period of delay: the bound binds in the band (tests/theory/velocity_filter_test.cpp
+    // holds these against numpy): 1240.23684 N/m at 100 Hz, 1534.0702 N/m unfiltered.
+    ImpedanceSizingRequest request{{0.1, 2.0}, 1000, {HoldModel::passive, 1.0}, 0.5};
+    request.velocity_filter_hz = 100.0;
+    const ImpedanceSizing filtered = size_impedance_coupling(request);
+    EXPECT_NEAR(filtered.coupling.stiffness_n_per_m, 1240.23684, 1e-6 * 1240.0);
+    EXPECT_NEAR(filtered.binding_frequency_hz, 135.362, 0.01);
+    request.velocity_filter_hz = 0.0;
+    EXPECT_NEAR(size_impedance_coupling(request).coupling.stiffness_n_per_m, 1534.0702,
+                1e-6 * 1534.0);
+}
+
+class FilteredOptimizeDamping : public ::testing::TestWithParam<theory::LoopModel> {};
+INSTANTIATE_TEST_SUITE_P(Models, FilteredOptimizeDamping,
+                         ::testing::Values(theory::LoopModel{HoldModel::encoder},
+                                           theory::LoopModel{HoldModel::passive, 1.0}));
+
+TEST_P(FilteredOptimizeDamping, BestPairBeatsEveryDampingOnABruteForceScan) {
+    const DeviceModel device{0.1, 2.0};
+    const double cutoff_hz = 100.0;
+    ImpedanceSizingRequest request{device, 1000, GetParam(), std::nullopt};
+    request.velocity_filter_hz = cutoff_hz;
+    const ImpedanceSizing best = size_impedance_coupling(request);
+    EXPECT_EQ(best.report.method, "golden-section");
+    double brute = 0.0;
+    double brute_b_c = 0.0;
+    for (double b_c = 0.0; b_c < 6.0; b_c += 0.02) {
+        request.coupling_damping_n_s_per_m = b_c;
+        try {
+            const double k = size_impedance_coupling(request).coupling.stiffness_n_per_m;
+            if (k > brute) brute = k, brute_b_c = b_c;
+        } catch (const InfeasibleCoupling&) {
+        }
+    }
+    EXPECT_GE(best.coupling.stiffness_n_per_m, brute * (1 - 1e-9));
+    EXPECT_LT(best.coupling.stiffness_n_per_m, brute * 1.001);
+    EXPECT_NEAR(best.coupling.damping_n_s_per_m, brute_b_c, 0.04);
+    EXPECT_GE(best.verified_worst_margin, 0.0);
+    EXPECT_EQ(best.coupling.velocity_filter_hz, cutoff_hz);
+}
+
+TEST(FilteredSizing, InfeasibleDampingNamesTheFilter) {
+    // Without delay the filtered damper alone meets (21) up to b_c = b (1 + a)/(1 - a) (Nyquist):
+    // 6.574 N s/m at 100 Hz, against b = 2 N s/m unfiltered.
+    ImpedanceSizingRequest request{{0.1, 2.0}, 1000, HoldModel::passive, 7.0};
+    request.velocity_filter_hz = 100.0;
+    const double a = std::exp(-2.0 * std::numbers::pi * 0.1);
+    try {
+        size_impedance_coupling(request);
+        FAIL() << "b_c = 7 cannot meet (21)";
+    } catch (const InfeasibleCoupling& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("b_c = 7"), std::string::npos) << what;
+        EXPECT_NE(what.find("velocity filter at 100 Hz"), std::string::npos) << what;
+        std::ostringstream limit;
+        limit << "must be below " << 2.0 * (1.0 + a) / (1.0 - a);
+        EXPECT_NE(what.find(limit.str().substr(0, 18)), std::string::npos) << what;
+    }
+    request.coupling_damping_n_s_per_m = 6.5;
+    EXPECT_GT(size_impedance_coupling(request).coupling.stiffness_n_per_m, 0.0);
+    request.velocity_filter_hz = 600.0;  // above Nyquist
+    EXPECT_THROW(size_impedance_coupling(request), std::invalid_argument);
 }
 
 // ---- Admittance display (37) ----

@@ -200,6 +200,116 @@ TEST(exactSimulation, GrowthPerTickEqualsSpectralRadius) {
     EXPECT_NEAR(growth, poles.spectral_radius, 2e-5);
 }
 
+// ---- The damper on a filtered velocity (theory/velocity_filter.hpp) ----------------------
+
+TEST(exactVelocityFilter, AgreesWithAnIndependentLoop) {
+    // tools/scripts/velocity_filter_loop.py: the same loop written from scratch with scipy.
+    struct Case {
+        OperatorModel hand;
+        SpringDamperCoupling coupling;
+        EnvironmentModel environment;
+        double radius, frequency_hz;
+    };
+    const Case cases[] = {
+        {OperatorModel::heavy_hand(0.5, 1.0),
+         {3600.0, 0.5, 100.0},
+         EnvironmentModel::rigid_wall(),
+         0.998591422294282,
+         12.33076936},
+        {OperatorModel::heavy_hand(0.5, 1.0),
+         {3600.0, 0.5, 0.0},
+         EnvironmentModel::rigid_wall(),
+         0.998585279527818,
+         12.3249996},
+        {OperatorModel::heavy_hand(2.0, 0.0),
+         {1500.0, 1.0, 30.0},
+         EnvironmentModel::rigid_wall(),
+         0.999468246299843,
+         4.258321381},
+        {OperatorModel::heavy_hand(0.5, 1.0),
+         {3000.0, 0.5, 100.0},
+         EnvironmentModel::mass_spring(0.01, 1e4, 0.0),
+         0.998218501716343,
+         9.864003582},
+        {OperatorModel::heavy_hand(1.0, 0.3),
+         {2500.0, 2.0, 300.0},
+         EnvironmentModel::mass_spring(0.1, 1e3, 1.0),
+         0.998842580256954,
+         3.959630965},
+    };
+    for (const Case& c : cases) {
+        const ClosedLoopPoles poles =
+            closed_loop_poles(kDevice, c.coupling, kRateHz, c.hand, c.environment);
+        EXPECT_NEAR(poles.spectral_radius, c.radius, 1e-12) << c.hand.describe();
+        EXPECT_NEAR(poles.dominant_frequency_hz, c.frequency_hz, 1e-7) << c.hand.describe();
+    }
+}
+
+TEST(exactVelocityFilter, TheServosUpdateGrowsAtTheSpectralRadius) {
+    // The servo tick of the file comment with the filter, simulated: the implicit-Euler
+    // mass-spring with D = m_e + T((1 - a) b_c + b_e) + T²(k_c + k_e) and the memory a b_c u.
+    const OperatorModel h = OperatorModel::two_mass_grasp(1000.0, 1.0, 0.5, 100.0, 2.0);
+    const EnvironmentModel env = EnvironmentModel::mass_spring(0.05, 1e5, 1.0);
+    const SpringDamperCoupling c{9000.0, 0.5, 100.0};
+    const ClosedLoopPoles poles = closed_loop_poles(kDevice, c, kRateHz, h, env);
+    ASSERT_GT(poles.spectral_radius, 1.002);
+
+    const double m = kDevice.mass_kg, b = kDevice.damping_n_s_per_m, t = kPeriodS;
+    const double a = std::exp(-2.0 * kPi * c.velocity_filter_hz * t);
+    const double kc = c.stiffness_n_per_m, bc = c.damping_n_s_per_m;
+    using State = std::array<double, 4>;  // x_d, v_d, x_h, v_h
+    auto derivative = [&](const State& s, double force) {
+        const double skin =
+            h.skin_stiffness_n_per_m * (s[0] - s[2]) + h.skin_damping_n_s_per_m * (s[1] - s[3]);
+        const double arm = h.arm_stiffness_n_per_m * s[2] + h.arm_damping_n_s_per_m * s[3];
+        return State{s[1], (-b * s[1] - skin - force) / m, s[3], (skin - arm) / h.hand_mass_kg};
+    };
+    State s{1e-3, 0.0, 0.0, 0.0};
+    double x_prev = 0.0, xe = 0.0, ve = 0.0, u = 0.0;
+    std::vector<double> force_history;
+    constexpr int kTicks = 4000, kSub = 100;
+    for (int n = 0; n < kTicks; ++n) {
+        const double xd = s[0];
+        const double vd = (xd - x_prev) / t;
+        const double ve_prev = ve;
+        const double d = env.mass_kg + t * ((1.0 - a) * bc + env.damping_n_s_per_m) +
+                         t * t * (kc + env.stiffness_n_per_m);
+        ve = (env.mass_kg * ve + t * (kc * (xd - xe) + (1.0 - a) * bc * vd + a * bc * u -
+                                      env.stiffness_n_per_m * xe)) /
+             d;
+        xe += t * ve;
+        u = a * u + (1.0 - a) * (vd - ve);
+        const double force = kc * (xd - xe) + bc * u;
+        ASSERT_NEAR(env.mass_kg * (ve - ve_prev) / t,
+                    force - env.stiffness_n_per_m * xe - env.damping_n_s_per_m * ve,
+                    1e-9 * (1.0 + std::abs(force)));
+        force_history.push_back(force);
+        x_prev = xd;
+        const double hstep = t / kSub;
+        for (int k = 0; k < kSub; ++k) {
+            auto add = [](const State& x, const State& dx, double w) {
+                return State{x[0] + w * dx[0], x[1] + w * dx[1], x[2] + w * dx[2],
+                             x[3] + w * dx[3]};
+            };
+            const State k1 = derivative(s, force);
+            const State k2 = derivative(add(s, k1, hstep / 2), force);
+            const State k3 = derivative(add(s, k2, hstep / 2), force);
+            const State k4 = derivative(add(s, k3, hstep), force);
+            for (std::size_t i = 0; i < 4; ++i) {
+                s[i] += hstep / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+            }
+        }
+    }
+    auto rms = [&](int from, int to) {
+        double sum = 0.0;
+        for (int n = from; n < to; ++n)
+            sum += force_history[std::size_t(n)] * force_history[std::size_t(n)];
+        return std::sqrt(sum / (to - from));
+    };
+    const double growth = std::pow(rms(3000, 4000) / rms(2000, 3000), 1.0 / 1000.0);
+    EXPECT_NEAR(growth, poles.spectral_radius, 2e-5);
+}
+
 // ---- The low-frequency bound: Colgate & Schenkel, and the paper's 8b/T -----------------
 
 TEST(exactColgate, JustBelowTwoBOverTIsStableForTheWholeSweep) {
@@ -410,6 +520,25 @@ std::string invalid_argument_message(F&& f) {
         return e.what();
     }
     return "(no std::invalid_argument thrown)";
+}
+
+TEST(exactVelocityFilter, NoFilterIsTheUnfilteredLoopAndTheCutoffIsChecked) {
+    const OperatorModel h = OperatorModel::two_mass_grasp(1000.0, 1.0, 0.5, 100.0, 2.0);
+    const EnvironmentModel env = EnvironmentModel::mass_spring(0.05, 1e5, 1.0);
+    const ClosedLoopPoles plain = closed_loop_poles(kDevice, {3000.0, 0.5}, kRateHz, h, env);
+    const ClosedLoopPoles zero = closed_loop_poles(kDevice, {3000.0, 0.5, 0.0}, kRateHz, h, env);
+    EXPECT_EQ(plain.spectral_radius, zero.spectral_radius);
+    EXPECT_EQ(plain.eigenvalues.size(), zero.eigenvalues.size());
+    const ClosedLoopPoles filtered =
+        closed_loop_poles(kDevice, {3000.0, 0.5, 100.0}, kRateHz, h, env);
+    EXPECT_EQ(filtered.eigenvalues.size(), plain.eigenvalues.size() + 1);  // u[n-1]
+    for (double bad : {-1.0, 0.5, 500.0, 800.0}) {
+        EXPECT_NE(invalid_argument_message([&] {
+                      closed_loop_poles(kDevice, {3000.0, 0.5, bad}, kRateHz, h, env);
+                  }).find("velocity filter"),
+                  std::string::npos)
+            << bad;
+    }
 }
 
 TEST(exactInput, RejectsNonPhysicalValuesNamingThem) {

@@ -8,6 +8,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iostream>
+#include <numbers>
 #include <random>
 #include <string>
 
@@ -26,14 +28,16 @@ const DeviceModel kPen{0.1, 2.0};  // m = 0.1 kg, b = 2 N s/m
 constexpr double kRateHz = 1000.0;
 constexpr double kPeriodS = 1.0 / kRateHz;
 
-/// The largest k_c the passive model allows at b_c, to 1e-9 relative.
-double passive_limit(const DeviceModel& device, double bc, double delay_periods, double rate_hz) {
+/// The largest k_c the passive model allows at b_c (on a velocity filter at `filter_hz`), to
+/// 1e-9 relative.
+double passive_limit(const DeviceModel& device, double bc, double delay_periods, double rate_hz,
+                     double filter_hz = 0.0) {
     double lo = 0.0, hi = 1e7;
     while (hi - lo > 1e-9 * hi) {
         const double mid = 0.5 * (lo + hi);
-        const bool stable =
-            theory::check_coupling(device, {mid, bc}, {HoldModel::passive, delay_periods}, rate_hz)
-                .unconditionally_stable;
+        const bool stable = theory::check_coupling(device, {mid, bc, filter_hz},
+                                                   {HoldModel::passive, delay_periods}, rate_hz)
+                                .unconditionally_stable;
         (stable ? lo : hi) = mid;
     }
     return lo;
@@ -78,6 +82,57 @@ TEST_P(TightWithWholePeriods, UnstableJustAboveStableJustBelow) {
     }
     const ExactCheck below =
         check_exact(kPen, {0.99 * limit, d.coupling_damping}, kRateHz, d.delay_periods);
+    EXPECT_TRUE(below.stable) << below.worst_operator.describe() << " | "
+                              << below.worst_environment.describe() << " |z| "
+                              << below.worst_spectral_radius;
+}
+
+// The damper on a filtered velocity (theory/velocity_filter.hpp): the same tightness. With no
+// delay the passive bound is k_c T/2 + b_c (1 - a)/(1 + a) <= b (docs/stability-models.md),
+// binding at Nyquist, where the filtered damper weighs (1 - a)/(1 + a) of b_c; with a period of
+// delay it binds in the band, where the filter's lag takes damping away.
+struct FilteredDesign {
+    double filter_hz;
+    double coupling_damping;
+    double delay_periods;
+};
+
+class TightWithAVelocityFilter : public ::testing::TestWithParam<FilteredDesign> {};
+INSTANTIATE_TEST_SUITE_P(Designs, TightWithAVelocityFilter,
+                         ::testing::Values(FilteredDesign{100.0, 0.5, 0.0},
+                                           FilteredDesign{300.0, 0.5, 0.0},
+                                           FilteredDesign{100.0, 0.5, 1.0},
+                                           FilteredDesign{300.0, 0.5, 1.0}));
+
+TEST_P(TightWithAVelocityFilter, UnstableJustAboveStableJustBelow) {
+    const FilteredDesign d = GetParam();
+    const double limit =
+        passive_limit(kPen, d.coupling_damping, d.delay_periods, kRateHz, d.filter_hz);
+    if (d.delay_periods == 0.0) {
+        const double a = std::exp(-2.0 * std::numbers::pi * d.filter_hz * kPeriodS);
+        EXPECT_NEAR(
+            limit,
+            2.0 * (kPen.damping_n_s_per_m - d.coupling_damping * (1.0 - a) / (1.0 + a)) / kPeriodS,
+            1e-5 * limit);
+    }
+    const ExactCheck above = check_exact(kPen, {1.03 * limit, d.coupling_damping, d.filter_hz},
+                                         kRateHz, d.delay_periods);
+    EXPECT_FALSE(above.stable) << "k_c = " << 1.03 * limit;
+    EXPECT_GT(above.worst_spectral_radius, 1.0 + 1e-7);
+    std::cout.precision(9);
+    std::cout << "[filtered] f_c " << d.filter_hz << " Hz, b_c " << d.coupling_damping << ", delay "
+              << d.delay_periods << ": passive limit " << limit
+              << " N/m; 1.03x: |z| = " << above.worst_spectral_radius << " at "
+              << above.worst_frequency_hz << " Hz, " << above.worst_operator.describe() << " | "
+              << above.worst_environment.describe() << "\n";
+    std::cout.precision(6);
+    if (d.delay_periods == 0.0) {
+        EXPECT_EQ(above.worst_operator.family, OperatorFamily::multi_mode)
+            << above.worst_operator.describe();
+        EXPECT_NEAR(above.worst_frequency_hz, kRateHz / 2.0, 1e-3);
+    }
+    const ExactCheck below = check_exact(kPen, {0.99 * limit, d.coupling_damping, d.filter_hz},
+                                         kRateHz, d.delay_periods);
     EXPECT_TRUE(below.stable) << below.worst_operator.describe() << " | "
                               << below.worst_environment.describe() << " |z| "
                               << below.worst_spectral_radius;

@@ -223,6 +223,7 @@ ImpedanceDesign resolve_impedance_design(const ChartOptions& options, const Desi
     ImpedanceDesign design;
     design.coupling.damping_n_s_per_m =
         options.coupling_damping.value_or(input.coupling_damping_n_s_per_m.value_or(0.0));
+    design.coupling.velocity_filter_hz = input.velocity_filter_hz;
     if (options.stiffness) {
         design.coupling.stiffness_n_per_m = *options.stiffness;
         design.source = "flags";
@@ -235,6 +236,7 @@ ImpedanceDesign resolve_impedance_design(const ChartOptions& options, const Desi
         request.rate_hz = input.rate_hz;
         request.model = {theory::HoldModel::passive, input.delay_periods()};
         request.coupling_damping_n_s_per_m = design.coupling.damping_n_s_per_m;
+        request.velocity_filter_hz = design.coupling.velocity_filter_hz;
         const tune::ImpedanceSizing sizing = tune::size_impedance_coupling(request);
         design.coupling = sizing.coupling;
         design.source = "sized";
@@ -249,6 +251,7 @@ ImpedanceDesign resolve_impedance_design(const ChartOptions& options, const Desi
 nlohmann::ordered_json design_json(const ImpedanceDesign& design) {
     nlohmann::ordered_json out = {{"stiffness", design.coupling.stiffness_n_per_m},
                                   {"damping", design.coupling.damping_n_s_per_m},
+                                  {"velocity_filter_hz", design.coupling.velocity_filter_hz},
                                   {"source", design.source}};
     if (design.source == "sized") {
         out["sizing_model"] = "passive";
@@ -266,6 +269,10 @@ std::string format_number(double value) {
 std::string describe_design(const ImpedanceDesign& design) {
     std::string text = "k_c = " + format_number(design.coupling.stiffness_n_per_m) +
                        " N/m, b_c = " + format_number(design.coupling.damping_n_s_per_m) + " N s/m";
+    if (design.coupling.velocity_filter_hz > 0.0) {
+        text +=
+            " on a " + format_number(design.coupling.velocity_filter_hz) + " Hz velocity filter";
+    }
     if (design.source == "sized") text += " (sized from (21) with the passive model)";
     if (design.source == "config") text += " (from [coupling] in the config)";
     return text;

@@ -65,6 +65,15 @@ void add_delay_option(CLI::App& command, DeviceOptions& options) {
         ->check(non_negative_finite("s"));
 }
 
+void add_velocity_filter_option(CLI::App& command, DeviceOptions& options) {
+    command
+        .add_option("--velocity-filter", options.velocity_filter_hz,
+                    "cutoff (Hz) of a first-order low-pass on the coupling damper's velocity, "
+                    "in Z_c of every model: 0 (none, the default unless [coupling] "
+                    "velocity_filter), or 1 Hz up to below rate/2")
+        ->check(non_negative_finite("Hz"));
+}
+
 void add_model_option(CLI::App& command, std::string& model,
                       const std::vector<std::string>& allowed) {
     std::string list;
@@ -96,9 +105,12 @@ DesignInput resolve_design_input(const DeviceOptions& options) {
     input.coupling_stiffness_n_per_m = file.coupling_stiffness_n_per_m;
     input.coupling_damping_n_s_per_m = file.coupling_damping_n_s_per_m;
     input.delay_s = options.delay_s.value_or(file.delay_s.value_or(0.0));
+    input.velocity_filter_hz =
+        options.velocity_filter_hz.value_or(file.velocity_filter_hz.value_or(0.0));
     try {
         tune::check_device(input.device);
         tune::check_rate(input.rate_hz);
+        tune::check_velocity_filter(input.velocity_filter_hz, input.rate_hz);
     } catch (const std::invalid_argument& error) {
         throw UsageError(error.what());
     }

@@ -41,12 +41,16 @@ struct DeviceOptions {
     std::optional<double> mass_kg;
     std::optional<double> damping_n_s_per_m;
     std::optional<double> rate_hz;
-    std::optional<double> delay_s;  ///< --delay, where the command takes it
+    std::optional<double> delay_s;             ///< --delay, where the command takes it
+    std::optional<double> velocity_filter_hz;  ///< --velocity-filter, where the command takes it
 };
 void add_device_options(CLI::App& command, DeviceOptions& options);
 /// --delay SECONDS: the loop delay from the encoder sample to the force taking effect,
 /// beyond the zero-order hold ([device.model] delay in a config).
 void add_delay_option(CLI::App& command, DeviceOptions& options);
+/// --velocity-filter HZ: the cutoff of the first-order low-pass on the coupling damper's
+/// velocity ([coupling] velocity_filter in a config); 0 (default) is none.
+void add_velocity_filter_option(CLI::App& command, DeviceOptions& options);
 
 /// --model for size/check/plot: `allowed` (the first is the default, passive).
 void add_model_option(CLI::App& command, std::string& model,
@@ -59,9 +63,10 @@ struct DesignInput {
     std::optional<double> coupling_damping_n_s_per_m;
     double delay_s = 0.0;  ///< checked: >= 0 and < 10 periods
     double delay_periods() const { return delay_s * rate_hz; }
+    double velocity_filter_hz = 0.0;  ///< checked: 0, or 1 Hz up to below rate/2
 };
 /// Merges the config file and the flags; throws UsageError naming what is missing or a
-/// value out of its range (device, rate, delay).
+/// value out of its range (device, rate, delay, velocity filter).
 DesignInput resolve_design_input(const DeviceOptions& options);
 
 /// Prints `fields` as aligned "key  value" lines, or as one JSON object with --json.

@@ -543,6 +543,7 @@ int run_autotune(const AutotuneCliOptions& o) {
     }
     const std::string original = read_file(o.config_path);
     options.rate_hz = config.servo.rate_hz;
+    options.velocity_filter_hz = config.coupling.velocity_filter_hz;  // checked by the config
     options.identification.force_limit_n = config.safety.max_force_n;
     if (o.delay_s) {
         // A --delay out of range is bad input before anything runs.

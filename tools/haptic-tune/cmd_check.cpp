@@ -49,6 +49,7 @@ int run_check(const CheckOptions& o) {
     }
     coupling.damping_n_s_per_m =
         o.coupling_damping.value_or(input.coupling_damping_n_s_per_m.value_or(0.0));
+    coupling.velocity_filter_hz = input.velocity_filter_hz;
     if (coupling.stiffness_n_per_m == 0.0 && coupling.damping_n_s_per_m == 0.0) {
         throw UsageError("--stiffness 0 with --coupling-damping 0 is no coupling at all");
     }
@@ -95,6 +96,7 @@ int run_check(const CheckOptions& o) {
     out["delay_periods"] = input.delay_periods();
     out["stiffness"] = coupling.stiffness_n_per_m;
     out["damping"] = coupling.damping_n_s_per_m;
+    out["velocity_filter_hz"] = coupling.velocity_filter_hz;
     out["device"] = {{"mass", input.device.mass_kg}, {"damping", input.device.damping_n_s_per_m}};
     out["rate_hz"] = input.rate_hz;
     print_result(out, o.json);
@@ -109,6 +111,7 @@ void add_check_command(CLI::App& app, Invocation& invocation) {
         "check", "Check a coupling design; exit 0 if unconditionally stable, 1 if not");
     add_device_options(*command, options->device);
     add_delay_option(*command, options->device);
+    add_velocity_filter_option(*command, options->device);
     command->add_option("--stiffness", options->stiffness, "coupling stiffness k_c (N/m)")
         ->check(non_negative_finite("N/m"));
     command

@@ -43,9 +43,7 @@ nlohmann::ordered_json model_curve(const DesignInput& input, const ImpedanceDesi
         {"marker",
          {{"frequency_hz", marker_hz},
           {"bound", theory::conductance_bound(model, b, marker_theta)},
-          {"conductance",
-           theory::coupling_conductance(design.coupling.stiffness_n_per_m,
-                                        design.coupling.damping_n_s_per_m, marker_theta, period)}}},
+          {"conductance", theory::coupling_conductance(design.coupling, marker_theta, period)}}},
     };
 }
 
@@ -61,8 +59,7 @@ int run_plot(const ChartOptions& o) {
     conductance.reserve(frequencies.size());
     for (const double f : frequencies) {
         conductance.push_back(theory::coupling_conductance(
-            design.coupling.stiffness_n_per_m, design.coupling.damping_n_s_per_m,
-            theory::normalized_frequency(f, period), period));
+            design.coupling, theory::normalized_frequency(f, period), period));
     }
     nlohmann::ordered_json per_model = nlohmann::ordered_json::object();
     for (const theory::HoldModel model : models) {
@@ -121,6 +118,7 @@ void add_plot_command(CLI::App& app, Invocation& invocation) {
         "model needs against frequency, and the coupling's Re(1/Z_c)");
     add_chart_options(*command, *options);
     add_delay_option(*command, options->device);
+    add_velocity_filter_option(*command, options->device);
     command->callback(
         [options, &invocation] { invocation.run = [options] { return run_plot(*options); }; });
 }

@@ -64,6 +64,7 @@ int run_impedance(const SizeOptions& o, const DesignInput& input, theory::HoldMo
     request.device = input.device;
     request.rate_hz = input.rate_hz;
     request.model = {model, input.delay_periods()};
+    request.velocity_filter_hz = input.velocity_filter_hz;
     request.coupling_damping_n_s_per_m = o.optimize_damping
                                              ? std::nullopt
                                              : std::optional<double>(o.coupling_damping.value_or(
@@ -73,6 +74,7 @@ int run_impedance(const SizeOptions& o, const DesignInput& input, theory::HoldMo
         {"display", "impedance"},
         {"stiffness", sizing.coupling.stiffness_n_per_m},
         {"damping", sizing.coupling.damping_n_s_per_m},
+        {"velocity_filter_hz", sizing.coupling.velocity_filter_hz},
         {"binding_frequency_hz", sizing.binding_frequency_hz},
         {"model", std::string(theory::to_string(model))},
         {"delay_s", input.delay_s},
@@ -285,6 +287,7 @@ void add_size_command(CLI::App& app, Invocation& invocation) {
         "(admittance display) for which the interface is unconditionally stable");
     add_device_options(*command, options->device);
     add_delay_option(*command, options->device);
+    add_velocity_filter_option(*command, options->device);
     CLI::Option* damping =
         command
             ->add_option("--coupling-damping", options->coupling_damping,
@@ -313,6 +316,11 @@ void add_size_command(CLI::App& app, Invocation& invocation) {
                 resolve_assumption(options->assumption, options->model);
             const bool declared = assumption.operators || !assumption.environments.every_passive();
             if (options->display == "admittance") {
+                if (input.velocity_filter_hz != 0.0) {
+                    throw UsageError(
+                        "--velocity-filter is the impedance display's coupling damper; the "
+                        "admittance display's coupling (32) has none");
+                }
                 if (declared) {
                     throw UsageError(
                         "--operator-class and --scene size the impedance display "

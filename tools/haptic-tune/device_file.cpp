@@ -61,7 +61,7 @@ DeviceFile read_device_file(const std::string& path) {
     const toml::table* coupling = root["coupling"].as_table();
     reject_unknown_keys(path, model, "device.model", {"mass", "damping", "delay"});
     reject_unknown_keys(path, coupling, "coupling",
-                        {"stiffness", "damping", "check", "environments"});
+                        {"stiffness", "damping", "velocity_filter", "check", "environments"});
     DeviceFile file;
     file.mass_kg = read_number(path, model, "device.model", "mass", false, "kg");
     file.damping_n_s_per_m = read_number(path, model, "device.model", "damping", false, "N s/m");
@@ -71,6 +71,9 @@ DeviceFile read_device_file(const std::string& path) {
         read_number(path, coupling, "coupling", "stiffness", true, "N/m");
     file.coupling_damping_n_s_per_m =
         read_number(path, coupling, "coupling", "damping", true, "N s/m");
+    // Its range depends on the rate: resolve_design_input checks it.
+    file.velocity_filter_hz =
+        read_number(path, coupling, "coupling", "velocity_filter", true, "Hz");
     return file;
 }
 

@@ -20,6 +20,7 @@ struct DeviceFile {
     std::optional<double> rate_hz;                     ///< [servo] rate_hz
     std::optional<double> coupling_stiffness_n_per_m;  ///< [coupling] stiffness
     std::optional<double> coupling_damping_n_s_per_m;  ///< [coupling] damping
+    std::optional<double> velocity_filter_hz;          ///< [coupling] velocity_filter
     std::optional<double> delay_s;                     ///< [device.model] delay
 };
 

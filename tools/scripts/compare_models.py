@@ -7,7 +7,7 @@ adversaries synthesised for each design). Prints a Markdown table for
 docs/stability-models.md.
 
 usage: tools/scripts/compare_models.py HAPTIC_TUNE --mass M --damping B --rate HZ
-           [--delay S] BC...
+           [--delay S] [--velocity-filter HZ] BC...
 """
 import argparse
 import json
@@ -46,9 +46,11 @@ def main():
     p.add_argument("--damping", required=True)
     p.add_argument("--rate", required=True)
     p.add_argument("--delay", default="0")
+    p.add_argument("--velocity-filter", default="0", help="the damper's velocity filter, Hz")
     p.add_argument("dampings", nargs="+", type=float)
     a = p.parse_args()
-    device = ["--mass", a.mass, "--damping", a.damping, "--rate", a.rate, "--delay", a.delay]
+    device = ["--mass", a.mass, "--damping", a.damping, "--rate", a.rate, "--delay", a.delay,
+              "--velocity-filter", a.velocity_filter]
     print("| b_c (N s/m) | paper k_c (N/m) | encoder k_c (N/m) | passive k_c (N/m) | exact k_c (N/m) |")
     print("|---|---|---|---|---|")
     for b_c in a.dampings:

@@ -9,6 +9,8 @@
 //                  (haptic-tune diag measures it)
 //   [device.<plugin>]  the plugin's own table, handed to it as TOML text; it validates it
 //   [coupling]     stiffness (N/m, >= 0), damping (N s/m, >= 0),
+//                  velocity_filter (Hz, 0 (default: none) or >= 1 and < rate_hz/2: the
+//                  cutoff of a first-order low-pass on the damper's velocity),
 //                  check ("passive" (default)|"exact"|"paper"|"encoder"|"off", the start-up
 //                  stability model; paper and encoder are not a guarantee and say so),
 //                  enabled (default true; false: no coupling, the scene's forces act on the
@@ -80,6 +82,7 @@ struct CouplingSection {
     bool enabled = true;
     double stiffness_n_per_m = 0.0;
     double damping_n_s_per_m = 0.0;
+    double velocity_filter_hz = 0.0;  ///< 0: no filter on the damper's velocity
     std::string check = "passive";
     /// "every-passive" (default) or "scene": the environments the check holds for.
     std::string environments = "every-passive";

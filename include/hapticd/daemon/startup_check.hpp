@@ -17,7 +17,8 @@ struct StartupCheck {
     std::string model;     ///< "passive", "exact", "paper" or "encoder"
     /// passive and exact hold for every passive operator; paper and encoder do not.
     bool guarantee = true;
-    double delay_s = 0.0;  ///< the loop delay the check assumed ([device.model] delay)
+    double delay_s = 0.0;             ///< the loop delay the check assumed ([device.model] delay)
+    double velocity_filter_hz = 0.0;  ///< [coupling] velocity_filter, in Z_c of every model
     double worst_margin = 0.0;
     double worst_frequency_hz = 0.0;
     std::string worst_case;  ///< exact model: the operator and environment

@@ -11,6 +11,11 @@
 //     device state and the coupling gains and returns the tool position x_e (the god-object
 //     returns the constrained point nearest x_d; a virtual mass integrates the coupling
 //     force implicitly, with the update written out in tune/exact_model.hpp).
+//     With a velocity filter (CouplingGains::velocity_filter_hz) the coupling force is
+//     k_c (x_d - x_e) + (1 - a) b_c (v_d - v_e) + a b_c u[n-1], still affine in x_e; the
+//     coupling hands step() the unfiltered coupling with the same force in this tick:
+//     damping (1 - a) b_c, no filter, and the velocity v_d + a u[n-1]/(1 - a) in place of
+//     v_d, so that an environment never sees the filter (VirtualCoupling::step).
 //
 // Sign convention: every force here is the force ON the virtual tool, in newtons, along
 // +x/+y/+z. The coupling's force on the tool is k_c (x_d - x_e) + b_c (v_d - v_e); the force
@@ -33,6 +38,9 @@ using Mat3 = glm::dmat3;
 struct CouplingGains {
     double stiffness_n_per_m = 0.0;  ///< k_c
     double damping_n_s_per_m = 0.0;  ///< b_c
+    /// f_c of the first-order low-pass on the damper's velocity (theory/velocity_filter.hpp),
+    /// Hz, 0 <= f_c < rate/2; 0: none, the damper acts on v_d - v_e itself.
+    double velocity_filter_hz = 0.0;
 };
 
 /// A penalty force on the tool and its linearisation at the evaluated state.

@@ -24,7 +24,8 @@ struct ServoConfig {
     double rate_hz = 1000.0;        ///< [servo] rate_hz; T = 1/rate_hz
     int axes = 1;                   ///< [device] axes, 1..kMaxAxes
     double counts_per_meter = 0.0;  ///< from DeviceInfo, > 0
-    CouplingGains coupling{};       ///< [coupling] stiffness, damping: k_c, b_c of (16)
+    /// [coupling] stiffness, damping, velocity_filter: k_c, b_c of (16), f_c (< rate_hz/2)
+    CouplingGains coupling{};
     /// false: no virtual coupling; an impedance environment acts on the device directly
     /// (VirtualCoupling::step_rigid). The gains are then unused. Not for admittance scenes.
     bool coupling_enabled = true;

@@ -25,6 +25,7 @@
 #include "hapticd/theory/passive_model.hpp"
 #include "hapticd/theory/twoport.hpp"
 #include "hapticd/theory/unit_circle.hpp"
+#include "hapticd/theory/velocity_filter.hpp"
 
 namespace hapticd::theory {
 
@@ -34,10 +35,13 @@ struct DeviceModel {
     double damping_n_s_per_m = 0.0;
 };
 
-/// Virtual coupling (16): a spring k_c in parallel with a damper b_c.
+/// Virtual coupling (16): a spring k_c in parallel with a damper b_c, the damper optionally
+/// on a first-order low-pass of the velocity (velocity_filter.hpp). Every model takes the
+/// filter through Z_c: coupling_impedance and coupling_conductance.
 struct SpringDamperCoupling {
     double stiffness_n_per_m = 0.0;
     double damping_n_s_per_m = 0.0;
+    double velocity_filter_hz = 0.0;  ///< f_c of the damper's velocity filter; 0: none
 };
 
 /// Which hold term stands in for (13).
@@ -68,7 +72,8 @@ Complex device_impedance(const DeviceModel& device, double theta, double sample_
 Complex device_impedance(const DeviceModel& device, HoldModel model, double theta,
                          double sample_period_s);
 
-/// (16): Z_cI(z) = b_c + k_c T z/(z - 1).
+/// (16): Z_cI(z) = b_c + k_c T z/(z - 1); with a velocity filter,
+/// b_c (1 - a)/(1 - a z⁻¹) + k_c T z/(z - 1) (velocity_filter.hpp).
 Complex coupling_impedance(const SpringDamperCoupling& coupling, double theta,
                            double sample_period_s);
 
@@ -129,15 +134,32 @@ S conductance_bound(const LoopModel& model, double device_damping_n_s_per_m, con
 
 /// Left side of (21): Re(1/Z_cI) for the coupling (16). With z = e^{jθ},
 /// z/(z-1) = 1/2 - (j/2)cot(θ/2), so Z_cI = R - jX with R = b_c + k_c T/2 and
-/// X = (k_c T/2) cot(θ/2), and Re(1/Z_cI) = R/(R² + X²).
+/// X = (k_c T/2) cot(θ/2), and Re(1/Z_cI) = R/(R² + X²). With a velocity filter of cutoff
+/// `velocity_filter_hz` the damper is b_c B (velocity_filter.hpp): R = b_c Re B + k_c T/2 and
+/// X = (k_c T/2) cot(θ/2) - b_c Im B (Im B < 0: the filter's lag adds to the spring's
+/// reactance). velocity_filter_hz = 0 is the unfiltered expression, to the bit.
 template <typename S>
 S coupling_conductance(const S& stiffness_n_per_m, const S& damping_n_s_per_m, const S& theta,
-                       double sample_period_s) {
+                       double sample_period_s, double velocity_filter_hz = 0.0) {
     using std::tan;
     const S half_kt = stiffness_n_per_m * (sample_period_s / 2.0);
+    if (velocity_filter_hz > 0.0) {
+        const FilterResponse<S> filter = velocity_filter_response(
+            velocity_filter_pole(velocity_filter_hz, sample_period_s), theta);
+        const S resistance = damping_n_s_per_m * filter.re + half_kt;
+        const S reactance = half_kt / tan(theta / 2.0) - damping_n_s_per_m * filter.im;
+        return resistance / (resistance * resistance + reactance * reactance);
+    }
     const S resistance = damping_n_s_per_m + half_kt;
     const S reactance = half_kt / tan(theta / 2.0);
     return resistance / (resistance * resistance + reactance * reactance);
+}
+
+/// coupling_conductance of `coupling` (its gains and its velocity filter).
+inline double coupling_conductance(const SpringDamperCoupling& coupling, double theta,
+                                   double sample_period_s) {
+    return coupling_conductance(coupling.stiffness_n_per_m, coupling.damping_n_s_per_m, theta,
+                                sample_period_s, coupling.velocity_filter_hz);
 }
 
 /// The right side of (21) on an increasing grid of frequencies: conductance_bound at each,
@@ -158,6 +180,8 @@ double coupling_margin(const DeviceModel& device, const SpringDamperCoupling& co
 
 /// Limit of coupling_margin as θ -> 0+, where both sides of (21) vanish like θ²:
 ///   Re(1/Z_c) ~ (b_c + k_c T/2) θ² / (k_c T)²,  bound ~ τ² θ² / (4 b).
+/// A velocity filter does not change it: Re B = 1 - O(θ²) and Im B = O(θ) (velocity_filter.hpp),
+/// so R -> the same b_c + k_c T/2 and X = k_c T/θ + O(θ).
 double coupling_margin_at_dc(const DeviceModel& device, const SpringDamperCoupling& coupling,
                              const LoopModel& model, double sample_period_s);
 

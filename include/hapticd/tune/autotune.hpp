@@ -45,6 +45,9 @@ struct AutotuneOptions {
     /// The loop's delay beyond the hold, in periods ([device.model] delay x rate_hz):
     /// 0 <= d < 10. The sizing and the exact check both include it.
     double delay_periods = 0.0;
+    /// The coupling damper's velocity filter ([coupling] velocity_filter), Hz; 0: none. The
+    /// sizing and the exact check both include it (it matters with optimize_damping only).
+    double velocity_filter_hz = 0.0;
     IdentificationOptions identification;
 
     /// Throws std::invalid_argument naming the option, the value and the allowed range.

@@ -5,6 +5,7 @@
 //     W(z) = β + α T z/(z - 1)
 // must satisfy Re(1/W) >= r(θ) at every frequency up to Nyquist.
 //   impedance display (21): W = Z_cI (16), α = k_c, β = b_c, r = right side of (21);
+//     with the damper's velocity filter, W = β B(z) + α T z/(z - 1) (velocity_filter.hpp);
 //   admittance display (37): W = Y_cA (32), α = 1/m_c, β = 1/b_c, r = right side of (37)
 // (the duality of Table I maps one onto the other). Performance wants α as large as
 // possible (stiffest coupling, or lightest coupling mass).
@@ -39,6 +40,9 @@ struct ImpedanceSizingRequest {
     theory::LoopModel model{theory::HoldModel::passive};
     /// b_c to size k_c for; nullopt asks for the best (k_c, b_c) pair.
     std::optional<double> coupling_damping_n_s_per_m = 0.0;
+    /// The damper's velocity filter, f_c (Hz; 0: none, else 1 Hz..rate/2): W = b_c B(z) +
+    /// k_c T z/(z - 1) with B of theory/velocity_filter.hpp. The result's coupling carries it.
+    double velocity_filter_hz = 0.0;
 };
 
 struct ImpedanceSizing {

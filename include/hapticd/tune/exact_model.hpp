@@ -12,11 +12,15 @@
 //           exactly (two matrix exponentials);
 //   v_d[n] = (x_d[n] - x_d[n-1]) / T                                     backward difference
 //   F[n]   = k_c (x_d[n] - x_e[n]) + b_c (v_d[n] - v_e[n])               coupling (16)
+//   or, with the damper's velocity filter (cutoff f_c > 0, theory/velocity_filter.hpp),
+//   u[n]   = a u[n-1] + (1 - a) (v_d[n] - v_e[n]),   a = exp(-2π f_c T)  one more state
+//   F[n]   = k_c (x_d[n] - x_e[n]) + b_c u[n]
 //   the device obeys  m dv/dt + b v = F_h - F[n]  (10): positive F pushes the handle back,
 //   and the same F pulls the environment toward the handle (+F on it along +x).
 //
 // Environments (discrete, in the tick; all passive, see Definition 2):
-//   rigid wall:    x_e = v_e = 0 (persistent contact, linearised), F = k_c x_d + b_c v_d.
+//   rigid wall:    x_e = v_e = 0 (persistent contact, linearised), F = k_c x_d + b_c v_d
+//                  (filtered: F = k_c x_d + b_c u[n], u[n] = a u[n-1] + (1 - a) v_d[n]).
 //   lossless mass-spring: m_e, k_e (and b_e) integrated by the trapezoidal rule, i.e. the
 //     impedance m_e s + b_e + k_e/s with s -> (2/T)(z-1)/(z+1) on the backward-difference
 //     v_e: Re Z_e = b_e on the unit circle, so with b_e = 0 it stores and returns every
@@ -30,6 +34,17 @@
 //       D      = m_e + T (b_c + b_e) + T² (k_c + k_e)
 //       v_e[n] = ( m_e v_e[n-1] + T [ k_c (x_d[n] - x_e[n-1]) + b_c v_d[n] - k_e x_e[n-1] ] ) / D
 //       x_e[n] = x_e[n-1] + T v_e[n],   then F[n] from (16) as above.
+//     With the velocity filter, F[n] = k_c (x_d[n] - x_e[n]) + (1 - a) b_c (v_d[n] - v_e[n])
+//     + a b_c u[n-1]: the damper weighs this tick's velocities by (1 - a) b_c and its memory
+//     a b_c u[n-1] is a known force, so the same substitution gives
+//       D      = m_e + T ((1 - a) b_c + b_e) + T² (k_c + k_e)
+//       v_e[n] = ( m_e v_e[n-1] + T [ k_c (x_d[n] - x_e[n-1]) + (1 - a) b_c v_d[n]
+//                                     + a b_c u[n-1] - k_e x_e[n-1] ] ) / D
+//       x_e[n] = x_e[n-1] + T v_e[n],   u[n] = a u[n-1] + (1 - a)(v_d[n] - v_e[n]),
+//       F[n]   = k_c (x_d[n] - x_e[n]) + b_c u[n],
+//     which is the unfiltered update with b_c -> (1 - a) b_c and v_d -> v_d + a u[n-1]/(1 - a):
+//     what the servo hands an admittance environment (servo/environment_port.hpp), so its
+//     virtual mass needs no filter of its own. The environment's admittance Y_e is unchanged.
 //     This makes the environment the implicit-Euler admittance
 //       Y_e(z) = 1 / ( m_e (1 - z⁻¹)/T + b_e + k_e T/(1 - z⁻¹) ),
 //     which is positive real (its impedance has Re = b_e + m_e(1 - cos θ)/T + k_e T/2 on

@@ -23,6 +23,7 @@ inline constexpr double kMinRateHz = 10.0, kMaxRateHz = 1e5;
 inline constexpr double kMaxCouplingStiffness = 1e9;  // N/m
 inline constexpr double kMaxCouplingDamping = 1e5;    // N s/m
 inline constexpr double kMaxDelayPeriods = 10.0;      // loop delay beyond the hold, < this
+inline constexpr double kMinVelocityFilterHz = 1.0;   // the damper's velocity filter, or 0
 
 /// m in [1e-4, 1e3] kg, b in [1e-4, 1e4] N s/m.
 void check_device(const theory::DeviceModel& device);
@@ -32,5 +33,8 @@ void check_rate(double rate_hz);
 void check_coupling_gains(const theory::SpringDamperCoupling& coupling);
 /// 0 <= delay < kMaxDelayPeriods periods (and finite).
 void check_delay_periods(double delay_periods);
+/// The coupling damper's velocity filter cutoff (theory/velocity_filter.hpp): 0 (none), or
+/// kMinVelocityFilterHz <= f_c < rate_hz/2 (below Nyquist).
+void check_velocity_filter(double cutoff_hz, double rate_hz);
 
 }  // namespace hapticd::tune
