@@ -122,7 +122,7 @@ void BM_SizeClass(benchmark::State& state) {
     hapticd::tune::StabilityAssumption a;
     a.operators = pen_grip();
     for (auto _ : state) {
-        auto l = hapticd::tune::exact_stiffness_limit(kPenDisplay, 1.0, 1000.0, a, 0.0);
+        auto l = hapticd::tune::exact_stiffness_limit(kPenDisplay, {0.0, 1.0}, 1000.0, a, 0.0);
         benchmark::DoNotOptimize(l);
     }
 }

@@ -380,8 +380,8 @@ ExactCheck check_exact(const DeviceModel& device, const SpringDamperCoupling& co
     return search.run(environments, every_environment);
 }
 
-StiffnessLimit exact_stiffness_limit(const DeviceModel& device, double coupling_damping_n_s_per_m,
-                                     double rate_hz, const StabilityAssumption& assumption,
+StiffnessLimit exact_stiffness_limit(const DeviceModel& device,
+                                     const SpringDamperCoupling& shape, double rate_hz, const StabilityAssumption& assumption,
                                      double delay_periods, double tolerance) {
     if (!(tolerance > 0.0 && tolerance < 1.0)) {
         throw std::invalid_argument("exact_stiffness_limit: tolerance must be in (0, 1)");
@@ -392,7 +392,8 @@ StiffnessLimit exact_stiffness_limit(const DeviceModel& device, double coupling_
     // acceptance always runs the whole check).
     std::vector<std::pair<OperatorModel, EnvironmentModel>> witnesses;
     const auto check = [&](double stiffness) {
-        const SpringDamperCoupling coupling{stiffness, coupling_damping_n_s_per_m};
+        SpringDamperCoupling coupling = shape;
+        coupling.stiffness_n_per_m = stiffness;
         for (const auto& [human, environment] : witnesses) {
             const ExactCheck quick =
                 check_exact(device, coupling, rate_hz, {human}, {environment}, delay_periods);

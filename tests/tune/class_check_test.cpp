@@ -109,7 +109,7 @@ TEST(ClassCheck, TheClassBuysStiffnessWhereTheCouplingDampingWorks) {
     // At b_c = 1 the passive bound is 2(b - b_c)/T = 2000 N/m; hands like the pen grip's
     // hold more than twice that, and the limit's rejection names a member of the class.
     const StiffnessLimit limit =
-        exact_stiffness_limit(kPen, 1.0, kRateHz, for_class(pen_grip()), 0.0);
+        exact_stiffness_limit(kPen, {0.0, 1.0}, kRateHz, for_class(pen_grip()), 0.0);
     EXPECT_GT(limit.stiffness_n_per_m, 2.5 * 2000.0);
     EXPECT_LT(limit.stiffness_n_per_m, 1e4);
     EXPECT_TRUE(limit.at_limit.stable);
@@ -152,7 +152,7 @@ TEST(ClassCheck, NoRandomMemberBeatsTheSearch) {
     // At 0.999 of the class limit, 300 random members (and hands-off) against the rigid wall
     // and the default environments are all stable: the search found the worst of them.
     const OperatorClass c = pen_grip();
-    const StiffnessLimit limit = exact_stiffness_limit(kPen, 0.5, kRateHz, for_class(c), 1.0);
+    const StiffnessLimit limit = exact_stiffness_limit(kPen, {0.0, 0.5}, kRateHz, for_class(c), 1.0);
     const SpringDamperCoupling coupling{0.999 * limit.stiffness_n_per_m, 0.5};
     std::mt19937 random(9);
     std::uniform_real_distribution<double> unit(0.0, 1.0);

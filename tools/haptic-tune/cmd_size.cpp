@@ -109,11 +109,12 @@ int run_assumed(const SizeOptions& o, const DesignInput& input,
     tune::check_coupling_gains({0.0, damping});
     nlohmann::ordered_json out = {{"display", "impedance"}};
     theory::SpringDamperCoupling coupling{0.0, damping};
+    coupling.velocity_filter_hz = input.velocity_filter_hz;
     double rejected = 0.0;
     int checks = 0;
     if (o.model == "exact") {
         const tune::StiffnessLimit limit = tune::exact_stiffness_limit(
-            input.device, damping, input.rate_hz, assumption, input.delay_periods());
+            input.device, coupling, input.rate_hz, assumption, input.delay_periods());
         coupling.stiffness_n_per_m = limit.stiffness_n_per_m;
         rejected = limit.rejected_n_per_m;
         checks = limit.checks;
@@ -124,7 +125,9 @@ int run_assumed(const SizeOptions& o, const DesignInput& input,
         // from an accepted 0 to a rejected upper end.
         const auto stable = [&](double k) {
             ++checks;
-            return tune::check_passive_scene(input.device, {k, damping}, input.rate_hz,
+            theory::SpringDamperCoupling trial = coupling;
+            trial.stiffness_n_per_m = k;
+            return tune::check_passive_scene(input.device, trial, input.rate_hz,
                                              assumption.environments.scene, input.delay_periods())
                 .stable;
         };

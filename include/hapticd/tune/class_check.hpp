@@ -51,8 +51,9 @@ struct StiffnessLimit {
     ExactCheck at_limit;             ///< the check of lo
     int checks = 0;                  ///< whole checks (a rejection by a past worst case is not one)
 };
+/// `coupling` gives b_c and the velocity filter; its stiffness is ignored.
 StiffnessLimit exact_stiffness_limit(const theory::DeviceModel& device,
-                                     double coupling_damping_n_s_per_m, double rate_hz,
+                                     const theory::SpringDamperCoupling& coupling, double rate_hz,
                                      const StabilityAssumption& assumption, double delay_periods,
                                      double tolerance = 2e-3);
 
