@@ -79,10 +79,16 @@ TEST(HapticTuneSizeAdmittance, TheExactSizingPassesItsCheckAndNamesItsClass) {
         run_command(tune(kDevice + "--kp 2 --ki 0 --model exact --optimize-damping"));
     EXPECT_EQ(optimise.exit_code, 2);
     EXPECT_NE(optimise.err.find("--optimize-damping"), std::string::npos) << optimise.err;
+    // For the impedance display --model exact is a bisection on the exact check: at b_c = 0
+    // the device alone binds, just above 2b/T, and the verdict says what it holds for.
     const auto impedance =
-        run_command(tune("size --mass 0.1 --damping 2 --rate 1000 --model exact"));
-    EXPECT_EQ(impedance.exit_code, 2);
-    EXPECT_NE(impedance.err.find("admittance display only"), std::string::npos) << impedance.err;
+        run_command(tune("size --mass 0.1 --damping 2 --rate 1000 --model exact --json"));
+    ASSERT_EQ(impedance.exit_code, 0) << impedance.err;
+    const json k = json::parse(impedance.out);
+    EXPECT_GE(k.at("stiffness").get<double>(), 4000.0);
+    EXPECT_LT(k.at("stiffness").get<double>(), 4100.0);
+    EXPECT_EQ(k.at("holds_for").get<std::string>(),
+              "every passive operator and every passive environment");
 }
 
 }  // namespace
