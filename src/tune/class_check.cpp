@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <initializer_list>
 #include <numbers>
 #include <stdexcept>
 
@@ -237,25 +238,8 @@ class ClassSearch {
                 if (r > radius) radius = r, best = c;
             }
         }
-        for (double step = 1.0 / 16.0; step >= kLastStep; step /= 2.0) {
-            bool improved = true;
-            while (improved) {
-                improved = false;
-                for (double* u : {&best.theta_u, &best.admittance_u}) {
-                    for (const double sign : {-1.0, 1.0}) {
-                        const double saved = *u;
-                        *u = std::clamp(saved + sign * step, 0.0, 1.0);
-                        const double r = evaluate(h, lossless_at(best, coupling_, rate_hz_), band);
-                        if (r > radius) {
-                            radius = r;
-                            improved = true;
-                        } else {
-                            *u = saved;
-                        }
-                    }
-                }
-            }
-        }
+        compass_climb({&best.theta_u, &best.admittance_u}, 1.0 / 16.0, radius,
+                      [&] { return evaluate(h, lossless_at(best, coupling_, rate_hz_), band); });
         return climb_masses(h, lossless_at(best, coupling_, rate_hz_), band);
     }
 
@@ -275,18 +259,38 @@ class ClassSearch {
         double ku = std::clamp(std::log(std::max(start.stiffness_n_per_m, kSpringLo) / kSpringLo) /
                                    std::log(kSpringHi / kSpringLo),
                                0.0, 1.0);
-        double radius = evaluate(h, env_at(mu, ku), band);
-        for (double step = 1.0 / 16.0; step >= kLastStep; step /= 2.0) {
+        compass_climb({&mu, &ku}, 1.0 / 16.0, evaluate(h, env_at(mu, ku), band),
+                      [&] { return evaluate(h, env_at(mu, ku), band); });
+        return env_at(mu, ku);
+    }
+
+    double climb_operator(ClassPoint& point, const EnvironmentModel& environment,
+                          const Band& band = kBands[0]) {
+        static_assert(kClassParameters == 5, "one coordinate per class parameter");
+        return compass_climb({&point[0], &point[1], &point[2], &point[3], &point[4]}, kFirstStep,
+                             evaluate(cls_.member(point), environment, band), [&] {
+                                 const OperatorModel h = cls_.member(point);
+                                 return cls_.contains(h) ? evaluate(h, environment, band) : -1.0;
+                             });
+    }
+
+    /// Compass search: each coordinate in [0, 1] in turn is moved by -step and +step and kept
+    /// where `value()` rises above `best`; the step halves from `first_step` to kLastStep
+    /// when no move helps. Returns the best value; the coordinates are left at it.
+    template <typename Value>
+    static double compass_climb(std::initializer_list<double*> coordinates, double first_step,
+                                double best, Value value) {
+        for (double step = first_step; step >= kLastStep; step /= 2.0) {
             bool improved = true;
             while (improved) {
                 improved = false;
-                for (double* u : {&mu, &ku}) {
+                for (double* u : coordinates) {
                     for (const double sign : {-1.0, 1.0}) {
                         const double saved = *u;
                         *u = std::clamp(saved + sign * step, 0.0, 1.0);
-                        const double r = evaluate(h, env_at(mu, ku), band);
-                        if (r > radius) {
-                            radius = r;
+                        const double r = value();
+                        if (r > best) {
+                            best = r;
                             improved = true;
                         } else {
                             *u = saved;
@@ -295,33 +299,7 @@ class ClassSearch {
                 }
             }
         }
-        return env_at(mu, ku);
-    }
-
-    double climb_operator(ClassPoint& point, const EnvironmentModel& environment,
-                          const Band& band = kBands[0]) {
-        double radius = evaluate(cls_.member(point), environment, band);
-        for (double step = kFirstStep; step >= kLastStep; step /= 2.0) {
-            bool improved = true;
-            while (improved) {
-                improved = false;
-                for (double& u : point) {
-                    for (const double sign : {-1.0, 1.0}) {
-                        const double saved = u;
-                        u = std::clamp(saved + sign * step, 0.0, 1.0);
-                        const OperatorModel h = cls_.member(point);
-                        const double r = cls_.contains(h) ? evaluate(h, environment, band) : -1.0;
-                        if (r > radius) {
-                            radius = r;
-                            improved = true;
-                        } else {
-                            u = saved;
-                        }
-                    }
-                }
-            }
-        }
-        return radius;
+        return best;
     }
 
     DeviceModel device_;
@@ -380,8 +358,8 @@ ExactCheck check_exact(const DeviceModel& device, const SpringDamperCoupling& co
     return search.run(environments, every_environment);
 }
 
-StiffnessLimit exact_stiffness_limit(const DeviceModel& device,
-                                     const SpringDamperCoupling& shape, double rate_hz, const StabilityAssumption& assumption,
+StiffnessLimit exact_stiffness_limit(const DeviceModel& device, const SpringDamperCoupling& shape,
+                                     double rate_hz, const StabilityAssumption& assumption,
                                      double delay_periods, double tolerance) {
     if (!(tolerance > 0.0 && tolerance < 1.0)) {
         throw std::invalid_argument("exact_stiffness_limit: tolerance must be in (0, 1)");
