@@ -129,7 +129,7 @@ TEST(HapticTuneSize, TextOutputNamesEveryField) {
 TEST(HapticTuneSize, AdmittanceDisplayExplainsAnInfeasibleLoop) {
     const auto result = run_command(
         tune("size --display admittance --mass 2 --damping 5 --rate 1000 --kp 2000 --ki 0 "
-                 "--model encoder"));
+             "--model encoder"));
     EXPECT_EQ(result.exit_code, 2);
     EXPECT_NE(result.err.find("(35) fails"), std::string::npos) << result.err;
 }

@@ -152,7 +152,8 @@ TEST(ClassCheck, NoRandomMemberBeatsTheSearch) {
     // At 0.999 of the class limit, 300 random members (and hands-off) against the rigid wall
     // and the default environments are all stable: the search found the worst of them.
     const OperatorClass c = pen_grip();
-    const StiffnessLimit limit = exact_stiffness_limit(kPen, {0.0, 0.5}, kRateHz, for_class(c), 1.0);
+    const StiffnessLimit limit =
+        exact_stiffness_limit(kPen, {0.0, 0.5}, kRateHz, for_class(c), 1.0);
     const SpringDamperCoupling coupling{0.999 * limit.stiffness_n_per_m, 0.5};
     std::mt19937 random(9);
     std::uniform_real_distribution<double> unit(0.0, 1.0);

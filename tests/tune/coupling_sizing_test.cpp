@@ -1,8 +1,6 @@
 // Coupling sizing from (21) and (37), held against an independent dense-grid bisection.
 #include "hapticd/tune/coupling_sizing.hpp"
 
-#include "hapticd/theory/coupling_check.hpp"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,6 +9,8 @@
 #include <ostream>
 #include <sstream>
 #include <vector>
+
+#include "hapticd/theory/coupling_check.hpp"
 
 namespace hapticd::tune {
 namespace {
@@ -33,7 +33,8 @@ bool satisfies_21_on_grid(const DeviceModel& d, double k, double b_c, HoldModel 
                           double period, const std::vector<double>& grid) {
     for (double theta : grid) {
         const Complex z = std::exp(Complex(0, theta));
-        const Complex z_minus_1 = 2.0 * Complex(0, std::sin(theta / 2)) * std::exp(Complex(0, theta / 2));
+        const Complex z_minus_1 =
+            2.0 * Complex(0, std::sin(theta / 2)) * std::exp(Complex(0, theta / 2));
         const Complex zc = b_c + k * period * z / z_minus_1;
         const Complex h = hold(model, theta);
         // |H|(1 - cos∠H), with 1 - cos x = 2 sin²(x/2) so that small θ keeps its digits.
@@ -72,8 +73,9 @@ struct Case {
 };
 
 void PrintTo(const Case& c, std::ostream* os) {
-    *os << theory::to_string(c.model) << ", m = " << c.device.mass_kg << " kg, b = "
-        << c.device.damping_n_s_per_m << " N s/m, " << c.rate_hz << " Hz, b_c = " << c.b_c;
+    *os << theory::to_string(c.model) << ", m = " << c.device.mass_kg
+        << " kg, b = " << c.device.damping_n_s_per_m << " N s/m, " << c.rate_hz
+        << " Hz, b_c = " << c.b_c;
 }
 
 class AgainstBisection : public ::testing::TestWithParam<Case> {};
@@ -94,7 +96,7 @@ TEST_P(AgainstBisection, StiffnessAgreesToOnePartPerMillion) {
     EXPECT_NEAR(s.coupling.stiffness_n_per_m, reference, 1e-6 * reference)
         << "method " << s.report.method;
     EXPECT_EQ(s.coupling.damping_n_s_per_m, c.b_c);
-    EXPECT_GE(s.verified_worst_margin, 0.0);  // strictly feasible, rounding included
+    EXPECT_GE(s.verified_worst_margin, 0.0);   // strictly feasible, rounding included
     EXPECT_LT(s.verified_worst_margin, 1e-4);  // tight: the design touches the bound
     // And the check that `haptic-tune check` runs agrees.
     const theory::CouplingCheck check =
@@ -103,17 +105,16 @@ TEST_P(AgainstBisection, StiffnessAgreesToOnePartPerMillion) {
     EXPECT_LT(check.worst_margin, 1e-4);
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Devices, AgainstBisection,
-    ::testing::Values(Case{{0.1, 2.0}, 1000, 0.0, HoldModel::encoder},
-                      Case{{0.1, 2.0}, 1000, 0.3, HoldModel::encoder},
-                      Case{{0.1, 2.0}, 1000, 1.0, HoldModel::encoder},
-                      Case{{0.1, 2.0}, 1000, 0.0, HoldModel::paper},
-                      Case{{0.1, 2.0}, 1000, 2.0, HoldModel::paper},
-                      Case{{0.5, 0.4}, 2000, 0.05, HoldModel::encoder},
-                      Case{{0.02, 8.0}, 500, 3.0, HoldModel::paper},
-                      Case{{1.0, 1.0}, 4000, 0.1, HoldModel::encoder}),
-    case_name);
+INSTANTIATE_TEST_SUITE_P(Devices, AgainstBisection,
+                         ::testing::Values(Case{{0.1, 2.0}, 1000, 0.0, HoldModel::encoder},
+                                           Case{{0.1, 2.0}, 1000, 0.3, HoldModel::encoder},
+                                           Case{{0.1, 2.0}, 1000, 1.0, HoldModel::encoder},
+                                           Case{{0.1, 2.0}, 1000, 0.0, HoldModel::paper},
+                                           Case{{0.1, 2.0}, 1000, 2.0, HoldModel::paper},
+                                           Case{{0.5, 0.4}, 2000, 0.05, HoldModel::encoder},
+                                           Case{{0.02, 8.0}, 500, 3.0, HoldModel::paper},
+                                           Case{{1.0, 1.0}, 4000, 0.1, HoldModel::encoder}),
+                         case_name);
 
 TEST(ImpedanceSizing, EncoderModelAtZeroDampingIsColgatesBound) {
     const DeviceModel device{0.1, 2.0};
@@ -354,11 +355,12 @@ TEST(AdmittanceSizing, MeetsThirtySevenWithEqualityAndIsMinimal) {
     // A lighter coupling mass at the same damping breaks (37) somewhere.
     const double period = 1e-3;
     bool violated = false;
-    const theory::MassDamperCoupling lighter{s.coupling.mass_kg * 0.99, s.coupling.damping_n_s_per_m};
+    const theory::MassDamperCoupling lighter{s.coupling.mass_kg * 0.99,
+                                             s.coupling.damping_n_s_per_m};
     for (double theta = 1e-4; theta < 3.1416; theta += 1e-4) {
         const double re_zca = (1.0 / theory::coupling_admittance(lighter, theta, period)).real();
-        if (re_zca < theory::admittance_coupling_bound(request.device, request.loop,
-                                                       request.model, theta, period)) {
+        if (re_zca < theory::admittance_coupling_bound(request.device, request.loop, request.model,
+                                                       theta, period)) {
             violated = true;
             break;
         }
