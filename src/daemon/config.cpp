@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "embedded_defaults.hpp"
+#include "hapticd/input/text_input.hpp"
 #include "hapticd/tune/input_checks.hpp"
 
 namespace hapticd::daemon {
@@ -237,6 +238,9 @@ std::optional<tune::OperatorClass> parse_operator_class(const toml::table& root,
 
 Config parse_config(std::string_view toml_text, const std::string& source,
                     const std::string& base_dir) {
+    if (const std::string e = input::toml_shape_error(toml_text, source); !e.empty()) {
+        throw ConfigError(e);
+    }
     toml::table root;
     try {
         root = toml::parse(toml_text, source);
@@ -362,9 +366,12 @@ Config parse_config(std::string_view toml_text, const std::string& source,
 
     const TableReader safety(source, "safety", sub_table(root, source, "safety"));
     safety.allow_only({"max_force", "max_speed", "soft_start_ramp", "passivity", "reconnect",
-                       "reconnect_settle", "reconnect_timeout"});
-    config.safety.max_force_n = safety.number("max_force", 0.0, kInf, true, "N").value_or(10.0);
-    config.safety.max_speed_mps = safety.number("max_speed", 0.0, kInf, true, "m/s").value_or(1.0);
+                       "reconnect_settle", "reconnect_timeout", "max_missed_periods",
+                       "max_consecutive_overruns"});
+    // Physical ranges: no haptic device pushes 10 kN or moves its handle at 100 m/s (and
+    // max_speed sets the encoder-jump threshold, 10 max_speed T, which must stay finite).
+    config.safety.max_force_n = safety.number("max_force", 0.0, 1e4, true, "N").value_or(10.0);
+    config.safety.max_speed_mps = safety.number("max_speed", 0.0, 100.0, true, "m/s").value_or(1.0);
     config.safety.soft_start_ramp_s =
         safety.number("soft_start_ramp", 0.0, 10.0, false, "s").value_or(0.5);
     config.safety.passivity = safety.text("passivity", {"observe", "control"}).value_or("observe");
@@ -373,6 +380,12 @@ Config parse_config(std::string_view toml_text, const std::string& source,
         safety.number("reconnect_settle", 0.0, 60.0, true, "s").value_or(0.5);
     config.safety.reconnect_timeout_s =
         safety.number("reconnect_timeout", 0.0, 3600.0, false, "s; 0: wait for ever").value_or(5.0);
+    // The overrun budget: a stall of up to max_missed_periods periods (20 ms at 1 kHz by
+    // default) or max_consecutive_overruns late ticks in a row is ridden out.
+    config.safety.max_missed_periods =
+        safety.integer("max_missed_periods", 0, 1'000'000).value_or(20);
+    config.safety.max_consecutive_overruns =
+        safety.integer("max_consecutive_overruns", 0, 1'000'000).value_or(5);
     if (!config.safety.reconnect) {
         for (const char* key : {"reconnect_settle", "reconnect_timeout"}) {
             if (safety.has(key)) {
@@ -395,22 +408,29 @@ Config parse_config(std::string_view toml_text, const std::string& source,
 }
 
 Config load_config(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw ConfigError(path + ": cannot read the config file");
-    std::ostringstream text;
-    text << in.rdbuf();
+    std::string text;
+    try {
+        text = input::read_text_file(path, "the config file");
+    } catch (const input::InputError& e) {
+        throw ConfigError(e.what());
+    }
     const std::string dir = std::filesystem::path(path).parent_path().string();
-    return parse_config(text.str(), path, dir.empty() ? "." : dir);
+    return parse_config(text, path, dir.empty() ? "." : dir);
 }
 
 tune::OperatorClass load_operator_class(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw ConfigError(path + ": cannot read the operator class file");
-    std::ostringstream text;
-    text << in.rdbuf();
+    std::string text;
+    try {
+        text = input::read_text_file(path, "the operator class file");
+    } catch (const input::InputError& e) {
+        throw ConfigError(e.what());
+    }
+    if (const std::string e = input::toml_shape_error(text, path); !e.empty()) {
+        throw ConfigError(e);
+    }
     toml::table root;
     try {
-        root = toml::parse(text.str(), path);
+        root = toml::parse(text, path);
     } catch (const toml::parse_error& e) {
         std::ostringstream m;
         m << path << ":" << e.source().begin.line << ":" << e.source().begin.column << ": "

@@ -14,6 +14,8 @@
 #include <regex>
 #include <sstream>
 
+#include "hapticd/input/text_input.hpp"
+
 namespace hapticd::daemon {
 namespace {
 
@@ -70,6 +72,9 @@ void flatten(const toml::table& table, const std::string& prefix,
 }
 
 toml::table parse(std::string_view text, const std::string& source, const char* which) {
+    if (const std::string e = input::toml_shape_error(text, source); !e.empty()) {
+        throw ConfigEditError(e);
+    }
     try {
         return toml::parse(text, source);
     } catch (const toml::parse_error& e) {

@@ -67,7 +67,9 @@ std::string status_line(const servo::StatusSnapshot& s, int axes) {
     } else {
         out << "armed";
     }
-    out << "  overruns " << s.overruns << "  faults ";
+    out << "  overruns " << s.overruns;
+    if (s.solver_not_converged > 0) out << "  solver failed " << s.solver_not_converged << " ticks";
+    out << "  faults ";
     if (s.faults == 0u) out << "none";
     bool first = true;
     servo::for_each_fault(s.faults, [&](std::string_view name) {
@@ -131,6 +133,23 @@ env::Scene load_any_scene(const Config& config) {
     } catch (const env::SceneError& e) {
         throw StartError(kExitBadInput, e.what());
     }
+}
+
+/// A scene the coupling cannot render is refused before the device opens: an object whose
+/// stiffness is more negative than -k_c (a detent with a short period or a large peak force)
+/// leaves the massless tool of (17) no stable balance, and the solve failed on every tick.
+void check_scene_renderable(const env::Scene& scene, const Config& config,
+                            const std::string& scene_source) {
+    if (!config.coupling.enabled || !scene.most_negative_stiffness) return;
+    const env::LinearObject& o = *scene.most_negative_stiffness;
+    const double k_c = config.coupling.stiffness_n_per_m;
+    if (k_c > -o.stiffness_n_per_m) return;
+    std::ostringstream m;
+    m << scene_source << ": " << o.source << " has a stiffness down to " << o.stiffness_n_per_m
+      << " N/m between its notches (-2π peak_force/period), out of range for this coupling: "
+      << "allowed > -k_c = " << -k_c << " N/m ([coupling] stiffness in " << config.source
+      << "); lengthen its period or lower its peak_force";
+    throw StartError(kExitBadInput, m.str());
 }
 
 StartupCheck run_startup_check(const Config& config, std::ostream& log) {
@@ -513,6 +532,9 @@ int run_daemon(const RunOptions& options, const std::atomic<bool>& stop, std::os
         context.lockstep = options.lockstep;
         context.check = run_startup_check(config, log);
         env::Scene scene = load_any_scene(config);
+        check_scene_renderable(scene, config,
+                               config.scene_file.empty() ? std::string("<embedded demo-wall scene>")
+                                                         : config.scene_file);
         context.scene = scene.name;
         context.causality = env::to_string(scene.causality);
         if (!config.coupling.enabled && scene.causality == env::Causality::admittance) {

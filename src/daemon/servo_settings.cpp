@@ -42,6 +42,8 @@ servo::ServoConfig make_servo_config(const Config& config, const device::DeviceI
     servo.device_paces_loop = info.paces_loop;
     servo.telemetry_backpressure = lossless_log && info.lockstep && info.paces_loop;
     servo.stop_on_fault = true;
+    servo.overrun = {.max_consecutive_overruns = config.safety.max_consecutive_overruns,
+                     .max_missed_periods = config.safety.max_missed_periods};
     servo.link_recovery = {.enabled = config.safety.reconnect,
                            .settle_s = config.safety.reconnect_settle_s,
                            .timeout_s = config.safety.reconnect_timeout_s};

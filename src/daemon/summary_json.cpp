@@ -21,6 +21,15 @@ std::string summary_json(const servo::Summary& s, const RunContext& c) {
                             {"max", s.tick_compute_us.max}};
     j["max_force_n"] = s.max_force_n;
     j["faults"] = s.faults;
+    if (s.overrun_budget) {
+        const servo::OverrunBudgetBreach& b = *s.overrun_budget;
+        j["overrun_budget"] = {{"late_ms", b.late_ms},
+                               {"missed_periods", b.missed_periods},
+                               {"consecutive_overruns", b.consecutive_overruns},
+                               {"max_missed_periods", b.max_missed_periods},
+                               {"max_consecutive_overruns", b.max_consecutive_overruns}};
+    }
+    j["intervals_unknown"] = s.intervals_unknown;
     j["link_recoveries"] = s.link_recoveries;
     j["telemetry_dropped"] = s.telemetry_dropped;
     j["telemetry_records"] = c.telemetry_records;
@@ -72,6 +81,16 @@ std::string summary_text(const servo::Summary& s, const RunContext& c) {
     for (const std::string& fault : s.faults) out << " " << fault;
     if (s.link_recoveries > 0) out << " (link recoveries: " << s.link_recoveries << ")";
     out << "\n";
+    if (s.overrun_budget) out << "  overrun_budget: " << servo::describe(*s.overrun_budget) << "\n";
+    if (s.solver_not_converged > 0) {
+        out << "  the coupling's series solve (17) failed on " << s.solver_not_converged
+            << " ticks (the tool's balance was not met: the scene may be too stiff, or too "
+               "negatively stiff, for the coupling)\n";
+    }
+    if (s.intervals_unknown > 0) {
+        out << "  samples with an unknown interval (zero force, history restarted): "
+            << s.intervals_unknown << "\n";
+    }
     return out.str();
 }
 

@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include "hapticd/input/text_input.hpp"
+
 namespace hapticd::device {
 
 bool Range::contains(double x) const {
@@ -135,6 +137,9 @@ void TableReader::finish() const {
 }
 
 toml::table parse_plugin_table(const std::string& toml_text, const std::string& source) {
+    if (const std::string e = input::toml_shape_error(toml_text, source); !e.empty()) {
+        throw std::runtime_error(e);
+    }
     try {
         return toml::parse(toml_text, source);
     } catch (const toml::parse_error& e) {

@@ -3,6 +3,7 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <numbers>
 #include <sstream>
 #include <utility>
 
@@ -10,6 +11,7 @@
 #include "hapticd/env/penalty_scene.hpp"
 #include "hapticd/env/scene.hpp"
 #include "hapticd/env/virtual_mass.hpp"
+#include "hapticd/input/text_input.hpp"
 #include "scene_fields.hpp"
 
 namespace hapticd::env {
@@ -88,6 +90,7 @@ class SceneParser {
         }
         scene.linear_objects = std::move(linear_);
         scene.unmodelled = std::move(unmodelled_);
+        scene.most_negative_stiffness = std::move(negative_);
         return scene;
     }
 
@@ -194,6 +197,13 @@ class SceneParser {
                      detent.peak_force_n = r.number("peak_force", kPositiveForce);
                      detent.periodic = r.boolean("periodic", true);
                      objects.detents.push_back(detent);
+                     const double slope_n_per_m =
+                         -2.0 * std::numbers::pi * detent.peak_force_n / detent.period_m;
+                     if (!negative_ || slope_n_per_m < negative_->stiffness_n_per_m) {
+                         negative_ = LinearObject{
+                             .source = "[[detent]] #" + std::to_string(objects.detents.size()),
+                             .stiffness_n_per_m = slope_n_per_m};
+                     }
                      unmodelled("[[detent]] #" + std::to_string(objects.detents.size()) +
                                 ": its force is periodic in position, with a slope that "
                                 "changes sign, so it has no passive linear model");
@@ -317,11 +327,15 @@ class SceneParser {
     // What the stability check's scene model needs (Scene::linear_objects).
     std::vector<LinearObject> linear_;
     std::string unmodelled_;
+    std::optional<LinearObject> negative_;
 };
 
 }  // namespace
 
 Scene parse_scene(std::string_view text, const std::string& source_name, int axes) {
+    if (const std::string e = input::toml_shape_error(text, source_name); !e.empty()) {
+        throw SceneError(e);
+    }
     toml::table root;
     try {
         root = toml::parse(text, source_name);
@@ -334,13 +348,13 @@ Scene parse_scene(std::string_view text, const std::string& source_name, int axe
 }
 
 Scene load_scene(const std::string& path, int axes) {
-    std::ifstream file(path, std::ios::binary);
-    if (!file) {
-        throw SceneError(path + ": cannot open the scene file: " + std::strerror(errno));
+    std::string text;
+    try {
+        text = input::read_text_file(path, "the scene file");
+    } catch (const input::InputError& e) {
+        throw SceneError(e.what());
     }
-    std::ostringstream text;
-    text << file.rdbuf();
-    return parse_scene(text.str(), path, axes);
+    return parse_scene(text, path, axes);
 }
 
 }  // namespace hapticd::env

@@ -93,11 +93,14 @@ SafeForce SafetySupervisor::filter(const Vec3& handle_force_n, const Vec3& handl
     }
     if (faulted()) return out;  // zero force, enable = false, in the tick that raised it
 
-    out.soft_start_scale = soft_start_.update(speed, period_s);
-    force *= out.soft_start_scale;
     force = passivity_.control(force, velocity, period_s);
     out.passivity_damping_n_s_per_m = passivity_.damping_n_s_per_m();
     force = saturate(force, out.saturated);
+    // The soft start scales the force that would be commanded, after saturation: the ramp
+    // bounds what the handle gets (scale x max_force at most), also for a handle that starts
+    // inside an object, whose raw force would saturate at once at any scale.
+    out.soft_start_scale = soft_start_.update(speed, period_s);
+    force *= out.soft_start_scale;
     passivity_.record(force, velocity, period_s);
     out.handle_force_n = force;
     out.enable = true;

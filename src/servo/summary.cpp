@@ -1,5 +1,8 @@
 #include "hapticd/servo/summary.hpp"
 
+#include <iomanip>
+#include <sstream>
+
 #include "hapticd/servo/faults.hpp"
 
 namespace hapticd::servo {
@@ -24,7 +27,19 @@ Summary make_summary(const TickStats& stats, double rate_hz, std::uint32_t fault
     summary.saturated_ticks = stats.saturated_ticks;
     summary.link_recoveries = stats.link_recoveries;
     summary.passivity_energy_j = passivity_energy_j;
+    summary.intervals_unknown = stats.intervals_unknown;
     return summary;
+}
+
+std::string describe(const OverrunBudgetBreach& b) {
+    std::ostringstream out;
+    out << std::fixed << std::setprecision(1) << "woke " << b.late_ms << " ms late ("
+        << b.missed_periods << (b.missed_periods == 1 ? " period" : " periods") << " missed, "
+        << b.consecutive_overruns << (b.consecutive_overruns == 1 ? " overrun" : " overruns")
+        << " in a row); the budget is " << b.max_missed_periods
+        << " periods in one overrun ([safety] max_missed_periods) and "
+        << b.max_consecutive_overruns << " overruns in a row ([safety] max_consecutive_overruns)";
+    return out.str();
 }
 
 }  // namespace hapticd::servo

@@ -88,6 +88,16 @@ TEST(DaemonConfig, ReconnectIsOnByDefaultAndCanBeTurnedOffOrMadePatient) {
         60.0);
 }
 
+TEST(DaemonConfig, TheOverrunBudgetIsASafetyKeyWithItsDefault) {
+    const Config defaults = parse_config("", "lab.toml", "");
+    EXPECT_EQ(defaults.safety.max_missed_periods, 20);
+    EXPECT_EQ(defaults.safety.max_consecutive_overruns, 5);
+    const Config patient = parse_config(
+        "[safety]\nmax_missed_periods = 100\nmax_consecutive_overruns = 0\n", "lab.toml", "");
+    EXPECT_EQ(patient.safety.max_missed_periods, 100);
+    EXPECT_EQ(patient.safety.max_consecutive_overruns, 0);
+}
+
 TEST(DaemonConfig, NoCouplingMustBeDeliberate) {
     const Config c = parse_config("[coupling]\nenabled = false\ncheck = \"off\"\n", "lab.toml", "");
     EXPECT_FALSE(c.coupling.enabled);
@@ -148,7 +158,8 @@ INSTANTIATE_TEST_SUITE_P(
         Bad{"[coupling]\nstiffness = -3\n",
             "[coupling] stiffness = -3 is out of range: allowed >= 0 and <= 1e+09 (N/m)"},
         Bad{"[coupling]\ncheck = \"none\"\n", "[coupling] check = \"none\" is not allowed"},
-        Bad{"[safety]\nmax_force = 0\n", "[safety] max_force = 0 is out of range: allowed > 0 (N)"},
+        Bad{"[safety]\nmax_force = 0\n",
+            "[safety] max_force = 0 is out of range: allowed > 0 and <= 10000 (N)"},
         Bad{"[safety]\nmax_torque = 1\n", "unknown key [safety] max_torque"},
         Bad{"[telemetry]\nfile = \"x\"\n", "unknown table [telemetry]"},
         Bad{"rate_hz = 1000\n", "top-level key rate_hz"}, Bad{"[servo\n", "lab.toml:1"},
@@ -179,6 +190,23 @@ INSTANTIATE_TEST_SUITE_P(
             "[safety] reconnect_settle = 0 is out of range: allowed > 0 and <= 60 (s)"},
         Bad{"[safety]\nreconnect_settle = 61\n",
             "[safety] reconnect_settle = 61 is out of range: allowed > 0 and <= 60 (s)"},
+        // toml++ 3.3 recursed once per part of a dotted key: 35,000 overflowed the stack.
+        Bad{"[servo]\n" + std::string("a") +
+                [] {
+                    std::string k;
+                    for (int i = 0; i < 35000; ++i) k += ".a";
+                    return k;
+                }() +
+                " = 1\n",
+            "lab.toml:2: a key of more than 32 dotted parts (allowed at most 32)"},
+        Bad{"[safety]\nmax_speed = 1e308\n",
+            "[safety] max_speed = 1e+308 is out of range: allowed > 0 and <= 100 (m/s)"},
+        Bad{"[safety]\nmax_force = 1e6\n",
+            "[safety] max_force = 1e+06 is out of range: allowed > 0 and <= 10000 (N)"},
+        Bad{"[safety]\nmax_missed_periods = -1\n",
+            "[safety] max_missed_periods = -1 is out of range: allowed 0..1000000"},
+        Bad{"[safety]\nmax_consecutive_overruns = 2.5\n",
+            "[safety] max_consecutive_overruns must be an integer"},
         Bad{"[safety]\nreconnect_timeout = -1\n",
             "[safety] reconnect_timeout = -1 is out of range: allowed >= 0 and <= 3600 (s; 0: "
             "wait for ever)"},

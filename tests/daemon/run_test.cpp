@@ -378,6 +378,34 @@ TEST_F(DaemonRun, ABadSceneIsNamed) {
     EXPECT_NE(outcome.log.find("stiffness = -5"), std::string::npos) << outcome.log;
 }
 
+// Issue 10: a detent with period = 1e-300 was accepted, and the series solve (17) then failed
+// on every tick without a word. Its stiffness between notches, -2π peak_force/period, must
+// stay above -k_c.
+TEST_F(DaemonRun, ADetentTheCouplingCannotRenderIsRefusedBeforeTheRun) {
+    RunOptions options;
+    options.config_path = config(kEncoderGains);
+    const std::string detent =
+        "[scene]\nname = \"notches\"\naxes = 1\n[[detent]]\naxis = [1.0]\n"
+        "peak_force = 1.0\nperiod = ";
+    write("wall.toml", detent + "1e-300\n");
+    const Outcome refused = run(options);
+    EXPECT_EQ(refused.exit_code, kExitBadInput);
+    EXPECT_NE(refused.log.find("wall.toml: [[detent]] #1 has a stiffness down to -6.28319e+300 "
+                               "N/m between its notches (-2π peak_force/period), out of range "
+                               "for this coupling: allowed > -k_c = -3600 N/m"),
+              std::string::npos)
+        << refused.log;
+    EXPECT_TRUE(refused.out.empty());  // no run, no summary
+    // 2π x 1 N / 2 mm = 3142 N/m < 3600 N/m: rendered.
+    write("wall.toml", detent + "0.002\n");
+    options.duration_s = 0.2;
+    options.lockstep = true;
+    options.summary_path = "-";
+    const Outcome ran = run(options);
+    EXPECT_EQ(ran.exit_code, 0) << ran.log;
+    EXPECT_EQ(ran.summary().at("solver_not_converged"), 0);
+}
+
 TEST_F(DaemonRun, AMissingConfigFileIsNamed) {
     RunOptions options;
     options.config_path = (dir_ / "absent.toml").string();

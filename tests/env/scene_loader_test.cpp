@@ -248,7 +248,8 @@ TEST(EnvSceneLoader, MissingFileNamesThePath) {
         (void)load_scene("/nonexistent/scene.toml", 1);
         FAIL() << "accepted a missing file";
     } catch (const SceneError& error) {
-        EXPECT_NE(std::string(error.what()).find("/nonexistent/scene.toml: cannot open"),
+        EXPECT_NE(std::string(error.what())
+                      .find("/nonexistent/scene.toml: cannot read the scene file: No such file"),
                   std::string::npos)
             << error.what();
     }

@@ -26,6 +26,7 @@ constexpr double kFaultAtS = 1.5;                    ///< lockstep: hits sample 
 constexpr std::uint32_t kFaultDeviceLost = 1u << 0;  // servo/faults.hpp
 constexpr std::uint32_t kFaultReadTimeout = 1u << 1;
 constexpr std::uint32_t kFaultEncoderJump = 1u << 2;
+constexpr std::uint32_t kFaultEncoderStale = 1u << 8;
 constexpr std::uint32_t kFlagNoSample = 1u << 6;  // servo/telemetry.hpp
 constexpr std::uint32_t kFlagSoftStart = 1u << 3;
 constexpr std::uint32_t kFlagLinkRecovered = 1u << 8;
@@ -173,6 +174,30 @@ TEST(HilFaults, EncoderJumpLatchesAndZeroesForceInTheSameTick) {
         EXPECT_NE(faults_at(run.log, i) & kFaultEncoderJump, 0u);
         EXPECT_EQ(f[i], 0.0);
     }
+}
+
+// Issue 10: with stale_at = 0.75 the status bit was ignored, the held force moved the
+// handle 31 mm and the summary said "faults: none". A stale sample latches encoder_stale and
+// zeroes the force in the tick that read it.
+TEST(HilFaults, StaleEncoderLatchesAndZeroesForceInTheSameTick) {
+    constexpr std::uint32_t kStatusStale = 1u << 1;  // servo/io.hpp
+    const ScratchDir dir;
+    const DaemonRun run = run_with_faults(dir, "stale_at = " + toml_number(kFaultAtS) + "\n");
+    EXPECT_EQ(run.exit_code, 1) << run.err;
+    EXPECT_EQ(run.summary.at("exit"), "fault");
+    EXPECT_EQ(fault_list(run), servo::fault_name(kFaultEncoderStale));
+    std::size_t faulted = 0;
+    while (faulted < run.log.rows() && faults_at(run.log, faulted) == 0u) ++faulted;
+    ASSERT_LT(faulted, run.log.rows());
+    ASSERT_GT(faulted, 0u);
+    const auto& f = run.log.column("f0_n");
+    const auto& x = run.log.column("x0_m");
+    EXPECT_EQ(run.log.column("tick")[faulted], kFaultAtS * kRateHz);
+    EXPECT_NE(static_cast<std::uint32_t>(run.log.column("status")[faulted]) & kStatusStale, 0u);
+    EXPECT_EQ(f[faulted], 0.0);
+    EXPECT_GT(std::abs(f[faulted - 1]), 1.0);
+    // The run ends there: the handle has not been pushed anywhere by a held force.
+    EXPECT_NEAR(x.back(), x[faulted - 1], 1e-4);
 }
 
 }  // namespace

@@ -155,6 +155,24 @@ TEST(ServoSafety, SoftStartScalesTheForce) {
     EXPECT_NEAR(safety.filter(force, Vec3(0.0), kPeriod).handle_force_n.x, 2.0, 1e-12);
 }
 
+// Issue 10: a handle that starts deep in a wall asks for far more than max_force. The ramp
+// must bound the force commanded (scale x max_force), not the raw force before saturation,
+// which reached the limit 3 ms into a 0.5 s ramp.
+TEST(ServoSafety, SoftStartBoundsTheForceCommandedNotTheRawForce) {
+    SafetyLimits limits = plain_limits();
+    limits.max_force_n = 20.0;
+    limits.soft_start = {.still_speed_mps = 0.01, .still_time_s = 0.0, .ramp_time_s = 0.5};
+    SafetySupervisor safety(limits, 1);
+    const Vec3 raw(1000.0, 0.0, 0.0);  // 1 m into a 1000 N/m wall
+    for (int n = 1; n <= 500; ++n) {
+        const SafeForce out = safety.filter(raw, Vec3(0.0), kPeriod);
+        const double ramp = n * kPeriod / 0.5;
+        ASSERT_NEAR(out.handle_force_n.x, ramp * 20.0, 1e-9) << "tick " << n;
+        ASSERT_TRUE(out.saturated);
+    }
+    EXPECT_NEAR(safety.filter(raw, Vec3(0.0), kPeriod).handle_force_n.x, 20.0, 1e-12);
+}
+
 // A deliberately active environment: the rendered handle force pushes along the motion,
 // F_h = +c v (negative damping), while the handle oscillates.
 struct ActiveRun {

@@ -31,6 +31,8 @@ struct FakeClock {
 };
 
 /// Returns `next` from read() and then advances it by `counts_per_read`; records writes.
+/// Like a real device it stamps each sample with its clock: the virtual time of the read when
+/// it has one, else one period (`seconds_per_read`) per read.
 struct FakeDevice {
     Sample next{};
     std::array<std::int64_t, kMaxAxes> counts_per_read{};
@@ -43,10 +45,20 @@ struct FakeDevice {
     std::int64_t writes = 0;
     double max_abs_force_n = 0.0;
 
+    double seconds_per_read = 1e-3;
+    bool clock_stamps = true;         ///< false: device_time_s stays as `next` holds it
+    std::int64_t stall_at_read = -1;  ///< this read (0, 1, ...) first stalls the host ...
+    std::int64_t stall_ns = 0;        ///< ... for this long (virtual time), as kill -STOP would
+
     IoResult read(Sample& sample) noexcept {
+        if (time != nullptr && reads == stall_at_read) time->now_ns += stall_ns;
         ++reads;
+        if (clock_stamps && time != nullptr) {
+            next.device_time_s = static_cast<double>(time->now_ns) * 1e-9;
+        }
         sample = next;
         ++next.sequence;
+        if (clock_stamps && time == nullptr) next.device_time_s += seconds_per_read;
         for (int axis = 0; axis < kMaxAxes; ++axis)
             next.encoder_counts[axis] += counts_per_read[axis];
         if (time != nullptr) time->now_ns += read_cost_ns;

@@ -123,6 +123,81 @@ TEST(ServoLoop, EncoderJumpStatusFaultsInTheSameTick) {
     EXPECT_EQ(loop.faults(), kFaultEncoderJump);
 }
 
+// Issue 10: a stale sample (the counts repeat the last good ones) was ignored, and the held
+// force moved the handle 31 mm. It latches encoder_stale and zeroes the force in that tick.
+TEST(ServoLoop, StaleSampleFaultsInTheSameTick) {
+    VirtualTime time;
+    FakeDevice device;
+    device.set_position_counts(-2000);
+    PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 6000.0};
+    TestLoop<PlaneWall> loop(device, wall, test_config(), nullptr, FakeClock{&time});
+    loop.tick();
+    ASSERT_GT(device.last_command.force_n[0], 2.9);
+    device.next.status = kStatusStale;
+    loop.tick();
+    EXPECT_FALSE(device.last_command.enable);
+    EXPECT_EQ(device.last_command.force_n[0], 0.0);
+    EXPECT_EQ(loop.faults(), kFaultEncoderStale);
+    ASSERT_EQ(loop.summary().faults.size(), 1u);
+    EXPECT_EQ(loop.summary().faults[0], "encoder_stale");
+    // Latched: a fresh sample does not bring the force back without a reset.
+    device.next.status = 0;
+    loop.tick();
+    EXPECT_FALSE(device.last_command.enable);
+}
+
+// Issue 10: a host stalled between its wake and the read (kill -STOP) saw the handle's move
+// over the stall as one period's and commanded max_force. The backward difference spans the
+// time between the samples, from the device's clock.
+TEST(ServoLoop, VelocitySpansTheDeviceClockAcrossAStall) {
+    VirtualTime time;
+    FakeDevice device;
+    device.set_position_counts(10'000);  // free space
+    device.counts_per_read[0] = 50;      // 50 um per read
+    PlaneWall wall{.wall_m = 0.0};
+    ServoConfig config = test_config();
+    config.coupling.damping_n_s_per_m = 2.0;
+    TestLoop<PlaneWall> loop(device, wall, config, nullptr, FakeClock{&time});
+    loop.tick();
+    EXPECT_NEAR(loop.tick().v_mps[0], 0.05, 1e-12);
+    device.next.device_time_s += 0.054;  // 55 ms between this sample and the last
+    const TelemetryRecord& after = loop.tick();
+    EXPECT_NEAR(after.v_mps[0], 50e-6 / 0.055, 1e-12);
+    EXPECT_EQ(after.flags & kFlagIntervalUnknown, 0u);
+    EXPECT_NEAR(loop.tick().v_mps[0], 0.05, 1e-12);  // and one period again
+    // Jitter within half a period is the nominal period.
+    device.next.device_time_s += 0.0004;
+    EXPECT_NEAR(loop.tick().v_mps[0], 0.05, 1e-12);
+}
+
+// A device clock that stands still or runs backwards leaves the interval unknown: no
+// velocity-based force in that tick (zero force), the history starts again there.
+TEST(ServoLoop, UnknownIntervalZeroesTheForceAndRestartsTheHistory) {
+    VirtualTime time;
+    FakeDevice device;
+    device.set_position_counts(-2000);  // 2 mm inside the wall
+    device.counts_per_read[0] = -10;
+    PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 6000.0, .damping_n_s_per_m = 5.0};
+    ServoConfig config = test_config();
+    config.coupling.damping_n_s_per_m = 2.0;
+    TestLoop<PlaneWall> loop(device, wall, config, nullptr, FakeClock{&time});
+    for (int n = 0; n < 3; ++n) loop.tick();
+    ASSERT_GT(device.last_command.force_n[0], 2.9);
+    device.next.device_time_s -= 0.005;  // the clock went backwards
+    const TelemetryRecord& record = loop.tick();
+    EXPECT_NE(record.flags & kFlagIntervalUnknown, 0u);
+    EXPECT_EQ(record.v_mps[0], 0.0);
+    EXPECT_EQ(device.last_command.force_n[0], 0.0);
+    EXPECT_EQ(loop.faults(), 0u);
+    EXPECT_EQ(loop.stats().intervals_unknown, 1u);
+    EXPECT_EQ(wall.resets, 2);
+    // The next sample differences against that one, over one period of its clock.
+    EXPECT_NEAR(loop.tick().v_mps[0], -0.01, 1e-12);
+    device.next.device_time_s = device.next.device_time_s - 0.001;  // stood still
+    EXPECT_NE(loop.tick().flags & kFlagIntervalUnknown, 0u);
+    EXPECT_EQ(loop.summary().intervals_unknown, 2u);
+}
+
 TEST(ServoLoop, ServoSideJumpCheckFaults) {
     VirtualTime time;
     FakeDevice device;
@@ -206,6 +281,48 @@ TEST(ServoLoop, OverrunBudgetFaultsAndIsCounted) {
     // Time in the record follows the schedule: tick 4 belongs to period 12 (0, 3, 6, 9, 12).
     EXPECT_NEAR(loop.last_record().t_s, 0.012, 1e-12);
     EXPECT_EQ(loop.summary().overruns, 4u);
+    // The summary names the overrun that broke the budget, beside the budget.
+    ASSERT_TRUE(loop.summary().overrun_budget.has_value());
+    const OverrunBudgetBreach breach = *loop.summary().overrun_budget;
+    EXPECT_EQ(breach.consecutive_overruns, 4);
+    EXPECT_EQ(breach.missed_periods, 2);
+    EXPECT_EQ(breach.max_consecutive_overruns, 3);
+    EXPECT_EQ(breach.max_missed_periods, 20);
+    EXPECT_NEAR(breach.late_ms, 2.0, 1e-9);  // woke for period 12 at 12 ms + 2 missed
+}
+
+// One long stall (a host that stops the VM for 55 ms) is measured and named.
+TEST(ServoLoop, OneLongStallBreaksTheMissedPeriodBudgetAndIsNamed) {
+    VirtualTime time;
+    FakeDevice device;
+    device.time = &time;
+    device.set_position_counts(5000);
+    PlaneWall wall{.wall_m = 0.0};
+    ServoConfig config = test_config();
+    config.overrun.max_missed_periods = 20;
+    TelemetryRing ring(16);
+    TestLoop<PlaneWall> loop(device, wall, config, &ring, FakeClock{&time});
+    device.counts_per_read[0] = 10;
+    device.stall_at_read = 3;  // between the wake of tick 3 and its read
+    device.stall_ns = 55'300'000;
+    const std::atomic<bool> stop{false};
+    EXPECT_EQ(loop.run(stop, 10), RunExit::fault);
+    EXPECT_EQ(loop.stats().ticks, 5u);  // tick 4 (due at 4 ms) woke at 58.3 ms
+    EXPECT_EQ(loop.faults(), kFaultOverrunBudget);
+    TelemetryRecord record;
+    for (int n = 0; n < 4; ++n) ASSERT_TRUE(ring.try_pop(record));
+    // Tick 3 read 56.3 ms after tick 2: 10 um over 56 periods, not over one.
+    EXPECT_EQ(record.tick, 3u);
+    EXPECT_NEAR(record.v_mps[0], 10e-6 / 0.056, 1e-12);
+    ASSERT_TRUE(loop.summary().overrun_budget.has_value());
+    const OverrunBudgetBreach breach = *loop.summary().overrun_budget;
+    EXPECT_EQ(breach.missed_periods, 54);
+    EXPECT_NEAR(breach.late_ms, 54.3, 1e-9);
+    EXPECT_EQ(breach.consecutive_overruns, 1);
+    EXPECT_EQ(describe(breach).substr(0, 45), "woke 54.3 ms late (54 periods missed, 1 overr");
+    EXPECT_NE(describe(breach).find("the budget is 20 periods in one overrun ([safety] "
+                                    "max_missed_periods)"),
+              std::string::npos);
 }
 
 TEST(ServoLoop, RunStopsOnTickLimitWithStatsAndZeroForce) {

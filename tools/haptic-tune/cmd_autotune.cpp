@@ -36,6 +36,7 @@
 #include "hapticd/daemon/config_editor.hpp"
 #include "hapticd/daemon/link_diag.hpp"
 #include "hapticd/daemon/startup_check.hpp"
+#include "hapticd/input/text_input.hpp"
 #include "hapticd/tune/autotune.hpp"
 #include "hapticd/tune/input_checks.hpp"
 
@@ -65,11 +66,11 @@ class AutotuneError : public std::runtime_error {
 };
 
 std::string read_file(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw AutotuneError("cannot read " + path + ": " + std::strerror(errno));
-    std::ostringstream text;
-    text << in.rdbuf();
-    return text.str();
+    try {
+        return input::read_text_file(path, "the config file");
+    } catch (const input::InputError& e) {
+        throw AutotuneError(e.what());
+    }
 }
 
 std::string number_text(double value, int digits = 6) {

@@ -6,6 +6,8 @@
 #include <set>
 #include <sstream>
 
+#include "hapticd/input/text_input.hpp"
+
 namespace hapticd::tools {
 namespace {
 
@@ -47,9 +49,18 @@ void reject_unknown_keys(const std::string& path, const toml::table* table,
 }  // namespace
 
 DeviceFile read_device_file(const std::string& path) {
+    std::string text;
+    try {
+        text = input::read_text_file(path, "the config file");
+    } catch (const input::InputError& e) {
+        throw ConfigError(e.what());
+    }
+    if (const std::string e = input::toml_shape_error(text, path); !e.empty()) {
+        throw ConfigError(e);
+    }
     toml::table root;
     try {
-        root = toml::parse_file(path);
+        root = toml::parse(text, path);
     } catch (const toml::parse_error& error) {
         std::ostringstream message;
         message << path << ":" << error.source().begin.line << ":" << error.source().begin.column

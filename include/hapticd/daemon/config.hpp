@@ -96,6 +96,10 @@ struct SafetySection {
     bool reconnect = true;
     double reconnect_settle_s = 0.5;
     double reconnect_timeout_s = 5.0;  ///< 0: wait for ever
+    /// The overrun budget (servo::OverrunBudget): one overrun that misses more periods, or
+    /// more overrunning ticks in a row, latches overrun_budget.
+    std::int64_t max_missed_periods = 20;
+    int max_consecutive_overruns = 5;
 };
 
 /// [identify]: what the config says; make_identify_plan() fills what it leaves unset.

@@ -43,6 +43,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -87,10 +88,16 @@ struct Scene {
     std::vector<LinearObject> linear_objects;
     /// Empty, or why the scene has no linear model (its first detent or friction).
     std::string unmodelled;
+    /// The object whose stiffness falls lowest, a detent between its notches (stiffness
+    /// -2π peak_force/period); none when no object's stiffness is negative. The coupling
+    /// stiffness must exceed its magnitude, or the series solve (17) of a massless tool has
+    /// no stable balance there (docs/scenes.md).
+    std::optional<LinearObject> most_negative_stiffness;
 };
 
 /// Reads and builds the scene in `path`. `axes` is the device's axis count: the scene's
-/// [scene] axes must equal it. Throws SceneError.
+/// [scene] axes may not exceed it (a 1-axis scene runs on the first axis of a 3-axis
+/// device). Throws SceneError.
 [[nodiscard]] Scene load_scene(const std::string& path, int axes);
 
 /// The same from text; `source_name` stands for the file in messages.

@@ -21,17 +21,18 @@ enum Fault : std::uint32_t {
     kFaultOverspeed = 1u << 5,      ///< |v_d| > max_speed_mps with SpeedAction::fault
     kFaultDeviceFault = 1u << 6,    ///< the device reported a fault of its own
     kFaultDeviceIo = 1u << 7,       ///< read or write returned IoResult::error
+    kFaultEncoderStale = 1u << 8,   ///< kStatusStale: the counts repeat the last good ones
 };
 
-inline constexpr int kFaultCount = 8;
+inline constexpr int kFaultCount = 9;
 
 /// Link faults: the device or the wire between it and the host failed, not the device's
 /// mechanics, the encoder or this host. They are the only faults that LinkRecovery
 /// (link_recovery.hpp) may clear by itself, once the device has sent good samples again for
 /// a while: a lost device (unplugged, ENODEV), reads that gave no sample (timeouts, dropped,
 /// corrupted frames), I/O errors. Every other fault needs an operator (request_fault_reset):
-/// encoder_jump (the position may be wrong), device_fault (the device says so itself),
-/// overspeed, non_finite (the environment is broken) and overrun_budget (this host cannot
+/// encoder_jump and encoder_stale (the position may be wrong), device_fault (the device says so
+/// itself), overspeed, non_finite (the environment is broken) and overrun_budget (this host cannot
 /// keep the rate).
 inline constexpr std::uint32_t kLinkFaults = kFaultDeviceLost | kFaultReadTimeout | kFaultDeviceIo;
 
@@ -59,6 +60,8 @@ constexpr std::string_view fault_name(std::uint32_t fault_bit) noexcept {
             return "device_fault";
         case kFaultDeviceIo:
             return "device_io";
+        case kFaultEncoderStale:
+            return "encoder_stale";
         default:
             return "unknown";
     }

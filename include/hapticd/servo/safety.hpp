@@ -3,7 +3,8 @@
 //   fault latch (latched -> zero force, enable = false, in the same tick),
 //   non-finite check (-> kFaultNonFinite),
 //   velocity limit (fault, or damping on the speed above max_speed_mps),
-//   soft start scale, passivity controller, force saturation, passivity observer.
+//   passivity controller, force saturation, soft start scale (so the ramp bounds the force
+//   actually commanded), passivity observer.
 // Only axes < `axes` ever carry force.
 //
 // Real-time: filter(), raise() never allocate, lock or throw.
@@ -34,7 +35,8 @@ struct SafetyLimits {
     double max_speed_mps = 1.0;  ///< [safety] max_speed
     SpeedAction speed_action = SpeedAction::damp;
     double overspeed_damping_n_s_per_m = 50.0;
-    /// A per-tick encoder step larger than this is a jump (kFaultEncoderJump); 0: off.
+    /// An encoder step larger than this per period between the two samples is a jump
+    /// (kFaultEncoderJump); 0: off.
     double encoder_jump_m = 0.0;
     /// Consecutive read timeouts / dropped samples tolerated before kFaultReadTimeout.
     int read_timeouts_allowed = 2;

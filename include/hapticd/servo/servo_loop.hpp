@@ -178,9 +178,18 @@ class ServoLoop {
     const ServoConfig& config() const noexcept { return config_; }
     const TelemetryRecord& last_record() const noexcept { return record_; }
     Summary summary() const {
-        return make_summary(stats_, config_.rate_hz, faults_seen_,
-                            telemetry_ != nullptr ? telemetry_->dropped() : 0,
-                            safety_.passivity().energy_j());
+        Summary s = make_summary(stats_, config_.rate_hz, faults_seen_,
+                                 telemetry_ != nullptr ? telemetry_->dropped() : 0,
+                                 safety_.passivity().energy_j());
+        if ((faults_seen_ & kFaultOverrunBudget) != 0u) {
+            s.overrun_budget = OverrunBudgetBreach{
+                .late_ms = static_cast<double>(stats_.budget_overrun_late_ns) * 1e-6,
+                .missed_periods = stats_.budget_overrun_missed_periods,
+                .consecutive_overruns = stats_.budget_overrun_consecutive,
+                .max_missed_periods = config_.overrun.max_missed_periods,
+                .max_consecutive_overruns = config_.overrun.max_consecutive_overruns};
+        }
+        return s;
     }
 
     /// A disabled zero-force command, now.
@@ -190,6 +199,9 @@ class ServoLoop {
     }
 
   private:
+    // A gap longer than this between two samples is no interval to difference over.
+    static constexpr double kMaxIntervalPeriods = 1e6;
+
     static const ServoConfig& validated(const ServoConfig& config) {
         config.validate();
         if (!config.coupling_enabled && !ImpedancePort<Environment>) {
@@ -234,9 +246,15 @@ class ServoLoop {
         ++stats_.overruns;
         stats_.missed_periods += static_cast<std::uint64_t>(wake.missed_periods);
         ++consecutive_overruns_;
-        if (consecutive_overruns_ > config_.overrun.max_consecutive_overruns ||
-            wake.missed_periods > config_.overrun.max_missed_periods) {
+        if ((consecutive_overruns_ > config_.overrun.max_consecutive_overruns ||
+             wake.missed_periods > config_.overrun.max_missed_periods) &&
+            (safety_.faults() & kFaultOverrunBudget) == 0u) {
             raise(kFaultOverrunBudget);
+            // Late against the first deadline it missed, not the latest one it woke for.
+            stats_.budget_overrun_late_ns =
+                wake.missed_periods * pacer_.period_ns() + wake.latency_ns;
+            stats_.budget_overrun_missed_periods = wake.missed_periods;
+            stats_.budget_overrun_consecutive = consecutive_overruns_;
         }
     }
 
@@ -270,6 +288,9 @@ class ServoLoop {
         }
         if ((sample.status & kStatusDeviceFault) != 0u) raise(kFaultDeviceFault);
         if ((sample.status & kStatusJump) != 0u) raise(kFaultEncoderJump);
+        // Counts that repeat the last good ones while the handle may move: the position, and
+        // any velocity from it, is wrong, so this is a sensor fault like a jump.
+        if (have_sample && (sample.status & kStatusStale) != 0u) raise(kFaultEncoderStale);
         if (have_sample) {
             consecutive_timeouts_ = 0;
         } else {
@@ -296,16 +317,36 @@ class ServoLoop {
         consecutive_timeouts_ = 0;
     }
 
-    // Time since the previous sample used, in periods: from the device's sequence numbers
-    // when it paces the loop, else from the deadlines the pacer scheduled.
+    // The time since the previous sample used, in whole periods times T: the backward
+    // difference must span the time between the two samples, not the period the loop meant
+    // to keep (a host stalled for 55 ms between its wake and the read would otherwise see
+    // the handle move 55 periods' worth in one). When the device paces the loop its sequence
+    // numbers count the periods; otherwise its clock says when it latched each sample,
+    // rounded to periods (the models' T; jitter within half a period is ignored, as the
+    // pacer's schedule ignores it). 0 when unknown: the device's clock stood still, went
+    // backwards or is not a number although a new sample came (the caller then restarts the
+    // history at this sample, with no velocity-based force in this tick).
     double sample_interval_s(const Sample& sample) noexcept {
-        std::uint64_t periods = periods_since_sample_;
-        if (config_.device_paces_loop && sample.sequence > last_sequence_) {
-            periods = sample.sequence - last_sequence_;
+        double periods = 0.0;
+        if (config_.device_paces_loop) {
+            if (sample.sequence > last_sequence_) {
+                periods = static_cast<double>(sample.sequence - last_sequence_);
+            }
+        } else {
+            const double elapsed_s = sample.device_time_s - last_device_time_s_;
+            if (elapsed_s > 0.0 && elapsed_s < kMaxIntervalPeriods * period_s_) {
+                periods = std::max(1.0, std::round(elapsed_s / period_s_));
+            }
         }
         last_sequence_ = sample.sequence;
-        periods_since_sample_ = 0;
-        return static_cast<double>(std::max<std::uint64_t>(periods, 1)) * period_s_;
+        last_device_time_s_ = sample.device_time_s;
+        return periods * period_s_;
+    }
+
+    // Starts the velocity history at `sample` (no interval is needed for the first one).
+    void start_history(const Sample& sample) noexcept {
+        last_sequence_ = sample.sequence;
+        last_device_time_s_ = sample.device_time_s;
     }
 
     const TelemetryRecord& run_tick(const Wake& wake, bool paced) noexcept {
@@ -320,7 +361,6 @@ class ServoLoop {
         was_armed_ = armed;
 
         account_overrun(wake, flags);
-        periods_since_sample_ += 1 + static_cast<std::uint64_t>(wake.missed_periods);
         scheduled_periods_ += 1 + static_cast<std::uint64_t>(wake.missed_periods);
 
         Sample sample;
@@ -331,15 +371,31 @@ class ServoLoop {
         if (!have_sample && (safety_.faults() & kLinkFaults) != 0u) initialised_ = false;
         const Vec3 x_d = have_sample ? to_metres(sample) : coupling_.previous_device_position_m();
         double interval_s = period_s_;
-        if (have_sample) {
+        bool interval_unknown = false;
+        if (have_sample && initialised_) {
             interval_s = sample_interval_s(sample);
+            interval_unknown = interval_s == 0.0;
+            if (interval_unknown) {
+                // Nothing velocity-based may act on a tick whose interval is unknown: zero
+                // force now, and the history (and the soft start) starts again here.
+                flags |= kFlagIntervalUnknown;
+                ++stats_.intervals_unknown;
+                initialised_ = false;
+                safety_.restart_soft_start();
+                interval_s = period_s_;
+            }
+        }
+        if (have_sample) {
             if (!initialised_) {
                 coupling_.reset(x_d);
                 environment_.reset(x_d);
+                start_history(sample);
                 initialised_ = true;
             } else if (config_.safety.encoder_jump_m > 0.0 &&
                        max_abs(x_d - coupling_.previous_device_position_m()) >
-                           config_.safety.encoder_jump_m) {
+                           config_.safety.encoder_jump_m * (interval_s / period_s_)) {
+                // A step per period: a sample that comes 55 periods after the last may have
+                // moved 55 times as far.
                 raise(kFaultEncoderJump);
             }
         }
@@ -348,7 +404,7 @@ class ServoLoop {
         Vec3 handle_force_n(0.0);
         Vec3 v_d(0.0);
         Vec3 x_e = coupling_.previous_tool_position_m();
-        if (have_sample && armed && !safety_.faulted()) {
+        if (have_sample && armed && !safety_.faulted() && !interval_unknown) {
             const CouplingStep step = couple(x_d, interval_s);
             if (!step.finite) raise(kFaultNonFinite);
             if (step.finite && !step.converged) {
@@ -460,6 +516,7 @@ class ServoLoop {
         snapshot.faults = record_.faults;
         snapshot.flags = record_.flags;
         snapshot.overruns = stats_.overruns;
+        snapshot.solver_not_converged = stats_.solver_not_converged;
         snapshot.energy_j = record_.energy_j;
         snapshot.soft_start_scale = soft_start_scale;
         snapshot.armed = armed;
@@ -488,11 +545,11 @@ class ServoLoop {
     bool initialised_ = false;
     int consecutive_overruns_ = 0;
     int consecutive_timeouts_ = 0;
-    std::uint64_t periods_since_sample_ = 0;
     std::uint64_t scheduled_periods_ = 0;
     std::uint64_t last_sequence_ = 0;
+    double last_device_time_s_ = 0.0;
     std::uint32_t faults_seen_ = 0;
-    std::uint32_t raised_this_tick_ = 0;  ///< Fault bits raised in the current tick
+    std::uint32_t raised_this_tick_ = 0;           ///< Fault bits raised in the current tick
     std::array<double, kMaxAxes> held_force_n_{};  ///< what the device holds (last written)
 };
 

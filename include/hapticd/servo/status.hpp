@@ -18,7 +18,8 @@ struct StatusSnapshot {
     std::uint32_t faults = 0;  ///< latched Fault mask
     std::uint32_t flags = 0;   ///< TickFlag of the last tick
     std::uint64_t overruns = 0;
-    double energy_j = 0.0;  ///< passivity observer
+    std::uint64_t solver_not_converged = 0;  ///< ticks whose series solve (17) failed so far
+    double energy_j = 0.0;                   ///< passivity observer
     double soft_start_scale = 0.0;
     bool armed = false;
 };

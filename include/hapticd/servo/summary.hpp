@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,15 @@ struct WakeLatencySummaryUs {
 
 struct TickComputeSummaryUs {
     double p50 = 0.0, p99 = 0.0, max = 0.0;
+};
+
+/// The overrun that latched overrun_budget, beside the budget it broke (ServoConfig::overrun).
+struct OverrunBudgetBreach {
+    double late_ms = 0.0;             ///< how late the tick woke
+    std::int64_t missed_periods = 0;  ///< periods that one overrun missed
+    int consecutive_overruns = 0;     ///< overrunning ticks in a row, this one included
+    std::int64_t max_missed_periods = 0;
+    int max_consecutive_overruns = 0;
 };
 
 struct Summary {
@@ -33,7 +43,13 @@ struct Summary {
     std::uint64_t saturated_ticks = 0;
     std::uint64_t link_recoveries = 0;  ///< link faults cleared once the device came back
     double passivity_energy_j = 0.0;
+    std::uint64_t intervals_unknown = 0;  ///< samples with no known time since the last one
+    std::optional<OverrunBudgetBreach> overrun_budget;  ///< set when overrun_budget latched
 };
+
+/// "woke 55.0 ms late (55 periods missed); the budget is 20 periods in one overrun
+/// ([safety] max_missed_periods) and 5 overruns in a row ([safety] max_consecutive_overruns)".
+std::string describe(const OverrunBudgetBreach& breach);
 
 /// `faults_seen` is a Fault mask.
 Summary make_summary(const TickStats& stats, double rate_hz, std::uint32_t faults_seen,

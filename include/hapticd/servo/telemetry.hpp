@@ -21,6 +21,9 @@ enum TickFlag : std::uint32_t {
     kFlagNoSample = 1u << 6,            ///< read() gave no sample (timeout, dropped)
     kFlagDisarmed = 1u << 7,            ///< the loop is disarmed: zero force by request
     kFlagLinkRecovered = 1u << 8,       ///< the link-fault latch clears after this tick
+    /// The time since the last sample is unknown (the device's clock stood still or went
+    /// backwards): zero force, and the velocity history starts again at this sample.
+    kFlagIntervalUnknown = 1u << 9,
 };
 
 struct TelemetryRecord {

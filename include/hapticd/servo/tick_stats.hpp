@@ -49,10 +49,16 @@ struct TickStats {
     std::uint64_t saturated_ticks = 0;
     std::uint64_t overspeed_ticks = 0;
     std::uint64_t passivity_control_ticks = 0;
-    std::uint64_t link_recoveries = 0;  ///< link-fault latches cleared by LinkRecovery
-    double max_force_n = 0.0;           ///< largest |F| commanded (vector norm)
-    DurationHistogram wake_latency;     ///< actual wake - deadline
-    DurationHistogram compute;          ///< wake to command written
+    std::uint64_t link_recoveries = 0;    ///< link-fault latches cleared by LinkRecovery
+    std::uint64_t intervals_unknown = 0;  ///< samples with no known time since the last one
+    double max_force_n = 0.0;             ///< largest |F| commanded (vector norm)
+    /// The overrun that exhausted the budget (kFaultOverrunBudget): how late that tick woke,
+    /// the periods it missed and the overrunning ticks in a row; all 0 until one does.
+    std::int64_t budget_overrun_late_ns = 0;
+    std::int64_t budget_overrun_missed_periods = 0;
+    int budget_overrun_consecutive = 0;
+    DurationHistogram wake_latency;  ///< actual wake - deadline
+    DurationHistogram compute;       ///< wake to command written
 
     void clear() noexcept { *this = TickStats{}; }
 };

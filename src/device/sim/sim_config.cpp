@@ -13,6 +13,7 @@
 
 #include "hapticd/device/sim/command_pipeline.hpp"
 #include "hapticd/device/table_reader.hpp"
+#include "hapticd/input/text_input.hpp"
 
 namespace hapticd::device::sim {
 namespace {
@@ -151,6 +152,10 @@ SimConfig parse_sim_config(const DeviceConfig& config) {
     c.axes = config.axes;
     c.rate_hz = config.rate_hz;
 
+    if (const std::string e = input::toml_shape_error(config.plugin_table_toml, source);
+        !e.empty()) {
+        throw std::runtime_error(e);
+    }
     toml::table table;
     try {
         table = toml::parse(config.plugin_table_toml, source);

@@ -1,0 +1,174 @@
+#include "hapticd/input/text_input.hpp"
+
+#include <sys/stat.h>
+
+#include <array>
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <vector>
+
+namespace hapticd::input {
+namespace {
+
+std::string mib(std::size_t bytes) {
+    if (bytes >= (std::size_t{1} << 20) && bytes % (std::size_t{1} << 20) == 0) {
+        return std::to_string(bytes >> 20) + " MiB";
+    }
+    return std::to_string(bytes) + " bytes";
+}
+
+/// A lexical walk of TOML text: strings and comments skipped, key parts and the nesting of
+/// arrays and inline tables counted.
+class TomlShape {
+  public:
+    TomlShape(std::string_view text, std::string_view source) : text_(text), source_(source) {}
+
+    std::string error() {
+        at_line_start_ = true;
+        while (i_ < text_.size()) {
+            const char c = text_[i_];
+            if (c == '\n') {
+                ++line_;
+                ++i_;
+                if (brackets_.empty()) at_line_start_ = true, in_key_ = false, parts_ = 1;
+                continue;
+            }
+            if (c == ' ' || c == '\t' || c == '\r') {
+                ++i_;
+                continue;
+            }
+            if (c == '#') {
+                while (i_ < text_.size() && text_[i_] != '\n') ++i_;
+                continue;
+            }
+            if (at_line_start_) {
+                at_line_start_ = false;
+                if (c == '[') {  // a table header, [a.b] or [[a.b]]
+                    in_header_ = true;
+                    parts_ = 1;
+                    ++i_;
+                    if (i_ < text_.size() && text_[i_] == '[') ++i_;
+                    continue;
+                }
+                in_key_ = true;
+                parts_ = 1;
+            }
+            if (c == '"' || c == '\'') {
+                if (!skip_string()) return at("a string that never ends");
+                continue;
+            }
+            if (in_header_) {
+                if (c == '.' && ++parts_ > kMaxTomlNesting) return too_many_parts();
+                if (c == ']') in_header_ = false;
+                ++i_;
+                continue;
+            }
+            if (in_key_) {
+                if (c == '.' && ++parts_ > kMaxTomlNesting) return too_many_parts();
+                if (c == '=') in_key_ = false;
+                ++i_;
+                continue;
+            }
+            if (c == '[' || c == '{') {
+                brackets_.push_back(c);
+                if (static_cast<int>(brackets_.size()) > kMaxTomlNesting) {
+                    return at("arrays and inline tables nested " +
+                              std::to_string(brackets_.size()) + " deep (allowed at most " +
+                              std::to_string(kMaxTomlNesting) + ")");
+                }
+                if (c == '{') in_key_ = true, parts_ = 1;
+            } else if ((c == ']' || c == '}') && !brackets_.empty()) {
+                brackets_.pop_back();
+            } else if (c == ',' && !brackets_.empty() && brackets_.back() == '{') {
+                in_key_ = true, parts_ = 1;
+            }
+            ++i_;
+        }
+        return "";
+    }
+
+  private:
+    std::string at(const std::string& what) const {
+        return std::string(source_) + ":" + std::to_string(line_) + ": " + what;
+    }
+    std::string too_many_parts() const {
+        return at("a key of more than " + std::to_string(kMaxTomlNesting) +
+                  " dotted parts (allowed at most " + std::to_string(kMaxTomlNesting) + ")");
+    }
+
+    /// Skips a basic, literal or multi-line string starting at i_; false if it never ends.
+    bool skip_string() {
+        const char quote = text_[i_];
+        const bool multi = text_.substr(i_, 3) == std::string(3, quote);
+        i_ += multi ? 3 : 1;
+        while (i_ < text_.size()) {
+            const char c = text_[i_];
+            if (c == '\\' && quote == '"') {
+                if (i_ + 1 < text_.size() && text_[i_ + 1] == '\n') ++line_;
+                i_ += 2;
+                continue;
+            }
+            if (c == '\n') {
+                if (!multi) return true;  // toml++ reports it; the shape is fine
+                ++line_;
+            }
+            if (c == quote && (!multi || text_.substr(i_, 3) == std::string(3, quote))) {
+                i_ += multi ? 3 : 1;
+                // A closing run of up to two extra quotes belongs to the string.
+                while (multi && i_ < text_.size() && text_[i_] == quote) ++i_;
+                return true;
+            }
+            ++i_;
+        }
+        return false;
+    }
+
+    std::string_view text_;
+    std::string_view source_;
+    std::size_t i_ = 0;
+    int line_ = 1;
+    bool at_line_start_ = true;
+    bool in_header_ = false;
+    bool in_key_ = false;
+    int parts_ = 1;
+    std::vector<char> brackets_;
+};
+
+}  // namespace
+
+std::string read_text_file(const std::string& path, std::string_view what, std::size_t max_bytes) {
+    if (path.empty()) throw InputError(std::string(what) + ": the path is empty");
+    struct stat st {};
+    if (::stat(path.c_str(), &st) != 0) {
+        throw InputError(path + ": cannot read " + std::string(what) + ": " + std::strerror(errno));
+    }
+    if (S_ISDIR(st.st_mode)) {
+        throw InputError(path + ": cannot read " + std::string(what) + ": it is a directory");
+    }
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError(path + ": cannot read " + std::string(what));
+    std::string text;
+    std::array<char, 65536> chunk{};
+    while (in) {
+        in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
+        text.append(chunk.data(), static_cast<std::size_t>(in.gcount()));
+        if (text.size() > max_bytes) {
+            throw InputError(path + ": " + std::string(what) + " is larger than " + mib(max_bytes) +
+                             " (allowed at most " + mib(max_bytes) + "): not a hapticd file");
+        }
+    }
+    if (in.bad()) throw InputError(path + ": cannot read " + std::string(what));
+    return text;
+}
+
+std::string toml_shape_error(std::string_view text, std::string_view source,
+                             std::size_t max_bytes) {
+    if (text.size() > max_bytes) {
+        return std::string(source) + ": " + std::to_string(text.size()) +
+               " bytes is too large (allowed at most " + mib(max_bytes) + ")";
+    }
+    return TomlShape(text, source).error();
+}
+
+}  // namespace hapticd::input
