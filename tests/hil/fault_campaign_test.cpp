@@ -153,6 +153,8 @@ constexpr double kMaxForceN = 8.0;
 constexpr double kCountsPerMeter = 1e5;
 constexpr double kPeriodS = 1e-3;
 constexpr std::int64_t kTicks = 900;
+constexpr std::int64_t kSettleTicks = 30;    ///< link_recovery.settle_s
+constexpr std::int64_t kTimeoutTicks = 250;  ///< link_recovery.timeout_s
 
 device::sim::SimConfig sim_config() {
     device::sim::SimConfig c;
@@ -182,7 +184,9 @@ servo::ServoConfig servo_config(bool reconnect) {
     c.safety.soft_start = {.still_speed_mps = 0.02, .still_time_s = 0.01, .ramp_time_s = 0.05};
     c.realtime.mode = servo::RealtimeMode::off;
     c.device_paces_loop = true;
-    c.link_recovery = {.enabled = reconnect, .settle_s = 0.03, .timeout_s = 0.25};
+    c.link_recovery = {.enabled = reconnect,
+                       .settle_s = kSettleTicks * kPeriodS,
+                       .timeout_s = kTimeoutTicks * kPeriodS};
     return c;
 }
 
@@ -303,9 +307,34 @@ void run_sequence(std::uint64_t seed, Counts& counts) {
     if (!reconnect && faults_seen != 0u) {
         ASSERT_EQ(exit, servo::RunExit::fault);
     }
-    if (reconnect && !non_link_fault && faults_seen != 0u && exit == servo::RunExit::tick_limit) {
-        ASSERT_GE(recoveries, 1u);
-        ASSERT_EQ(records.back().faults, 0u);  // recovered by the end
+    if (reconnect && !non_link_fault && faults_seen != 0u) {
+        // Link faults only. Each latch either clears after the device was good for the whole
+        // settle time (the tick flagged link-recovered), within the timeout, or is still held
+        // at the end: then the run gave up if the timeout ran out, and ran on otherwise.
+        std::size_t n = 0;
+        while (n < records.size()) {
+            if (records[n].faults == 0u) {
+                ++n;
+                continue;
+            }
+            const std::size_t start = n;
+            while (n < records.size() && records[n].faults != 0u) ++n;
+            const std::size_t last = n - 1;
+            const auto held = static_cast<std::int64_t>(last - start);
+            if (n < records.size()) {
+                ASSERT_NE(records[last].flags & servo::kFlagLinkRecovered, 0u) << "tick " << last;
+                ASSERT_LE(held, kTimeoutTicks) << "latched at " << start;
+                for (std::int64_t k = 0; k < kSettleTicks; ++k) {
+                    const servo::TelemetryRecord& good =
+                        records[last - static_cast<std::size_t>(k)];
+                    ASSERT_EQ(good.flags & servo::kFlagNoSample, 0u) << "recovered over a bad tick";
+                }
+            } else if (exit == servo::RunExit::fault) {
+                ASSERT_GE(held, kTimeoutTicks - 1) << "gave up early, latched at " << start;
+            } else {
+                ASSERT_LT(held, kTimeoutTicks + 1) << "did not give up, latched at " << start;
+            }
+        }
     }
     if (exit == servo::RunExit::fault) {
         ASSERT_NE(records.back().faults, 0u);
