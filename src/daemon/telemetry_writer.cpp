@@ -3,10 +3,12 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <span>
 #include <stdexcept>
+#include <string_view>
 
 #include "hapticd/servo/telemetry_csv.hpp"
 
@@ -111,8 +113,9 @@ void TelemetryWriter::drain() noexcept {
     }
 }
 
-// Writes the buffer (whole lines) with write(2). A failure part way cuts the file back to
-// the last whole line and stops all further writes.
+// Writes the buffer (whole lines) with write(2). A write that fails part way keeps the whole
+// lines it got onto the disk, cuts the file back to the last of them, and stops all further
+// writes.
 void TelemetryWriter::flush_buffer() noexcept {
     if (used_ == 0) return;
     if (write_errno_ == 0) {
@@ -129,9 +132,21 @@ void TelemetryWriter::flush_buffer() noexcept {
         if (write_errno_ == 0) {
             file_bytes_ += used_;
             records_written_.fetch_add(buffered_records_, std::memory_order_relaxed);
+            header_pending_ = false;
         } else if (done > 0) {
-            // A partial line may be on disk: cut back to the last whole one (a device such
-            // as /dev/full has no length to cut, and nothing was kept there).
+            // The whole lines of what was written stay; a cut last line goes (a device such
+            // as /dev/full has no length to cut, and kept nothing).
+            const std::string_view written(buffer_.data(), done);
+            const std::size_t last_newline = written.rfind('\n');
+            const std::size_t keep = last_newline == std::string_view::npos ? 0 : last_newline + 1;
+            auto lines = static_cast<std::uint64_t>(std::count(
+                written.begin(), written.begin() + static_cast<std::ptrdiff_t>(keep), '\n'));
+            if (header_pending_ && lines > 0) {
+                --lines;  // the header is not a record
+                header_pending_ = false;
+            }
+            records_written_.fetch_add(lines, std::memory_order_relaxed);
+            file_bytes_ += keep;
             (void)::ftruncate(fd_, static_cast<off_t>(file_bytes_));
         }
     }

@@ -10,12 +10,12 @@
 // sync interval the writer also fdatasync()s, bounding what a power cut loses.
 //
 // Only whole lines are written: every write(2) ends on a newline, and a write that fails
-// part way (disk full, EFBIG) is cut back with ftruncate() to the last whole line; from
-// then on nothing more is written (the records are still drained and counted), and the
-// file holds records_written() whole lines after the header. finish() is called after the
-// loop has stopped: it drains what is left, writes and closes, so on a clean stop the file
-// holds every record the ring accepted. Records the ring refused are counted by the ring
-// (TelemetryRing::dropped) and reported in the summary.
+// part way (disk full, EFBIG) keeps the whole lines it wrote and is cut back with
+// ftruncate() to the last of them; from then on nothing more is written (the records are still
+// drained and counted), and the file holds records_written() whole lines after the header. finish()
+// is called after the loop has stopped: it drains what is left, writes and closes, so on a clean
+// stop the file holds every record the ring accepted. Records the ring refused are counted by the
+// ring (TelemetryRing::dropped) and reported in the summary.
 #pragma once
 
 #include <atomic>
@@ -78,6 +78,7 @@ class TelemetryWriter {
     std::size_t used_ = 0;
     std::uint64_t buffered_records_ = 0;  ///< lines in buffer_ (the header is not one)
     std::uint64_t file_bytes_ = 0;        ///< bytes on disk: whole lines only
+    bool header_pending_ = true;          ///< the header row is still in buffer_
     int write_errno_ = 0;
     std::chrono::steady_clock::time_point oldest_buffered_{};
     std::chrono::steady_clock::time_point last_sync_{};
