@@ -93,26 +93,59 @@ OwnedFd& OwnedFd::operator=(OwnedFd&& other) noexcept {
     return *this;
 }
 
-OwnedFd open_locked_log(const std::string& option, const std::string& path) {
-    // No O_TRUNC: the file may be another daemon's live log; empty it only once it is ours.
-    OwnedFd fd(::open(path.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0644));
-    if (!fd) {
+namespace {
+
+/// Opens `path` for writing, creating it if it is missing (and saying so); no truncation.
+OutputFile open_for_writing(const std::string& option, const std::string& path) {
+    bool created = true;
+    int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+    if (fd < 0 && errno == EEXIST) {
+        created = false;
+        fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
+        // A dangling symlink: create its target (and leave it, like any existing name).
+        if (fd < 0 && errno == ENOENT)
+            fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0644);
+    }
+    if (fd < 0) {
         throw OutputError(option + " " + path +
                           ": cannot create the file: " + std::strerror(errno));
     }
+    return OutputFile(OwnedFd(fd), option, path, created);
+}
+
+}  // namespace
+
+OutputFile::~OutputFile() {
+    if (fd_ && created_ && !begun_) ::unlink(path_.c_str());
+}
+
+void OutputFile::begin() {
+    begun_ = true;
     struct stat st {};
-    if (::fstat(fd.get(), &st) != 0 || !S_ISREG(st.st_mode)) return fd;  // /dev/null, a pipe
+    if (!fd_ || ::fstat(fd_.get(), &st) != 0 || !S_ISREG(st.st_mode)) return;
+    if (::ftruncate(fd_.get(), 0) != 0) {
+        throw OutputError(option_ + " " + path_ +
+                          ": cannot empty the file: " + std::strerror(errno));
+    }
+}
+
+OutputFile open_locked_log(const std::string& option, const std::string& path) {
+    // No O_TRUNC: the file may be another daemon's live log; it is emptied once it is ours
+    // and the run starts (OutputFile::begin()).
+    OutputFile file = open_for_writing(option, path);
+    struct stat st {};
+    if (::fstat(file.fd(), &st) != 0 || !S_ISREG(st.st_mode)) return file;  // /dev/null, a pipe
     struct flock lock {};
     lock.l_type = F_WRLCK;
     lock.l_whence = SEEK_SET;  // l_start = l_len = 0: the whole file
-    if (::fcntl(fd.get(), F_SETLK, &lock) != 0) {
+    if (::fcntl(file.fd(), F_SETLK, &lock) != 0) {
         const int error = errno;
         if (error == EACCES || error == EAGAIN) {
             struct flock holder {};
             holder.l_type = F_WRLCK;
             holder.l_whence = SEEK_SET;
             std::string who = "another process";
-            if (::fcntl(fd.get(), F_GETLK, &holder) == 0 && holder.l_type != F_UNLCK &&
+            if (::fcntl(file.fd(), F_GETLK, &holder) == 0 && holder.l_type != F_UNLCK &&
                 holder.l_pid > 0) {
                 who = "process " + std::to_string(holder.l_pid);
             }
@@ -122,19 +155,11 @@ OwnedFd open_locked_log(const std::string& option, const std::string& path) {
         }
         throw OutputError(option + " " + path + ": cannot lock the file: " + std::strerror(error));
     }
-    if (::ftruncate(fd.get(), 0) != 0) {
-        throw OutputError(option + " " + path + ": cannot empty the file: " + std::strerror(errno));
-    }
-    return fd;
+    return file;
 }
 
-OwnedFd open_output(const std::string& option, const std::string& path) {
-    OwnedFd fd(::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644));
-    if (!fd) {
-        throw OutputError(option + " " + path +
-                          ": cannot create the file: " + std::strerror(errno));
-    }
-    return fd;
+OutputFile open_output(const std::string& option, const std::string& path) {
+    return open_for_writing(option, path);
 }
 
 bool write_all(int fd, const std::string& text) noexcept {

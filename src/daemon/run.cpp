@@ -212,8 +212,8 @@ device::DeviceHandle open_device(const Config& config, bool lockstep) {
 
 /// The outputs, opened before the device (prepare_outputs()).
 struct Outputs {
-    OwnedFd log;      ///< --log, locked and empty
-    OwnedFd summary;  ///< --summary FILE, created and empty
+    OutputFile log;      ///< --log, locked; emptied when the run starts
+    OutputFile summary;  ///< --summary FILE; emptied when the run starts
 };
 
 /// Writes the summary; false when --summary FILE could not be written whole (the JSON then
@@ -229,7 +229,7 @@ bool write_summary(const RunOptions& options, Outputs& outputs, const servo::Sum
         out << json << std::flush;
         return static_cast<bool>(out);
     }
-    bool written = outputs.summary && write_all(outputs.summary.get(), json);
+    bool written = outputs.summary && write_all(outputs.summary.fd(), json);
     const int error = errno;
     if (outputs.summary && ::close(outputs.summary.release()) != 0 && written) written = false;
     if (!written) {
@@ -321,6 +321,14 @@ int run_loop(const RunOptions& options, const Config& config,
              AfterRun after_run = {}) {
     const device::DeviceInfo info = device.info();
 
+    // From here on the outputs are this run's: emptied now (an old summary must not outlive
+    // a run that is killed), kept whatever happens.
+    try {
+        outputs.log.begin();
+        outputs.summary.begin();
+    } catch (const OutputError& e) {
+        throw StartError(kExitBadInput, e.what());
+    }
     std::unique_ptr<servo::TelemetryRing> ring;
     std::unique_ptr<TelemetryWriter> writer;
     if (options.log_path) {

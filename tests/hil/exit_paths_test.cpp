@@ -382,7 +382,8 @@ TEST(HilExit, AnOutputThatIsAnInputIsRefused) {
         bench, {h, "--lockstep", "--duration", "1", "--config", bench.config, "--summary", dotted},
         "is the same file as --config " + bench.config);
     // The plugin (refused before it is loaded, so any file will do).
-    const std::string plugin = bench.dir.write("hapticd-device-fake.so", "not really a shared object\n");
+    const std::string plugin =
+        bench.dir.write("hapticd-device-fake.so", "not really a shared object\n");
     const std::string with_plugin = bench.dir.write("plugin.toml", [&] {
         std::string text = slurp(bench.config);
         const std::string from = "plugin = \"sim\"";
@@ -440,6 +441,26 @@ TEST(HilExit, AnUnwritableOutputIsRefusedBeforeTheRun) {
          bench.dir.path().string()},
         "--log " + bench.dir.path().string() + ": cannot create the file: Is a directory");
     EXPECT_FALSE(fs::exists(bench.log));
+}
+
+TEST(HilExit, ARunRefusedAfterTheOutputsWereCheckedLeavesNoneBehind) {
+    // The device cannot be loaded: the outputs, already checked and created, are removed
+    // again (the ones it created) or left as they were (the ones that existed).
+    const Bench bench("lockstep");
+    std::string text = slurp(bench.config);
+    text.replace(text.find("plugin = \"sim\""), std::string("plugin = \"sim\"").size(),
+                 "plugin = \"" + bench.dir.file("hapticd-device-none.so") + "\"");
+    const std::string config =
+        bench.dir.write("none.toml", text.substr(0, text.find("[device.sim")));
+    const std::string old_summary = bench.dir.write("old-summary.json", "{\"old\": true}\n");
+    Child child({hapticd_bin(), "--lockstep", "--duration", "1", "--config", config, "--log",
+                 bench.log, "--summary", old_summary},
+                bench.dir.file("out.txt"), bench.dir.file("err.txt"));
+    ASSERT_TRUE(child.wait(30s));
+    EXPECT_EQ(child.exit_code(), 2) << child.err();
+    EXPECT_NE(child.err().find("hapticd-device-none.so"), std::string::npos) << child.err();
+    EXPECT_FALSE(fs::exists(bench.log));
+    EXPECT_EQ(slurp(old_summary), "{\"old\": true}\n");
 }
 
 TEST(HilExit, EmptyPathsAreErrors) {
@@ -546,7 +567,7 @@ TEST(HilExit, AutotunePassesItsStopSignalsOnToTheIdentificationRun) {
                            ": passed on to the identification run"),
                   std::string::npos)
             << err;
-        EXPECT_NE(err.find("exited with status 0 at zero force; nothing was written"),
+        EXPECT_NE(err.find("exited with status 0 (it stops at zero force); nothing was written"),
                   std::string::npos)
             << err;
         EXPECT_LT(took_s, 2.0);

@@ -224,10 +224,11 @@ void run_identification(const std::string& hapticd, const std::string& config_pa
                  : " (give --hapticd PATH, or record a run yourself and give --log)"));
     }
     if (g_interrupted != 0) {
-        throw AutotuneError("interrupted by SIG" +
-                            std::string(sigabbrev_np(static_cast<int>(g_interrupted))) +
-                            ": passed on to the identification run (" + command + "), which " +
-                            describe_hapticd_exit(status) + " at zero force; nothing was written");
+        throw AutotuneError(
+            "interrupted by SIG" + std::string(sigabbrev_np(static_cast<int>(g_interrupted))) +
+            ": passed on to the identification run (" + command + "), which " +
+            describe_hapticd_exit(status) + (WIFEXITED(status) ? " (it stops at zero force)" : "") +
+            "; nothing was written");
     }
     if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
         throw AutotuneError("the identification run failed: " + command + " " +

@@ -53,14 +53,48 @@ class OwnedFd {
     int fd_ = -1;
 };
 
-/// Opens (creating it, mode 0644) the telemetry log `path` for `option`, takes an exclusive
-/// write lock on it without waiting (fcntl F_SETLK; a second daemon on the same file is
-/// refused, naming the holder's pid), and only then empties it. Throws OutputError.
-OwnedFd open_locked_log(const std::string& option, const std::string& path);
+/// An output opened before the run: created when missing, not yet emptied. Until begin(),
+/// destroying it removes the file if it created it (a refused run leaves no output behind)
+/// and leaves a file that was there as it was.
+class OutputFile {
+  public:
+    OutputFile() = default;
+    OutputFile(OwnedFd fd, std::string option, std::string path, bool created)
+        : fd_(std::move(fd)),
+          option_(std::move(option)),
+          path_(std::move(path)),
+          created_(created) {}
+    ~OutputFile();
+    OutputFile(OutputFile&&) noexcept = default;
+    OutputFile& operator=(OutputFile&&) noexcept = default;
+    OutputFile(const OutputFile&) = delete;
+    OutputFile& operator=(const OutputFile&) = delete;
 
-/// Creates (or empties) `path` for `option` now, so that an unwritable path is found before
+    /// The run starts: empties the file (when it is a regular file) and keeps it from now
+    /// on. Throws OutputError.
+    void begin();
+    int fd() const noexcept { return fd_.get(); }
+    /// The descriptor, now owned by the caller.
+    int release() noexcept { return fd_.release(); }
+    explicit operator bool() const noexcept { return static_cast<bool>(fd_); }
+
+  private:
+    OwnedFd fd_;
+    std::string option_;
+    std::string path_;
+    bool created_ = false;
+    bool begun_ = false;
+};
+
+/// Opens (creating it, mode 0644) the telemetry log `path` for `option` and takes an
+/// exclusive write lock on it without waiting (fcntl F_SETLK): a second daemon on the same
+/// file is refused, naming the holder's pid, and the first one's log is not touched.
+/// Throws OutputError.
+OutputFile open_locked_log(const std::string& option, const std::string& path);
+
+/// Opens (creating it) `path` for `option` now, so that an unwritable path is found before
 /// the run. Throws OutputError.
-OwnedFd open_output(const std::string& option, const std::string& path);
+OutputFile open_output(const std::string& option, const std::string& path);
 
 /// Writes all of `text` to `fd`; false (errno set) when the system refused part of it.
 bool write_all(int fd, const std::string& text) noexcept;
