@@ -402,6 +402,21 @@ int run_loop(const RunOptions& options, const Config& config,
     }
     servo_thread.join();
     loop.write_zero_force();
+    // Once more, to know that it landed: the summary's final_command.
+    switch (device.write(servo::Command{})) {
+        case servo::IoResult::ok:
+            context.final_command = "zero";
+            break;
+        case servo::IoResult::timeout:
+            context.final_command = "zero, not confirmed: timeout";
+            break;
+        case servo::IoResult::disconnected:
+            context.final_command = "zero, not confirmed: disconnected";
+            break;
+        case servo::IoResult::error:
+            context.final_command = "zero, not confirmed: error";
+            break;
+    }
 
     if (writer) {
         try {

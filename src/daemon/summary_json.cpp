@@ -34,6 +34,7 @@ std::string summary_json(const servo::Summary& s, const RunContext& c) {
     j["passivity_energy_j"] = s.passivity_energy_j;
     j["exit"] = c.exit;
     if (!c.stopped_by.empty()) j["stopped_by"] = c.stopped_by;
+    if (!c.final_command.empty()) j["final_command"] = c.final_command;
     j["run_time_s"] = c.run_time_s;
     j["lockstep"] = c.lockstep;
     j["config"] = c.config_source;

@@ -239,6 +239,7 @@ void expect_stops_cleanly(const Bench& bench, const NamedSignal& signal, bool lo
         signal.number >= SIGRTMIN ? "signal " + std::to_string(signal.number) : signal.name;
     EXPECT_EQ(s.at("stopped_by"), expected_name);
     EXPECT_EQ(s.at("telemetry_complete"), true) << signal.name;
+    EXPECT_EQ(s.at("final_command"), "zero") << signal.name;  // the device took it
     const LogFile log = read_log(bench.log);
     expect_whole_rows(log);
     EXPECT_EQ(log.lines.size() - 1, s.at("ticks").get<std::size_t>()) << signal.name;

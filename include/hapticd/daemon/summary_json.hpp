@@ -19,7 +19,10 @@ struct RunContext {
     std::string scene;          ///< the scene's name
     std::string causality;      ///< "impedance" | "admittance"
     bool lockstep = false;
-    std::string exit;           ///< "stopped" | "duration" | "fault" | "error"
+    std::string exit;  ///< "stopped" | "duration" | "fault" | "error"
+    /// The last command written after the loop stopped: "zero" when the device accepted the
+    /// disabled zero-force command, else "zero, not confirmed: REASON".
+    std::string final_command;
     std::string stopped_by;     ///< "SIGTERM", "SIGHUP"..., or "parent lifeline"; empty: n/a
     double run_time_s = 0.0;    ///< device time covered (virtual time in lockstep)
     std::string telemetry_log;  ///< the --log path; empty without one
