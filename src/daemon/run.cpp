@@ -1,7 +1,12 @@
 #include "hapticd/daemon/run.hpp"
 
+#include <unistd.h>
+
+#include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <csignal>
+#include <cstring>
 #include <exception>
 #include <fstream>
 #include <iomanip>
@@ -11,6 +16,7 @@
 #include <thread>
 
 #include "hapticd/daemon/config.hpp"
+#include "hapticd/daemon/output_files.hpp"
 #include "hapticd/daemon/servo_settings.hpp"
 #include "hapticd/daemon/startup_check.hpp"
 #include "hapticd/daemon/summary_json.hpp"
@@ -223,24 +229,89 @@ device::DeviceHandle open_device(const Config& config, bool lockstep) {
     return device;
 }
 
-void write_summary(const RunOptions& options, const servo::Summary& summary,
+/// The outputs, opened before the device (prepare_outputs()).
+struct Outputs {
+    OutputFile log;      ///< --log, locked; emptied when the run starts
+    OutputFile summary;  ///< --summary FILE; emptied when the run starts
+};
+
+/// Writes the summary; false when --summary FILE could not be written whole (the JSON then
+/// goes to `log`, so that it is not lost).
+bool write_summary(const RunOptions& options, Outputs& outputs, const servo::Summary& summary,
                    const RunContext& context, std::ostream& out, std::ostream& log) {
     if (!options.summary_path) {
         log << summary_text(summary, context);
-        return;
+        return true;
     }
     const std::string json = summary_json(summary, context) + "\n";
     if (*options.summary_path == "-") {
         out << json << std::flush;
-        return;
+        return static_cast<bool>(out);
     }
-    std::ofstream file(*options.summary_path);
-    file << json;
-    file.close();
-    if (!file) {
-        log << "hapticd: --summary " << *options.summary_path << ": cannot write the summary\n";
+    bool written = outputs.summary && write_all(outputs.summary.fd(), json);
+    const int error = errno;
+    if (outputs.summary && ::close(outputs.summary.release()) != 0 && written) written = false;
+    if (!written) {
+        log << "hapticd: --summary " << *options.summary_path
+            << ": cannot write the summary: " << std::strerror(error) << "\n";
         log << json;
     }
+    return written;
+}
+
+/// An empty path is an error, not "none".
+void refuse_empty_paths(const RunOptions& options) {
+    const auto empty = [](const std::optional<std::string>& path) { return path && path->empty(); };
+    const char* option = empty(options.config_path)    ? "--config"
+                         : empty(options.log_path)     ? "--log"
+                         : empty(options.summary_path) ? "--summary"
+                                                       : nullptr;
+    if (option != nullptr) {
+        throw StartError(kExitBadInput,
+                         std::string(option) + " \"\": the path is empty; give a file name");
+    }
+}
+
+/// --duration: finite, at least half a period (it is rounded to whole ticks: anything
+/// shorter would be zero ticks, which means no limit), at most kMaxDurationS.
+void check_duration(const RunOptions& options, double rate_hz) {
+    if (!options.duration_s) return;
+    const double d = *options.duration_s;
+    const double shortest = 0.5 / rate_hz;
+    if (std::isfinite(d) && d >= shortest && d <= kMaxDurationS) return;
+    std::ostringstream m;
+    m << "--duration " << d << ": must be a number of seconds from half a period (" << shortest
+      << " s at [servo] rate_hz = " << rate_hz << ") to " << kMaxDurationS;
+    throw StartError(kExitBadInput, m.str());
+}
+
+/// Refuses outputs that are inputs (or each other), then creates them: all before the device
+/// is opened, so that a run that could not keep its results never starts.
+Outputs prepare_outputs(const RunOptions& options, const Config& config) {
+    std::vector<NamedPath> inputs;
+    if (options.config_path) inputs.push_back({"--config", *options.config_path});
+    if (!config.scene_file.empty()) {
+        inputs.push_back({"the scene ([scene] file in " + config.source + ")", config.scene_file});
+    }
+    if (const std::string plugin = plugin_file(config.device.plugin); !plugin.empty()) {
+        inputs.push_back({"the device plugin ([device] plugin in " + config.source + ")", plugin});
+    }
+    std::vector<NamedPath> outputs;
+    if (options.log_path) outputs.push_back({"--log", *options.log_path});
+    if (options.summary_path && *options.summary_path != "-") {
+        outputs.push_back({"--summary", *options.summary_path});
+    }
+    Outputs opened;
+    try {
+        refuse_overlapping_paths(inputs, outputs);
+        if (options.log_path) opened.log = open_locked_log("--log", *options.log_path);
+        if (options.summary_path && *options.summary_path != "-") {
+            opened.summary = open_output("--summary", *options.summary_path);
+        }
+    } catch (const OutputError& e) {
+        throw StartError(kExitBadInput, e.what());
+    }
+    return opened;
 }
 
 /// make_servo_config() or make_identify_servo_config(), with config errors as exit 2.
@@ -264,20 +335,29 @@ struct NoAfterRun {
 template <typename Environment, typename AfterRun = NoAfterRun>
 int run_loop(const RunOptions& options, const Config& config,
              const servo::ServoConfig& servo_config, device::Device& device,
-             Environment& environment, RunContext& context, const std::atomic<bool>& stop,
-             std::ostream& out, std::ostream& log, AfterRun after_run = {}) {
+             Environment& environment, RunContext& context, Outputs& outputs,
+             std::atomic<bool>& stop, std::ostream& out, std::ostream& log,
+             AfterRun after_run = {}) {
     const device::DeviceInfo info = device.info();
 
+    // From here on the outputs are this run's: emptied now (an old summary must not outlive
+    // a run that is killed), kept whatever happens.
+    try {
+        outputs.log.begin();
+        outputs.summary.begin();
+    } catch (const OutputError& e) {
+        throw StartError(kExitBadInput, e.what());
+    }
     std::unique_ptr<servo::TelemetryRing> ring;
     std::unique_ptr<TelemetryWriter> writer;
     if (options.log_path) {
         ring = std::make_unique<servo::TelemetryRing>(info.lockstep ? kLockstepRingRecords
                                                                     : kRealtimeRingRecords);
-        try {
-            writer = std::make_unique<TelemetryWriter>(*ring, *options.log_path, info.axes);
-        } catch (const std::exception& e) {
-            throw StartError(kExitBadInput, e.what());
-        }
+        // Real time: also fdatasync() each second, bounding what a power cut loses; a lockstep
+        // run (a test, a simulation) waits for its writer, so it does not sync.
+        writer = std::make_unique<TelemetryWriter>(
+            *ring, outputs.log.release(), *options.log_path, info.axes,
+            info.lockstep ? std::chrono::milliseconds{0} : std::chrono::milliseconds{1000});
         writer->start();
     }
 
@@ -289,7 +369,9 @@ int run_loop(const RunOptions& options, const Config& config,
 
     servo::ServoLoop<device::Device, Environment> loop(device, environment, servo_config,
                                                        ring.get());
-    std::atomic<bool> stop_servo{stop.load(std::memory_order_acquire)};
+    // The servo thread reads `stop` itself, so a signal (or the parent's death) ends the run
+    // at the next tick; this thread sets it too when the duration ends.
+    std::atomic<bool>& stop_servo = stop;
     std::atomic<bool> servo_done{false};
     servo::RunExit run_exit = servo::RunExit::stopped;
     std::string servo_error;
@@ -327,7 +409,6 @@ int run_loop(const RunOptions& options, const Config& config,
             }
             logged_faults = status.faults;
         }
-        if (stop.load(std::memory_order_acquire)) stop_servo.store(true, std::memory_order_release);
         if (options.duration_s && !info.lockstep &&
             now - started >= std::chrono::duration<double>(*options.duration_s)) {
             duration_ended = true;
@@ -340,6 +421,21 @@ int run_loop(const RunOptions& options, const Config& config,
     }
     servo_thread.join();
     loop.write_zero_force();
+    // Once more, to know that it landed: the summary's final_command.
+    switch (device.write(servo::Command{})) {
+        case servo::IoResult::ok:
+            context.final_command = "zero";
+            break;
+        case servo::IoResult::timeout:
+            context.final_command = "zero, not confirmed: timeout";
+            break;
+        case servo::IoResult::disconnected:
+            context.final_command = "zero, not confirmed: disconnected";
+            break;
+        case servo::IoResult::error:
+            context.final_command = "zero, not confirmed: error";
+            break;
+    }
 
     if (writer) {
         try {
@@ -347,7 +443,11 @@ int run_loop(const RunOptions& options, const Config& config,
         } catch (const std::exception& e) {
             log << "hapticd: " << e.what() << "\n";
         }
-        context.telemetry_records = writer->records_written();
+        context.telemetry_log = *options.log_path;
+        context.telemetry_records = writer->records_taken();
+        context.telemetry_records_written = writer->records_written();
+        context.telemetry_complete = writer->complete() && ring->dropped() == 0 &&
+                                     writer->records_written() == writer->records_taken();
     }
 
     const servo::Summary summary = loop.summary();
@@ -383,11 +483,33 @@ int run_loop(const RunOptions& options, const Config& config,
     } else {
         context.exit = "stopped";
     }
+    if (const int cause = options.stop_cause != nullptr ? options.stop_cause->load() : 0;
+        cause != 0 && !duration_ended && run_exit != servo::RunExit::tick_limit) {
+        const char* abbrev = cause > 0 ? sigabbrev_np(cause) : nullptr;
+        context.stopped_by = cause == kStopByLifeline ? std::string("parent lifeline")
+                             : abbrev != nullptr      ? "SIG" + std::string(abbrev)
+                                                      : "signal " + std::to_string(cause);
+        log << "hapticd: stopped by " << context.stopped_by
+            << ": force zeroed, telemetry flushed, summary written\n";
+    }
     if (!context.realtime.refused.empty() && servo_error.empty()) {
         log << "hapticd: " << context.realtime.brief() << "\n";
     }
     after_run(code, context);
-    write_summary(options, summary, context, out, log);
+    const bool summary_written = write_summary(options, outputs, summary, context, out, log);
+    // An output that is not whole is an exit status of its own, unless a fault (1) says more.
+    if (code == kExitOk && (!context.telemetry_complete || !summary_written)) {
+        if (!context.telemetry_complete) {
+            log << "hapticd: the telemetry log " << context.telemetry_log
+                << " is incomplete: " << context.telemetry_records_written << " of "
+                << context.telemetry_records << " records written"
+                << (summary.telemetry_dropped > 0
+                        ? ", " + std::to_string(summary.telemetry_dropped) + " dropped"
+                        : std::string())
+                << "; exit " << kExitOutput << "\n";
+        }
+        code = kExitOutput;
+    }
     return code;
 }
 
@@ -437,7 +559,7 @@ void describe_identify(const Config& config, const IdentifyPlan& plan,
 }
 
 /// `hapticd --identify`: the excitation instead of the scene, open loop, logged.
-int run_identify(const RunOptions& options, const std::atomic<bool>& stop, std::ostream& out,
+int run_identify(const RunOptions& options, std::atomic<bool>& stop, std::ostream& out,
                  std::ostream& log) {
     if (!options.log_path) {
         throw StartError(kExitBadInput,
@@ -452,6 +574,8 @@ int run_identify(const RunOptions& options, const std::atomic<bool>& stop, std::
     context.check.model = "none (identify: open loop, nothing coupled)";
     context.scene = "identify-multisine";
     context.causality = env::to_string(env::Causality::impedance);
+    check_duration(options, config.servo.rate_hz);
+    Outputs outputs = prepare_outputs(options, config);
     device::DeviceHandle device = open_device(config, options.lockstep);
     const DeviceCloser closer{device.get()};
     const device::DeviceInfo info = device->info();
@@ -516,15 +640,16 @@ int run_identify(const RunOptions& options, const std::atomic<bool>& stop, std::
                 break;
         }
     };
-    return run_loop(run_options, config, servo_config, *device, *excitation, context, stop, out,
-                    log, report);
+    return run_loop(run_options, config, servo_config, *device, *excitation, context, outputs, stop,
+                    out, log, report);
 }
 
 }  // namespace
 
-int run_daemon(const RunOptions& options, const std::atomic<bool>& stop, std::ostream& out,
+int run_daemon(const RunOptions& options, std::atomic<bool>& stop, std::ostream& out,
                std::ostream& log) {
     try {
+        refuse_empty_paths(options);
         if (options.identify) return run_identify(options, stop, out, log);
         const Config config = load_any_config(options);
         RunContext context;
@@ -544,6 +669,8 @@ int run_daemon(const RunOptions& options, const std::atomic<bool>& stop, std::os
                                  "\" is an admittance (constraint) scene, which needs the "
                                  "coupling (22) to produce any force");
         }
+        check_duration(options, config.servo.rate_hz);
+        Outputs outputs = prepare_outputs(options, config);
         device::DeviceHandle device = open_device(config, options.lockstep);
         const DeviceCloser closer{device.get()};
         const device::DeviceInfo info = device->info();
@@ -556,11 +683,11 @@ int run_daemon(const RunOptions& options, const std::atomic<bool>& stop, std::os
         const servo::ServoConfig servo_config = servo_config_or_exit(
             [&] { return make_servo_config(config, info, options.log_path.has_value()); });
         if (scene.causality == env::Causality::impedance) {
-            return run_loop(options, config, servo_config, *device, *scene.impedance, context, stop,
-                            out, log);
+            return run_loop(options, config, servo_config, *device, *scene.impedance, context,
+                            outputs, stop, out, log);
         }
-        return run_loop(options, config, servo_config, *device, *scene.admittance, context, stop,
-                        out, log);
+        return run_loop(options, config, servo_config, *device, *scene.admittance, context, outputs,
+                        stop, out, log);
     } catch (const StartError& e) {
         log << "hapticd: " << e.what() << "\n";
         return e.code;

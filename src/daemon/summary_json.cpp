@@ -33,11 +33,17 @@ std::string summary_json(const servo::Summary& s, const RunContext& c) {
     j["link_recoveries"] = s.link_recoveries;
     j["telemetry_dropped"] = s.telemetry_dropped;
     j["telemetry_records"] = c.telemetry_records;
+    if (!c.telemetry_log.empty()) {
+        j["telemetry_records_written"] = c.telemetry_records_written;
+        j["telemetry_complete"] = c.telemetry_complete;
+    }
     j["read_timeouts"] = s.read_timeouts;
     j["solver_not_converged"] = s.solver_not_converged;
     j["saturated_ticks"] = s.saturated_ticks;
     j["passivity_energy_j"] = s.passivity_energy_j;
     j["exit"] = c.exit;
+    if (!c.stopped_by.empty()) j["stopped_by"] = c.stopped_by;
+    if (!c.final_command.empty()) j["final_command"] = c.final_command;
     j["run_time_s"] = c.run_time_s;
     j["lockstep"] = c.lockstep;
     j["config"] = c.config_source;
@@ -68,7 +74,7 @@ std::string summary_text(const servo::Summary& s, const RunContext& c) {
     out << std::fixed << std::setprecision(1);
     out << "hapticd summary: " << s.ticks << " ticks at " << s.rate_hz << " Hz over "
         << std::setprecision(3) << c.run_time_s << " s" << (c.lockstep ? " (lockstep)" : "")
-        << ", exit: " << c.exit << "\n";
+        << ", exit: " << c.exit << (c.stopped_by.empty() ? "" : " (" + c.stopped_by + ")") << "\n";
     out << std::setprecision(1) << "  wake latency us: p50 " << s.wake_latency_us.p50 << ", p99 "
         << s.wake_latency_us.p99 << ", p99.9 " << s.wake_latency_us.p999 << ", max "
         << s.wake_latency_us.max << "\n";
@@ -76,6 +82,11 @@ std::string summary_text(const servo::Summary& s, const RunContext& c) {
         << s.tick_compute_us.p99 << ", max " << s.tick_compute_us.max << "\n";
     out << "  overruns " << s.overruns << " (" << s.missed_periods << " periods missed), max force "
         << s.max_force_n << " N, telemetry dropped " << s.telemetry_dropped << "\n";
+    if (!c.telemetry_log.empty()) {
+        out << "  telemetry: " << c.telemetry_records_written << " of " << c.telemetry_records
+            << " records written to " << c.telemetry_log
+            << (c.telemetry_complete ? "" : " (INCOMPLETE)") << "\n";
+    }
     out << "  faults:";
     if (s.faults.empty()) out << " none";
     for (const std::string& fault : s.faults) out << " " << fault;

@@ -1,33 +1,55 @@
 #include "hapticd/daemon/telemetry_writer.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
 #include <cerrno>
-#include <chrono>
 #include <cstring>
 #include <span>
 #include <stdexcept>
+#include <string_view>
 
 #include "hapticd/servo/telemetry_csv.hpp"
 
 namespace hapticd::daemon {
 namespace {
 
-constexpr std::size_t kBufferBytes = std::size_t{1} << 20;
+using Clock = std::chrono::steady_clock;
+
+// 256 KiB: well above what kFlushInterval of records fills at 1 kHz (about 10 KiB), so in
+// real time it is the timer that writes; in lockstep the buffer fills first.
+constexpr std::size_t kBufferBytes = std::size_t{1} << 18;
 // An empty ring at 1 kHz fills with one record per millisecond; polling at a quarter of
 // that keeps the ring nearly empty without spinning a core.
 constexpr auto kIdlePoll = std::chrono::microseconds(250);
 
-}  // namespace
-
-TelemetryWriter::TelemetryWriter(servo::TelemetryRing& ring, const std::string& path, int axes)
-    : ring_(ring), path_(path), axes_(axes), buffer_(kBufferBytes) {
-    file_ = std::fopen(path.c_str(), "w");
-    if (file_ == nullptr) {
+int create_log(const std::string& path) {
+    const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd < 0) {
         throw std::runtime_error("--log " + path +
                                  ": cannot create the telemetry file: " + std::strerror(errno));
     }
+    return fd;
+}
+
+}  // namespace
+
+TelemetryWriter::TelemetryWriter(servo::TelemetryRing& ring, const std::string& path, int axes)
+    : TelemetryWriter(ring, create_log(path), path, axes) {}
+
+TelemetryWriter::TelemetryWriter(servo::TelemetryRing& ring, int fd, std::string path, int axes,
+                                 std::chrono::milliseconds sync_interval)
+    : ring_(ring),
+      path_(std::move(path)),
+      axes_(axes),
+      fd_(fd),
+      sync_interval_(sync_interval),
+      buffer_(kBufferBytes) {
     const std::string header = servo::csv_header(axes) + "\n";
     std::memcpy(buffer_.data(), header.data(), header.size());
     used_ = header.size();
+    oldest_buffered_ = last_sync_ = Clock::now();
 }
 
 TelemetryWriter::~TelemetryWriter() {
@@ -48,17 +70,32 @@ void TelemetryWriter::finish() {
     if (thread_.joinable()) thread_.join();
     drain();  // in case start() was never called
     flush_buffer();
-    if (std::fclose(file_) != 0 && write_errno_ == 0) write_errno_ = errno;
-    file_ = nullptr;
+    if (write_errno_ == 0 && sync_interval_.count() > 0 && ::fdatasync(fd_) != 0 &&
+        errno != EINVAL && errno != EROFS) {
+        write_errno_ = errno;
+    }
+    if (::close(fd_) != 0 && write_errno_ == 0 && errno != EINTR) write_errno_ = errno;
+    fd_ = -1;
     if (write_errno_ != 0) {
-        throw std::runtime_error("--log " + path_ +
-                                 ": writing telemetry failed: " + std::strerror(write_errno_));
+        throw std::runtime_error(
+            "--log " + path_ + ": writing telemetry failed: " + std::strerror(write_errno_) +
+            "; the file holds the first " + std::to_string(records_written()) + " of " +
+            std::to_string(records_taken()) + " records, each line whole");
     }
 }
 
 void TelemetryWriter::run() noexcept {
     while (!producer_done_.load(std::memory_order_acquire)) {
         drain();
+        const auto now = Clock::now();
+        if (buffered_records_ > 0 && now - oldest_buffered_ >= kFlushInterval) {
+            flush_buffer();
+            if (write_errno_ == 0 && sync_interval_.count() > 0 &&
+                now - last_sync_ >= sync_interval_) {
+                (void)::fdatasync(fd_);  // a device that cannot sync (a pipe, /dev/null): fine
+                last_sync_ = now;
+            }
+        }
         std::this_thread::sleep_for(kIdlePoll);
     }
     drain();
@@ -68,18 +105,53 @@ void TelemetryWriter::drain() noexcept {
     servo::TelemetryRecord record;
     while (ring_.try_pop(record)) {
         if (buffer_.size() - used_ < servo::kMaxCsvLineChars) flush_buffer();
+        if (buffered_records_ == 0) oldest_buffered_ = Clock::now();
         used_ += servo::format_csv_record(
             record, axes_, std::span<char>(buffer_.data() + used_, buffer_.size() - used_));
-        records_written_.fetch_add(1, std::memory_order_relaxed);
+        ++buffered_records_;
+        records_taken_.fetch_add(1, std::memory_order_relaxed);
     }
 }
 
+// Writes the buffer (whole lines) with write(2). A write that fails part way keeps the whole
+// lines it got onto the disk, cuts the file back to the last of them, and stops all further
+// writes.
 void TelemetryWriter::flush_buffer() noexcept {
     if (used_ == 0) return;
-    if (std::fwrite(buffer_.data(), 1, used_, file_) != used_ && write_errno_ == 0) {
-        write_errno_ = errno != 0 ? errno : EIO;
+    if (write_errno_ == 0) {
+        std::size_t done = 0;
+        while (done < used_) {
+            const ssize_t n = ::write(fd_, buffer_.data() + done, used_ - done);
+            if (n < 0 && errno == EINTR) continue;
+            if (n <= 0) {
+                write_errno_ = n < 0 ? errno : EIO;
+                break;
+            }
+            done += static_cast<std::size_t>(n);
+        }
+        if (write_errno_ == 0) {
+            file_bytes_ += used_;
+            records_written_.fetch_add(buffered_records_, std::memory_order_relaxed);
+            header_pending_ = false;
+        } else if (done > 0) {
+            // The whole lines of what was written stay; a cut last line goes (a device such
+            // as /dev/full has no length to cut, and kept nothing).
+            const std::string_view written(buffer_.data(), done);
+            const std::size_t last_newline = written.rfind('\n');
+            const std::size_t keep = last_newline == std::string_view::npos ? 0 : last_newline + 1;
+            auto lines = static_cast<std::uint64_t>(std::count(
+                written.begin(), written.begin() + static_cast<std::ptrdiff_t>(keep), '\n'));
+            if (header_pending_ && lines > 0) {
+                --lines;  // the header is not a record
+                header_pending_ = false;
+            }
+            records_written_.fetch_add(lines, std::memory_order_relaxed);
+            file_bytes_ += keep;
+            (void)::ftruncate(fd_, static_cast<off_t>(file_bytes_));
+        }
     }
     used_ = 0;
+    buffered_records_ = 0;
 }
 
 }  // namespace hapticd::daemon

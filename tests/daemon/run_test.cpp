@@ -41,7 +41,7 @@ class DaemonRun : public ::testing::Test {
 
     static Outcome run(RunOptions options, bool stop_now = false) {
         options.status_interval_s = 0.0;
-        const std::atomic<bool> stop{stop_now};
+        std::atomic<bool> stop{stop_now};
         std::ostringstream out, log;
         Outcome outcome;
         outcome.exit_code = run_daemon(options, stop, out, log);

@@ -1,9 +1,12 @@
 // The telemetry writer drains the ring into CSV; on a clean stop the file is complete.
 #include "hapticd/daemon/telemetry_writer.hpp"
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -103,6 +106,50 @@ TEST(DaemonTelemetryWriter, AFullDiskIsReported) {
                   std::string::npos)
             << e.what();
     }
+}
+
+TEST(DaemonTelemetryWriter, RecordsReachTheFileWithinTheFlushIntervalWithoutFinish) {
+    // What a SIGKILL would find: the records are in the file kFlushInterval after they were
+    // pushed, each line whole, although finish() was never called and the buffer is far
+    // from full.
+    servo::TelemetryRing ring(1024);
+    const std::string path = temp_path("timer.csv");
+    TelemetryWriter writer(ring, path, 1);
+    writer.start();
+    for (std::uint64_t n = 0; n < 50; ++n) {
+        servo::TelemetryRecord record;
+        record.tick = n;
+        ASSERT_TRUE(ring.try_push(record));
+    }
+    std::this_thread::sleep_for(TelemetryWriter::kFlushInterval + std::chrono::milliseconds(60));
+    std::ifstream in(path, std::ios::binary);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 51);
+    ASSERT_FALSE(text.empty());
+    EXPECT_EQ(text.back(), '\n');
+    EXPECT_EQ(writer.records_written(), 50u);
+    writer.finish();
+    std::filesystem::remove(path);
+}
+
+TEST(DaemonTelemetryWriter, AFullDeviceCountsOnlyTheRecordsOnDisk) {
+    servo::TelemetryRing ring(1024);
+    const int fd = ::open("/dev/full", O_WRONLY | O_CLOEXEC);
+    ASSERT_GE(fd, 0);
+    TelemetryWriter writer(ring, fd, "/dev/full", 1);
+    writer.start();
+    for (std::uint64_t n = 0; n < 10; ++n) ASSERT_TRUE(ring.try_push(servo::TelemetryRecord{}));
+    try {
+        writer.finish();
+        FAIL() << "finish() did not report the failed write";
+    } catch (const std::runtime_error& e) {
+        EXPECT_EQ(std::string(e.what()),
+                  "--log /dev/full: writing telemetry failed: No space left on device; the file "
+                  "holds the first 0 of 10 records, each line whole");
+    }
+    EXPECT_EQ(writer.records_taken(), 10u);
+    EXPECT_EQ(writer.records_written(), 0u);
+    EXPECT_FALSE(writer.complete());
 }
 
 }  // namespace

@@ -21,6 +21,7 @@
 #include <toml++/toml.h>
 #include <unistd.h>
 
+#include <array>
 #include <cerrno>
 #include <csignal>
 #include <cstring>
@@ -35,6 +36,7 @@
 #include "hapticd/daemon/config.hpp"
 #include "hapticd/daemon/config_editor.hpp"
 #include "hapticd/daemon/link_diag.hpp"
+#include "hapticd/daemon/output_files.hpp"
 #include "hapticd/daemon/startup_check.hpp"
 #include "hapticd/input/text_input.hpp"
 #include "hapticd/tune/autotune.hpp"
@@ -108,11 +110,16 @@ bool sim_lockstep(const daemon::Config& config) {
 volatile std::sig_atomic_t g_child_pid = 0;
 volatile std::sig_atomic_t g_interrupted = 0;
 
+/// The signals autotune passes on to the identification run: each stops hapticd as SIGTERM
+/// does (zero force, log flushed), and autotune then reports the run as interrupted.
+constexpr std::array<int, 4> kForwardedSignals = {SIGINT, SIGTERM, SIGHUP, SIGQUIT};
+
 extern "C" void on_stop_signal(int signal) {
-    g_interrupted = 1;
-    // A terminal's Ctrl-C reaches the whole process group, hapticd included; a SIGTERM sent
-    // to haptic-tune alone is passed on, so that hapticd stops and zeroes the force.
-    if (signal == SIGTERM && g_child_pid > 0) ::kill(static_cast<pid_t>(g_child_pid), SIGTERM);
+    g_interrupted = signal;
+    // Passed on whoever sent it: a terminal's Ctrl-C reaches the whole process group,
+    // hapticd included (a second SIGINT is harmless), but a signal sent to haptic-tune
+    // alone must reach hapticd too.
+    if (g_child_pid > 0) ::kill(static_cast<pid_t>(g_child_pid), signal);
 }
 
 std::string describe_hapticd_exit(int status) {
@@ -128,51 +135,86 @@ std::string describe_hapticd_exit(int status) {
         case 2:
             return "exited with status 2: it refused the config or the command line (its "
                    "message above says why)";
+        case 3:
+            return "exited with status 3: its telemetry log is incomplete (disk full or a write "
+                   "error; its message above says which)";
         default:
             return "exited with status " + std::to_string(code);
     }
 }
 
-/// Runs `hapticd --identify --config CONFIG --log LOG [--lockstep]`. Its standard output
-/// goes to our standard error (so that --json output stays clean); its messages show.
+/// Runs `hapticd --identify --config CONFIG --log LOG [--lockstep] --parent-lifeline FD`.
+/// Its standard output goes to our standard error (so that --json output stays clean); its
+/// messages show. SIGINT, SIGTERM, SIGHUP and SIGQUIT are passed on to it (it stops at zero
+/// force), and autotune reports "interrupted". The lifeline is the read end of a pipe whose
+/// write end only this process holds: if autotune dies, even by SIGKILL, the kernel closes
+/// it and hapticd stops on its own within one period.
 void run_identification(const std::string& hapticd, const std::string& config_path,
                         const std::string& log_path, bool lockstep, bool quiet) {
+    std::array<int, 2> lifeline{-1, -1};
+    if (::pipe2(lifeline.data(), O_CLOEXEC) != 0) {
+        throw AutotuneError(std::string("cannot create the lifeline pipe for hapticd: ") +
+                            std::strerror(errno));
+    }
+    // The read end stays open across the exec (hapticd watches it); the write end does not.
+    ::fcntl(lifeline[0], F_SETFD, 0);
     std::vector<std::string> args = {hapticd,     "--identify", "--config",
                                      config_path, "--log",      log_path};
     if (lockstep) args.emplace_back("--lockstep");
     if (quiet) args.emplace_back("--no-status");
+    std::string command;
+    for (const std::string& arg : args) command += (command.empty() ? "" : " ") + arg;
+    args.emplace_back("--parent-lifeline");
+    args.emplace_back(std::to_string(lifeline[0]));
     std::vector<char*> argv;
     for (std::string& arg : args) argv.push_back(arg.data());
     argv.push_back(nullptr);
 
-    std::string command;
-    for (const std::string& arg : args) command += (command.empty() ? "" : " ") + arg;
     std::cerr << "haptic-tune: autotune: running " << command << '\n';
 
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
     posix_spawn_file_actions_adddup2(&actions, STDERR_FILENO, STDOUT_FILENO);
+    // The signals are blocked from before the spawn until the child's pid is known to the
+    // handler, so that none is lost in between; the child starts with our old mask and the
+    // default actions (hapticd takes them itself).
+    sigset_t forwarded;
+    sigemptyset(&forwarded);
+    for (const int signal : kForwardedSignals) sigaddset(&forwarded, signal);
+    sigset_t old_mask;
+    ::pthread_sigmask(SIG_BLOCK, &forwarded, &old_mask);
+    posix_spawnattr_t attributes;
+    posix_spawnattr_init(&attributes);
+    posix_spawnattr_setsigmask(&attributes, &old_mask);
+    posix_spawnattr_setsigdefault(&attributes, &forwarded);
+    posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETSIGDEF);
     struct sigaction stop {};
     stop.sa_handler = on_stop_signal;
     sigemptyset(&stop.sa_mask);
-    struct sigaction old_int {};
-    struct sigaction old_term {};
+    std::array<struct sigaction, kForwardedSignals.size()> old_actions{};
     g_interrupted = 0;
-    ::sigaction(SIGINT, &stop, &old_int);
-    ::sigaction(SIGTERM, &stop, &old_term);
+    for (std::size_t i = 0; i < kForwardedSignals.size(); ++i) {
+        ::sigaction(kForwardedSignals[i], &stop, &old_actions[i]);
+    }
     pid_t pid = 0;
     // posix_spawnp searches PATH when the name has no '/'; glibc reports a failed exec here.
-    const int spawn_error = ::posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+    const int spawn_error =
+        ::posix_spawnp(&pid, argv[0], &actions, &attributes, argv.data(), environ);
     posix_spawn_file_actions_destroy(&actions);
+    posix_spawnattr_destroy(&attributes);
+    ::close(lifeline[0]);
     int status = 0;
+    if (spawn_error == 0) g_child_pid = pid;
+    ::pthread_sigmask(SIG_SETMASK, &old_mask, nullptr);  // a signal that came meanwhile: now
     if (spawn_error == 0) {
-        g_child_pid = pid;
         while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
         }
         g_child_pid = 0;
     }
-    ::sigaction(SIGINT, &old_int, nullptr);
-    ::sigaction(SIGTERM, &old_term, nullptr);
+    for (std::size_t i = 0; i < kForwardedSignals.size(); ++i) {
+        ::sigaction(kForwardedSignals[i], &old_actions[i], nullptr);
+    }
+    ::close(lifeline[1]);
 
     if (spawn_error != 0) {
         throw AutotuneError(
@@ -182,9 +224,12 @@ void run_identification(const std::string& hapticd, const std::string& config_pa
                    "record a run yourself and give --log)"
                  : " (give --hapticd PATH, or record a run yourself and give --log)"));
     }
-    if (g_interrupted) {
-        throw AutotuneError("interrupted: the identification run (" + command +
-                            ") was stopped; nothing was written");
+    if (g_interrupted != 0) {
+        throw AutotuneError(
+            "interrupted by SIG" + std::string(sigabbrev_np(static_cast<int>(g_interrupted))) +
+            ": passed on to the identification run (" + command + "), which " +
+            describe_hapticd_exit(status) + (WIFEXITED(status) ? " (it stops at zero force)" : "") +
+            "; nothing was written");
     }
     if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
         throw AutotuneError("the identification run failed: " + command + " " +
@@ -543,6 +588,24 @@ int run_autotune(const AutotuneCliOptions& o) {
         throw AutotuneError(std::string("the config does not load: ") + e.what());
     }
     const std::string original = read_file(o.config_path);
+    if (!o.record_path.empty()) {
+        // The run's log must not land on the config (which autotune then edits), the scene,
+        // the plugin or the log it would identify from: refused before anything runs.
+        std::vector<daemon::NamedPath> inputs = {{"--config", o.config_path}};
+        if (!config.scene_file.empty()) {
+            inputs.push_back(
+                {"the scene ([scene] file in " + o.config_path + ")", config.scene_file});
+        }
+        if (const std::string plugin = daemon::plugin_file(config.device.plugin); !plugin.empty()) {
+            inputs.push_back(
+                {"the device plugin ([device] plugin in " + o.config_path + ")", plugin});
+        }
+        try {
+            daemon::refuse_overlapping_paths(inputs, {{"--record", o.record_path}});
+        } catch (const daemon::OutputError& e) {
+            throw AutotuneError(e.what());
+        }
+    }
     options.rate_hz = config.servo.rate_hz;
     options.velocity_filter_hz = config.coupling.velocity_filter_hz;  // checked by the config
     options.identification.force_limit_n = config.safety.max_force_n;
@@ -715,7 +778,13 @@ void add_autotune_command(CLI::App& app, Invocation& invocation) {
     command
         ->add_option("--record", options->record_path,
                      "keep the identification run's log in FILE (default: a temporary file, "
-                     "removed once the gains are found)")
+                     "removed once the gains are found); refused when it is the config, the "
+                     "scene or the plugin")
+        ->check(CLI::Validator(
+            [](std::string& text) -> std::string {
+                return text.empty() ? "the path is empty; give a file name" : "";
+            },
+            "FILE"))
         ->excludes(log);
     command
         ->add_option("--hapticd", options->hapticd_path,

@@ -17,11 +17,18 @@ enum ExitCode : int {
     kExitOk = 0,        ///< stopped by a signal or at the end of --duration, no fault
     kExitFault = 1,     ///< the run ended on a latched fault, or the loop could not run;
                         ///< --identify: also when the handle left the workspace
-    kExitBadInput = 2,  ///< usage, config, scene or device-table errors; gains refused
+    kExitBadInput = 2,  ///< usage, config, scene or device-table errors; gains refused;
+                        ///< an output path that is empty, an input, another output, locked
+                        ///< by another daemon, or cannot be created (found before the run)
+    kExitOutput = 3,    ///< the run ended without a fault, but an output is not whole: the
+                        ///< --log (disk full, a write error, records dropped) or --summary
 };
 
+/// The longest --duration, seconds.
+inline constexpr double kMaxDurationS = 1e7;
+
 struct RunOptions {
-    std::optional<std::string> config_path;   ///< --config; none: the embedded default
+    std::optional<std::string> config_path;   ///< --config; none: the embedded default; "": error
     std::optional<double> duration_s;         ///< --duration; none: until SIGINT/SIGTERM
     std::optional<std::string> summary_path;  ///< --summary FILE, or "-" for standard output
     std::optional<std::string> log_path;      ///< --log FILE: telemetry CSV
@@ -31,14 +38,19 @@ struct RunOptions {
     /// for the excitation (IdentifyPlan::duration_s).
     bool identify = false;
     double status_interval_s = 1.0;  ///< the live status line; 0: none
+    /// What set `stop`, for the summary's `stopped_by`: > 0 a signal number, kStopByLifeline
+    /// the parent's lifeline (--parent-lifeline); null or 0: not known.
+    const std::atomic<int>* stop_cause = nullptr;
 };
 
-/// Runs the daemon until `stop` is set (the signal handler's flag), the duration ends or a
-/// fault is latched. Messages and the status line go to `log`; `--summary -` writes the
-/// JSON summary to `out`, and without --summary a readable summary goes to `log`.
-/// Never throws: every error becomes a message and an exit code, and the device is left at
-/// zero force on every path.
-int run_daemon(const RunOptions& options, const std::atomic<bool>& stop, std::ostream& out,
+inline constexpr int kStopByLifeline = -1;
+
+/// Runs the daemon until `stop` is set (the signal watcher's flag: the servo thread reads it
+/// at each tick), the duration ends (the run then sets `stop` itself) or a fault is latched.
+/// Messages and the status line go to `log`; `--summary -` writes the JSON summary to `out`, and
+/// without --summary a readable summary goes to `log`. Never throws: every error becomes a message
+/// and an exit code, and the device is left at zero force on every path.
+int run_daemon(const RunOptions& options, std::atomic<bool>& stop, std::ostream& out,
                std::ostream& log);
 
 }  // namespace hapticd::daemon

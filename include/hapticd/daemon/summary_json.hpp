@@ -19,9 +19,16 @@ struct RunContext {
     std::string scene;          ///< the scene's name
     std::string causality;      ///< "impedance" | "admittance"
     bool lockstep = false;
-    std::string exit;                     ///< "stopped" | "duration" | "fault" | "error"
-    double run_time_s = 0.0;              ///< device time covered (virtual time in lockstep)
-    std::uint64_t telemetry_records = 0;  ///< lines in the --log file; 0 without one
+    std::string exit;  ///< "stopped" | "duration" | "fault" | "error"
+    /// The last command written after the loop stopped: "zero" when the device accepted the
+    /// disabled zero-force command, else "zero, not confirmed: REASON".
+    std::string final_command;
+    std::string stopped_by;     ///< "SIGTERM", "SIGHUP"..., or "parent lifeline"; empty: n/a
+    double run_time_s = 0.0;    ///< device time covered (virtual time in lockstep)
+    std::string telemetry_log;  ///< the --log path; empty without one
+    std::uint64_t telemetry_records = 0;  ///< records the run gave the writer; 0 without --log
+    std::uint64_t telemetry_records_written = 0;  ///< of them, whole lines in the --log file
+    bool telemetry_complete = true;  ///< every record is in the file (none failed, none dropped)
     StartupCheck check;
     servo::RealtimeReport realtime;
 };

@@ -2,16 +2,25 @@
 // (DESIGN.md "Public names": tick, t_s, per axis x{i}_m, v{i}_mps, xe{i}_m, f{i}_n, then
 // the status columns; servo/telemetry_csv.hpp formats the lines).
 //
-// The servo thread only ever try_push()es (never blocks); this thread pops, formats into a
-// 1 MiB buffer and writes it out in large blocks. finish() is called after the loop has
-// stopped: it drains what is left, flushes and closes, so on a clean stop the file holds
-// every record the ring accepted. Records the ring refused are counted by the ring
-// (TelemetryRing::dropped) and reported in the summary.
+// The servo thread only ever try_push()es (never blocks); this thread pops, formats whole
+// lines into a buffer and write(2)s them out: when the buffer is nearly full, and at the
+// latest kFlushInterval after the oldest line still in it (a timer on this thread, never on
+// the tick). So a SIGKILL of the daemon loses at most the last kFlushInterval of records
+// (plus what the ring still held, which the writer drains every kIdlePoll); with a
+// sync interval the writer also fdatasync()s, bounding what a power cut loses.
+//
+// Only whole lines are written: every write(2) ends on a newline, and a write that fails
+// part way (disk full, EFBIG) keeps the whole lines it wrote and is cut back with
+// ftruncate() to the last of them; from then on nothing more is written (the records are still
+// drained and counted), and the file holds records_written() whole lines after the header. finish()
+// is called after the loop has stopped: it drains what is left, writes and closes, so on a clean
+// stop the file holds every record the ring accepted. Records the ring refused are counted by the
+// ring (TelemetryRing::dropped) and reported in the summary.
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
-#include <cstdio>
 #include <string>
 #include <thread>
 #include <vector>
@@ -22,22 +31,37 @@ namespace hapticd::daemon {
 
 class TelemetryWriter {
   public:
-    /// Opens `path` for writing and writes the header row. Throws std::runtime_error naming
-    /// the path and the system's reason when the file cannot be created.
+    /// The longest a formatted record waits in the writer's buffer before write(2).
+    static constexpr std::chrono::milliseconds kFlushInterval{100};
+
+    /// Creates (truncates) `path` and writes the header row. Throws std::runtime_error
+    /// naming the path and the system's reason when the file cannot be created.
     TelemetryWriter(servo::TelemetryRing& ring, const std::string& path, int axes);
+    /// Writes to `fd` (an open, empty file; the writer owns and closes it); `path` is for
+    /// messages. `sync_interval` > 0: fdatasync() at most that often (0: never).
+    TelemetryWriter(servo::TelemetryRing& ring, int fd, std::string path, int axes,
+                    std::chrono::milliseconds sync_interval = std::chrono::milliseconds{0});
     ~TelemetryWriter();
     TelemetryWriter(const TelemetryWriter&) = delete;
     TelemetryWriter& operator=(const TelemetryWriter&) = delete;
 
     /// Starts the writer thread.
     void start();
-    /// After the producer has stopped: drains the ring, flushes and closes the file. Throws
-    /// std::runtime_error if any write failed (disk full...), naming the path. Idempotent.
+    /// After the producer has stopped: drains the ring, writes and closes the file. Throws
+    /// std::runtime_error if any write failed (disk full...), naming the path and saying how
+    /// many records are in the file. Idempotent.
     void finish();
 
+    /// Records whole on disk (lines after the header that write(2) accepted).
     std::uint64_t records_written() const noexcept {
         return records_written_.load(std::memory_order_relaxed);
     }
+    /// Records taken from the ring (written or not).
+    std::uint64_t records_taken() const noexcept {
+        return records_taken_.load(std::memory_order_relaxed);
+    }
+    /// No write failed: every record taken is in the file (after finish()).
+    bool complete() const noexcept { return write_errno_ == 0; }
     const std::string& path() const noexcept { return path_; }
 
   private:
@@ -48,12 +72,19 @@ class TelemetryWriter {
     servo::TelemetryRing& ring_;
     std::string path_;
     int axes_;
-    std::FILE* file_ = nullptr;
+    int fd_ = -1;
+    std::chrono::milliseconds sync_interval_{0};
     std::vector<char> buffer_;
     std::size_t used_ = 0;
+    std::uint64_t buffered_records_ = 0;  ///< lines in buffer_ (the header is not one)
+    std::uint64_t file_bytes_ = 0;        ///< bytes on disk: whole lines only
+    bool header_pending_ = true;          ///< the header row is still in buffer_
     int write_errno_ = 0;
+    std::chrono::steady_clock::time_point oldest_buffered_{};
+    std::chrono::steady_clock::time_point last_sync_{};
     std::atomic<bool> producer_done_{false};
     std::atomic<std::uint64_t> records_written_{0};
+    std::atomic<std::uint64_t> records_taken_{0};
     std::thread thread_;
     bool finished_ = false;
 };
