@@ -172,7 +172,7 @@ FilteredAliasMargin filtered_alias_margin(const DeviceModel& device, const PiVel
                                           const ForceSensorFilter& filter,
                                           const EnvironmentAdmittanceDisk& disk, double theta,
                                           double sample_period_s, double delay_periods,
-                                          bool decide_only) {
+                                          bool decide_only, double tolerance, int max_evaluations) {
     const AliasTerms terms =
         alias_terms(device, loop, filter, theta, sample_period_s, delay_periods);
     FilteredAliasMargin out;
@@ -211,8 +211,6 @@ FilteredAliasMargin filtered_alias_margin(const DeviceModel& device, const PiVel
         const double dy = std::max(0.0, std::abs(y) - h);
         return dx * dx + dy * dy <= disk.radius * disk.radius;
     };
-    constexpr double kTolerance = 1e-7;
-    constexpr int kMaxEvaluations = 20000;
     std::priority_queue<Box, std::vector<Box>, std::greater<Box>> boxes;
     double best = std::numeric_limits<double>::infinity();
     Complex best_at = disk.centre;
@@ -240,10 +238,10 @@ FilteredAliasMargin filtered_alias_margin(const DeviceModel& device, const PiVel
         if (decide_only) {
             if (top.bound > 0.0) break;
             if (best + tail_allowance(terms, std::abs(best_at)) <= 0.0) break;
-        } else if (top.bound >= best - kTolerance) {
+        } else if (top.bound >= best - tolerance) {
             break;
         }
-        if (out.evaluations >= kMaxEvaluations || top.h < 1e-12 * disk.radius) break;
+        if (out.evaluations >= max_evaluations || top.h < 1e-12 * disk.radius) break;
         boxes.pop();
         const double q = top.h / 2.0;
         for (const double dx : {-q, q}) {
@@ -273,15 +271,18 @@ FilteredPassiveCheck check_filtered_admittance_passive(const DeviceModel& device
                                                        bool stop_at_failure) {
     FilteredPassiveCheck out;
     out.worst_margin = std::numeric_limits<double>::infinity();
-    const auto at = [&](double theta) {
+    double worst_theta = 0.0;
+    const auto at = [&](double theta, double tolerance = 1e-4, int evaluations = 400) {
         const FilteredAliasMargin r = filtered_alias_margin(
             device, loop, filter, environment_admittance_disk(coupling, theta, sample_period_s),
-            theta, sample_period_s, delay_periods, /*decide_only=*/true);
+            theta, sample_period_s, delay_periods, /*decide_only=*/stop_at_failure, tolerance,
+            stop_at_failure ? 20000 : evaluations);
         ++out.frequencies;
         if (r.margin < out.worst_margin) {
             out.worst_margin = r.margin;
             out.worst_frequency_hz = frequency_hz(theta, sample_period_s);
             out.worst_admittance = r.worst_admittance;
+            worst_theta = theta;
         }
         return r.margin;
     };
@@ -317,6 +318,11 @@ FilteredPassiveCheck check_filtered_admittance_passive(const DeviceModel& device
         for (int i = 1; i < kRefine; ++i) {
             const double m = at(lo + (hi - lo) * i / kRefine);
             if (stop_at_failure && m <= 0.0) break;
+        }
+        if (!stop_at_failure) {
+            // The worst once more, tightly.
+            out.worst_margin = std::numeric_limits<double>::infinity();
+            at(worst_theta, 1e-7, 20000);
         }
     }
     out.holds = out.worst_margin > 0.0 && !out.fails_at_dc;

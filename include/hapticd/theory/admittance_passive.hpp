@@ -103,13 +103,16 @@ struct FilteredAliasMargin {
 };
 
 /// The margin at θ over the disk. decide_only stops as soon as the sign is settled (margin
-/// > 0 proved, or a point with f + tails <= 0 found); otherwise the minimum to 1e-7.
+/// > 0 proved, or a point with f + tails <= 0 found); otherwise the minimum to `tolerance`
+/// (absolute, on the dimensionless margin; at most max_evaluations, after which the bound
+/// found so far is returned: lower, never optimistic).
 /// Throws std::invalid_argument for an unsupported filter.
 FilteredAliasMargin filtered_alias_margin(const DeviceModel& device, const PiVelocityLoop& loop,
                                           const ForceSensorFilter& filter,
                                           const EnvironmentAdmittanceDisk& disk, double theta,
                                           double sample_period_s, double delay_periods,
-                                          bool decide_only = false);
+                                          bool decide_only = false, double tolerance = 1e-7,
+                                          int max_evaluations = 20000);
 
 /// The large-|Y_v| slope of the margin at θ: |dR/dY - dc/dY| - Σ |dβ_k/dY|/(2b) (first N
 /// aliases). f(Y) <= |Y| slope + f(0) + ..., so where it is negative a large enough |Y_v| fails.
@@ -133,7 +136,9 @@ struct FilteredPassiveCheck {
 
 /// (P2) with the filter over every passive operator and environment, on θ in (0, π]: 4096
 /// uniform points, 256 log-spaced from 1e-6 rad to the first, and 64 between the neighbours of
-/// the worst. With stop_at_failure the first failing frequency ends the sweep (for a bisection).
+/// the worst. With stop_at_failure each frequency only settles the sign and the first failing
+/// one ends the sweep (for a bisection); otherwise each is bounded with 400 evaluations (a
+/// lower bound), and the worst once more to 1e-7.
 FilteredPassiveCheck check_filtered_admittance_passive(const DeviceModel& device,
                                                        const PiVelocityLoop& loop,
                                                        const ForceSensorFilter& filter,
