@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "hapticd/theory/admittance_passive.hpp"
 #include "hapticd/theory/coupling_check.hpp"
 #include "hapticd/tune/admittance_sizing.hpp"
 #include "hapticd/tune/class_check.hpp"
@@ -168,6 +169,40 @@ void BM_SizeAdmittanceExact(benchmark::State& state) {
     }
 }
 BENCHMARK(BM_SizeAdmittanceExact)->Arg(0)->Arg(100)->Unit(benchmark::kMillisecond)->Iterations(1);
+
+// The passive model with a force filter (admittance_passive.hpp): one check of a pure damper
+// over the 4096 + 256 + 64 frequencies, sign only (what the bisection runs) and minimised, and
+// the lightest pure damper (a bisection of about 27 checks). Argument: f_aa in Hz.
+void BM_CheckFilteredAdmittancePassive(benchmark::State& state) {
+    const hapticd::theory::ForceSensorFilter filter{static_cast<double>(state.range(0))};
+    const bool minimise = state.range(1) != 0;
+    for (auto _ : state) {
+        auto c = hapticd::theory::check_filtered_admittance_passive(
+            kArm, {2.0, 0.0}, filter, {INFINITY, 300.0}, 1e-3, 0.0, !minimise);
+        benchmark::DoNotOptimize(c);
+    }
+}
+BENCHMARK(BM_CheckFilteredAdmittancePassive)
+    ->Args({100, 0})
+    ->Args({100, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(3);
+
+void BM_LightestPassiveDamper(benchmark::State& state) {
+    const hapticd::tune::PassiveAdmittanceSizingRequest request{
+        kArm, {2.0, 0.0}, 1000.0,
+        0.0,  INFINITY,   hapticd::theory::ForceSensorFilter{static_cast<double>(state.range(0))}};
+    for (auto _ : state) {
+        auto b = hapticd::tune::lightest_passive_damper(request);
+        benchmark::DoNotOptimize(b);
+    }
+}
+BENCHMARK(BM_LightestPassiveDamper)
+    ->Arg(50)
+    ->Arg(100)
+    ->Arg(200)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1);
 
 }  // namespace
 

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <complex>
 #include <limits>
 #include <numbers>
 #include <sstream>
@@ -101,11 +102,9 @@ ExactAdmittanceSizing size_admittance_coupling_exact(const ExactAdmittanceSizing
     check_positive_or_infinite("coupling damping b_c", request.coupling_damping_n_s_per_m, "N s/m");
     check_in_range("safety factor", request.safety_factor, 1.0, 100.0, "");
     const auto design_with = [&](double mass) {
-        return AdmittanceDesign{request.device,
-                                request.loop,
-                                {mass, request.coupling_damping_n_s_per_m},
-                                request.rate_hz,
-                                request.delay_periods};
+        return AdmittanceDesign{
+            request.device,  request.loop,          {mass, request.coupling_damping_n_s_per_m},
+            request.rate_hz, request.delay_periods, request.force_filter};
     };
     const double heaviest = kHeaviestCouplingPerDeviceMass * request.device.mass_kg;
     const std::vector<OperatorModel> operators =
@@ -206,6 +205,160 @@ ExactAdmittanceSizing size_admittance_coupling_exact(const ExactAdmittanceSizing
     result.report.solver_time_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return result;
+}
+
+namespace {
+
+bool passive_holds(const PassiveAdmittanceSizingRequest& r, const theory::MassDamperCoupling& c) {
+    return theory::check_filtered_admittance_passive(r.device, r.loop, *r.force_filter, c,
+                                                     1.0 / r.rate_hz, r.delay_periods,
+                                                     /*stop_at_failure=*/true)
+        .holds;
+}
+
+constexpr double kPassiveTolerance = 1e-4;  // relative, on m_c and b_c
+
+void check_passive_request(const PassiveAdmittanceSizingRequest& r) {
+    check_device(r.device);
+    check_rate(r.rate_hz);
+    check_delay_periods(r.delay_periods);
+    check_positive_or_infinite("coupling damping b_c", r.coupling_damping_n_s_per_m, "N s/m");
+    if (r.force_filter) theory::check_force_sensor_filter(*r.force_filter, r.rate_hz);
+}
+
+}  // namespace
+
+double lightest_passive_damper(const PassiveAdmittanceSizingRequest& r) {
+    check_passive_request(r);
+    const double inf = std::numeric_limits<double>::infinity();
+    if (!r.force_filter || r.force_filter->order != 2) return inf;
+    double lo = 1e-3, hi = 1e7;  // N s/m
+    if (!passive_holds(r, {inf, hi})) return inf;
+    if (passive_holds(r, {inf, lo})) return lo;
+    while (hi > lo * (1.0 + kPassiveTolerance)) {
+        const double mid = std::sqrt(lo * hi);
+        (passive_holds(r, {inf, mid}) ? hi : lo) = mid;
+    }
+    return hi;
+}
+
+PassiveAdmittanceSizing size_admittance_coupling_passive(const PassiveAdmittanceSizingRequest& r) {
+    const auto start = std::chrono::steady_clock::now();
+    check_passive_request(r);
+    const double inf = std::numeric_limits<double>::infinity();
+    const double period = 1.0 / r.rate_hz;
+    if (!r.force_filter || r.force_filter->order != 2) {
+        std::string why =
+            passive_admittance_verdict(r.device, r.loop, r.rate_hz, r.delay_periods).explanation;
+        if (r.force_filter) {
+            why +=
+                ". A first-order filter is not enough: its alias weights fall like 1/k, so "
+                "Σ|β_k| still diverges (logarithmically); give a second-order one "
+                "(--force-filter-order 2)";
+        } else {
+            why += " (--force-filter HZ: a second-order low-pass makes Σ|β_k| converge)";
+        }
+        throw InfeasibleCoupling(why);
+    }
+    // The homotopy from hands-off needs the hands-off loop stable (the PI loop on the device).
+    const AdmittanceDesign probe{r.device,  r.loop,          {inf, 1.0},
+                                 r.rate_hz, r.delay_periods, r.force_filter};
+    const ClosedLoopPoles hands_off = admittance_closed_loop_poles(
+        probe, OperatorModel::hands_off(), AdmittanceEnvironment::free_space());
+    if (hands_off.spectral_radius > 1.0 + kMarginalTolerance) {
+        std::ostringstream why;
+        why << "the PI velocity loop is unstable hands-off (|z| = " << hands_off.spectral_radius
+            << "): lower k_p, k_i";
+        throw InfeasibleCoupling(why.str());
+    }
+    const double b_c = r.coupling_damping_n_s_per_m;
+    PassiveAdmittanceSizing out;
+    const auto lightest_damper_text = [&] {
+        const double lightest = lightest_passive_damper(r);
+        std::ostringstream s;
+        if (std::isfinite(lightest)) {
+            s << "the lightest pure damper that holds is b_c = " << lightest
+              << " N s/m (--coupling-damping " << lightest << ": m_c = inf)";
+        } else {
+            s << "no pure damper up to 1e7 N s/m holds either";
+            const double needed =
+                theory::velocity_loop_damping_bound(r.loop, period, r.delay_periods);
+            if (r.device.damping_n_s_per_m <= needed) {
+                s << " (the PI loop alone needs b >= " << needed << " N s/m at a rigid wall)";
+            }
+        }
+        return s.str();
+    };
+    const std::string holds_for = r.force_filter->describe();
+    if (std::isinf(b_c)) {
+        // A pure mass: the DC law (theory filtered_alias_slope) or the grid decides.
+        const double heaviest = kHeaviestCouplingPerDeviceMass * r.device.mass_kg;
+        if (!passive_holds(r, {heaviest, inf})) {
+            std::ostringstream why;
+            why << "no pure-mass coupling up to " << heaviest
+                << " kg holds for every passive operator and environment with the " << holds_for
+                << ": a virtual spring resonating with m_c at low frequency (where the "
+                   "coupling's implicit Euler barely dissipates, Re Z_cA ~ m_c θ²/(2T)) meets "
+                   "the force sample's aliases near multiples of the servo rate, a negative "
+                   "resistance ~ θ (docs/stability-models.md); "
+                << lightest_damper_text();
+            throw InfeasibleCoupling(why.str());
+        }
+    } else if (!passive_holds(r, {inf, b_c})) {
+        std::ostringstream why;
+        why << "with b_c = " << b_c
+            << " N s/m no coupling mass holds for every passive operator and environment with "
+               "the "
+            << holds_for << " (not even m_c = inf); " << lightest_damper_text();
+        throw InfeasibleCoupling(why.str());
+    }
+    // Bisection on log m_c between the heaviest (holds, or the pure damper) and the lightest.
+    double hi = kHeaviestCouplingPerDeviceMass * r.device.mass_kg;
+    if (!passive_holds(r, {hi, b_c})) hi = inf;
+    if (std::isfinite(hi)) {
+        double lo = 1e-6 * r.device.mass_kg;
+        if (passive_holds(r, {lo, b_c})) {
+            hi = lo;
+        } else {
+            while (hi > lo * (1.0 + kPassiveTolerance)) {
+                const double mid = std::sqrt(lo * hi);
+                (passive_holds(r, {mid, b_c}) ? hi : lo) = mid;
+            }
+        }
+    }
+    out.coupling = {hi, b_c};
+    out.finite_mass_fails_at_dc = std::isinf(hi);
+    // The binding case: the full check just below the answer (for m_c = inf, just below b_c).
+    const theory::MassDamperCoupling below =
+        std::isfinite(hi) ? theory::MassDamperCoupling{hi / (1.0 + kPassiveTolerance), b_c}
+                          : theory::MassDamperCoupling{inf, b_c};
+    const theory::FilteredPassiveCheck at = theory::check_filtered_admittance_passive(
+        r.device, r.loop, *r.force_filter, below, period, r.delay_periods);
+    out.binding_frequency_hz = at.worst_frequency_hz;
+    out.binding_admittance = at.worst_admittance;
+    out.worst_margin = at.worst_margin;
+    {
+        const double theta = theory::normalized_frequency(at.worst_frequency_hz, period);
+        std::ostringstream env;
+        if (std::abs(at.worst_admittance) < 1e-12) {
+            env << "rigid wall";
+        } else {
+            const theory::Complex z_e =
+                1.0 / at.worst_admittance -
+                1.0 / theory::coupling_admittance(out.coupling, theta, period);
+            env << "Z_e = " << z_e.real() << (z_e.imag() < 0 ? " - " : " + ")
+                << std::abs(z_e.imag()) << "j N s/m at " << at.worst_frequency_hz << " Hz";
+            if (std::abs(z_e) < 1e-6 * std::abs(1.0 / at.worst_admittance)) env << " (free space)";
+        }
+        out.binding_environment = env.str();
+    }
+    out.exact = check_exact_admittance(
+        {r.device, r.loop, out.coupling, r.rate_hz, r.delay_periods, r.force_filter});
+    out.report.method = "passive-filtered-bisection";
+    out.report.verify_points = at.frequencies;
+    out.report.solver_time_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return out;
 }
 
 }  // namespace hapticd::tune

@@ -1,6 +1,7 @@
 #include "hapticd/tune/exact_admittance.hpp"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -31,11 +32,81 @@ struct SensedPlant {
     VectorXd translation;    ///< 1 on every position state, or empty when the handle is grounded
 };
 
+/// The operator's force on the handle, F_h = C s + D F_d (file comment), and whether the
+/// operator grounds the handle.
+bool handle_force(const OperatorModel& h, const MatrixXd& a, const VectorXd& b, RowVectorXd& c,
+                  double& d) {
+    const Index n = a.rows();
+    c = RowVectorXd::Zero(n);
+    d = 0.0;
+    if (h.family == OperatorFamily::two_mass_grasp) {
+        c(0) = -h.skin_stiffness_n_per_m;
+        c(1) = -h.skin_damping_n_s_per_m;
+        c(2) = h.skin_stiffness_n_per_m;
+        c(3) = h.skin_damping_n_s_per_m;
+        return h.arm_stiffness_n_per_m > 0.0;
+    }
+    if (h.family == OperatorFamily::hands_off) return false;
+    // -m_h a with a = A.row(1) s + B(1) F: the rigid hand's inertia reads the held force.
+    c = -h.hand_mass_kg * a.row(1);
+    d = -h.hand_mass_kg * b(1);
+    c(0) -= h.hand_stiffness_n_per_m;
+    c(1) -= h.hand_damping_n_s_per_m;
+    for (std::size_t i = 0; i < h.modes.size(); ++i) {
+        const OperatorMode& mode = h.modes[i];
+        const auto x = static_cast<Index>(2 + 2 * i), v = x + 1;
+        c(0) -= mode.stiffness_n_per_m;
+        c(1) -= mode.damping_n_s_per_m;
+        c(x) += mode.stiffness_n_per_m;
+        c(v) += mode.damping_n_s_per_m;
+    }
+    return h.hand_stiffness_n_per_m > 0.0;
+}
+
 SensedPlant sense_plant(const theory::DeviceModel& device, const OperatorModel& h, double period_s,
-                        double delay_fraction) {
+                        double delay_fraction,
+                        const std::optional<theory::ForceSensorFilter>& filter) {
     MatrixXd a;
     VectorXd b;
     detail::operator_plant(device, h, a, b);
+    RowVectorXd force_row;
+    double force_feedthrough = 0.0;
+    const bool grounded = handle_force(h, a, b, force_row, force_feedthrough);
+    const Index positions = a.rows();
+    if (filter) {
+        // Append the filter, driven by the continuous F_h, in a balanced form: the states are
+        // x_f1 = F_f/σ and x_f2 = (dF_f/dt)/(ω_a σ), ẋ_f1 = ω_a x_f2,
+        // ẋ_f2 = -ω_a x_f1 - 2ζ ω_a x_f2 + ω_a F_h/σ (order 1: ẋ_f1 = -ω_a x_f1 + ω_a F_h/σ).
+        // The companion form's ω_a² entries, and a steel grip's k_h ω_a² driving them, would
+        // leave the matrix exponential a norm 1e10 times the plant's, and the plant's block
+        // inaccurate: σ brings the coupling down to the plant's own scale.
+        const double w = 2.0 * std::numbers::pi * filter->cutoff_hz;
+        const Index nf = filter->order, n0 = a.rows();
+        const double scale = std::max(
+            1.0, w * std::max(force_row.cwiseAbs().maxCoeff(), std::abs(force_feedthrough)) /
+                     std::max(1.0, a.cwiseAbs().maxCoeff()));
+        MatrixXd af = MatrixXd::Zero(nf, nf);
+        VectorXd bf = VectorXd::Zero(nf);
+        if (nf == 1) {
+            af(0, 0) = -w;
+            bf(0) = w / scale;
+        } else {
+            af << 0.0, w, -w, -2.0 * filter->damping_ratio * w;
+            bf(1) = w / scale;
+        }
+        MatrixXd big = MatrixXd::Zero(n0 + nf, n0 + nf);
+        big.topLeftCorner(n0, n0) = a;
+        big.bottomLeftCorner(nf, n0) = bf * force_row;
+        big.bottomRightCorner(nf, nf) = af;
+        VectorXd big_b(n0 + nf);
+        big_b.head(n0) = b;
+        big_b.tail(nf) = bf * force_feedthrough;
+        a = big;
+        b = big_b;
+        force_row = RowVectorXd::Zero(n0 + nf);
+        force_row(n0) = scale;
+        force_feedthrough = 0.0;
+    }
     SensedPlant plant;
     const Index n = a.rows();
     if (delay_fraction == 0.0) {
@@ -51,34 +122,12 @@ SensedPlant sense_plant(const theory::DeviceModel& device, const OperatorModel& 
         plant.gamma_new = gamma_new;
         plant.gamma_old = phi_new * gamma_old;
     }
-    // The operator's force on the handle, F_h = -Z_h v (file comment).
-    plant.sensor = RowVectorXd::Zero(n);
-    bool grounded = false;
-    if (h.family == OperatorFamily::two_mass_grasp) {
-        plant.sensor(0) = -h.skin_stiffness_n_per_m;
-        plant.sensor(1) = -h.skin_damping_n_s_per_m;
-        plant.sensor(2) = h.skin_stiffness_n_per_m;
-        plant.sensor(3) = h.skin_damping_n_s_per_m;
-        grounded = h.arm_stiffness_n_per_m > 0.0;
-    } else if (h.family != OperatorFamily::hands_off) {
-        // -m_h a with a = A.row(1) s + B(1) F: the rigid hand's inertia reads the held force.
-        plant.sensor = -h.hand_mass_kg * a.row(1);
-        plant.feedthrough = -h.hand_mass_kg * b(1);
-        plant.sensor(0) -= h.hand_stiffness_n_per_m;
-        plant.sensor(1) -= h.hand_damping_n_s_per_m;
-        for (std::size_t i = 0; i < h.modes.size(); ++i) {
-            const OperatorMode& mode = h.modes[i];
-            const auto x = static_cast<Index>(2 + 2 * i), v = x + 1;
-            plant.sensor(0) -= mode.stiffness_n_per_m;
-            plant.sensor(1) -= mode.damping_n_s_per_m;
-            plant.sensor(x) += mode.stiffness_n_per_m;
-            plant.sensor(v) += mode.damping_n_s_per_m;
-        }
-        grounded = h.hand_stiffness_n_per_m > 0.0;
-    }
+    plant.sensor = force_row;
+    plant.feedthrough = force_feedthrough;
     if (!grounded) {
+        // The filter's states are forces: a translation leaves them alone.
         plant.translation = VectorXd::Zero(n);
-        for (Index i = 0; i < n; i += 2) plant.translation(i) = 1.0;
+        for (Index i = 0; i < positions; i += 2) plant.translation(i) = 1.0;
     }
     return plant;
 }
@@ -256,6 +305,7 @@ void check_design(const AdmittanceDesign& d) {
     check_in_range("integral gain k_i", d.loop.integral_gain_n_per_m, 0.0, 1e9, "N/m");
     check_positive_or_infinite("coupling mass m_c", d.coupling.mass_kg, "kg");
     check_positive_or_infinite("coupling damping b_c", d.coupling.damping_n_s_per_m, "N s/m");
+    if (d.force_filter) theory::check_force_sensor_filter(*d.force_filter, d.rate_hz);
     if (std::isinf(d.coupling.mass_kg) && std::isinf(d.coupling.damping_n_s_per_m)) {
         throw std::invalid_argument(
             "coupling (32) with m_c = inf and b_c = inf is no coupling (Y_cA = 0): give one");
@@ -345,7 +395,8 @@ ClosedLoopPoles admittance_closed_loop_poles(const AdmittanceDesign& design,
     check_environment(environment);
     const double period_s = 1.0 / design.rate_hz;
     const theory::LoopDelay delay = theory::split_delay(design.delay_periods);
-    const SensedPlant plant = sense_plant(design.device, human, period_s, delay.fraction);
+    const SensedPlant plant =
+        sense_plant(design.device, human, period_s, delay.fraction, design.force_filter);
     Layout layout;
     const MatrixXd loop = closed_loop(design, environment, plant, delay, period_s, &layout);
     return poles_of(loop, plant, layout, period_s);
@@ -383,7 +434,8 @@ AdmittanceExactCheck check_exact_admittance(
     check.worst_spectral_radius = -1.0;
     check.delay_periods = design.delay_periods;
     for (const OperatorModel& h : operators) {
-        const SensedPlant plant = sense_plant(design.device, h, period_s, delay.fraction);
+        const SensedPlant plant =
+            sense_plant(design.device, h, period_s, delay.fraction, design.force_filter);
         for (const AdmittanceEnvironment& env : environments) {
             Layout layout;
             const MatrixXd loop = closed_loop(design, env, plant, delay, period_s, &layout);

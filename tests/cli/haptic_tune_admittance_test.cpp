@@ -32,6 +32,45 @@ TEST(HapticTuneSizeAdmittance, ThePassiveDefaultExplainsWhyNoCouplingHolds) {
     EXPECT_NE(hot.err.find("needs device damping b >= 8"), std::string::npos) << hot.err;
 }
 
+// With a second-order force filter the passive model sizes: a pure damper (every finite m_c
+// fails at low frequency), named with its filter, and held against the exact sweep.
+TEST(HapticTuneSizeAdmittance, TheForceFilterMakesThePassiveModelSize) {
+    const auto r = run_command(
+        tune(kDevice + "--kp 2 --ki 0 --force-filter 100 --coupling-damping 300 --json"));
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    const json j = json::parse(r.out);
+    EXPECT_EQ(j.at("model"), "passive");
+    EXPECT_TRUE(j.at("coupling_mass").is_null());
+    EXPECT_EQ(j.at("damping").get<double>(), 300.0);
+    EXPECT_EQ(j.at("force_filter").at("cutoff_hz").get<double>(), 100.0);
+    EXPECT_EQ(j.at("force_filter").at("order").get<int>(), 2);
+    EXPECT_GT(j.at("worst_margin").get<double>(), 0.0);
+    EXPECT_TRUE(j.at("exact_check").at("stable").get<bool>());
+    EXPECT_NE(j.at("holds_for").get<std::string>().find("every passive operator"),
+              std::string::npos);
+    // A pure mass: none holds, and the lightest pure damper is named instead.
+    const auto mass = run_command(tune(kDevice + "--kp 2 --ki 0 --force-filter 100"));
+    EXPECT_EQ(mass.exit_code, 2);
+    EXPECT_NE(mass.err.find("no pure-mass coupling"), std::string::npos) << mass.err;
+    EXPECT_NE(mass.err.find("lightest pure damper that holds is b_c = "), std::string::npos);
+    // A first-order filter is not enough.
+    const auto first =
+        run_command(tune(kDevice + "--kp 2 --ki 0 --force-filter 100 --force-filter-order 1 "
+                                   "--coupling-damping 300"));
+    EXPECT_EQ(first.exit_code, 2);
+    EXPECT_NE(first.err.find("first-order filter is not enough"), std::string::npos) << first.err;
+    // Bad filters name the option, the value and the range.
+    const auto zero = run_command(tune(kDevice + "--kp 2 --ki 0 --force-filter 0"));
+    EXPECT_EQ(zero.exit_code, 2);
+    EXPECT_NE(zero.err.find("--force-filter"), std::string::npos) << zero.err;
+    EXPECT_NE(zero.err.find("f_aa = 0 Hz is outside (0, 100000] Hz"), std::string::npos)
+        << zero.err;
+    const auto damping =
+        run_command(tune(kDevice + "--kp 2 --ki 0 --force-filter 100 --force-filter-damping 12"));
+    EXPECT_EQ(damping.exit_code, 2);
+    EXPECT_NE(damping.err.find("ζ = 12 is outside (0, 10]"), std::string::npos) << damping.err;
+}
+
 // (37) under the encoder model is optimistic: its best pair fails the exact admittance loop,
 // and size says so and exits 1 (as the impedance display's size does).
 TEST(HapticTuneSizeAdmittance, ThirtySevenIsHeldAgainstTheExactLoop) {

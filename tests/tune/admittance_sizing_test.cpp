@@ -164,5 +164,65 @@ TEST_P(ExactAdmittanceSizingGrid, NeverOptimisticAndTight) {
     EXPECT_FALSE(lighter.worst_operator.describe().empty());
 }
 
+// The passive model with a second-order force filter (admittance_passive.hpp): the lightest
+// pure damper b_c* it sizes is never optimistic (the exact sweep, and one-mode alias-tuned
+// operators scanned over their reactance near the binding frequency, find nothing unstable at
+// b_c*), and the bound is reached: 3 % lighter such an operator (lossless: free-handle mode
+// plus a reactance on the aliases) grows in free space.
+TEST(PassiveFilteredSizing, TheLightestPureDamperIsNeverOptimisticAndIsReached) {
+    const theory::ForceSensorFilter filter{100.0};
+    const PassiveAdmittanceSizingRequest request{kArm, {2.0, 0.0}, kRateHz, 0.0, INFINITY, filter};
+    const double lightest = lightest_passive_damper(request);
+    ASSERT_TRUE(std::isfinite(lightest));
+    const auto design = [&](double b_c) {
+        return AdmittanceDesign{kArm, {2.0, 0.0}, {INFINITY, b_c}, kRateHz, 0.0, filter};
+    };
+    EXPECT_TRUE(check_exact_admittance(design(lightest)).stable);
+    const auto worst_adversary = [&](double b_c) {
+        double worst = 0.0;
+        for (double theta = 0.2; theta <= 0.8; theta += 0.02) {
+            for (double x = -3000.0; x <= 0.0; x += 20.0) {
+                const OperatorModel h = alias_tuned_operator(kArm, theta, kRateHz, 1, x);
+                worst = std::max(worst, admittance_closed_loop_poles(
+                                            design(b_c), h, AdmittanceEnvironment::free_space())
+                                            .spectral_radius);
+            }
+        }
+        return worst;
+    };
+    EXPECT_LE(worst_adversary(lightest), 1.0 + kMarginalTolerance);
+    EXPECT_GT(worst_adversary(0.97 * lightest), 1.0 + 1e-6);
+}
+
+// The sizing's verdicts: a damper at or above b_c* needs no mass (every finite m_c fails at
+// DC); below it, or as a pure mass, or without a second-order filter, nothing, and why.
+TEST(PassiveFilteredSizing, SizesThePureDamperAndExplainsTheRest) {
+    const theory::ForceSensorFilter filter{100.0};
+    PassiveAdmittanceSizingRequest request{kArm, {2.0, 0.0}, kRateHz, 0.0, INFINITY, filter};
+    const double lightest = lightest_passive_damper(request);
+    request.coupling_damping_n_s_per_m = 1.2 * lightest;
+    const PassiveAdmittanceSizing s = size_admittance_coupling_passive(request);
+    EXPECT_TRUE(std::isinf(s.coupling.mass_kg));
+    EXPECT_TRUE(s.finite_mass_fails_at_dc);
+    EXPECT_GT(s.worst_margin, 0.0);
+    EXPECT_TRUE(s.exact.stable);
+    const auto message = [&](PassiveAdmittanceSizingRequest r) {
+        try {
+            size_admittance_coupling_passive(r);
+        } catch (const InfeasibleCoupling& e) {
+            return std::string(e.what());
+        }
+        return std::string("sized");
+    };
+    request.coupling_damping_n_s_per_m = 0.8 * lightest;
+    EXPECT_NE(message(request).find("lightest pure damper that holds"), std::string::npos);
+    request.coupling_damping_n_s_per_m = INFINITY;
+    EXPECT_NE(message(request).find("no pure-mass coupling"), std::string::npos);
+    request.force_filter = std::nullopt;
+    EXPECT_NE(message(request).find("--force-filter"), std::string::npos);
+    request.force_filter = theory::ForceSensorFilter{100.0, 0.7, 1};
+    EXPECT_NE(message(request).find("first-order filter is not enough"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace hapticd::tune

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <complex>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace hapticd::tune {
@@ -144,6 +145,62 @@ TEST(ExactAdmittanceLoop, AFractionalDelayTendsToTheWholePeriod) {
     EXPECT_NEAR(almost, whole, 1e-6);
 }
 
+// The force-sensor filter's states (force_sensor_filter.hpp), against the same independent
+// computation: scipy samples the device with the filter appended and closes the loop on
+// polynomials (`/usr/bin/python3 tools/scripts/admittance_closed_loop.py`, last two cases).
+TEST(ExactAdmittanceLoop, TheFilteredSensorAgreesWithAnIndependentComputation) {
+    AdmittanceDesign grasp{{2.0, 5.0}, {4.0, 100.0}, {0.5, 30.0}, 1000.0};
+    grasp.force_filter = theory::ForceSensorFilter{100.0, 0.5, 2};
+    expect_poles(admittance_closed_loop_poles(grasp, OperatorModel::stiff_grasp(1.0, 1000.0, 2.0),
+                                              AdmittanceEnvironment::free_space()),
+                 {{1.0028151177025175, -0.018890127381267476},
+                  {1.0028151177025175, 0.018890127381267476},
+                  {0.993409236778213, -0.011492693797327673},
+                  {0.993409236778213, 0.011492693797327673},
+                  {0.6228995320723173, -0.39116918677158913},
+                  {0.6228995320723173, 0.39116918677158913},
+                  {0.0006610351137605316, 0.0}},
+                 1e-9);
+    AdmittanceDesign heavy{{0.5, 3.0}, {2.0, 0.0}, {2.0, INFINITY}, 2000.0};
+    heavy.force_filter = theory::ForceSensorFilter{50.0, 0.7071067811865476, 2};
+    expect_poles(admittance_closed_loop_poles(heavy, OperatorModel::heavy_hand(3.0, 1.0),
+                                              AdmittanceEnvironment::free_space()),
+                 {{0.9999417928883843, 0.0},
+                  {0.9987685245746644, 0.0},
+                  {0.889573766418543, -0.09902172631233865},
+                  {0.889573766418543, 0.09902172631233865},
+                  {0.00014292522302856428, 0.0}},
+                 1e-9);
+}
+
+// A filter far above the servo rate is a wire: today's poles come back, with the filter's own
+// (at e^{-ω_a T ...} ~ 0) added. The rigid hand reads the held force at nT⁻ either way.
+TEST(ExactAdmittanceLoop, AVeryFastFilterRecoversTheUnfilteredLoop) {
+    const std::vector<std::pair<OperatorModel, AdmittanceEnvironment>> cases{
+        {OperatorModel::stiff_grasp(1.0, 1000.0, 2.0), AdmittanceEnvironment::free_space()},
+        {OperatorModel::heavy_hand(3.0, 1.0), AdmittanceEnvironment::mass_spring(1.0, 100.0, 2.0)},
+        {OperatorModel::two_mass_grasp(1e4, 3.0, 0.5, 1e3, 1.0),
+         AdmittanceEnvironment::free_space()}};
+    for (const auto& [human, env] : cases) {
+        AdmittanceDesign d{{2.0, 5.0}, {4.0, 100.0}, {0.5, 30.0}, 1000.0};
+        const std::vector<Complex> plain =
+            nonzero_sorted(admittance_closed_loop_poles(d, human, env));
+        d.force_filter = theory::ForceSensorFilter{100.0 * d.rate_hz, 0.7071067811865476, 2};
+        const ClosedLoopPoles filtered = admittance_closed_loop_poles(d, human, env);
+        EXPECT_EQ(
+            filtered.eigenvalues.size(),
+            admittance_closed_loop_poles({d.device, d.loop, d.coupling, d.rate_hz}, human, env)
+                    .eigenvalues.size() +
+                2);
+        for (const Complex& p : plain) {
+            double nearest = INFINITY;
+            for (const Complex& q : filtered.eigenvalues)
+                nearest = std::min(nearest, std::abs(p - q));
+            EXPECT_LT(nearest, 1e-6) << human.describe() << ": " << p;
+        }
+    }
+}
+
 TEST(ExactAdmittanceLoop, NonPhysicalInputNamesTheValue) {
     const auto message = [](AdmittanceDesign d, AdmittanceEnvironment e) {
         try {
@@ -169,6 +226,12 @@ TEST(ExactAdmittanceLoop, NonPhysicalInputNamesTheValue) {
     EXPECT_NE(message(good, AdmittanceEnvironment::mass_spring(-1.0, 0.0)).find("m_e = -1"),
               std::string::npos);
     EXPECT_EQ(message(good, AdmittanceEnvironment::free_space()), "no error");
+    d = good;
+    d.force_filter = theory::ForceSensorFilter{2e5, 0.7, 2};
+    EXPECT_NE(message(d, {}).find("f_aa = 200000 Hz is outside (0, 100000]"), std::string::npos)
+        << message(d, {});
+    d.force_filter = theory::ForceSensorFilter{100.0, 11.0, 2};
+    EXPECT_NE(message(d, {}).find("ζ = 11 is outside (0, 10]"), std::string::npos);
 }
 
 TEST(ExactAdmittanceLoop, EnvironmentsDescribeThemselves) {

@@ -6,6 +6,7 @@
 
 #include "assumption_options.hpp"
 #include "commands.hpp"
+#include "hapticd/theory/force_sensor_filter.hpp"
 #include "hapticd/tune/admittance_sizing.hpp"
 #include "hapticd/tune/coupling_sizing.hpp"
 #include "hapticd/tune/input_checks.hpp"
@@ -24,7 +25,33 @@ struct SizeOptions {
     bool json = false;
     bool skip_exact_check = false;
     AssumptionOptions assumption;
+    std::optional<double> force_filter_hz;
+    double force_filter_damping = theory::ForceSensorFilter{}.damping_ratio;
+    int force_filter_order = 2;
 };
+
+/// --force-filter HZ [--force-filter-damping Z] [--force-filter-order 1|2], range-checked.
+std::optional<theory::ForceSensorFilter> force_filter_of(const SizeOptions& o, double rate_hz) {
+    if (!o.force_filter_hz) return std::nullopt;
+    const theory::ForceSensorFilter filter{*o.force_filter_hz, o.force_filter_damping,
+                                           o.force_filter_order};
+    try {
+        theory::check_force_sensor_filter(filter, rate_hz);
+    } catch (const std::invalid_argument& error) {
+        throw UsageError(std::string("--force-filter / --force-filter-damping / "
+                                     "--force-filter-order: ") +
+                         error.what());
+    }
+    return filter;
+}
+
+nlohmann::ordered_json filter_fields(const std::optional<theory::ForceSensorFilter>& filter) {
+    if (!filter) return nullptr;
+    return {{"cutoff_hz", filter->cutoff_hz},
+            {"damping_ratio", filter->damping_ratio},
+            {"order", filter->order},
+            {"description", filter->describe()}};
+}
 
 nlohmann::ordered_json report_fields(const tune::SizingReport& report) {
     return {{"method", report.method},
@@ -192,11 +219,51 @@ int run_admittance(const SizeOptions& o, const DesignInput& input, const std::st
     }
     const theory::PiVelocityLoop loop{*o.kp, *o.ki};
     const double damping = o.coupling_damping.value_or(std::numeric_limits<double>::infinity());
+    const std::optional<theory::ForceSensorFilter> filter = force_filter_of(o, input.rate_hz);
+    if (filter && model != "passive" && model != "exact") {
+        throw UsageError("--force-filter is for --model passive or exact; (37) has no filter");
+    }
     if (model == "passive") {
-        // The passive model has no coupling to offer (admittance_passive.hpp): say why.
-        const tune::PassiveAdmittanceVerdict verdict = tune::passive_admittance_verdict(
-            input.device, loop, input.rate_hz, input.delay_periods());
-        throw tune::InfeasibleCoupling(verdict.explanation);
+        if (o.optimize_damping) {
+            throw UsageError(
+                "--model passive sizes m_c for a given --coupling-damping (default none): "
+                "--optimize-damping is for (37)");
+        }
+        // Without a filter (or with a first-order one) this throws with the explanation.
+        tune::PassiveAdmittanceSizingRequest request{input.device,          loop,    input.rate_hz,
+                                                     input.delay_periods(), damping, filter};
+        const tune::PassiveAdmittanceSizing sizing =
+            tune::size_admittance_coupling_passive(request);
+        nlohmann::ordered_json out = {
+            {"display", "admittance"},
+            // null: m_c = inf, the coupling is the damper alone.
+            {"coupling_mass", null_if_infinite(sizing.coupling.mass_kg)},
+            {"damping", null_if_infinite(sizing.coupling.damping_n_s_per_m)},
+            {"binding_frequency_hz", sizing.binding_frequency_hz},
+            {"model", "passive"},
+            {"force_filter", filter_fields(filter)},
+            {"binding_environment", sizing.binding_environment},
+            {"worst_margin", sizing.worst_margin},
+            {"finite_mass_fails_at_dc", sizing.finite_mass_fails_at_dc},
+            {"holds_for",
+             "every passive operator and every passive environment, with the force sensor "
+             "behind the " +
+                 filter->describe() +
+                 " ((P2) with the whole alias sums, tails bounded; frequencies on a grid of "
+                 "4096 + 256 log-spaced points, refined at the worst)"},
+            {"delay_s", input.delay_s},
+            {"delay_periods", input.delay_periods()},
+            {"solver_time_s", sizing.report.solver_time_s},
+            {"device",
+             {{"mass", input.device.mass_kg}, {"damping", input.device.damping_n_s_per_m}}},
+            {"pi_gains", {{"kp", *o.kp}, {"ki", *o.ki}}},
+            {"rate_hz", input.rate_hz},
+            {"solver", report_fields(sizing.report)},
+            {"exact_check", exact_admittance_fields(sizing.exact)},
+        };
+        if (!sizing.exact.stable) warn_exact_admittance_rejects(sizing.exact);
+        print_result(out, o.json);
+        return sizing.exact.stable ? kExitOk : kExitVerdictNo;
     }
     if (model == "exact") {
         if (o.optimize_damping) {
@@ -210,6 +277,7 @@ int run_admittance(const SizeOptions& o, const DesignInput& input, const std::st
         request.rate_hz = input.rate_hz;
         request.delay_periods = input.delay_periods();
         request.coupling_damping_n_s_per_m = damping;
+        request.force_filter = filter;
         const tune::ExactAdmittanceSizing sizing = tune::size_admittance_coupling_exact(request);
         nlohmann::ordered_json out = {
             {"display", "admittance"},
@@ -217,6 +285,7 @@ int run_admittance(const SizeOptions& o, const DesignInput& input, const std::st
             {"damping", null_if_infinite(sizing.coupling.damping_n_s_per_m)},
             {"binding_frequency_hz", sizing.binding_frequency_hz},
             {"model", "exact"},
+            {"force_filter", filter_fields(filter)},
             {"limit_coupling_mass", sizing.limit_mass_kg},
             {"safety_factor", request.safety_factor},
             {"binding_operator", sizing.binding_operator.describe()},
@@ -309,6 +378,16 @@ void add_size_command(CLI::App& app, Invocation& invocation) {
         ->check(non_negative_finite("N s/m"));
     command->add_option("--ki", options->ki, "admittance display: PI integral gain (N/m)")
         ->check(non_negative_finite("N/m"));
+    command
+        ->add_option("--force-filter", options->force_filter_hz,
+                     "admittance display: cutoff f_aa (Hz) of the analog low-pass on the force "
+                     "sensor, 0 < f_aa <= 100 x rate (default none)")
+        ->check(non_negative_finite("Hz"));
+    command->add_option("--force-filter-damping", options->force_filter_damping,
+                        "damping ratio of the second-order force filter, (0, 10] (default "
+                        "0.7071, Butterworth)");
+    command->add_option("--force-filter-order", options->force_filter_order,
+                        "order of the force filter, 1 or 2 (default 2; 1 sizes nothing)");
     command->add_flag("--json", options->json, "print the result as JSON");
     command->add_flag("--no-exact-check", options->skip_exact_check,
                       "skip holding a (21) or (37) answer against the exact model");
@@ -330,6 +409,9 @@ void add_size_command(CLI::App& app, Invocation& invocation) {
                         "only");
                 }
                 return run_admittance(*options, input, options->model);
+            }
+            if (options->force_filter_hz) {
+                throw UsageError("--force-filter is the admittance display's force sensor");
             }
             if (declared || options->model == "exact") {
                 return run_assumed(*options, input, assumption);

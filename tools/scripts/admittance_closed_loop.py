@@ -34,6 +34,18 @@ def plant(m, b, m_h=0.0, b_h=0.0, k_h=0.0):
     return a, bb, c, d
 
 
+def with_force_filter(a, bb, c, d, cutoff_hz, zeta):
+    """Append the second-order low-pass w^2/(s^2 + 2 zeta w s + w^2) on the continuous F_h:
+    states (x, v, F_f, dF_f/dt), outputs x and F_f (no feedthrough: F_f is continuous)."""
+    w = 2.0 * np.pi * cutoff_hz
+    af = np.array([[0.0, 1.0], [-w * w, -2.0 * zeta * w]])
+    bf = np.array([[0.0], [w * w]])
+    big_a = np.block([[a, np.zeros((2, 2))], [bf @ c[1:2], af]])
+    big_b = np.vstack([bb, bf * d[1, 0]])
+    big_c = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]])
+    return big_a, big_b, big_c, np.zeros((2, 1))
+
+
 def poly_z_inverse(num, den):
     """A ratio of polynomials in z^-1, coefficients lowest power first."""
     return np.array(num, dtype=float), np.array(den, dtype=float)
@@ -43,6 +55,8 @@ def closed_loop_poles(case):
     t = 1.0 / case["rate_hz"]
     a, b, c, d = plant(case["m"], case["b"], case.get("m_h", 0.0), case.get("b_h", 0.0),
                        case.get("k_h", 0.0))
+    if "filter_hz" in case:
+        a, b, c, d = with_force_filter(a, b, c, d, case["filter_hz"], case["filter_zeta"])
     phi, gamma, _, _, _ = signal.cont2discrete((a, b, c, d), t, method="zoh")
     # Transfer functions from F[n] to x[n] and to F_h(nT-), as polynomials in z^-1:
     # y = C (zI - Φ)^-1 Γ F  (+ D z^-1 F for the sensor: the force held at nT-).
@@ -52,7 +66,8 @@ def closed_loop_poles(case):
     # the same coefficient lists read in order.
     den_p = den
     x_p = num_x[0]
-    f_p = P.polyadd(num_f[0], P.polymul([0.0, d[1, 0]], den_p))
+    f_p = P.polyadd(num_f[0], P.polymul([0.0, d[1, 0]], den_p)) if "filter_hz" not in case \
+        else num_f[0]
     kp, ki = case["kp"], case["ki"]
     # K_PI = (kp (1 - z^-1) + ki T) / (1 - z^-1)
     k_num = P.polyadd(P.polymul([kp], [1.0, -1.0]), [ki * t])
@@ -93,6 +108,15 @@ CASES = [
     {"name": "heavy hand, free space, pure-mass coupling", "m": 0.5, "b": 3.0,
      "rate_hz": 2000.0, "kp": 2.0, "ki": 0.0, "m_h": 3.0, "b_h": 1.0,
      "environment": "free space", "m_c": 2.0, "b_c": None},
+    # The force sensor behind a second-order low-pass (force_sensor_filter.hpp).
+    {"name": "stiff grasp, free space, 100 Hz filter", "m": 2.0, "b": 5.0, "rate_hz": 1000.0,
+     "kp": 4.0, "ki": 100.0, "m_h": 1.0, "b_h": 2.0, "k_h": 1000.0,
+     "environment": "free space", "m_c": 0.5, "b_c": 30.0, "filter_hz": 100.0,
+     "filter_zeta": 0.5},
+    {"name": "heavy hand, free space, 50 Hz Butterworth", "m": 0.5, "b": 3.0,
+     "rate_hz": 2000.0, "kp": 2.0, "ki": 0.0, "m_h": 3.0, "b_h": 1.0,
+     "environment": "free space", "m_c": 2.0, "b_c": None, "filter_hz": 50.0,
+     "filter_zeta": 0.7071067811865476},
 ]
 
 

@@ -37,6 +37,7 @@
 #pragma once
 
 #include "hapticd/theory/admittance.hpp"
+#include "hapticd/theory/force_sensor_filter.hpp"
 
 namespace hapticd::theory {
 
@@ -62,5 +63,87 @@ struct AliasReach {
 AliasReach free_space_alias_reach(const DeviceModel& device, const PiVelocityLoop& loop,
                                   const MassDamperCoupling& coupling, double theta,
                                   double sample_period_s, int whole_periods);
+
+// ---- (P2) with an anti-aliasing filter on the force sensor (force_sensor_filter.hpp) ----
+// The filtered force is sampled at nT (continuous: no jump), so at alias k the sensor part of
+// β_k gains H_k = H_aa(jω_k), the term without u_k becomes the filter's hold equivalent, and
+// a fraction φ of a period of delay puts e_k = e^{-jθ_k φ} on every alias:
+//   R = 1 + G H_hold,   β_k = K_PI e^{-jqθ} e_k [Y_v (1 - e^{-jθ}) H_k (m/T + b/(jθ_k))
+//                                                 - e^{-jθ} s_k],   G = K_PI Y_v e^{-jqθ}.
+// Over every passive operator Σ β_k u_k fills the disk centred c = Σ β_k/(2b) with radius
+// ρ = Σ |β_k|/(2b) (a Minkowski sum of the aliases' disks), so no passive operator puts a pole
+// at e^{jθ} iff |R - c| > ρ. With a second-order filter |β_k| ~ 1/k² and the sums converge
+// (the first N = 64.. aliases summed, the rest bounded: force_filter_alias_tail and Σ s_k = 1);
+// with a first-order one |β_k| ~ 1/k and ρ = ∞. R, c and the β_k are affine in Y_v, which fills
+// the disk of environment_admittance_disk over every passive environment; the margin
+//   f(Y) = |R - c| - ρ
+// is minimised over that disk by branch and bound (lower bound on a square: the affine |R - c|
+// at its centre less |dR/dY - dc/dY| times the half-diagonal, ρ at its centre plus
+// Σ |dβ_k/dY|/(2b) times it, and twice the tail).
+
+/// {1/(Z_cA + Z_e) : Re Z_e >= 0} at θ: the disk centred (and of radius) 1/(2 Re Z_cA) on the
+/// positive real axis; it holds the rigid wall (0) and free space (Y_cA). Re Z_cA grows with
+/// m_c (and with b_c), so a heavier coupling's disk lies inside a lighter one's.
+struct EnvironmentAdmittanceDisk {
+    double centre = 0.0;  ///< m/(N s), real
+    double radius = 0.0;
+};
+EnvironmentAdmittanceDisk environment_admittance_disk(const MassDamperCoupling& coupling,
+                                                      double theta, double sample_period_s);
+
+struct FilteredAliasMargin {
+    /// A certified lower bound of min over the disk of f = |R - c| - ρ (tails included); > 0
+    /// means no passive operator and environment puts a pole at e^{jθ}.
+    double margin = 0.0;
+    /// f (truncated sums) at the best point found; margin <= it, within the tolerance when
+    /// the search ran to the end.
+    double value_at_worst = 0.0;
+    std::complex<double> worst_admittance;  ///< Y_v there (m/(N s))
+    int evaluations = 0;
+};
+
+/// The margin at θ over the disk. decide_only stops as soon as the sign is settled (margin
+/// > 0 proved, or a point with f + tails <= 0 found); otherwise the minimum to `tolerance`
+/// (absolute, on the dimensionless margin; at most max_evaluations, after which the bound
+/// found so far is returned: lower, never optimistic).
+/// Throws std::invalid_argument for an unsupported filter.
+FilteredAliasMargin filtered_alias_margin(const DeviceModel& device, const PiVelocityLoop& loop,
+                                          const ForceSensorFilter& filter,
+                                          const EnvironmentAdmittanceDisk& disk, double theta,
+                                          double sample_period_s, double delay_periods,
+                                          bool decide_only = false, double tolerance = 1e-7,
+                                          int max_evaluations = 20000);
+
+/// The large-|Y_v| slope of the margin at θ: |dR/dY - dc/dY| - Σ |dβ_k/dY|/(2b) (first N
+/// aliases). f(Y) <= |Y| slope + f(0) + ..., so where it is negative a large enough |Y_v| fails.
+/// As θ -> 0 it tends to -θ |K_PI| (m/(2bT)) Σ_{k != 0} |H_aa(j2πk/T)| (to first order), while a
+/// coupling with finite m_c lets |Y_v| reach 1/Re Z_cA ~ 2T/(m_c θ²): every finite coupling
+/// mass fails at low enough frequency, against a virtual spring resonating with it.
+double filtered_alias_slope(const DeviceModel& device, const PiVelocityLoop& loop,
+                            const ForceSensorFilter& filter, double theta, double sample_period_s,
+                            double delay_periods);
+
+struct FilteredPassiveCheck {
+    bool holds = false;  ///< margin > 0 at every frequency checked (and at DC, below)
+    double worst_margin = 0.0;
+    double worst_frequency_hz = 0.0;
+    std::complex<double> worst_admittance;  ///< the binding environment's Y_v
+    /// A finite m_c with a negative slope at θ = 1e-6 rad: fails as θ -> 0 (the grid's
+    /// lowest frequency may not reach it; filtered_alias_slope).
+    bool fails_at_dc = false;
+    int frequencies = 0;
+};
+
+/// (P2) with the filter over every passive operator and environment, on θ in (0, π]: 4096
+/// uniform points, 256 log-spaced from 1e-6 rad to the first, and 64 between the neighbours of
+/// the worst. With stop_at_failure each frequency only settles the sign and the first failing
+/// one ends the sweep (for a bisection); otherwise each is bounded with 400 evaluations (a
+/// lower bound), and the worst once more to 1e-7.
+FilteredPassiveCheck check_filtered_admittance_passive(const DeviceModel& device,
+                                                       const PiVelocityLoop& loop,
+                                                       const ForceSensorFilter& filter,
+                                                       const MassDamperCoupling& coupling,
+                                                       double sample_period_s, double delay_periods,
+                                                       bool stop_at_failure = false);
 
 }  // namespace hapticd::theory

@@ -45,6 +45,7 @@ struct ExactAdmittanceSizingRequest {
     double delay_periods = 0.0;
     double coupling_damping_n_s_per_m = std::numeric_limits<double>::infinity();  ///< b_c
     double safety_factor = 1.1;  ///< the sized m_c is this times the exact limit (>= 1)
+    std::optional<theory::ForceSensorFilter> force_filter = std::nullopt;  ///< none: the unfiltered sensor
 };
 
 struct ExactAdmittanceSizing {
@@ -64,5 +65,40 @@ struct ExactAdmittanceSizing {
 /// Throws InfeasibleCoupling (naming the operator and environment) when even m_c = 1e4 m is
 /// unstable, and std::invalid_argument for non-physical input.
 ExactAdmittanceSizing size_admittance_coupling_exact(const ExactAdmittanceSizingRequest& request);
+
+/// The passive model with an anti-aliasing filter on the force sensor (theory
+/// check_filtered_admittance_passive): every passive operator and every passive environment.
+struct PassiveAdmittanceSizingRequest {
+    theory::DeviceModel device;
+    theory::PiVelocityLoop loop;
+    double rate_hz = 1000.0;
+    double delay_periods = 0.0;
+    double coupling_damping_n_s_per_m = std::numeric_limits<double>::infinity();  ///< b_c
+    std::optional<theory::ForceSensorFilter> force_filter = std::nullopt;
+};
+
+struct PassiveAdmittanceSizing {
+    /// The lightest m_c at b_c for which (P2) holds (+inf: only the pure damper b_c holds; a
+    /// finite mass fails at low frequency, theory filtered_alias_slope).
+    theory::MassDamperCoupling coupling;
+    double binding_frequency_hz = 0.0;
+    theory::Complex binding_admittance;  ///< Y_v of the binding environment (m/(N s))
+    std::string binding_environment;     ///< that Y_v as an environment impedance Z_e
+    double worst_margin = 0.0;           ///< (P2)'s margin at the answer
+    bool finite_mass_fails_at_dc = false;
+    AdmittanceExactCheck exact;  ///< the answer held against the exact sweep
+    SizingReport report;         ///< method "passive-filtered-bisection"
+};
+
+/// Throws InfeasibleCoupling with the explanation when no coupling holds: no filter or a
+/// first-order one (passive_admittance_verdict's reasons, and the filter as the remedy), the
+/// velocity loop failing (P1), the pure damper at b_c failing (naming the lightest that
+/// holds), or a pure-mass coupling asked for (no finite m_c holds at DC: naming the lightest
+/// pure damper instead). Bisection on log m_c and on log b_c to a relative 1e-4; both are
+/// monotone (the environments' disks are nested).
+PassiveAdmittanceSizing size_admittance_coupling_passive(const PassiveAdmittanceSizingRequest& r);
+
+/// The lightest pure damper (m_c = inf) for which the filtered (P2) holds, to 1e-4, or +inf.
+double lightest_passive_damper(const PassiveAdmittanceSizingRequest& r);
 
 }  // namespace hapticd::tune

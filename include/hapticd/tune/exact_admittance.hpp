@@ -18,6 +18,9 @@
 //   F_h[n]    the force sensor at t = nT⁻, before the new command: a rigid hand mass m_h makes
 //             it depend on the force being held then, F[n-q-1] (through a = dv/dt):
 //               F_h[n] = C_h s[n] + D_h F[n-q-1],   D_h = m_h/(m + m_h) for a rigid hand;
+//             with a force-sensor filter H_aa the plant gains its states x_f, driven by the
+//             continuous F_h = C_h s + D_h F_d(t), ẋ_f = A_f x_f + B_f F_h, and the sensor reads
+//             F_f[n] = C_f x_f(nT) (continuous: no feedthrough);
 //   v_d[n]  = (x_d[n] - x_d[n-1]) / T                                backward difference
 //   v_com[n]  from the coupling (32) and the environment, solved together in the tick: both
 //             share the velocity v_com (the coupling is a shunt element, (33)/(38)), and the
@@ -72,10 +75,12 @@
 // b_e {0, 1, 30} N s/m) and mass-springs with k_e 1..1e6 N/m (7), b_e {0, 30} N s/m.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "hapticd/theory/admittance.hpp"
+#include "hapticd/theory/force_sensor_filter.hpp"
 #include "hapticd/tune/exact_model.hpp"
 
 namespace hapticd::tune {
@@ -112,6 +117,10 @@ struct AdmittanceDesign {
     theory::MassDamperCoupling coupling;  ///< m_c, b_c in (0, ∞], not both ∞
     double rate_hz = 1000.0;
     double delay_periods = 0.0;  ///< 0 <= d < kMaxDelayPeriods
+    /// An analog low-pass on the force sensor (force_sensor_filter.hpp), none by default: its
+    /// two states (one for order 1) are driven by F_h and sampled with the plant by the same
+    /// matrix exponential, and the sensor reads the filter's output at nT.
+    std::optional<theory::ForceSensorFilter> force_filter = std::nullopt;
 };
 
 /// The closed loop of device + operator + force sensor + PI loop + coupling + environment.
