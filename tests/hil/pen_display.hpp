@@ -94,6 +94,7 @@ struct DaemonConfig {
     double max_speed_mps = 1.0;
     double soft_start_ramp_s = 0.5;
     std::string scene_file = "scene.toml";
+    std::string safety_keys;  ///< more [safety] keys, e.g. "max_missed_periods = 1000\n"
 
     std::string toml() const {
         std::string text;
@@ -107,7 +108,7 @@ struct DaemonConfig {
         text += "[safety]\nmax_force = " + toml_number(max_force_n) +
                 "\nmax_speed = " + toml_number(max_speed_mps) +
                 "\nsoft_start_ramp = " + toml_number(soft_start_ramp_s) + "\npassivity = \"" +
-                passivity + "\"\n";
+                passivity + "\"\n" + safety_keys;
         text += "[device.sim]\nmass = " + toml_number(kPenMassKg) +
                 "\ndamping = " + toml_number(kPenDampingNsPerM) +
                 "\ncounts_per_meter = " + toml_number(counts_per_meter) +

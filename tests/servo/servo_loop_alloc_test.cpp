@@ -123,6 +123,26 @@ TEST(ServoAllocation, FaultPathDoesNotAllocate) {
     EXPECT_NE(loop.faults_seen(), 0u);
 }
 
+// Issue 10's paths: a device clock that runs backwards every 50 ticks (interval unknown:
+// zero force, the history and the soft start restart), and a stale sample at the end.
+TEST(ServoAllocation, UnknownIntervalAndStalePathsDoNotAllocate) {
+    VirtualTime time;
+    SweepingDevice device;
+    fakes::PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 8000.0, .damping_n_s_per_m = 5.0};
+    ServoLoop<SweepingDevice, fakes::PlaneWall, FakeClock> loop(device, wall, alloc_config(),
+                                                                nullptr, FakeClock{&time});
+    hapticd::testing::AllocationGuard guard;
+    for (int n = 0; n < 1000; ++n) {
+        if (n % 50 == 49) device.inner.next.device_time_s -= 0.01;
+        loop.tick();
+    }
+    device.inner.next.status = kStatusStale;
+    loop.tick();
+    EXPECT_EQ(guard.allocations(), 0u);
+    EXPECT_EQ(loop.stats().intervals_unknown, 20u);
+    EXPECT_EQ(loop.faults(), std::uint32_t{kFaultEncoderStale});
+}
+
 // The sweep, unplugged for 40 ticks of every 200 (and answering with dropped samples for
 // a few more): link faults latch and clear by themselves again and again.
 struct FlakyDevice {
