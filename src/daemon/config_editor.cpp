@@ -1,8 +1,12 @@
 // Value edits in a TOML config that keep the rest of the text (config_editor.hpp).
 #include "hapticd/daemon/config_editor.hpp"
 
+#include <fcntl.h>
+#include <sys/stat.h>
 #include <toml++/toml.h>
+#include <unistd.h>
 
+#include <array>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -201,32 +205,217 @@ EditedConfig edit_config_text(std::string_view text, const std::vector<ConfigEdi
     return result;
 }
 
-void write_config_with_backup(const std::string& path, const std::string& text,
-                              const std::string& backup_path) {
-    namespace fs = std::filesystem;
-    std::error_code error;
-    fs::copy_file(path, backup_path, fs::copy_options::overwrite_existing, error);
-    if (error) {
-        throw std::runtime_error("could not back up " + path + " to " + backup_path + ": " +
-                                 error.message() + "; the config was not changed");
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string errno_text() { return std::strerror(errno); }
+
+/// Closes the descriptor it holds.
+class FileDescriptor {
+  public:
+    explicit FileDescriptor(int fd) : fd_(fd) {}
+    ~FileDescriptor() {
+        if (fd_ >= 0) ::close(fd_);
     }
-    const std::string temporary = path + ".tmp";
+    FileDescriptor(const FileDescriptor&) = delete;
+    FileDescriptor& operator=(const FileDescriptor&) = delete;
+    int get() const { return fd_; }
+    /// close(2), with its error (some filesystems report a failed write-back only here).
+    bool close() {
+        const int fd = fd_;
+        fd_ = -1;
+        return ::close(fd) == 0;
+    }
+
+  private:
+    int fd_;
+};
+
+/// Writes all of `data`; false (errno set) on failure.
+bool write_all(int fd, std::string_view data) {
+    while (!data.empty()) {
+        const ssize_t n = ::write(fd, data.data(), data.size());
+        if (n < 0) {
+            if (errno == EINTR) continue;
+            return false;
+        }
+        data.remove_prefix(static_cast<std::size_t>(n));
+    }
+    return true;
+}
+
+/// Reads to the end; false (errno set) on failure.
+bool read_all(int fd, std::string& out) {
+    std::array<char, 65536> buffer{};
+    for (;;) {
+        const ssize_t n = ::read(fd, buffer.data(), buffer.size());
+        if (n < 0) {
+            if (errno == EINTR) continue;
+            return false;
+        }
+        if (n == 0) return true;
+        out.append(buffer.data(), static_cast<std::size_t>(n));
+    }
+}
+
+/// Writes `data` to a file we created (`fd`), gives it the config's owner (as root; an
+/// unprivileged user keeps the config's group when a member of it) and then its mode, and
+/// syncs it. Throws ConfigWriteError naming `what`.
+void fill_new_file(int fd, std::string_view data, const struct stat& config,
+                   const std::string& what) {
+    const auto fail = [&](const std::string& step) {
+        throw ConfigWriteError("could not " + step + " " + what + ": " + errno_text() +
+                               "; the config was not changed");
+    };
+    if (!write_all(fd, data)) fail("write");
+    if (::geteuid() == 0) {
+        if (::fchown(fd, config.st_uid, config.st_gid) != 0) fail("give the config's owner to");
+    } else if (config.st_gid != ::getegid()) {
+        (void)!::fchown(fd, static_cast<uid_t>(-1), config.st_gid);  // best effort
+    }
+    if (::fchmod(fd, config.st_mode & 07777) != 0) fail("give the config's mode to");
+    if (::fsync(fd) != 0) fail("sync");
+}
+
+}  // namespace
+
+std::string file_mode_text(unsigned mode) {
+    char text[8];
+    std::snprintf(text, sizeof text, "%04o", mode & 07777U);
+    return text;
+}
+
+ConfigTarget check_config_writable(const std::string& path) {
+    ConfigTarget out;
+    out.path = path;
+    std::error_code error;
+    const fs::path target = fs::canonical(path, error);
+    if (error) {
+        throw ConfigWriteError("cannot resolve " + path + ": " + error.message() +
+                               "; nothing was written");
+    }
+    out.target = target.string();
+    const std::string named = out.describe();
+    struct stat st {};
+    if (::stat(out.target.c_str(), &st) != 0) {
+        throw ConfigWriteError("cannot stat " + named + ": " + errno_text() +
+                               "; nothing was written");
+    }
+    out.mode = st.st_mode & 07777U;
+    if (!S_ISREG(st.st_mode)) {
+        throw ConfigWriteError(named + " is not a regular file; nothing was written");
+    }
+    // The owner's write bit, not access(2): root may write anything, but a config its owner
+    // made read-only is a statement, and root honours it too.
+    if ((st.st_mode & S_IWUSR) == 0) {
+        throw ConfigWriteError(named + " is not writable: its mode " + file_mode_text(out.mode) +
+                               " has no owner write bit (honoured as root too); nothing was "
+                               "written (chmod u+w " +
+                               out.target + " to allow it)");
+    }
+    // And this user may write it (the group and other bits, ACLs, a read-only mount).
+    if (::faccessat(AT_FDCWD, out.target.c_str(), W_OK, AT_EACCESS) != 0) {
+        throw ConfigWriteError(named + " is not writable: " + errno_text() + " (mode " +
+                               file_mode_text(out.mode) + ", owner uid " +
+                               std::to_string(st.st_uid) + "); nothing was written");
+    }
+    return out;
+}
+
+std::string ConfigTarget::describe() const {
+    return target.empty() || target == path ? path : path + " (" + target + ")";
+}
+
+WrittenConfig write_config_with_backup(const std::string& path, std::string_view original,
+                                       std::string_view text) {
+    const ConfigTarget config = check_config_writable(path);
+    const std::string named = config.describe();
+    WrittenConfig written;
+    written.target = config.target;
+
+    // What is replaced must be what was read: an edit made in the meantime is not lost.
+    struct stat st {};
     {
-        std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-        out << text;
-        out.flush();
-        if (!out) {
-            throw std::runtime_error("could not write " + temporary + ": " + std::strerror(errno) +
-                                     "; the config was not changed");
+        FileDescriptor current(::open(config.target.c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC));
+        std::string now;
+        if (current.get() < 0 || ::fstat(current.get(), &st) != 0 ||
+            !read_all(current.get(), now)) {
+            throw ConfigWriteError("cannot read " + named + ": " + errno_text() +
+                                   "; the config was not changed");
+        }
+        if (now != original) {
+            throw ConfigWriteError(named +
+                                   " changed since it was read (edited meanwhile?); the config "
+                                   "was not changed: run again");
         }
     }
-    fs::permissions(temporary, fs::status(path).permissions(), error);
-    fs::rename(temporary, path, error);
-    if (error) {
-        fs::remove(temporary);
-        throw std::runtime_error("could not replace " + path + ": " + error.message() +
-                                 "; the config was not changed (backup at " + backup_path + ")");
+
+    // The backup, beside the file it copies, created exclusively (O_EXCL: never through a
+    // planted symlink, never over an older backup): TARGET.bak, else TARGET.bak.1, .2, ...
+    for (int n = 0; n < 1000 && written.backup.empty(); ++n) {
+        const std::string name = config.target + ".bak" + (n == 0 ? "" : "." + std::to_string(n));
+        FileDescriptor backup(
+            ::open(name.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0600));
+        if (backup.get() < 0) {
+            if (errno == EEXIST) continue;
+            throw ConfigWriteError("cannot create the backup " + name + ": " + errno_text() +
+                                   "; the config was not changed");
+        }
+        try {
+            fill_new_file(backup.get(), original, st, "the backup " + name);
+            if (!backup.close()) {
+                throw ConfigWriteError("could not write the backup " + name + ": " + errno_text() +
+                                       "; the config was not changed");
+            }
+        } catch (const ConfigWriteError&) {
+            ::unlink(name.c_str());
+            throw;
+        }
+        written.backup = name;
     }
+    if (written.backup.empty()) {
+        throw ConfigWriteError(config.target + ".bak through " + config.target +
+                               ".bak.999 all exist; remove old backups; the config was not "
+                               "changed");
+    }
+
+    // The new text: a temporary created exclusively beside the target (mkstemp: a fresh name,
+    // O_CREAT | O_EXCL, never a predictable one), with the config's owner and mode, synced,
+    // then renamed over the target. A symlink to the config stays a symlink.
+    const std::string directory = fs::path(config.target).parent_path().string();
+    std::string temporary = directory + "/.haptic-tune-autotune-XXXXXX";
+    FileDescriptor out(::mkostemp(temporary.data(), O_CLOEXEC));
+    try {
+        if (out.get() < 0) {
+            throw ConfigWriteError("cannot create a temporary file in " + directory +
+                                   " for the new config: " + errno_text() +
+                                   "; the config was not changed");
+        }
+        try {
+            fill_new_file(out.get(), text, st,
+                          "the new config " + named + " (to " + temporary + ")");
+            if (!out.close()) {
+                throw ConfigWriteError("could not write the new config " + named + " (to " +
+                                       temporary + "): " + errno_text() +
+                                       "; the config was not changed");
+            }
+            if (::rename(temporary.c_str(), config.target.c_str()) != 0) {
+                throw ConfigWriteError("could not replace " + named + ": " + errno_text() +
+                                       "; the config was not changed");
+            }
+        } catch (const ConfigWriteError&) {
+            ::unlink(temporary.c_str());
+            throw;
+        }
+    } catch (const ConfigWriteError&) {
+        ::unlink(written.backup.c_str());  // the config is the original: the backup is redundant
+        throw;
+    }
+    // The rename, to disk.
+    FileDescriptor folder(::open(directory.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC));
+    if (folder.get() >= 0) (void)::fsync(folder.get());
+    return written;
 }
 
 }  // namespace hapticd::daemon

@@ -7,6 +7,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -407,18 +408,162 @@ TEST(AutotuneCli, AReadOnlyConfigIsNotReplaced) {
     bench.expect_untouched();
 }
 
-// The config cannot be replaced (its temporary's name is taken by a directory) after the
-// backup was made: the config is the original and the redundant backup is removed.
-TEST(AutotuneCli, AFailedWriteLeavesTheOriginalAndNoStrayBackup) {
-    const Bench bench;
+/// The names of the files in `dir`, sorted.
+std::vector<std::string> names_in(const fs::path& dir) {
+    std::vector<std::string> names;
+    for (const fs::directory_entry& entry : fs::directory_iterator(dir)) {
+        names.push_back(entry.path().filename().string());
+    }
+    std::sort(names.begin(), names.end());
+    return names;
+}
+
+// The new config cannot be written after the backup was made (a file size limit just
+// above the original's size: the backup fits, the longer edited config does not): the
+// config is the original, and neither the redundant backup nor the temporary is left.
+TEST(AutotuneCli, AFailedWriteLeavesTheOriginalAndNoStrayFile) {
+    if (!fs::exists("/usr/bin/prlimit")) GTEST_SKIP() << "no prlimit";
+    // Without the comment to absorb it, the identified mass (6 digits) makes the file longer.
+    std::string text = lab_config();
+    const std::string guess = "mass = 0.12             # kg";
+    text.replace(text.find(guess), guess.size(), "mass = 0.12");
+    const Bench bench(text);
     const std::string log = write_sim_log(bench.dir);
-    fs::create_directory(bench.config + ".tmp");
-    const CommandResult r = bench.autotune("--log " + quoted(log));
-    EXPECT_EQ(r.exit_code, 2);
-    EXPECT_NE(r.err.find("could not write " + bench.config + ".tmp"), std::string::npos) << r.err;
+    const std::string limit = std::to_string(bench.original.size());
+    const CommandResult r = bench.autotune("--log " + quoted(log),
+                                           "trap '' XFSZ; /usr/bin/prlimit --fsize=" + limit + " ");
+    EXPECT_EQ(r.exit_code, 2) << r.out;
+    EXPECT_NE(r.err.find("could not write the new config " + bench.config), std::string::npos)
+        << r.err;
+    EXPECT_NE(r.err.find("File too large"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("the config was not changed"), std::string::npos) << r.err;
     EXPECT_EQ(read(bench.config), bench.original);
-    EXPECT_FALSE(fs::exists(bench.config + ".bak"));
+    EXPECT_EQ(names_in(bench.dir.path()), (std::vector<std::string>{"lab.toml", "run.csv"}));
+}
+
+// --- symlinks and modes -------------------------------------------------------------------
+
+// A config reached through a symlink: the file it points to is updated (the link stays a
+// link, to the same place), and the backup is made beside that file.
+TEST(AutotuneCli, ASymlinkedConfigHasItsTargetUpdatedAndStaysALink) {
+    const Bench bench;
+    const std::string log = write_sim_log(bench.dir);
+    const std::string link = bench.dir.file("current.toml");
+    fs::create_symlink("lab.toml", link);  // relative, as a lab would make it
+    const CommandResult r = run_command(quoted(HAPTIC_TUNE) + " autotune --config " + quoted(link) +
+                                        " --log " + quoted(log));
+    ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
+    ASSERT_TRUE(fs::is_symlink(link));
+    EXPECT_EQ(fs::read_symlink(link), fs::path("lab.toml"));
+    expect_only_the_four_values_changed(bench.original, read(bench.config));
+    expect_tuned(bench.config, 0.9, 0.02);
+    EXPECT_EQ(read(bench.config + ".bak"), bench.original);
+    EXPECT_FALSE(fs::exists(link + ".bak"));
+    EXPECT_NE(r.out.find("written: " + link + " (" + bench.config + "; backup: " + bench.config +
+                         ".bak)"),
+              std::string::npos)
+        << r.out;
+    EXPECT_EQ(names_in(bench.dir.path()),
+              (std::vector<std::string>{"current.toml", "lab.toml", "lab.toml.bak", "run.csv"}));
+}
+
+// Symlinks planted at the names autotune once used or uses (FILE.tmp, FILE.bak) are never
+// followed: the files they point to are untouched, the config is a plain file again.
+TEST(AutotuneCli, PlantedSymlinksAtTheTemporaryAndBackupNamesAreNotFollowed) {
+    const Bench bench;
+    const std::string log = write_sim_log(bench.dir);
+    const std::string victim = bench.dir.write("victim.txt", "precious\n");
+    fs::create_symlink(victim, bench.config + ".tmp");
+    fs::create_symlink(victim, bench.config + ".bak");
+    const CommandResult r = bench.autotune("--log " + quoted(log) + " --json");
+    ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
+    EXPECT_EQ(read(victim), "precious\n");
+    EXPECT_EQ(fs::read_symlink(bench.config + ".tmp"), fs::path(victim));
+    EXPECT_EQ(fs::read_symlink(bench.config + ".bak"), fs::path(victim));
+    EXPECT_FALSE(fs::is_symlink(bench.config));
+    expect_tuned(bench.config, 0.9, 0.02);
+    EXPECT_EQ(json::parse(r.out).at("backup"), bench.config + ".bak.1");
+    EXPECT_EQ(read(bench.config + ".bak.1"), bench.original);
+    EXPECT_EQ(names_in(bench.dir.path()),
+              (std::vector<std::string>{"lab.toml", "lab.toml.bak", "lab.toml.bak.1",
+                                        "lab.toml.tmp", "run.csv", "victim.txt"}));
+}
+
+// A config without its owner's write bit is a statement: refused as root too (st_mode, not
+// access(2)), before any run, with the mode in the message; nothing changes.
+TEST(AutotuneCli, AConfigWithoutTheOwnerWriteBitIsRefusedEvenAsRoot) {
+    const Bench bench;
+    const std::string log = write_sim_log(bench.dir);
+    fs::permissions(bench.config,
+                    fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
+    for (const std::string& args : {"--log " + quoted(log), std::string()}) {
+        const CommandResult r = bench.autotune(args);
+        EXPECT_EQ(r.exit_code, 2) << args << r.out;
+        EXPECT_NE(
+            r.err.find(bench.config + " is not writable: its mode 0444 has no owner write bit"),
+            std::string::npos)
+            << r.err;
+        EXPECT_NE(r.err.find("nothing was written"), std::string::npos) << r.err;
+        EXPECT_EQ(r.err.find("running"), std::string::npos) << r.err;  // before the run
+        EXPECT_EQ(r.err.find("measuring"), std::string::npos) << r.err;
+        EXPECT_EQ(read(bench.config), bench.original);
+        EXPECT_EQ(fs::status(bench.config).permissions(),
+                  fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
+        EXPECT_EQ(names_in(bench.dir.path()), (std::vector<std::string>{"lab.toml", "run.csv"}));
+    }
+    // --dry-run writes nothing and may look.
+    EXPECT_EQ(bench.autotune("--log " + quoted(log) + " --dry-run").exit_code, 0);
+}
+
+// The new config has the original's mode and, when autotune runs as root, its owner.
+TEST(AutotuneCli, TheWrittenConfigKeepsItsModeAndOwner) {
+    const Bench bench;
+    const std::string log = write_sim_log(bench.dir);
+    ::chmod(bench.config.c_str(), 0640);
+    const bool root = ::geteuid() == 0;
+    if (root) {
+        ASSERT_EQ(::chown(bench.config.c_str(), 65534, 65534), 0);
+    }
+    struct stat before {};
+    ASSERT_EQ(::stat(bench.config.c_str(), &before), 0);
+    const CommandResult r = bench.autotune("--log " + quoted(log));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    struct stat after {};
+    ASSERT_EQ(::stat(bench.config.c_str(), &after), 0);
+    EXPECT_NE(after.st_ino, before.st_ino);  // replaced by a rename, not rewritten in place
+    EXPECT_EQ(after.st_mode & 07777, 0640u);
+    EXPECT_EQ(after.st_uid, before.st_uid);
+    EXPECT_EQ(after.st_gid, before.st_gid);
+    struct stat backup {};
+    ASSERT_EQ(::stat((bench.config + ".bak").c_str(), &backup), 0);
+    EXPECT_EQ(backup.st_mode & 07777, 0640u);
+    EXPECT_EQ(backup.st_uid, before.st_uid);
+    expect_tuned(bench.config, 0.9, 0.02);
+}
+
+// --- the temporary directory ----------------------------------------------------------------
+
+// TMPDIR names where the run's temporary log goes: one that is not a directory is refused
+// (exit 2, naming it) before anything runs; autotune does not silently pick another.
+TEST(AutotuneCli, ATmpdirThatIsNotADirectoryIsRefusedNamingIt) {
+    const Bench bench;
+    const CommandResult r = bench.autotune("", "TMPDIR=/nonexistent ");
+    EXPECT_EQ(r.exit_code, 2) << r.out;
+    EXPECT_NE(r.err.find("TMPDIR=/nonexistent: No such file or directory"), std::string::npos)
+        << r.err;
+    EXPECT_NE(r.err.find("--record FILE"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("running"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("measuring"), std::string::npos) << r.err;
+    bench.expect_untouched();
+    const CommandResult file = bench.autotune("", "TMPDIR=" + quoted(bench.config) + " ");
+    EXPECT_EQ(file.exit_code, 2) << file.out;
+    EXPECT_NE(file.err.find("TMPDIR=" + bench.config + " is not a directory"), std::string::npos)
+        << file.err;
+    bench.expect_untouched();
+    // No temporary is needed with --log: TMPDIR does not matter.
+    const std::string log = write_sim_log(bench.dir);
+    EXPECT_EQ(
+        bench.autotune("--log " + quoted(log) + " --dry-run", "TMPDIR=/nonexistent ").exit_code, 0);
 }
 
 // --- from a run it starts: hapticd --identify --lockstep ---------------------------------
@@ -455,13 +600,51 @@ TEST(AutotuneCli, RunsHapticdIdentifyWhenNoLogIsGiven) {
 
     // A second pass plans the run from the first one's model: the 2 %.
     const std::string first = read(bench.config);
-    const CommandResult again = bench.autotune("");
+    const std::string tmp = bench.dir.file("tmp");
+    fs::create_directory(tmp);
+    const CommandResult again = bench.autotune("", "TMPDIR=" + quoted(tmp) + " ");
     ASSERT_EQ(again.exit_code, 0) << again.err << again.out;
     expect_tuned(bench.config, 0.9, 0.02);
     EXPECT_EQ(read(bench.config + ".bak.1"), first);
-    // Without --record the run's log was temporary and is gone.
+    // Without --record the run's log was temporary (in TMPDIR) and, on success, is gone.
+    EXPECT_NE(again.err.find("--log " + tmp + "/haptic-tune-autotune-"), std::string::npos)
+        << again.err;
     EXPECT_NE(again.out.find("identified from the identification run"), std::string::npos)
         << again.out;
+    EXPECT_TRUE(names_in(tmp).empty());
+}
+
+/// The temporary log a failed autotune names ("the run's log is kept: PATH"), which must be
+/// in `tmp`, the only file there, and hold hapticd's rows (a header and more).
+void expect_the_log_kept_and_named(const CommandResult& r, const std::string& tmp) {
+    const std::string marker = "the run's log is kept: ";
+    const std::size_t at = r.err.find(marker);
+    ASSERT_NE(at, std::string::npos) << r.err;
+    const std::size_t start = at + marker.size();
+    const std::string path = r.err.substr(start, r.err.find_first_of(")\n", start) - start);
+    EXPECT_EQ(fs::path(path).parent_path(), fs::path(tmp)) << path;
+    EXPECT_EQ(names_in(tmp), std::vector<std::string>{fs::path(path).filename().string()});
+    const std::vector<std::string> rows = lines(read(path));
+    ASSERT_GE(rows.size(), 2u) << path;
+    EXPECT_EQ(rows.front().rfind("tick,t_s,", 0), 0u) << rows.front();
+}
+
+// The run succeeded but the config cannot be written (its name leaves no room for ".bak"):
+// exit 2, the config is the original, and the run's log is kept and named.
+TEST(AutotuneCli, AFailedWriteAfterTheRunKeepsTheRunsLogAndNamesIt) {
+    ScratchDir dir;
+    const std::string text = lab_config(1, "force_amplitude = 0.7\n");
+    const std::string config = dir.write(std::string(250, 'c') + ".toml", text);  // 255 bytes
+    const std::string tmp = dir.file("tmp");
+    fs::create_directory(tmp);
+    const CommandResult r = run_command("TMPDIR=" + quoted(tmp) + " " + quoted(HAPTIC_TUNE) +
+                                        " autotune --config " + quoted(config));
+    EXPECT_EQ(r.exit_code, 2) << r.out;
+    EXPECT_NE(r.err.find("cannot create the backup " + config + ".bak: File name too long"),
+              std::string::npos)
+        << r.err;
+    EXPECT_EQ(read(config), text);
+    expect_the_log_kept_and_named(r, tmp);
 }
 
 TEST(AutotuneCli, MeasuresTheLoopDelayAndSizesTheGainsForIt) {
@@ -518,12 +701,16 @@ TEST(AutotuneCli, AFailedIdentificationRunIsNamed) {
     // A push far too strong for a 0.5 mm workspace: hapticd stops the excitation at its
     // edge and exits 1.
     const Bench bench(lab_config(1, "force_amplitude = 5.0\nworkspace = 0.0005\n"));
-    const CommandResult r = bench.autotune("");
+    const std::string tmp = bench.dir.file("tmp");
+    fs::create_directory(tmp);
+    const CommandResult r = bench.autotune("", "TMPDIR=" + quoted(tmp) + " ");
     EXPECT_EQ(r.exit_code, 2);
     EXPECT_NE(r.err.find("the identification run failed"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("exited with status 1"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("nothing was written"), std::string::npos) << r.err;
     bench.expect_untouched();
+    // The log hapticd's last message names is kept, and autotune says where.
+    expect_the_log_kept_and_named(r, tmp);
 }
 
 }  // namespace

@@ -104,7 +104,9 @@ TEST(DaemonConfigEditor, WritesAtomicallyAfterABackup) {
     std::filesystem::permissions(
         path, std::filesystem::perms::owner_read | std::filesystem::perms::owner_write);
     const EditedConfig r = edit_config_text(kConfig, {{"coupling", "stiffness", 1.0}}, path);
-    write_config_with_backup(path, r.text, path + ".bak");
+    const WrittenConfig written = write_config_with_backup(path, kConfig, r.text);
+    EXPECT_EQ(written.target, std::filesystem::canonical(path).string());
+    EXPECT_EQ(written.backup, written.target + ".bak");
     EXPECT_EQ(read_file(path + ".bak"), kConfig);
     EXPECT_EQ(read_file(path), r.text);
     EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));

@@ -17,6 +17,7 @@
 // (nothing changed).
 #include <fcntl.h>
 #include <spawn.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <toml++/toml.h>
 #include <unistd.h>
@@ -24,6 +25,7 @@
 #include <array>
 #include <cerrno>
 #include <csignal>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -150,7 +152,7 @@ std::string describe_hapticd_exit(int status) {
 /// write end only this process holds: if autotune dies, even by SIGKILL, the kernel closes
 /// it and hapticd stops on its own within one period.
 void run_identification(const std::string& hapticd, const std::string& config_path,
-                        const std::string& log_path, bool lockstep, bool quiet) {
+                        const std::string& log_path, bool lockstep, bool quiet, bool& started) {
     std::array<int, 2> lifeline{-1, -1};
     if (::pipe2(lifeline.data(), O_CLOEXEC) != 0) {
         throw AutotuneError(std::string("cannot create the lifeline pipe for hapticd: ") +
@@ -204,7 +206,10 @@ void run_identification(const std::string& hapticd, const std::string& config_pa
     posix_spawnattr_destroy(&attributes);
     ::close(lifeline[0]);
     int status = 0;
-    if (spawn_error == 0) g_child_pid = pid;
+    if (spawn_error == 0) {
+        g_child_pid = pid;
+        started = true;
+    }
     ::pthread_sigmask(SIG_SETMASK, &old_mask, nullptr);  // a signal that came meanwhile: now
     if (spawn_error == 0) {
         while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
@@ -237,41 +242,76 @@ void run_identification(const std::string& hapticd, const std::string& config_pa
     }
 }
 
-/// A fresh temporary file name for the run's log.
-std::string temporary_log_path() {
-    std::string name = (fs::temp_directory_path() / "haptic-tune-autotune-XXXXXX.csv").string();
-    const int fd = ::mkstemps(name.data(), 4);
-    if (fd < 0) {
-        throw AutotuneError("cannot create a temporary file for the identification log in " +
-                            fs::temp_directory_path().string() + ": " + std::strerror(errno) +
-                            " (give --record FILE)");
-    }
-    ::close(fd);
-    return name;
+/// The directory for the run's temporary log: $TMPDIR when set and not empty, else /tmp.
+/// A TMPDIR that is not a directory is an error (exit 2, before anything runs), not a
+/// reason to pick another directory: whoever set it expects temporary files there, as
+/// mktemp(1) does.
+std::string temporary_directory() {
+    const char* tmpdir = std::getenv("TMPDIR");
+    if (tmpdir == nullptr || *tmpdir == '\0') return "/tmp";
+    const std::string named = "TMPDIR=" + std::string(tmpdir);
+    const std::string why =
+        ": the identification run's temporary log goes there; set TMPDIR to a directory, or "
+        "give --record FILE to keep the log in FILE; nothing was run or written";
+    struct stat st {};
+    if (::stat(tmpdir, &st) != 0) throw AutotuneError(named + ": " + std::strerror(errno) + why);
+    if (!S_ISDIR(st.st_mode)) throw AutotuneError(named + " is not a directory" + why);
+    return tmpdir;
 }
 
-// ---------------------------------------------------------------------------------------
-// The backup.
-
-/// Reserves the backup name by creating it exclusively: FILE.bak, or FILE.bak.1, .2, ...
-/// when that exists, so that no older backup is overwritten (also not by a second autotune
-/// running at the same time).
-std::string reserve_backup(const std::string& path) {
-    for (int n = 0; n < 1000; ++n) {
-        const std::string name = path + ".bak" + (n == 0 ? "" : "." + std::to_string(n));
-        const int fd = ::open(name.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
-        if (fd >= 0) {
-            ::close(fd);
-            return name;
-        }
-        if (errno != EEXIST) {
-            throw AutotuneError("cannot create the backup " + name + ": " + std::strerror(errno) +
-                                "; " + path + " was not changed");
-        }
+/// The identification run's log, when autotune runs hapticd: --record FILE (the user's,
+/// always kept), or a temporary file created exclusively in temporary_directory(). The
+/// temporary is removed only when autotune succeeds; once hapticd has started, every
+/// failure keeps it (hapticd's last message may name it) and autotune's error names it. A
+/// temporary that hapticd never got (nothing ran) is removed.
+class RunLog {
+  public:
+    RunLog() = default;
+    RunLog(const RunLog&) = delete;
+    RunLog& operator=(const RunLog&) = delete;
+    ~RunLog() {
+        if (temporary_ && !started) ::unlink(path_.c_str());
     }
-    throw AutotuneError(path + ".bak through " + path + ".bak.999 all exist; remove old backups; " +
-                        path + " was not changed");
-}
+
+    void record_to(const std::string& path) { path_ = path; }
+    void create_temporary() {
+        const std::string directory = temporary_directory();
+        std::string name = directory + "/haptic-tune-autotune-XXXXXX.csv";
+        const int fd = ::mkstemps(name.data(), 4);  // O_CREAT | O_EXCL, a fresh name
+        if (fd < 0) {
+            throw AutotuneError(
+                "cannot create a temporary file for the identification run's "
+                "log in " +
+                directory + ": " + std::strerror(errno) +
+                " (set TMPDIR to another directory, or give --record FILE); "
+                "nothing was run or written");
+        }
+        ::close(fd);
+        path_ = name;
+        temporary_ = true;
+    }
+    const std::string& path() const { return path_; }
+    bool temporary() const { return temporary_; }
+
+    /// For an error message: where the log is, once hapticd has started.
+    std::string note() const {
+        if (!started) return "";
+        return temporary_ ? " (the run's log is kept: " + path_ + ")"
+                          : " (the run's log: " + path_ + ", --record)";
+    }
+    /// Success: the temporary is not needed any more.
+    void discard() {
+        if (!temporary_) return;
+        ::unlink(path_.c_str());
+        temporary_ = false;
+    }
+
+    bool started = false;  ///< hapticd was started: the file is its log
+
+  private:
+    std::string path_;
+    bool temporary_ = false;
+};
 
 // ---------------------------------------------------------------------------------------
 // The report.
@@ -440,7 +480,8 @@ struct Outcome {
     tune::AutotuneResult result;
     std::vector<daemon::ConfigChange> changes;
     std::optional<daemon::StartupCheck> startup;
-    std::string backup_path;  ///< empty: nothing written
+    std::string backup_path;   ///< empty: nothing written
+    std::string written_path;  ///< the file written: the config resolved through symlinks
     bool dry_run = false;
     LoopDelay delay;
 };
@@ -462,6 +503,8 @@ nlohmann::ordered_json outcome_json(const Outcome& o) {
         {"config", o.config_path},
         {"log", o.log_kept ? nlohmann::ordered_json(o.log_path) : nlohmann::ordered_json(nullptr)},
         {"written", !o.backup_path.empty()},
+        {"written_file", o.written_path.empty() ? nlohmann::ordered_json(nullptr)
+                                                : nlohmann::ordered_json(o.written_path)},
         {"dry_run", o.dry_run},
         {"backup", o.backup_path.empty() ? nlohmann::ordered_json(nullptr)
                                          : nlohmann::ordered_json(o.backup_path)},
@@ -567,7 +610,9 @@ void print_text(const Outcome& o) {
         }
     }
     if (!o.backup_path.empty()) {
-        std::cout << "written: " << o.config_path << " (backup: " << o.backup_path << ")\n";
+        std::cout << "written: " << o.config_path
+                  << (o.written_path != o.config_path ? " (" + o.written_path + "; " : " (")
+                  << "backup: " << o.backup_path << ")\n";
     } else if (o.dry_run) {
         std::cout << "dry run: " << o.config_path << " not written\n";
     }
@@ -575,112 +620,35 @@ void print_text(const Outcome& o) {
 
 // ---------------------------------------------------------------------------------------
 
-int run_autotune(const AutotuneCliOptions& o) {
-    tune::AutotuneOptions options;
-    options.margin = o.margin;
-    options.optimize_damping = o.optimize_damping;
-
-    // The config first: a config the daemon would refuse is refused before any run.
-    daemon::Config config;
-    try {
-        config = daemon::load_config(o.config_path);
-    } catch (const daemon::ConfigError& e) {
-        throw AutotuneError(std::string("the config does not load: ") + e.what());
-    }
-    const std::string original = read_file(o.config_path);
-    if (!o.record_path.empty()) {
-        // The run's log must not land on the config (which autotune then edits), the scene,
-        // the plugin or the log it would identify from: refused before anything runs.
-        std::vector<daemon::NamedPath> inputs = {{"--config", o.config_path}};
-        if (!config.scene_file.empty()) {
-            inputs.push_back(
-                {"the scene ([scene] file in " + o.config_path + ")", config.scene_file});
-        }
-        if (const std::string plugin = daemon::plugin_file(config.device.plugin); !plugin.empty()) {
-            inputs.push_back(
-                {"the device plugin ([device] plugin in " + o.config_path + ")", plugin});
-        }
-        try {
-            daemon::refuse_overlapping_paths(inputs, {{"--record", o.record_path}});
-        } catch (const daemon::OutputError& e) {
-            throw AutotuneError(e.what());
-        }
-    }
-    options.rate_hz = config.servo.rate_hz;
-    options.velocity_filter_hz = config.coupling.velocity_filter_hz;  // checked by the config
-    options.identification.force_limit_n = config.safety.max_force_n;
-    if (o.delay_s) {
-        // A --delay out of range is bad input before anything runs.
-        try {
-            tune::check_delay_periods(*o.delay_s * config.servo.rate_hz);
-        } catch (const std::invalid_argument& e) {
-            throw AutotuneError(std::string(e.what()) + " (--delay x [servo] rate_hz)");
-        }
-    }
-
-    Outcome outcome;
-    outcome.config_path = o.config_path;
-    outcome.dry_run = o.dry_run;
-    outcome.delay = find_loop_delay(o, config, original);
-    options.delay_periods = outcome.delay.delay_s * config.servo.rate_hz;
-    try {
-        tune::check_delay_periods(options.delay_periods);
-    } catch (const std::invalid_argument& e) {
-        throw AutotuneError(std::string(e.what()) +
-                            " ([device.model] delay, the measured one or --delay x [servo] "
-                            "rate_hz)");
-    }
-    options.validate();
-    bool temporary = false;
-    if (!o.log_path.empty()) {
-        outcome.log_path = o.log_path;
-    } else {
-        temporary = o.record_path.empty();
-        outcome.log_path = temporary ? temporary_log_path() : o.record_path;
-        try {
-            run_identification(o.hapticd_path.empty() ? default_hapticd() : o.hapticd_path,
-                               o.config_path, outcome.log_path, sim_lockstep(config), o.json);
-        } catch (const AutotuneError&) {
-            if (temporary) fs::remove(outcome.log_path);
-            throw;
-        }
-    }
-    // The run's temporary log is removed once the gains are found; kept (and named) when
-    // the log cannot identify the device, for haptic-tune identify and a look at it.
-    const auto keep_log = [&](const std::string& message) {
-        return AutotuneError(message + (temporary
-                                            ? " (the run's log is kept: " + outcome.log_path + ")"
-                                            : std::string()));
-    };
-
+/// From the run's log (or --log) to the written config; every failure throws (the caller
+/// adds where the run's log is). Exit 0 written, 1 the exact model rejects the gains.
+int identify_size_and_write(const AutotuneCliOptions& o, const daemon::Config& config,
+                            const std::string& original, const tune::AutotuneOptions& options,
+                            Outcome& outcome, RunLog& run_log) {
     tune::TelemetryLog log;
     try {
         log = tune::read_telemetry_log(outcome.log_path);
     } catch (const tune::LogFormatError& e) {
-        throw keep_log(std::string("bad log: ") + e.what());
+        throw AutotuneError(std::string("bad log: ") + e.what());
     }
     if (log.axes != config.device.axes) {
-        throw keep_log(outcome.log_path + " has " + std::to_string(log.axes) +
-                       " axes (x{i}_m and "
-                       "f{i}_n), but " +
-                       o.config_path + " says [device] axes = " +
-                       std::to_string(config.device.axes) + ": is it a run of this device?");
+        throw AutotuneError(outcome.log_path + " has " + std::to_string(log.axes) +
+                            " axes (x{i}_m and "
+                            "f{i}_n), but " +
+                            o.config_path + " says [device] axes = " +
+                            std::to_string(config.device.axes) + ": is it a run of this device?");
     }
     try {
         outcome.result = tune::autotune(log, options);
     } catch (const tune::IdentificationRefused& e) {
-        throw keep_log(outcome.log_path + ": cannot identify the device: " + e.what() + " [" +
-                       std::string(tune::to_string(e.reason())) + "]");
+        throw AutotuneError(outcome.log_path + ": cannot identify the device: " + e.what() + " [" +
+                            std::string(tune::to_string(e.reason())) + "]");
     }
     if (outcome.delay.source == DelaySource::none) {
         outcome.result.warnings.push_back(
             "sized for no loop delay: none was measured (from --log there is no device to run) "
             "or stated; a device on the open protocol has at least one period "
             "(docs/stability-models.md): measure it with haptic-tune diag and give --delay");
-    }
-    if (temporary) {
-        fs::remove(outcome.log_path);
-        outcome.log_kept = false;
     }
     const tune::AutotuneResult& result = outcome.result;
 
@@ -691,7 +659,7 @@ int run_autotune(const AutotuneCliOptions& o) {
             print_text(outcome);
         }
         std::cerr << "haptic-tune: autotune: " << o.config_path
-                  << " not written: " << result.verdict << '\n';
+                  << " not written: " << result.verdict << run_log.note() << '\n';
         return kExitVerdictNo;
     }
 
@@ -727,29 +695,120 @@ int run_autotune(const AutotuneCliOptions& o) {
     }
 
     if (!o.dry_run) {
-        // A read-only config is a statement: do not replace it (the rename below would).
-        if (::access(o.config_path.c_str(), W_OK) != 0) {
-            throw AutotuneError(o.config_path + " is not writable: " + std::strerror(errno) +
-                                "; nothing was written (--dry-run shows the changes)");
-        }
-        const std::string backup = reserve_backup(o.config_path);
+        // The file the config resolves to is replaced (a symlink stays one) by a temporary
+        // made exclusively beside it, with its mode and owner, after an exclusive backup; a
+        // config without its owner's write bit is refused (daemon/config_editor.hpp).
         try {
-            daemon::write_config_with_backup(o.config_path, edited.text, backup);
-        } catch (const std::exception& e) {
-            // write_config_with_backup replaces the config last, by a rename: when it throws,
-            // the config is the original. The backup is then ours and redundant.
-            std::error_code ignored;
-            if (read_file(o.config_path) == original) fs::remove(backup, ignored);
+            const daemon::WrittenConfig written =
+                daemon::write_config_with_backup(o.config_path, original, edited.text);
+            outcome.backup_path = written.backup;
+            outcome.written_path = written.target;
+        } catch (const daemon::ConfigWriteError& e) {
             throw AutotuneError(e.what());
         }
-        outcome.backup_path = backup;
     }
+    // Done: the run's temporary log is not needed any more.
+    outcome.log_kept = !run_log.temporary();
+    run_log.discard();
     if (o.json) {
         print_result(outcome_json(outcome), true);
     } else {
         print_text(outcome);
     }
     return kExitOk;
+}
+
+int run_autotune(const AutotuneCliOptions& o) {
+    tune::AutotuneOptions options;
+    options.margin = o.margin;
+    options.optimize_damping = o.optimize_damping;
+
+    // The config first: a config the daemon would refuse is refused before any run.
+    daemon::Config config;
+    try {
+        config = daemon::load_config(o.config_path);
+    } catch (const daemon::ConfigError& e) {
+        throw AutotuneError(std::string("the config does not load: ") + e.what());
+    }
+    const std::string original = read_file(o.config_path);
+    if (!o.dry_run) {
+        // A config that may not be replaced is refused before the run, not after it.
+        try {
+            daemon::check_config_writable(o.config_path);
+        } catch (const daemon::ConfigWriteError& e) {
+            throw AutotuneError(std::string(e.what()) + " (--dry-run shows the changes)");
+        }
+    }
+    if (!o.record_path.empty()) {
+        // The run's log must not land on the config (which autotune then edits), the scene,
+        // the plugin or the log it would identify from: refused before anything runs.
+        std::vector<daemon::NamedPath> inputs = {{"--config", o.config_path}};
+        if (!config.scene_file.empty()) {
+            inputs.push_back(
+                {"the scene ([scene] file in " + o.config_path + ")", config.scene_file});
+        }
+        if (const std::string plugin = daemon::plugin_file(config.device.plugin); !plugin.empty()) {
+            inputs.push_back(
+                {"the device plugin ([device] plugin in " + o.config_path + ")", plugin});
+        }
+        try {
+            daemon::refuse_overlapping_paths(inputs, {{"--record", o.record_path}});
+        } catch (const daemon::OutputError& e) {
+            throw AutotuneError(e.what());
+        }
+    }
+    options.rate_hz = config.servo.rate_hz;
+    options.velocity_filter_hz = config.coupling.velocity_filter_hz;  // checked by the config
+    options.identification.force_limit_n = config.safety.max_force_n;
+    if (o.delay_s) {
+        // A --delay out of range is bad input before anything runs.
+        try {
+            tune::check_delay_periods(*o.delay_s * config.servo.rate_hz);
+        } catch (const std::invalid_argument& e) {
+            throw AutotuneError(std::string(e.what()) + " (--delay x [servo] rate_hz)");
+        }
+    }
+    // Where the run's log goes, before the device is opened: a TMPDIR that is not a
+    // directory is refused before anything runs.
+    RunLog run_log;
+    if (o.log_path.empty()) {
+        if (o.record_path.empty()) {
+            run_log.create_temporary();
+        } else {
+            run_log.record_to(o.record_path);
+        }
+    }
+
+    Outcome outcome;
+    outcome.config_path = o.config_path;
+    outcome.dry_run = o.dry_run;
+    outcome.delay = find_loop_delay(o, config, original);
+    options.delay_periods = outcome.delay.delay_s * config.servo.rate_hz;
+    try {
+        tune::check_delay_periods(options.delay_periods);
+    } catch (const std::invalid_argument& e) {
+        throw AutotuneError(std::string(e.what()) +
+                            " ([device.model] delay, the measured one or --delay x [servo] "
+                            "rate_hz)");
+    }
+    options.validate();
+    outcome.log_path = o.log_path.empty() ? run_log.path() : o.log_path;
+    try {
+        if (o.log_path.empty()) {
+            run_identification(o.hapticd_path.empty() ? default_hapticd() : o.hapticd_path,
+                               o.config_path, run_log.path(), sim_lockstep(config), o.json,
+                               run_log.started);
+            // Named now, so that whatever ends autotune from here on, the log can be found.
+            std::cerr << "haptic-tune: autotune: identifying from the run's log " << run_log.path()
+                      << (run_log.temporary() ? " (removed once the config is written)" : "")
+                      << '\n';
+        }
+        return identify_size_and_write(o, config, original, options, outcome, run_log);
+    } catch (const std::exception& e) {
+        // Every failure once hapticd ran keeps its log, and says where it is.
+        if (!run_log.started) throw;
+        throw AutotuneError(e.what() + run_log.note());
+    }
 }
 
 }  // namespace
@@ -777,9 +836,9 @@ void add_autotune_command(CLI::App& app, Invocation& invocation) {
             ->check(CLI::ExistingFile);
     command
         ->add_option("--record", options->record_path,
-                     "keep the identification run's log in FILE (default: a temporary file, "
-                     "removed once the gains are found); refused when it is the config, the "
-                     "scene or the plugin")
+                     "keep the identification run's log in FILE (default: a temporary file in "
+                     "$TMPDIR, else /tmp, removed on success and kept, and named, on any "
+                     "failure); refused when it is the config, the scene or the plugin")
         ->check(CLI::Validator(
             [](std::string& text) -> std::string {
                 return text.empty() ? "the path is empty; give a file name" : "";

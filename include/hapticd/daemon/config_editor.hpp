@@ -52,9 +52,46 @@ EditedConfig edit_config_text(std::string_view text, const std::vector<ConfigEdi
 /// trimmed), with a ".0" so that TOML reads a float.
 std::string format_config_number(double value);
 
-/// Writes `text` to `path` atomically (a temporary file renamed over it), after copying the
-/// current file to `backup_path`. Throws std::runtime_error naming the file on failure.
-void write_config_with_backup(const std::string& path, const std::string& text,
-                              const std::string& backup_path);
+/// write_config_with_backup failed, or the config may not be replaced; the message names
+/// the file and the reason, and says the config was not changed.
+class ConfigWriteError : public std::runtime_error {
+  public:
+    using std::runtime_error::runtime_error;
+};
+
+/// A config path and the file it names, resolved through symlinks.
+struct ConfigTarget {
+    std::string path;    ///< as given
+    std::string target;  ///< std::filesystem::canonical(path): the file read and replaced
+    unsigned mode = 0;   ///< its permission bits (st_mode & 07777)
+    /// "PATH", or "PATH (TARGET)" when they differ.
+    std::string describe() const;
+};
+
+/// Resolves `path` and refuses (ConfigWriteError naming it, with its mode) a config that may
+/// not be replaced: not a regular file; a mode without the owner's write bit (0444), also
+/// for root: the mode bits, not access(2); or not writable by this user.
+ConfigTarget check_config_writable(const std::string& path);
+
+/// "0644".
+std::string file_mode_text(unsigned mode);
+
+struct WrittenConfig {
+    std::string target;  ///< the file replaced (the config resolved through symlinks)
+    std::string backup;  ///< TARGET.bak, or TARGET.bak.N when that exists
+};
+
+/// Replaces the file `path` resolves to (a symlink to it stays a symlink) with `text`,
+/// after backing up `original`, which must still be its content (else nothing is written:
+/// an edit made meanwhile is not lost). check_config_writable() first. The backup is
+/// created exclusively (O_CREAT | O_EXCL | O_NOFOLLOW) beside the target as TARGET.bak, or
+/// TARGET.bak.1, .2, ... when that exists: never through a planted symlink, never over an
+/// older backup. The new text goes to a temporary created exclusively in the target's
+/// directory (mkostemp, never a predictable name), given the target's mode (and, as root,
+/// its owner), fsynced and renamed over the target. Both copies get the config's mode and
+/// owner. On failure the config is unchanged, the temporary and the backup are removed, and
+/// ConfigWriteError names the file and the reason.
+WrittenConfig write_config_with_backup(const std::string& path, std::string_view original,
+                                       std::string_view text);
 
 }  // namespace hapticd::daemon
