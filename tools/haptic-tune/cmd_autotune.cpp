@@ -592,7 +592,8 @@ int run_autotune(const AutotuneCliOptions& o) {
 
     tune::TelemetryLog log;
     try {
-        log = tune::read_telemetry_log(outcome.log_path);
+        log =
+            tune::read_telemetry_log(outcome.log_path, tune::TelemetryLogOptions::identification());
     } catch (const tune::LogFormatError& e) {
         throw keep_log(std::string("bad log: ") + e.what());
     }
