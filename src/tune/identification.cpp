@@ -190,8 +190,8 @@ struct Uncertainty {
     Matrix4 independent;  ///< σ² (JᵀJ)⁻¹: residuals taken as independent
 };
 
-/// The output-error problem: per-sample residual blocks over the shooting segments, the four
-/// parameters shared by all, two initial-state parameters per segment.
+/// The output-error problem: one residual block per shooting segment (the Huber loss per
+/// sample), the four parameters shared by all, two initial-state parameters per segment.
 class OutputErrorFit {
   public:
     OutputErrorFit(const AxisData& data, const std::vector<SegmentRange>& ranges,
