@@ -13,8 +13,8 @@
 // the stream (when it can seek; otherwise it grows by doubling), and the per-row line
 // numbers another 8. TelemetryLogOptions::identification() keeps only what identification
 // reads (t_s, x{i}_m, f{i}_n, status, flags, faults) and no per-row line vector: 48 bytes a
-// row for one axis, a sixth of the file's size for the daemon's 12 columns
-// (docs/identification.md "Memory").
+// row for one axis, against about 75 bytes a row of the daemon's 12-column text and 104 for
+// the default read (docs/identification.md "Memory").
 #pragma once
 
 #include <cstddef>
