@@ -28,9 +28,10 @@ const std::string& csv(int seconds) {
     return it->second;
 }
 
-TelemetryLog parse(const std::string& text) {
+TelemetryLog parse(const std::string& text,
+                   const hapticd::tune::TelemetryLogOptions& options = {}) {
     std::istringstream in(text);
-    return hapticd::tune::parse_telemetry_log(in, "bench.csv");
+    return hapticd::tune::parse_telemetry_log(in, "bench.csv", options);
 }
 
 /// identify_axis on a log already read: checks, both Ceres passes, covariance.
@@ -47,16 +48,30 @@ void BM_Identify(benchmark::State& state) {
 }
 BENCHMARK(BM_Identify)->Arg(2)->Arg(10)->Arg(30)->Unit(benchmark::kMillisecond);
 
-/// Reading the daemon's CSV (10 s, 1 axis, all status columns) from memory.
-void BM_ParseLog(benchmark::State& state) {
+/// Reading the daemon's CSV (10 s, 1 axis, all status columns) from memory: every column
+/// kept (the default), or only what identification reads (what haptic-tune identify does).
+/// bytes_per_row: the log's memory (TelemetryLog::memory_bytes) per row.
+void parse_log(benchmark::State& state, const hapticd::tune::TelemetryLogOptions& options) {
     const std::string& text = csv(static_cast<int>(state.range(0)));
+    std::size_t bytes = 0;
+    std::size_t rows = 1;
     for (auto _ : state) {
-        TelemetryLog log = parse(text);
+        TelemetryLog log = parse(text, options);
+        bytes = log.memory_bytes();
+        rows = log.rows();
         benchmark::DoNotOptimize(log);
     }
     state.SetBytesProcessed(static_cast<std::int64_t>(state.iterations() * text.size()));
+    state.counters["bytes_per_row"] = static_cast<double>(bytes) / static_cast<double>(rows);
+    state.counters["file_bytes_per_row"] =
+        static_cast<double>(text.size()) / static_cast<double>(rows);
 }
+void BM_ParseLog(benchmark::State& state) { parse_log(state, {}); }
 BENCHMARK(BM_ParseLog)->Arg(10)->Unit(benchmark::kMillisecond);
+void BM_ParseLogForIdentification(benchmark::State& state) {
+    parse_log(state, hapticd::tune::TelemetryLogOptions::identification());
+}
+BENCHMARK(BM_ParseLogForIdentification)->Arg(10)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

@@ -12,6 +12,7 @@
 #include <memory>
 #include <numbers>
 #include <tuple>
+#include <utility>
 
 #include "hapticd/tune/identification_model.hpp"
 #include "identification_data.hpp"
@@ -68,85 +69,119 @@ double median(std::vector<double> values) {
     return *mid;
 }
 
-/// One segment's simulation with its derivatives, cached for the parameter values it was last
-/// run at. Each sample is its own Ceres residual block (so that the robust loss acts on each
-/// sample); they all read this cache, so a segment is simulated once per evaluation.
-class SegmentSimulation {
-  public:
-    SegmentSimulation(const double* force, std::size_t length, double period_s)
-        : force_(force), period_s_(period_s), x_(length) {}
-
-    /// Simulates at (global, state) unless that is where the cache is. False when the
-    /// simulation is not finite.
-    bool update(const double* global, const double* state) {
-        const std::array<double, 6> key = {global[0], global[1], global[2],
-                                           global[3], state[0],  state[1]};
-        if (valid_ && key == key_) return finite_;
-        key_ = key;
-        valid_ = true;
-        const Jet mass = exp(Jet(global[0], 0));
-        const Jet damping = exp(Jet(global[1], 1));
-        const Jet coulomb(global[2], 2);
-        const Jet offset(global[3], 3);
-        const Jet a = damping / mass;
-        const HoldConstants<Jet> full = hold_constants(a, period_s_);
-        MotionState<Jet> motion{Jet(state[0], 4), Jet(state[1], 5)};
-        x_[0] = motion.x;
-        stuck_ = 0;
-        for (std::size_t j = 1; j < x_.size(); ++j) {
-            hold_step(motion, mass, a, coulomb, Jet(force_[j - 1]) + offset, full, period_s_);
-            x_[j] = motion.x;
-            stuck_ += motion.v == 0.0;
-        }
-        // ceres::isfinite(Jet) looks at the value only; a NaN derivative would corrupt the
-        // step just as well. Positions only accumulate, so the last one carries any NaN.
-        finite_ = std::isfinite(motion.x.a) && motion.x.v.allFinite();
-        return finite_;
+/// Simulates a segment from (global, state) with its derivatives: calls visit(j, x_j) for each
+/// of its `length` samples, x_j the position with its derivatives by (log m, log b, F_c, F_0,
+/// x0, v0). Nothing is stored. Returns false when the simulation is not finite; `stuck`
+/// counts the holds after which the handle is at rest (stuck by Coulomb friction).
+template <typename Visit>
+bool simulate_segment(const double* force, std::size_t length, double period_s,
+                      const double* global, const double* state, Visit&& visit,
+                      std::size_t* stuck = nullptr) {
+    const Jet mass = exp(Jet(global[0], 0));
+    const Jet damping = exp(Jet(global[1], 1));
+    const Jet coulomb(global[2], 2);
+    const Jet offset(global[3], 3);
+    const Jet a = damping / mass;
+    const HoldConstants<Jet> full = hold_constants(a, period_s);
+    MotionState<Jet> motion{Jet(state[0], 4), Jet(state[1], 5)};
+    visit(std::size_t{0}, motion.x);
+    std::size_t at_rest = 0;
+    for (std::size_t j = 1; j < length; ++j) {
+        hold_step(motion, mass, a, coulomb, Jet(force[j - 1]) + offset, full, period_s);
+        visit(j, motion.x);
+        at_rest += motion.v == 0.0;
     }
-    const Jet& position(std::size_t j) const { return x_[j]; }
-    /// Holds after which the handle was at rest (stuck by Coulomb friction).
-    std::size_t stuck() const { return stuck_; }
+    if (stuck != nullptr) *stuck = at_rest;
+    // ceres::isfinite(Jet) looks at the value only; a NaN derivative would corrupt the
+    // step just as well. Positions only accumulate, so the last one carries any NaN.
+    return std::isfinite(motion.x.a) && motion.x.v.allFinite();
+}
 
-  private:
-    const double* force_;
-    double period_s_;
-    std::vector<Jet> x_;
-    std::array<double, 6> key_{};
-    bool valid_ = false;
-    bool finite_ = false;
-    std::size_t stuck_ = 0;
+/// The Huber loss' scale a (and b = a², as ceres::HuberLoss keeps it), shared by the blocks.
+struct HuberScale {
+    double a = kFirstPassScale;
+    double b = kFirstPassScale * kFirstPassScale;
 };
 
-/// (simulated - logged position) of one sample, in units of `unit_m`.
-class SampleResidual final : public ceres::SizedCostFunction<1, kGlobalSize, kStateSize> {
+/// One shooting segment as one Ceres residual block: (simulated - logged position) of each of
+/// its fresh samples, in units of `unit_m`, with the Huber loss applied per sample inside the
+/// block exactly as Ceres applies a loss to a one-residual block (residual_block.cc,
+/// corrector.cc: cost ½ρ(r²), residual and Jacobian scaled by √ρ'(r²), no curvature term since
+/// ρ'' <= 0 for Huber). The block's cost is ½ of its squared norm, so one more residual, with
+/// a zero Jacobian, carries Σ (ρ(r²) - ρ'(r²) r²) over the samples outside the scale: cost,
+/// gradient and Gauss-Newton matrix are those of one block per sample with a Huber loss each,
+/// at one block (and one Jacobian row block) per segment instead of per sample.
+class SegmentResidual final : public ceres::CostFunction {
   public:
-    SampleResidual(SegmentSimulation* simulation, std::size_t index, double logged_m, double unit_m)
-        : simulation_(simulation),
-          index_(index),
-          logged_m_(logged_m),
-          inverse_unit_(1.0 / unit_m) {}
+    SegmentResidual(const AxisData& data, const SegmentRange& range, std::size_t fresh,
+                    double unit_m, const HuberScale* huber)
+        : force_(data.f->data() + range.start),
+          logged_(data.x->data() + range.start),
+          masked_(data.masked.data() + range.start),
+          length_(range.length),
+          period_s_(data.period_s),
+          inverse_unit_(1.0 / unit_m),
+          huber_(huber) {
+        set_num_residuals(static_cast<int>(fresh) + 1);
+        mutable_parameter_block_sizes()->assign({kGlobalSize, kStateSize});
+    }
 
     bool Evaluate(double const* const* parameters, double* residuals,
                   double** jacobians) const override {
-        if (!simulation_->update(parameters[0], parameters[1])) return false;
-        const Jet& x = simulation_->position(index_);
-        residuals[0] = (x.a - logged_m_) * inverse_unit_;
-        if (jacobians != nullptr && jacobians[0] != nullptr) {
-            for (int k = 0; k < kGlobalSize; ++k) jacobians[0][k] = x.v[k] * inverse_unit_;
+        double* global_jacobian = jacobians != nullptr ? jacobians[0] : nullptr;
+        double* state_jacobian = jacobians != nullptr ? jacobians[1] : nullptr;
+        const double a = huber_->a;
+        const double b = huber_->b;
+        double excess = 0.0;
+        std::size_t k = 0;  // the residual's index in the block
+        const bool finite = simulate_segment(
+            force_, length_, period_s_, parameters[0], parameters[1],
+            [&](std::size_t j, const Jet& x) {
+                if (masked_[j]) return;
+                const double r = (x.a - logged_[j]) * inverse_unit_;
+                const double s = r * r;
+                double scale = 1.0;  // √ρ'(s): 1 inside the scale
+                if (s > b) {         // ceres::HuberLoss::Evaluate, outlier region
+                    const double root = std::sqrt(s);
+                    const double rho0 = 2.0 * a * root - b;
+                    const double rho1 = std::max(std::numeric_limits<double>::min(), a / root);
+                    scale = std::sqrt(rho1);
+                    const double corrected = r * scale;
+                    excess += rho0 - corrected * corrected;
+                }
+                residuals[k] = s > b ? r * scale : r;
+                if (global_jacobian != nullptr) {
+                    for (int p = 0; p < kGlobalSize; ++p) {
+                        const double d = x.v[p] * inverse_unit_;
+                        global_jacobian[k * kGlobalSize + p] = s > b ? d * scale : d;
+                    }
+                }
+                if (state_jacobian != nullptr) {
+                    for (int p = 0; p < kStateSize; ++p) {
+                        const double d = x.v[kGlobalSize + p] * inverse_unit_;
+                        state_jacobian[k * kStateSize + p] = s > b ? d * scale : d;
+                    }
+                }
+                ++k;
+            });
+        if (!finite) return false;
+        residuals[k] = std::sqrt(std::max(excess, 0.0));
+        if (global_jacobian != nullptr) {
+            std::fill_n(global_jacobian + k * kGlobalSize, kGlobalSize, 0.0);
         }
-        if (jacobians != nullptr && jacobians[1] != nullptr) {
-            for (int k = 0; k < kStateSize; ++k) {
-                jacobians[1][k] = x.v[kGlobalSize + k] * inverse_unit_;
-            }
-        }
+        if (state_jacobian != nullptr)
+            std::fill_n(state_jacobian + k * kStateSize, kStateSize, 0.0);
         return true;
     }
 
   private:
-    SegmentSimulation* simulation_;
-    std::size_t index_;
-    double logged_m_;
+    const double* force_;
+    const double* logged_;
+    const char* masked_;
+    std::size_t length_;
+    double period_s_;
     double inverse_unit_;
+    const HuberScale* huber_;
 };
 
 /// The covariance of (log m, log b, F_c, F_0).
@@ -155,8 +190,8 @@ struct Uncertainty {
     Matrix4 independent;  ///< σ² (JᵀJ)⁻¹: residuals taken as independent
 };
 
-/// The output-error problem: per-sample residual blocks over the shooting segments, the four
-/// parameters shared by all, two initial-state parameters per segment.
+/// The output-error problem: one residual block per shooting segment (the Huber loss per
+/// sample), the four parameters shared by all, two initial-state parameters per segment.
 class OutputErrorFit {
   public:
     OutputErrorFit(const AxisData& data, const std::vector<SegmentRange>& ranges,
@@ -172,22 +207,16 @@ class OutputErrorFit {
         for (const SegmentRange& range : ranges) {
             segments_.push_back(
                 {range,
-                 {detail::initial_position(data, range), detail::initial_velocity(data, range)},
-                 std::make_unique<SegmentSimulation>(data.f->data() + range.start, range.length,
-                                                     data.period_s)});
+                 {detail::initial_position(data, range), detail::initial_velocity(data, range)}});
         }
-        ceres::Problem::Options problem_options;
-        problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-        problem_ = std::make_unique<ceres::Problem>(problem_options);
+        problem_ = std::make_unique<ceres::Problem>();
         for (Segment& s : segments_) {
-            for (std::size_t j = 0; j < s.range.length; ++j) {
-                const std::size_t row = s.range.start + j;
-                if (data.masked[row]) continue;
-                problem_->AddResidualBlock(
-                    new SampleResidual(s.simulation.get(), j, (*data.x)[row], unit_m), &loss_,
-                    global_.data(), s.state.data());
-                ++samples_;
-            }
+            const auto first = data.masked.begin() + static_cast<std::ptrdiff_t>(s.range.start);
+            const auto fresh = static_cast<std::size_t>(
+                std::count(first, first + static_cast<std::ptrdiff_t>(s.range.length), 0));
+            problem_->AddResidualBlock(new SegmentResidual(data, s.range, fresh, unit_m, &huber_),
+                                       nullptr, global_.data(), s.state.data());
+            samples_ += fresh;
         }
         // m and b through their logarithms, inside a physical range. F_c is not bounded:
         // the model is defined for F_c < 0 (it never sticks), and a bound that is active
@@ -208,7 +237,7 @@ class OutputErrorFit {
     /// Solves with a Huber loss of scale `huber_scale` (residual units) until the cost
     /// changes by less than `function_tolerance` (relative); refuses on failure.
     ceres::Solver::Summary solve(double huber_scale, double function_tolerance) {
-        loss_.Reset(new ceres::HuberLoss(huber_scale), ceres::TAKE_OWNERSHIP);
+        huber_ = {huber_scale, huber_scale * huber_scale};
         huber_scale_ = huber_scale;
         options_.function_tolerance = function_tolerance;
         // Schur elimination of the segments' states: the reduced system is 4 x 4. (A fresh
@@ -262,9 +291,11 @@ class OutputErrorFit {
     double stuck_fraction() {
         std::size_t stuck = 0;
         std::size_t holds = 0;
-        for (Segment& s : segments_) {
-            s.simulation->update(global_.data(), s.state.data());
-            stuck += s.simulation->stuck();
+        for (const Segment& s : segments_) {
+            std::size_t at_rest = 0;
+            simulate(
+                s, [](std::size_t, const Jet&) {}, &at_rest);
+            stuck += at_rest;
             holds += s.range.length - 1;
         }
         return static_cast<double>(stuck) / static_cast<double>(std::max<std::size_t>(holds, 1));
@@ -277,40 +308,40 @@ class OutputErrorFit {
         return std::sqrt(sum / static_cast<double>(samples_)) * unit_m_;
     }
 
-    /// The covariance at the solution: the bread (JᵀJ)⁻¹ from ceres::Covariance, the meat from
-    /// each segment's score. Refuses when the log cannot separate the parameters.
+    /// The covariance at the solution: the bread (JᵀJ)⁻¹ of the four parameters with the
+    /// segments' states eliminated (the inverse of the Schur complement, what
+    /// ceres::Covariance computed from a QR of the whole Jacobian), the meat from each
+    /// segment's score. Refuses when the log cannot separate the parameters.
     Uncertainty uncertainty() {
         // Per segment: the information of its samples with the weights Ceres' Huber corrector
-        // uses (1 inside the scale, δ/|r| outside), and its score Σ ψ(r) ∂r/∂θ.
-        std::vector<Matrix6> information(segments_.size(), Matrix6::Zero());
-        std::vector<Vector4> score(segments_.size(), Vector4::Zero());
+        // uses (1 inside the scale, δ/|r| outside), and its score Σ ψ(r) ∂r/∂θ; each folded
+        // into the totals as soon as it is complete, so nothing here grows with the log.
+        Matrix4 reduced = Matrix4::Zero();  // Σ_k A_k - B_k D_k⁻¹ B_kᵀ
+        Matrix4 meat = Matrix4::Zero();     // Σ_k g_k g_kᵀ
         double sum_psi2 = 0.0;
-        for_each_residual([&](double r, const Vector6& J, std::size_t k) {
-            const double weight = std::abs(r) <= huber_scale_ ? 1.0 : huber_scale_ / std::abs(r);
-            const double psi = std::clamp(r, -huber_scale_, huber_scale_);  // ρ'(r²) r
-            information[k] += weight * J * J.transpose();
-            score[k] += psi * J.head<kGlobalSize>();
-            sum_psi2 += psi * psi;
-        });
-        check_information(information);
-
-        ceres::Covariance::Options covariance_options;
-        covariance_options.num_threads = 1;
-        ceres::Covariance covariance(covariance_options);
-        const std::vector<std::pair<const double*, const double*>> blocks = {
-            {global_.data(), global_.data()}};
-        if (!covariance.Compute(blocks, problem_.get())) {
-            refuse(RefusalReason::too_little_excitation,
-                   "ceres::Covariance found the Jacobian of the fit rank-deficient: the log "
-                   "cannot tell m, b, F_c and F_0 apart");
+        for (std::size_t k = 0; k < segments_.size(); ++k) {
+            const Segment& s = segments_[k];
+            Matrix6 information = Matrix6::Zero();
+            Vector4 score = Vector4::Zero();
+            simulate(s, [&](std::size_t j, const Jet& x) {
+                const std::size_t row = s.range.start + j;
+                if (data_.masked[row]) return;
+                const double r = (x.a - (*data_.x)[row]) / unit_m_;
+                const Vector6 J(x.v / unit_m_);
+                const double weight =
+                    std::abs(r) <= huber_scale_ ? 1.0 : huber_scale_ / std::abs(r);
+                const double psi = std::clamp(r, -huber_scale_, huber_scale_);  // ρ'(r²) r
+                information += weight * J * J.transpose();
+                score += psi * J.head<kGlobalSize>();
+                sum_psi2 += psi * psi;
+            });
+            reduced += reduced_information(k, information);
+            meat += score * score.transpose();
         }
-        Matrix4 bread;  // symmetric: row- or column-major alike
-        covariance.GetCovarianceBlock(global_.data(), global_.data(), bread.data());
+        const Matrix4 bread = check_information(reduced);
 
         // Sandwich with the segments as clusters: within a segment, force noise correlates
         // the residuals; across segments (each with its own initial state) it does not.
-        Matrix4 meat = Matrix4::Zero();
-        for (const Vector4& g : score) meat += g * g.transpose();
         const double clusters = static_cast<double>(segments_.size());
         if (clusters > 1.0) meat *= clusters / (clusters - 1.0);
         const double dof =
@@ -331,48 +362,53 @@ class OutputErrorFit {
     struct Segment {
         SegmentRange range;
         std::array<double, kStateSize> state;
-        std::unique_ptr<SegmentSimulation> simulation;
     };
 
-    /// Calls visit(residual, ∂residual/∂(global, state), segment) for every fresh sample at
-    /// the current parameters.
+    /// Simulates segment `s` at the current parameters (simulate_segment).
     template <typename Visit>
-    void for_each_residual(Visit visit) {
+    bool simulate(const Segment& s, Visit&& visit, std::size_t* stuck = nullptr) const {
+        return simulate_segment(data_.f->data() + s.range.start, s.range.length, data_.period_s,
+                                global_.data(), s.state.data(), std::forward<Visit>(visit), stuck);
+    }
+
+    /// Calls visit(residual, ∂residual/∂(global, state), segment) for every fresh sample at
+    /// the current parameters, segment by segment.
+    template <typename Visit>
+    void for_each_residual(Visit visit) const {
         for (std::size_t k = 0; k < segments_.size(); ++k) {
-            Segment& s = segments_[k];
-            s.simulation->update(global_.data(), s.state.data());
-            for (std::size_t j = 0; j < s.range.length; ++j) {
+            const Segment& s = segments_[k];
+            simulate(s, [&](std::size_t j, const Jet& x) {
                 const std::size_t row = s.range.start + j;
-                if (data_.masked[row]) continue;
-                const Jet& x = s.simulation->position(j);
+                if (data_.masked[row]) return;
                 visit((x.a - (*data_.x)[row]) / unit_m_, Vector6(x.v / unit_m_), k);
-            }
+            });
         }
     }
 
-    /// The information about the four parameters once each segment's initial state is
-    /// eliminated (Schur complement), scaled to unit diagonal: refuses if it is singular,
-    /// naming the parameters the log cannot tell apart. A segment that sits in stiction from
-    /// its start has no use for v0 (any small v0 stops at once): v0 is held for the
-    /// covariance.
-    void check_information(const std::vector<Matrix6>& information) {
-        Matrix4 reduced = Matrix4::Zero();
-        for (std::size_t k = 0; k < segments_.size(); ++k) {
-            const Matrix6& M = information[k];
-            const double span_s = static_cast<double>(segments_[k].range.length) * data_.period_s;
-            const Matrix4 A = M.topLeftCorner<kGlobalSize, kGlobalSize>();
-            if (M(5, 5) > 1e-10 * M(4, 4) * span_s * span_s) {
-                const Eigen::Matrix<double, kGlobalSize, kStateSize> B =
-                    M.topRightCorner<kGlobalSize, kStateSize>();
-                const Eigen::Matrix2d D = M.bottomRightCorner<kStateSize, kStateSize>();
-                reduced += A - B * D.ldlt().solve(B.transpose());
-            } else {
-                problem_->SetManifold(segments_[k].state.data(),
-                                      new ceres::SubsetManifold(kStateSize, {1}));
-                const Vector4 b = M.block<kGlobalSize, 1>(0, kGlobalSize);
-                reduced += A - b * b.transpose() / M(4, 4);
-            }
+    /// Segment k's information M about (global, state), its state eliminated (Schur
+    /// complement): A - B D⁻¹ Bᵀ. A segment that sits in stiction from its start has no use
+    /// for v0 (any small v0 stops at once): its v0 is held (in the covariance and in any
+    /// refit) and only x0 is eliminated.
+    Matrix4 reduced_information(std::size_t k, const Matrix6& M) {
+        const double span_s = static_cast<double>(segments_[k].range.length) * data_.period_s;
+        const Matrix4 A = M.topLeftCorner<kGlobalSize, kGlobalSize>();
+        if (M(5, 5) > 1e-10 * M(4, 4) * span_s * span_s) {
+            const Eigen::Matrix<double, kGlobalSize, kStateSize> B =
+                M.topRightCorner<kGlobalSize, kStateSize>();
+            const Eigen::Matrix2d D = M.bottomRightCorner<kStateSize, kStateSize>();
+            return A - B * D.ldlt().solve(B.transpose());
         }
+        problem_->SetManifold(segments_[k].state.data(),
+                              new ceres::SubsetManifold(kStateSize, {1}));
+        const Vector4 b = M.block<kGlobalSize, 1>(0, kGlobalSize);
+        return A - b * b.transpose() / M(4, 4);
+    }
+
+    /// The information about the four parameters once each segment's initial state is
+    /// eliminated, scaled to unit diagonal: refuses if it is singular, naming the parameters
+    /// the log cannot tell apart. Returns its inverse, the covariance of the four (JᵀJ)⁻¹
+    /// (zero in F_c's row and column when F_c is held).
+    Matrix4 check_information(const Matrix4& reduced) {
         const bool coulomb_held = problem_->GetManifold(global_.data()) != nullptr;
         Vector4 scale = reduced.diagonal().cwiseMax(0.0).cwiseSqrt();
         if (coulomb_held) scale[kCoulombIndex] = 1.0;  // its row is out of the problem
@@ -405,12 +441,26 @@ class OutputErrorFit {
                        "must reverse direction for Coulomb friction to show apart from a "
                        "constant offset");
         }
+        // The inverse through the scaled matrix (well conditioned: its eigenvalues passed
+        // the check above); a held F_c has no variance.
+        const Eigen::LLT<Matrix4> factor(normalized);
+        Matrix4 inverse = factor.solve(Matrix4::Identity());
+        if (factor.info() != Eigen::Success || !inverse.allFinite()) {
+            refuse(RefusalReason::too_little_excitation,
+                   "the information matrix of the fit is singular: the log cannot tell m, b, "
+                   "F_c and F_0 apart");
+        }
+        if (coulomb_held) {
+            inverse.row(kCoulombIndex).setZero();
+            inverse.col(kCoulombIndex).setZero();
+        }
+        return scale.cwiseInverse().asDiagonal() * inverse * scale.cwiseInverse().asDiagonal();
     }
 
     const AxisData& data_;
     double unit_m_;
-    // The loss outlives the problem, which does not own it (one loss shared by every block).
-    ceres::LossFunctionWrapper loss_{new ceres::HuberLoss(kFirstPassScale), ceres::TAKE_OWNERSHIP};
+    // Read by every block (SegmentResidual); set by solve().
+    HuberScale huber_;
     double huber_scale_ = kFirstPassScale;
     std::array<double, kGlobalSize> global_{};
     std::vector<Segment> segments_;

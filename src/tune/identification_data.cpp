@@ -7,6 +7,7 @@
 #include <limits>
 #include <numbers>
 #include <sstream>
+#include <utility>
 
 #include "hapticd/servo/telemetry.hpp"
 
@@ -52,15 +53,16 @@ void check_time(const TelemetryLog& log, AxisData& data) {
                        format(t[i + 1], 10) + " s after " + format(t[i], 10) + " s)");
         }
     }
-    const double median_step = median(steps);
+    const double median_step = median(std::move(steps));  // reordered: not read again
     data.gap_after.assign(n, 0);
     double total_periods = 0.0;
     for (std::size_t i = 0; i + 1 < n; ++i) {
-        const double periods = steps[i] / median_step;
+        const double step = t[i + 1] - t[i];
+        const double periods = step / median_step;
         const double whole = std::round(periods);
         if (std::abs(periods - whole) > kTimeTolerance) {
             refuse(RefusalReason::non_uniform_time,
-                   log.where(i + 1, "t_s") + ": t_s steps by " + format(steps[i], 6) +
+                   log.where(i + 1, "t_s") + ": t_s steps by " + format(step, 6) +
                        " s, not a whole number of periods of the log's median step " +
                        format(median_step, 6) + " s (tolerance " + percent(kTimeTolerance) +
                        "); the model replays each row's force through a hold of one period");

@@ -1,6 +1,7 @@
 #include "hapticd/tune/telemetry_log.hpp"
 
 #include <algorithm>
+#include <array>
 #include <charconv>
 #include <cmath>
 #include <fstream>
@@ -53,17 +54,67 @@ bool parse_number(std::string_view text, double& value) {
     return error == std::errc{} && end == text.data() + text.size() && std::isfinite(value);
 }
 
+/// The lines left in `in` (an upper bound of its rows), read ahead and rewound; 0 when the
+/// stream cannot seek back (then the columns grow as they are read).
+std::size_t lines_left(std::istream& in) {
+    const std::istream::pos_type start = in.tellg();
+    if (start == std::istream::pos_type(-1)) return 0;
+    std::array<char, 1 << 16> buffer;
+    std::size_t lines = 0;
+    char last = '\n';
+    while (in.read(buffer.data(), buffer.size()) || in.gcount() > 0) {
+        const auto count = static_cast<std::size_t>(in.gcount());
+        lines += static_cast<std::size_t>(std::count(buffer.data(), buffer.data() + count, '\n'));
+        last = buffer[count - 1];
+    }
+    if (last != '\n') ++lines;  // a last line without its newline
+    in.clear();
+    in.seekg(start);
+    return in ? lines : 0;
+}
+
+bool is_required(std::string_view name, int axes) {
+    if (name == "t_s") return true;
+    for (int axis = 0; axis < axes; ++axis) {
+        const std::string i = std::to_string(axis);
+        if (name == "x" + i + "_m" || name == "f" + i + "_n") return true;
+    }
+    return false;
+}
+
 }  // namespace
+
+TelemetryLogOptions TelemetryLogOptions::identification() {
+    TelemetryLogOptions options;
+    // t_s, x{i}_m and f{i}_n are kept as required columns; these are the masks
+    // identification_data.cpp reads.
+    options.keep_column = [](std::string_view name) {
+        return name == "status" || name == "flags" || name == "faults";
+    };
+    options.row_lines = false;
+    return options;
+}
 
 const std::vector<double>* TelemetryLog::column(std::string_view name) const {
     for (std::size_t c = 0; c < columns.size(); ++c) {
-        if (columns[c] == name) return &values[c];
+        if (columns[c] == name) return c < kept.size() && kept[c] ? &values[c] : nullptr;
     }
     return nullptr;
 }
 
+std::size_t TelemetryLog::line(std::size_t row) const {
+    if (row >= row_count) return 0;
+    if (row < lines.size()) return lines[row];
+    const auto run =
+        std::upper_bound(line_runs.begin(), line_runs.end(), row,
+                         [](std::size_t r, const auto& entry) { return r < entry.first; });
+    if (run == line_runs.begin()) return 0;
+    const auto& [first_row, first_line] = *std::prev(run);
+    return first_line + (row - first_row);
+}
+
 std::string TelemetryLog::where(std::size_t row) const {
-    return source + ":" + std::to_string(row < lines.size() ? lines[row] : 0);
+    return source + ":" + std::to_string(line(row));
 }
 
 std::string TelemetryLog::where(std::size_t row, std::string_view name) const {
@@ -72,7 +123,16 @@ std::string TelemetryLog::where(std::size_t row, std::string_view name) const {
     return where(row) + ":" + std::to_string(number) + " (" + std::string(name) + ")";
 }
 
-TelemetryLog parse_telemetry_log(std::istream& in, const std::string& source) {
+std::size_t TelemetryLog::memory_bytes() const {
+    std::size_t bytes = values.capacity() * sizeof(std::vector<double>);
+    for (const std::vector<double>& column : values) bytes += column.capacity() * sizeof(double);
+    bytes += lines.capacity() * sizeof(std::size_t);
+    bytes += line_runs.capacity() * sizeof(line_runs[0]);
+    return bytes;
+}
+
+TelemetryLog parse_telemetry_log(std::istream& in, const std::string& source,
+                                 const TelemetryLogOptions& options) {
     TelemetryLog log;
     log.source = source;
     std::string line;
@@ -130,38 +190,58 @@ TelemetryLog parse_telemetry_log(std::istream& in, const std::string& source) {
     }
     if (log.axes == 0) throw missing("no axis columns: need at least x0_m and f0_n");
 
-    // Rows.
-    log.values.assign(log.columns.size(), {});
+    // Rows: the kept columns reserved once for every line left (comments and blank lines
+    // make it a slight overestimate), not grown by doubling.
+    const std::size_t columns = log.columns.size();
+    log.values.assign(columns, {});
+    log.kept.assign(columns, false);
+    std::vector<std::vector<double>*> kept(columns, nullptr);
+    for (std::size_t c = 0; c < columns; ++c) {
+        const std::string& name = log.columns[c];
+        log.kept[c] =
+            !options.keep_column || options.keep_column(name) || is_required(name, log.axes);
+        if (log.kept[c]) kept[c] = &log.values[c];
+    }
+    const std::size_t expected_rows = lines_left(in);
+    for (std::vector<double>* column : kept) {
+        if (column != nullptr) column->reserve(expected_rows);
+    }
+    if (options.row_lines) log.lines.reserve(expected_rows);
+    std::size_t previous_line = 0;
     while (std::getline(in, line)) {
         ++line_number;
         if (is_skipped(line)) continue;
         split_fields(line, fields);
-        if (fields.size() != log.columns.size()) {
-            throw fail(line_number, std::to_string(fields.size()) +
-                                        " fields, but the header (line " +
-                                        std::to_string(header_line) + ") has " +
-                                        std::to_string(log.columns.size()));
+        if (fields.size() != columns) {
+            throw fail(line_number,
+                       std::to_string(fields.size()) + " fields, but the header (line " +
+                           std::to_string(header_line) + ") has " + std::to_string(columns));
         }
-        for (std::size_t c = 0; c < fields.size(); ++c) {
+        for (std::size_t c = 0; c < columns; ++c) {
             double value = 0.0;
             if (!parse_number(fields[c], value)) {
                 throw LogFormatError(source + ":" + std::to_string(line_number) + ":" +
                                      std::to_string(c + 1) + " (" + log.columns[c] + "): '" +
                                      std::string(fields[c]) + "' is not a finite number");
             }
-            log.values[c].push_back(value);
+            if (kept[c] != nullptr) kept[c]->push_back(value);
         }
-        log.lines.push_back(line_number);
+        if (options.row_lines) log.lines.push_back(line_number);
+        if (line_number != previous_line + 1)
+            log.line_runs.emplace_back(log.row_count, line_number);
+        previous_line = line_number;
+        ++log.row_count;
     }
     if (in.bad())
         throw LogFormatError(source + ": read error after line " + std::to_string(line_number));
+    log.line_runs.shrink_to_fit();
     return log;
 }
 
-TelemetryLog read_telemetry_log(const std::string& path) {
+TelemetryLog read_telemetry_log(const std::string& path, const TelemetryLogOptions& options) {
     std::ifstream file(path);
     if (!file) throw LogFormatError(path + ": cannot open the log");
-    return parse_telemetry_log(file, path);
+    return parse_telemetry_log(file, path, options);
 }
 
 }  // namespace hapticd::tune

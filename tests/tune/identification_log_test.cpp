@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <streambuf>
 #include <string>
 #include <vector>
 
@@ -127,6 +128,79 @@ TEST(IdentificationLog, ReadsAScriptsLogWithOnlyTheRequiredColumns) {
     EXPECT_EQ((*log.column("x0_m"))[2], 1e-5);
     EXPECT_EQ((*log.column("temperature_c"))[2], 21.6);
     EXPECT_EQ(log.column("tick"), nullptr);
+}
+
+TEST(IdentificationLog, KeepsOnlyTheColumnsIdentificationReadsWithinTheirOwnSize) {
+    // Issue 10: a 172 MB daemon log took 2 GB to identify, 12 parsed columns grown by
+    // doubling among the causes. The reader's memory, counted by capacity: with
+    // TelemetryLogOptions::identification(), the kept columns (t_s, x0_m, f0_n, status,
+    // flags, faults: 6 of the daemon's 12 for one axis) at 8 bytes a row, reserved once;
+    // the default keeps all 12 and the line numbers, still reserved once.
+    const testing::SimulatedRun run;
+    std::vector<servo::TelemetryRecord> records = testing::simulate_run(run);
+    std::string csv = testing::daemon_csv(records, 1);
+    // Comments and a blank line inside the rows: where() must still name the right lines.
+    for (const std::size_t at : {csv.size() / 3, csv.size() / 2}) {
+        const std::size_t line_end = csv.find('\n', at) + 1;
+        csv.insert(line_end, "# a comment\n\n");
+    }
+    const TelemetryLog lean = [&] {
+        std::istringstream in(csv);
+        return parse_telemetry_log(in, "lean.csv", TelemetryLogOptions::identification());
+    }();
+    const TelemetryLog full = parse(csv, "lean.csv");
+    const std::size_t n = records.size();
+    ASSERT_EQ(lean.rows(), n);
+    ASSERT_EQ(full.rows(), n);
+    for (const char* name : {"t_s", "x0_m", "f0_n", "status", "flags", "faults"}) {
+        ASSERT_NE(lean.column(name), nullptr) << name;
+        EXPECT_EQ(*lean.column(name), *full.column(name)) << name;
+    }
+    for (const char* name : {"tick", "v0_mps", "xe0_m", "wake_latency_us", "energy_j"}) {
+        EXPECT_EQ(lean.column(name), nullptr) << name;
+        EXPECT_NE(full.column(name), nullptr) << name;
+    }
+    EXPECT_TRUE(lean.lines.empty());
+    for (std::size_t row = 0; row < n; ++row) {
+        ASSERT_EQ(lean.where(row, "f0_n"), full.where(row, "f0_n")) << row;
+        ASSERT_EQ(lean.line(row), full.lines[row]) << row;
+    }
+    EXPECT_EQ(lean.line_runs.size(), 3u);
+
+    // 1 % over the kept bytes allows for the comment lines counted when reserving, and a few
+    // hundred bytes for the bookkeeping; a column too many (8 bytes a row) or growth by
+    // doubling (up to 16) fails.
+    const auto per_row = [&](const TelemetryLog& log) {
+        return static_cast<double>(log.memory_bytes()) / static_cast<double>(n);
+    };
+    const double lean_bound = 6 * sizeof(double) * 1.01 + 512.0 / static_cast<double>(n);
+    EXPECT_LE(per_row(lean), lean_bound);
+    EXPECT_GE(per_row(lean), 6 * sizeof(double));
+    const double full_bound = (12 + 1) * sizeof(double) * 1.01 + 1024.0 / static_cast<double>(n);
+    EXPECT_LE(per_row(full), full_bound);
+
+    // And identification reads the same numbers from either.
+    const IdentifiedAxis a = identify_axis(lean, 0);
+    const IdentifiedAxis b = identify_axis(full, 0);
+    EXPECT_EQ(a.estimate.mass_kg, b.estimate.mass_kg);
+    EXPECT_EQ(a.estimate.damping_n_s_per_m, b.estimate.damping_n_s_per_m);
+    EXPECT_EQ(a.std_error.mass_kg, b.std_error.mass_kg);
+}
+
+TEST(IdentificationLog, AStreamThatCannotSeekStillReads) {
+    // A pipe cannot be read ahead to count its lines: the columns then grow as they are read.
+    std::stringbuf buffer("t_s,x0_m,f0_n\n0,0,1\n0.001,1e-5,2\n");
+    struct NoSeek : std::streambuf {
+        explicit NoSeek(std::stringbuf* from) : from_(from) {}
+        int_type underflow() override { return from_->sgetc(); }
+        int_type uflow() override { return from_->sbumpc(); }
+        std::stringbuf* from_;
+    } pipe(&buffer);
+    std::istream in(&pipe);
+    const TelemetryLog log = parse_telemetry_log(in, "pipe", TelemetryLogOptions::identification());
+    ASSERT_EQ(log.rows(), 2u);
+    EXPECT_EQ((*log.column("f0_n"))[1], 2.0);
+    EXPECT_EQ(log.where(1), "pipe:3");
 }
 
 TEST(IdentificationLog, AUserScriptsLogIdentifiesLikeTheDaemonsOwn) {

@@ -627,7 +627,8 @@ int identify_size_and_write(const AutotuneCliOptions& o, const daemon::Config& c
                             Outcome& outcome, RunLog& run_log) {
     tune::TelemetryLog log;
     try {
-        log = tune::read_telemetry_log(outcome.log_path);
+        log =
+            tune::read_telemetry_log(outcome.log_path, tune::TelemetryLogOptions::identification());
     } catch (const tune::LogFormatError& e) {
         throw AutotuneError(std::string("bad log: ") + e.what());
     }

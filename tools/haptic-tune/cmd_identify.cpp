@@ -61,7 +61,7 @@ nlohmann::ordered_json axis_json(const tune::IdentifiedAxis& a) {
 int run_identify(const IdentifyOptions& o) {
     tune::TelemetryLog log;
     try {
-        log = tune::read_telemetry_log(o.log_path);
+        log = tune::read_telemetry_log(o.log_path, tune::TelemetryLogOptions::identification());
     } catch (const tune::LogFormatError& e) {
         std::cerr << "haptic-tune: bad log: " << e.what() << '\n';
         return kExitUsage;

@@ -9,10 +9,11 @@
 // noise and unmodelled effects cannot make a long simulation drift). Huber loss on each
 // sample, scaled from the encoder resolution and the residuals' robust spread; m and b
 // through their logarithms (so they stay positive); F_c >= 0 (a fit that wants F_c < 0 is
-// refitted with F_c = 0). Standard errors come from ceres::Covariance, made robust to the
-// residuals' correlation within a segment (a sandwich with the segments as clusters). A log
-// that cannot pin m and b to 1 % (one standard error), or in which the handle mostly sticks,
-// is refused with the reason.
+// refitted with F_c = 0). Standard errors come from (JᵀJ)⁻¹ of the four parameters (the
+// inverse of their Schur-reduced information), made robust to the residuals' correlation
+// within a segment (a sandwich with the segments as clusters). A log that cannot pin m and b
+// to 1 % (one standard error), or in which the handle mostly sticks, is refused with the
+// reason.
 //
 // Typical use (what `haptic-tune autotune` does):
 //     const TelemetryLog log = read_telemetry_log(path);           // LogFormatError
@@ -111,7 +112,7 @@ struct IdentificationReport {
 struct IdentifiedAxis {
     int axis = 0;
     AxisParameters estimate;
-    /// Standard errors (same units), segment-clustered sandwich over ceres::Covariance.
+    /// Standard errors (same units), segment-clustered sandwich over (JᵀJ)⁻¹.
     AxisParameters std_error;
     /// The textbook standard errors σ² (JᵀJ)⁻¹, which assume independent residuals; they
     /// understate the uncertainty when force noise correlates the residuals (for reports).

@@ -8,13 +8,22 @@
 // status columns, a script's own extras) are kept if present and otherwise ignored. Lines
 // starting with '#' and blank lines are skipped; '\r' line ends and spaces around fields are
 // accepted; header names may be quoted. Every value must be a finite number.
+//
+// Memory: a kept column costs 8 bytes a row, reserved once from the number of lines left in
+// the stream (when it can seek; otherwise it grows by doubling), and the per-row line
+// numbers another 8. TelemetryLogOptions::identification() keeps only what identification
+// reads (t_s, x{i}_m, f{i}_n, status, flags, faults) and no per-row line vector: 48 bytes a
+// row for one axis, against about 75 bytes a row of the daemon's 12-column text and 104 for
+// the default read (docs/identification.md "Memory").
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <iosfwd>
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace hapticd::tune {
@@ -26,31 +35,56 @@ class LogFormatError : public std::runtime_error {
     using std::runtime_error::runtime_error;
 };
 
+/// What the reader keeps. The default keeps every column and every row's line number.
+struct TelemetryLogOptions {
+    /// Whether the values of column `name` are kept (unset: every column). The required
+    /// columns (t_s, x{i}_m, f{i}_n) are always kept. A column that is not kept is still
+    /// checked, a finite number on every row, but not stored: column() returns nullptr.
+    std::function<bool(std::string_view name)> keep_column;
+    /// Fill TelemetryLog::lines (8 bytes a row). where() names the line either way.
+    bool row_lines = true;
+
+    /// What identification reads (identification_data.cpp): t_s, x{i}_m, f{i}_n and the
+    /// status, flags and faults columns, without TelemetryLog::lines.
+    static TelemetryLogOptions identification();
+};
+
 /// A telemetry log, column by column.
 struct TelemetryLog {
     std::string source;                       ///< the file name, for messages
     std::vector<std::string> columns;         ///< header names in file order
-    std::vector<std::vector<double>> values;  ///< values[column][row]
-    std::vector<std::size_t> lines;           ///< 1-based file line of each row
+    std::vector<std::vector<double>> values;  ///< values[column][row]; empty if not kept
+    std::vector<bool> kept;                   ///< kept[column]: values[column] holds it
+    /// 1-based file line of each row; empty unless TelemetryLogOptions::row_lines.
+    std::vector<std::size_t> lines;
+    /// (first row, its file line) of each run of rows on consecutive lines: the line of
+    /// every row in a few entries (a new run after each comment or blank line).
+    std::vector<std::pair<std::size_t, std::size_t>> line_runs;
+    std::size_t row_count = 0;
     /// Axes with both x{i}_m and f{i}_n, for i = 0 .. axes-1 (at least 1).
     int axes = 0;
 
-    std::size_t rows() const { return lines.size(); }
-    /// The column's values, or nullptr when the log has no such column.
+    std::size_t rows() const { return row_count; }
+    /// The column's values, or nullptr when the log has no such column (or did not keep it).
     const std::vector<double>* column(std::string_view name) const;
+    /// The 1-based file line of row `row` (0 past the last row).
+    std::size_t line(std::size_t row) const;
     /// "run.csv:12" for row `row`.
     std::string where(std::size_t row) const;
     /// "run.csv:12:4 (x0_m)" for row `row` of column `name`.
     std::string where(std::size_t row, std::string_view name) const;
+    /// Bytes held by the columns' values and the line bookkeeping (by capacity).
+    std::size_t memory_bytes() const;
 };
 
 /// Reads `path`. Throws LogFormatError naming the file (and line and column) when it cannot
 /// be opened, a header name repeats, `t_s` or an axis's x{i}_m / f{i}_n is missing (the
 /// message lists the columns found), a row has the wrong number of fields, or a value is
 /// not a finite number.
-TelemetryLog read_telemetry_log(const std::string& path);
+TelemetryLog read_telemetry_log(const std::string& path, const TelemetryLogOptions& options = {});
 
 /// The same from a stream; `source` names it in messages.
-TelemetryLog parse_telemetry_log(std::istream& in, const std::string& source);
+TelemetryLog parse_telemetry_log(std::istream& in, const std::string& source,
+                                 const TelemetryLogOptions& options = {});
 
 }  // namespace hapticd::tune
