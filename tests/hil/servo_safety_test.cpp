@@ -31,7 +31,10 @@ std::string identify_config() {
            "[device.sim]\nmass = 0.1\ndamping = 2.0\ncounts_per_meter = 1e5\n"
            "force_limit = 20.0\ninitial_position = -0.01\n"
            "[device.sim.human]\nmodel = \"hands-off\"\n"
-           "[identify]\nforce_amplitude = 0.75\n";
+           // The sim's physics runs on through the stall under the held force (up to 0.75 N
+           // for 55 ms moves the hands-off pen display ~20 mm): a wide workspace keeps the run
+           // from ending at its edge, which is not what this test is about.
+           "[identify]\nforce_amplitude = 0.75\nworkspace = 0.5\n";
 }
 
 TEST(HilServoSafety, AHostStallDoesNotTurnIntoAVelocity) {
@@ -60,14 +63,15 @@ TEST(HilServoSafety, AHostStallDoesNotTurnIntoAVelocity) {
         longest_gap_s = std::max(longest_gap_s, t[i] - t[i - 1]);
     EXPECT_GT(longest_gap_s, 0.040);
     // No force beyond the excitation's peak (0.75 N per axis; no overspeed brake), and no
-    // velocity a hands-off pen display driven by 0.75 N could have.
+    // velocity the limit would brake (a hands-off pen display under 0.75 N, even through the
+    // stall, stays well below 1 m/s).
     double peak_force_n = 0.0, peak_speed_mps = 0.0;
     for (std::size_t i = 0; i < log.rows(); ++i) {
         peak_force_n = std::max(peak_force_n, std::abs(f[i]));
         peak_speed_mps = std::max(peak_speed_mps, std::abs(v[i]));
     }
     EXPECT_LE(peak_force_n, 0.75 + 1e-9);
-    EXPECT_LT(peak_speed_mps, 0.5);
+    EXPECT_LT(peak_speed_mps, 1.0);  // max_speed: its brake never acted (7 m/s before the fix)
 }
 
 TEST(HilServoSafety, TheSoftStartRampBoundsTheForceInsideAWall) {
