@@ -23,6 +23,7 @@
 #include <span>
 #include <variant>
 
+#include "fuzz_check.hpp"
 #include "hapticd/device/protocol/crc32c.hpp"
 #include "hapticd/device/protocol/frame.hpp"
 #include "hapticd/device/protocol/messages.hpp"
@@ -33,14 +34,6 @@
 namespace {
 
 using namespace hapticd::device::protocol;
-
-#define FUZZ_CHECK(condition)                                                                      \
-    do {                                                                                           \
-        if (!(condition)) {                                                                        \
-            std::fprintf(stderr, "%s:%d: invariant failed: %s\n", __FILE__, __LINE__, #condition); \
-            std::abort();                                                                          \
-        }                                                                                          \
-    } while (false)
 
 bool same_bytes(std::span<const std::byte> a, std::span<const std::byte> b) {
     if (a.size() != b.size()) return false;

@@ -26,6 +26,7 @@
 #include <cstdlib>
 #include <span>
 
+#include "fuzz_check.hpp"
 #include "hapticd/device/protocol/crc32c.hpp"
 #include "hapticd/device/protocol/device_emulator.hpp"
 #include "hapticd/device/protocol/stream_framer.hpp"
@@ -34,14 +35,6 @@
 namespace {
 
 using namespace hapticd::device::protocol;
-
-#define FUZZ_CHECK(condition)                                                                      \
-    do {                                                                                           \
-        if (!(condition)) {                                                                        \
-            std::fprintf(stderr, "%s:%d: invariant failed: %s\n", __FILE__, __LINE__, #condition); \
-            std::abort();                                                                          \
-        }                                                                                          \
-    } while (false)
 
 constexpr std::uint32_t kSession = 0x12345678u;
 

@@ -338,8 +338,7 @@ class ServoLoop {
                 periods = std::max(1.0, std::round(elapsed_s / period_s_));
             }
         }
-        last_sequence_ = sample.sequence;
-        last_device_time_s_ = sample.device_time_s;
+        start_history(sample);
         return periods * period_s_;
     }
 
