@@ -1,10 +1,24 @@
 #include "hapticd/theory/frequency_grid.hpp"
 
+#include <algorithm>
+#include <charconv>
 #include <cmath>
+#include <functional>
 #include <numbers>
 #include <stdexcept>
+#include <string>
 
 namespace hapticd::theory {
+namespace {
+
+/// The shortest text that reads back as `value`.
+std::string shortest(double value) {
+    char buffer[32];
+    const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
+    return {buffer, result.ptr};
+}
+
+}  // namespace
 
 std::vector<double> frequency_grid(int points, double lowest_theta) {
     constexpr double kKnee = 0.1;
@@ -22,6 +36,12 @@ std::vector<double> frequency_grid(int points, double lowest_theta) {
     const double step = (std::numbers::pi - kKnee) / uniform;
     for (int i = 0; i < uniform; ++i) grid.push_back(kKnee + step * i);
     grid.back() = std::numbers::pi;
+    // So close to the knee the ratio rounds to 1 and the low band would repeat one θ.
+    if (std::adjacent_find(grid.begin(), grid.end(), std::greater_equal<>()) != grid.end()) {
+        throw std::invalid_argument("frequency_grid: lowest_theta = " + shortest(lowest_theta) +
+                                    " is too close to 0.1 for " + std::to_string(points) +
+                                    " points: the grid would not be strictly increasing");
+    }
     return grid;
 }
 
@@ -35,6 +55,12 @@ GridMinimum minimize_on_grid(const std::function<double(double)>& f,
 
 GridMinimum minimize_tabulated(const std::function<double(double)>& f,
                                const std::vector<double>& grid, const std::vector<double>& values) {
+    if (grid.empty()) throw std::invalid_argument("minimize_tabulated: the grid is empty");
+    if (values.size() != grid.size()) {
+        throw std::invalid_argument("minimize_tabulated: " + std::to_string(values.size()) +
+                                    " values for a grid of " + std::to_string(grid.size()) +
+                                    " points");
+    }
     std::size_t best = 0;
     double best_value = values[0];
     for (std::size_t i = 1; i < grid.size(); ++i) {

@@ -10,29 +10,23 @@ extern "C" __attribute__((visibility("default"))) int hapticd_not_a_device_plugi
     return 42;
 }
 
-#else
+#elif defined(HAPTICD_TEST_PLUGIN_BAD_ABI)
 
+// Written out by hand: HAPTICD_DEVICE_PLUGIN always says this build's kDeviceAbiVersion.
 namespace {
-
 hapticd::device::Device* create_nothing() { return nullptr; }
 void destroy_nothing(hapticd::device::Device*) {}
-
-#if defined(HAPTICD_TEST_PLUGIN_BAD_ABI)
-constexpr std::uint32_t kAbi = 999;
-constexpr const char* kName = "badabi";
-#else
-constexpr std::uint32_t kAbi = hapticd::device::kDeviceAbiVersion;
-constexpr const char* kName = "nullcreate";
-#endif
-
-constexpr hapticd_device_plugin kPlugin{kAbi, kName, "a broken plugin for tests",
-                                        &create_nothing, &destroy_nothing};
-
+constexpr hapticd_device_plugin kPlugin{999, "badabi", "a broken plugin for tests", &create_nothing,
+                                        &destroy_nothing};
 }  // namespace
 
 extern "C" __attribute__((visibility("default"))) const hapticd_device_plugin*
 hapticd_device_plugin_entry(void) {
     return &kPlugin;
 }
+
+#else
+
+HAPTICD_DEVICE_PLUGIN("nullcreate", "a broken plugin for tests", nullptr);
 
 #endif

@@ -4,17 +4,20 @@
 //
 // which returns a static descriptor. The loader (plugin_loader.hpp) checks abi_version
 // before it touches anything else, so a plugin built against another ABI is refused with
-// a clear message rather than crashing. Bump kDeviceAbiVersion whenever Device, Sample,
-// Command, DeviceInfo or DeviceConfig change layout or meaning.
+// a clear message rather than crashing. A plugin defines the entry with one line,
+// HAPTICD_DEVICE_PLUGIN (below). Bump kDeviceAbiVersion whenever Device, Sample, Command,
+// DeviceInfo or DeviceConfig change layout or meaning: the layout asserts at the end of this
+// file fail the build on a change of layout until the version is bumped and the new layout
+// recorded.
 #pragma once
 
+#include <array>
+#include <cstddef>
 #include <cstdint>
+#include <string>
+#include <type_traits>
 
 #include "hapticd/device/device.hpp"
-
-namespace hapticd::device {
-inline constexpr std::uint32_t kDeviceAbiVersion = 2;
-}  // namespace hapticd::device
 
 extern "C" {
 
@@ -31,3 +34,138 @@ const hapticd_device_plugin* hapticd_device_plugin_entry(void);
 }
 
 #define HAPTICD_DEVICE_PLUGIN_ENTRY_SYMBOL "hapticd_device_plugin_entry"
+
+/// Defines a plugin's entry point: the descriptor of a plugin called `name` (a string
+/// literal, e.g. "sim") with a one-line `description`, built for this kDeviceAbiVersion,
+/// whose create() returns the expression after them (a new, unopened device) and whose
+/// destroy() deletes it. Once, at file scope, in one source file of the plugin:
+///
+///     HAPTICD_DEVICE_PLUGIN("sim", "simulated device: ...",
+///                           new hapticd::device::sim::SimDevice());
+#define HAPTICD_DEVICE_PLUGIN(name, description, ...)                              \
+    extern "C" __attribute__((visibility("default"))) const hapticd_device_plugin* \
+    hapticd_device_plugin_entry(void) {                                            \
+        static constexpr hapticd_device_plugin kPlugin{                            \
+            ::hapticd::device::kDeviceAbiVersion, name, description,               \
+            []() -> ::hapticd::device::Device* { return __VA_ARGS__; },            \
+            [](::hapticd::device::Device* device) { delete device; }};             \
+        return &kPlugin;                                                           \
+    }                                                                              \
+    static_assert(true, "HAPTICD_DEVICE_PLUGIN(...) ends with a semicolon")
+
+namespace hapticd::device {
+
+inline constexpr std::uint32_t kDeviceAbiVersion = 2;
+
+// The layout of ABI version 2: size, alignment and offset in bytes of every type and field
+// that crosses the plugin boundary, on the LP64 Linux targets with libstdc++ that hapticd
+// builds on (x86_64, aarch64). The daemon and every plugin compile these asserts, so a
+// plugin built where a type lays out otherwise (another std::string ABI, say) fails to build.
+// A failing assert means that a type changed: bump kDeviceAbiVersion, then write the new
+// figures here under the new number. The figures of a released version never change.
+// (Device's virtual functions cross too: their signatures are asserted; their order, which
+// the vtable depends on, only a reviewer can see.)
+#if defined(__LP64__) && defined(__GLIBCXX__)
+
+static_assert(kDeviceAbiVersion == 2,
+              "plugin_abi.hpp: the layout figures below are device plugin ABI version 2's; "
+              "write the new version's figures and its number");
+
+#define HAPTICD_ABI_LAYOUT(expression, figure)                                           \
+    static_assert((expression) == (figure),                                              \
+                  "the device plugin ABI changed: " #expression " is no longer " #figure \
+                  "; bump kDeviceAbiVersion (plugin_abi.hpp) and record the new layout")
+/// `type::field` is a `...` (the field's type) at `offset`.
+#define HAPTICD_ABI_FIELD(type, field, offset, ...)                                             \
+    static_assert(std::is_same_v<decltype(type::field), __VA_ARGS__>,                           \
+                  "the device plugin ABI changed: " #type "::" #field                           \
+                  " is no longer a " #__VA_ARGS__ "; bump kDeviceAbiVersion (plugin_abi.hpp)"); \
+    HAPTICD_ABI_LAYOUT(offsetof(type, field), offset)
+/// Device::function is a virtual function of this signature (a pointer-to-member type).
+#define HAPTICD_ABI_VIRTUAL(function, ...)                                  \
+    static_assert(std::is_same_v<decltype(&Device::function), __VA_ARGS__>, \
+                  "the device plugin ABI changed: Device::" #function       \
+                  " is no longer " #__VA_ARGS__ "; bump kDeviceAbiVersion (plugin_abi.hpp)")
+
+HAPTICD_ABI_LAYOUT(sizeof(std::string), 32);
+HAPTICD_ABI_LAYOUT(servo::kMaxAxes, 3);
+
+HAPTICD_ABI_LAYOUT(sizeof(hapticd_device_plugin), 40);
+HAPTICD_ABI_LAYOUT(alignof(hapticd_device_plugin), 8);
+HAPTICD_ABI_FIELD(hapticd_device_plugin, abi_version, 0, std::uint32_t);
+HAPTICD_ABI_FIELD(hapticd_device_plugin, name, 8, const char*);
+HAPTICD_ABI_FIELD(hapticd_device_plugin, description, 16, const char*);
+HAPTICD_ABI_FIELD(hapticd_device_plugin, create, 24, Device* (*)());
+HAPTICD_ABI_FIELD(hapticd_device_plugin, destroy, 32, void (*)(Device*));
+
+HAPTICD_ABI_LAYOUT(sizeof(Sample), 72);
+HAPTICD_ABI_LAYOUT(alignof(Sample), 8);
+HAPTICD_ABI_FIELD(Sample, encoder_counts, 0, std::array<std::int64_t, 3>);
+HAPTICD_ABI_FIELD(Sample, device_time_s, 24, double);
+HAPTICD_ABI_FIELD(Sample, sequence, 32, std::uint64_t);
+HAPTICD_ABI_FIELD(Sample, status, 40, std::uint32_t);
+HAPTICD_ABI_FIELD(Sample, applied_write, 48, std::uint64_t);
+HAPTICD_ABI_FIELD(Sample, applied_time_s, 56, double);
+HAPTICD_ABI_FIELD(Sample, applied, 64, servo::AppliedReport);
+
+HAPTICD_ABI_LAYOUT(sizeof(Command), 32);
+HAPTICD_ABI_LAYOUT(alignof(Command), 8);
+HAPTICD_ABI_FIELD(Command, force_n, 0, std::array<double, 3>);
+HAPTICD_ABI_FIELD(Command, enable, 24, bool);
+
+HAPTICD_ABI_LAYOUT(sizeof(DeviceInfo), 96);
+HAPTICD_ABI_LAYOUT(alignof(DeviceInfo), 8);
+HAPTICD_ABI_FIELD(DeviceInfo, axes, 0, int);
+HAPTICD_ABI_FIELD(DeviceInfo, counts_per_meter, 8, double);
+HAPTICD_ABI_FIELD(DeviceInfo, force_limit_n, 16, double);
+HAPTICD_ABI_FIELD(DeviceInfo, paces_loop, 24, bool);
+HAPTICD_ABI_FIELD(DeviceInfo, lockstep, 25, bool);
+HAPTICD_ABI_FIELD(DeviceInfo, samples_at_read, 26, bool);
+HAPTICD_ABI_FIELD(DeviceInfo, protocol_version, 28, int);
+HAPTICD_ABI_FIELD(DeviceInfo, name, 32, std::string);
+HAPTICD_ABI_FIELD(DeviceInfo, serial, 64, std::string);
+
+HAPTICD_ABI_LAYOUT(sizeof(DeviceConfig), 88);
+HAPTICD_ABI_LAYOUT(alignof(DeviceConfig), 8);
+HAPTICD_ABI_FIELD(DeviceConfig, axes, 0, int);
+HAPTICD_ABI_FIELD(DeviceConfig, rate_hz, 8, double);
+HAPTICD_ABI_FIELD(DeviceConfig, lockstep, 16, bool);
+HAPTICD_ABI_FIELD(DeviceConfig, plugin_table_toml, 24, std::string);
+HAPTICD_ABI_FIELD(DeviceConfig, source, 56, std::string);
+
+// The enumerations: their size and the values that cross.
+HAPTICD_ABI_LAYOUT(sizeof(IoResult), 4);
+HAPTICD_ABI_LAYOUT(static_cast<int>(IoResult::ok), 0);
+HAPTICD_ABI_LAYOUT(static_cast<int>(IoResult::timeout), 1);
+HAPTICD_ABI_LAYOUT(static_cast<int>(IoResult::disconnected), 2);
+HAPTICD_ABI_LAYOUT(static_cast<int>(IoResult::error), 3);
+HAPTICD_ABI_LAYOUT(sizeof(servo::AppliedReport), 1);
+HAPTICD_ABI_LAYOUT(static_cast<int>(servo::AppliedReport::unsupported), 0);
+HAPTICD_ABI_LAYOUT(static_cast<int>(servo::AppliedReport::none), 1);
+HAPTICD_ABI_LAYOUT(static_cast<int>(servo::AppliedReport::reported), 2);
+HAPTICD_ABI_LAYOUT(static_cast<int>(servo::AppliedReport::bad_command), 3);
+HAPTICD_ABI_LAYOUT(static_cast<int>(servo::AppliedReport::bad_time), 4);
+HAPTICD_ABI_LAYOUT(servo::kStatusDisconnected, 1u << 0);
+HAPTICD_ABI_LAYOUT(servo::kStatusStale, 1u << 1);
+HAPTICD_ABI_LAYOUT(servo::kStatusJump, 1u << 2);
+HAPTICD_ABI_LAYOUT(servo::kStatusLate, 1u << 3);
+HAPTICD_ABI_LAYOUT(servo::kStatusDropped, 1u << 4);
+HAPTICD_ABI_LAYOUT(servo::kStatusDeviceFault, 1u << 5);
+
+// Device: one vtable pointer and no data; the signatures of its virtual functions.
+HAPTICD_ABI_LAYOUT(sizeof(Device), 8);
+HAPTICD_ABI_LAYOUT(alignof(Device), 8);
+HAPTICD_ABI_LAYOUT(std::has_virtual_destructor_v<Device>, true);
+HAPTICD_ABI_VIRTUAL(open, void (Device::*)(const DeviceConfig&));
+HAPTICD_ABI_VIRTUAL(info, DeviceInfo (Device::*)() const);
+HAPTICD_ABI_VIRTUAL(read, IoResult (Device::*)(Sample&) noexcept);
+HAPTICD_ABI_VIRTUAL(write, IoResult (Device::*)(const Command&) noexcept);
+HAPTICD_ABI_VIRTUAL(close, void (Device::*)() noexcept);
+
+#undef HAPTICD_ABI_VIRTUAL
+#undef HAPTICD_ABI_FIELD
+#undef HAPTICD_ABI_LAYOUT
+
+#endif  // LP64 with libstdc++
+
+}  // namespace hapticd::device

@@ -9,6 +9,10 @@
 //   write the force (the device holds it: ZOH); push one telemetry record (never blocks)
 //   link recovery: a latch of link faults only clears once the device is back (LinkRecovery)
 //
+// run_tick() is that list as four steps, each an inline function: sense (the requests, the
+// wake, the sample, x_d and the interval of (16)), couple ((16) with (17) or (22)), command
+// (safety and the write) and record (link recovery, statistics, telemetry, status).
+//
 // It is a template over the device (anything with noexcept read(Sample&) and
 // write(const Command&) returning IoResult, e.g. device::Device), the environment (an
 // ImpedancePort or an AdmittancePort) and the clock (MonotonicClock; tests inject a virtual
@@ -212,13 +216,6 @@ class ServoLoop {
         return config;
     }
 
-    CouplingStep couple(const Vec3& x_d, double interval_s) noexcept {
-        if constexpr (ImpedancePort<Environment>) {
-            if (rigid_) return coupling_.step_rigid(environment_, x_d, interval_s);
-        }
-        return coupling_.step(environment_, x_d, interval_s);
-    }
-
     // Lockstep only (ServoConfig::telemetry_backpressure): between ticks, wait for the
     // telemetry writer to make room, so that every record of a virtual-time run is logged.
     void wait_for_telemetry_room(const std::atomic<bool>& stop) const noexcept {
@@ -348,9 +345,144 @@ class ServoLoop {
         last_device_time_s_ = sample.device_time_s;
     }
 
+    // What sense() found: whether the loop is armed, the sample's fate, the handle's position
+    // and the interval that its velocity spans.
+    struct Sensed {
+        bool armed = false;             ///< armed_, as this tick read it
+        bool have_sample = false;       ///< a sample came, neither dropped nor disconnected
+        bool interval_unknown = false;  ///< nothing velocity-based may act this tick
+        double interval_s = 0.0;        ///< what the backward difference spans, s
+        Vec3 x_d{0.0};                  ///< device position, m
+    };
+
+    // What couple() found: the velocity, the tool and the coupling's force on the handle.
+    struct Coupled {
+        Vec3 v_d{0.0};             ///< device velocity, m/s
+        Vec3 x_e{0.0};             ///< tool position (the environment's side), m
+        Vec3 handle_force_n{0.0};  ///< before safety, N
+    };
+
+    // One tick, the steps of the list at the top of this file. The steps are always inlined:
+    // the tick is one function, as it was when it was written as one (bench/servo).
     const TelemetryRecord& run_tick(const Wake& wake, bool paced) noexcept {
-        std::uint32_t flags = 0;
+        std::uint32_t flags = 0;  // TelemetryRecord::flags
+        Sample sample;            // its status is recorded even when it is not a sample
+        const Sensed sensed = sense(wake, sample, flags);
+        const Coupled coupled = couple(sensed, flags);
+        const SafeForce safe = command(sensed, coupled, flags);
+        record(wake, paced, sample, sensed, coupled, safe, flags);
+        return record_;
+    }
+
+    // Sense: what the other threads asked for, how late the tick woke, and the sample: the
+    // device position x_d and the interval that its backward difference (16) spans. Where
+    // the position history breaks (the first sample, a gap under a link fault, an unknown
+    // interval) it starts again at x_d; a step no handle makes raises encoder_jump.
+    [[gnu::always_inline]] Sensed sense(const Wake& wake, Sample& sample,
+                                        std::uint32_t& flags) noexcept {
         raised_this_tick_ = 0;
+        Sensed sensed;
+        sensed.armed = take_requests();
+        account_overrun(wake, flags);
+        scheduled_periods_ += 1 + static_cast<std::uint64_t>(wake.missed_periods);
+        sensed.have_sample = read_sample(sample, flags);
+        // A gap in the samples under a link fault breaks the position history: a device that
+        // comes back may have moved or restarted its encoder, so its first sample starts the
+        // history again (no jump check against the last position before the gap).
+        if (!sensed.have_sample && (safety_.faults() & kLinkFaults) != 0u) initialised_ = false;
+        sensed.x_d =
+            sensed.have_sample ? to_metres(sample) : coupling_.previous_device_position_m();
+        sensed.interval_s = period_s_;
+        if (sensed.have_sample && initialised_) measure_interval(sample, sensed, flags);
+        if (sensed.have_sample) continue_history(sample, sensed);
+        return sensed;
+    }
+
+    // Couple: the virtual coupling (16), F = k_c (x_d - x_e) + b_c (v_d - v_e), in series
+    // with an impedance environment (17) or driving an admittance environment (22); without
+    // the coupling (coupling_enabled = false) the environment acts on the handle directly.
+    // Only when armed, unfaulted and with a sample over a known interval; otherwise there is
+    // no force and the tool follows the handle.
+    [[gnu::always_inline]] Coupled couple(const Sensed& sensed, std::uint32_t& flags) noexcept {
+        Coupled coupled{.x_e = coupling_.previous_tool_position_m()};
+        if (sensed.have_sample && sensed.armed && !safety_.faulted() && !sensed.interval_unknown) {
+            const CouplingStep step = coupling_step(sensed.x_d, sensed.interval_s);
+            if (!step.finite) raise(kFaultNonFinite);
+            if (step.finite && !step.converged) {
+                flags |= kFlagSolverNotConverged;
+                ++stats_.solver_not_converged;
+            }
+            coupled.handle_force_n = step.handle_force_n;
+            coupled.v_d = step.device_velocity_mps;
+            coupled.x_e = step.tool_position_m;
+        } else if (sensed.have_sample) {
+            coupled.v_d = coupling_.device_velocity_mps(sensed.x_d, sensed.interval_s);
+            coupling_.track_device(sensed.x_d);
+            coupled.x_e = sensed.x_d;
+        }
+        return coupled;
+    }
+
+    // Command: safety (fault latch, velocity limit, soft start, passivity, saturation), then
+    // the write; the device holds the force until the next one (the ZOH of (13)). A fault
+    // zeroes the force in the tick that raised it. Without a sample (and without a fault)
+    // nothing is written: the device holds the last force for at most read_timeouts_allowed.
+    [[gnu::always_inline]] SafeForce command(const Sensed& sensed, const Coupled& coupled,
+                                             std::uint32_t& flags) noexcept {
+        Command force_command;
+        SafeForce safe;
+        bool write = true;
+        if (!sensed.armed) {
+            flags |= kFlagDisarmed;
+        } else if (sensed.have_sample && !safety_.faulted()) {
+            safe = safety_.filter(coupled.handle_force_n, coupled.v_d, sensed.interval_s);
+            for (int axis = 0; axis < config_.axes; ++axis) {
+                force_command.force_n[static_cast<std::size_t>(axis)] = safe.handle_force_n[axis];
+            }
+            force_command.enable = safe.enable;
+        } else if (!safety_.faulted()) {
+            write = false;
+        }
+        if (safety_.faulted()) force_command = Command{};  // zero force in the tick that faulted
+        if (write) {
+            write_command(force_command);
+            held_force_n_ = force_command.force_n;
+        }
+        flag_safety_actions(safe, force_command.enable, flags);
+        faults_seen_ |= safety_.faults();
+        return safe;
+    }
+
+    // Record: link recovery counts the tick, then the statistics, the telemetry record
+    // (never blocks) and the status snapshot. A link-fault latch that this tick's settle
+    // completes clears after its record, which still carries the faults that held the force
+    // at zero.
+    [[gnu::always_inline]] void record(const Wake& wake, bool paced, const Sample& sample,
+                                       const Sensed& sensed, const Coupled& coupled,
+                                       const SafeForce& safe, std::uint32_t flags) noexcept {
+        const bool good_tick = sensed.have_sample && (raised_this_tick_ & kLinkFaults) == 0u;
+        const LinkAction link_action = link_recovery_.update(
+            safety_.faults(), good_tick, 1 + static_cast<std::uint64_t>(wake.missed_periods));
+        if (link_action == LinkAction::recover) flags |= kFlagLinkRecovered;
+        // Compute time: from the wake to the command written.
+        const std::int64_t compute_ns = clock_.now_ns() - wake.wake_ns;
+        count_tick(wake, paced, compute_ns);
+        fill_record(wake, paced, sample, sensed, coupled, flags, compute_ns);
+        if (telemetry_ != nullptr) telemetry_->try_push(record_);
+        ++stats_.ticks;
+        if (link_action == LinkAction::recover) {
+            clear_fault_latch();
+            ++stats_.link_recoveries;
+        }
+        publish_status(safe.soft_start_scale, sensed.armed);
+    }
+
+    // ---- the steps' parts ----
+
+    // The requests of other threads, at the start of a tick: a fault reset, and arming
+    // (the soft start begins again, and the environment restarts where the handle is).
+    // Returns whether the loop is armed.
+    bool take_requests() noexcept {
         if (reset_requested_.exchange(false, std::memory_order_acq_rel)) clear_fault_latch();
         const bool armed = armed_.load(std::memory_order_acquire);
         if (armed && !was_armed_) {
@@ -358,88 +490,49 @@ class ServoLoop {
             initialised_ = false;  // the environment restarts where the handle is
         }
         was_armed_ = armed;
+        return armed;
+    }
 
-        account_overrun(wake, flags);
-        scheduled_periods_ += 1 + static_cast<std::uint64_t>(wake.missed_periods);
+    // The interval since the previous sample (sample_interval_s). When it is unknown,
+    // nothing velocity-based may act on this tick: zero force now, and the history (and the
+    // soft start) starts again here.
+    void measure_interval(const Sample& sample, Sensed& sensed, std::uint32_t& flags) noexcept {
+        sensed.interval_s = sample_interval_s(sample);
+        sensed.interval_unknown = sensed.interval_s == 0.0;
+        if (!sensed.interval_unknown) return;
+        flags |= kFlagIntervalUnknown;
+        ++stats_.intervals_unknown;
+        initialised_ = false;
+        safety_.restart_soft_start();
+        sensed.interval_s = period_s_;
+    }
 
-        Sample sample;
-        const bool have_sample = read_sample(sample, flags);
-        // A gap in the samples under a link fault breaks the position history: a device that
-        // comes back may have moved or restarted its encoder, so its first sample starts the
-        // history again (no jump check against the last position before the gap).
-        if (!have_sample && (safety_.faults() & kLinkFaults) != 0u) initialised_ = false;
-        const Vec3 x_d = have_sample ? to_metres(sample) : coupling_.previous_device_position_m();
-        double interval_s = period_s_;
-        bool interval_unknown = false;
-        if (have_sample && initialised_) {
-            interval_s = sample_interval_s(sample);
-            interval_unknown = interval_s == 0.0;
-            if (interval_unknown) {
-                // Nothing velocity-based may act on a tick whose interval is unknown: zero
-                // force now, and the history (and the soft start) starts again here.
-                flags |= kFlagIntervalUnknown;
-                ++stats_.intervals_unknown;
-                initialised_ = false;
-                safety_.restart_soft_start();
-                interval_s = period_s_;
-            }
+    // A new sample either starts the history (the coupling, the environment and the velocity
+    // history restart at x_d) or continues it, checked for an encoder jump.
+    void continue_history(const Sample& sample, const Sensed& sensed) noexcept {
+        if (!initialised_) {
+            coupling_.reset(sensed.x_d);
+            environment_.reset(sensed.x_d);
+            start_history(sample);
+            initialised_ = true;
+        } else if (config_.safety.encoder_jump_m > 0.0 &&
+                   max_abs(sensed.x_d - coupling_.previous_device_position_m()) >
+                       config_.safety.encoder_jump_m * (sensed.interval_s / period_s_)) {
+            // A step per period: a sample that comes 55 periods after the last may have
+            // moved 55 times as far.
+            raise(kFaultEncoderJump);
         }
-        if (have_sample) {
-            if (!initialised_) {
-                coupling_.reset(x_d);
-                environment_.reset(x_d);
-                start_history(sample);
-                initialised_ = true;
-            } else if (config_.safety.encoder_jump_m > 0.0 &&
-                       max_abs(x_d - coupling_.previous_device_position_m()) >
-                           config_.safety.encoder_jump_m * (interval_s / period_s_)) {
-                // A step per period: a sample that comes 55 periods after the last may have
-                // moved 55 times as far.
-                raise(kFaultEncoderJump);
-            }
-        }
+    }
 
-        // Coupling against the environment: (17) or (22).
-        Vec3 handle_force_n(0.0);
-        Vec3 v_d(0.0);
-        Vec3 x_e = coupling_.previous_tool_position_m();
-        if (have_sample && armed && !safety_.faulted() && !interval_unknown) {
-            const CouplingStep step = couple(x_d, interval_s);
-            if (!step.finite) raise(kFaultNonFinite);
-            if (step.finite && !step.converged) {
-                flags |= kFlagSolverNotConverged;
-                ++stats_.solver_not_converged;
-            }
-            handle_force_n = step.handle_force_n;
-            v_d = step.device_velocity_mps;
-            x_e = step.tool_position_m;
-        } else if (have_sample) {
-            v_d = coupling_.device_velocity_mps(x_d, interval_s);
-            coupling_.track_device(x_d);
-            x_e = x_d;
+    CouplingStep coupling_step(const Vec3& x_d, double interval_s) noexcept {
+        if constexpr (ImpedancePort<Environment>) {
+            if (rigid_) return coupling_.step_rigid(environment_, x_d, interval_s);
         }
+        return coupling_.step(environment_, x_d, interval_s);
+    }
 
-        // Safety, then the command. Without a sample (and without a fault) nothing is
-        // written: the device holds the last force (ZOH) for at most read_timeouts_allowed.
-        Command command;
-        SafeForce safe;
-        bool write = true;
-        if (!armed) {
-            flags |= kFlagDisarmed;
-        } else if (have_sample && !safety_.faulted()) {
-            safe = safety_.filter(handle_force_n, v_d, interval_s);
-            for (int axis = 0; axis < config_.axes; ++axis) {
-                command.force_n[static_cast<std::size_t>(axis)] = safe.handle_force_n[axis];
-            }
-            command.enable = safe.enable;
-        } else if (!safety_.faulted()) {
-            write = false;
-        }
-        if (safety_.faulted()) command = Command{};  // zero force in the tick that faulted
-        if (write) {
-            write_command(command);
-            held_force_n_ = command.force_n;
-        }
+    // The flags and counts of what safety did to this tick's force.
+    void flag_safety_actions(const SafeForce& safe, bool enabled, std::uint32_t& flags) noexcept {
         if (safe.saturated) {
             flags |= kFlagSaturated;
             ++stats_.saturated_ticks;
@@ -448,38 +541,35 @@ class ServoLoop {
             flags |= kFlagOverspeed;
             ++stats_.overspeed_ticks;
         }
-        if (command.enable && safe.soft_start_scale < 1.0) flags |= kFlagSoftStart;
+        if (enabled && safe.soft_start_scale < 1.0) flags |= kFlagSoftStart;
         if (safe.passivity_damping_n_s_per_m > 0.0) {
             flags |= kFlagPassivityControl;
             ++stats_.passivity_control_ticks;
         }
-        faults_seen_ |= safety_.faults();
+    }
 
-        // Link recovery: count this tick; the latch clears after the record of this tick
-        // (which still carries the faults that held the force at zero).
-        const bool good_tick = have_sample && (raised_this_tick_ & kLinkFaults) == 0u;
-        const LinkAction link_action = link_recovery_.update(
-            safety_.faults(), good_tick, 1 + static_cast<std::uint64_t>(wake.missed_periods));
-        if (link_action == LinkAction::recover) flags |= kFlagLinkRecovered;
-
-        // Statistics: compute time from wake to the command written.
-        const std::int64_t compute_ns = clock_.now_ns() - wake.wake_ns;
+    // The tick's statistics: compute time, wake latency, and the largest force held.
+    void count_tick(const Wake& wake, bool paced, std::int64_t compute_ns) noexcept {
         stats_.compute.record(compute_ns);
         if (paced) stats_.wake_latency.record(wake.latency_ns);
         // The force the device holds from this tick on (ZOH): this tick's command, or the
         // last one when nothing was written. The telemetry's f{i}_n is this force.
         const Vec3 commanded(held_force_n_[0], held_force_n_[1], held_force_n_[2]);
         stats_.max_force_n = std::max(stats_.max_force_n, glm::length(commanded));
+    }
 
+    void fill_record(const Wake& wake, bool paced, const Sample& sample, const Sensed& sensed,
+                     const Coupled& coupled, std::uint32_t flags,
+                     std::int64_t compute_ns) noexcept {
         record_.tick = stats_.ticks;
-        record_.t_s = config_.device_paces_loop && have_sample
+        record_.t_s = config_.device_paces_loop && sensed.have_sample
                           ? sample.device_time_s
                           : static_cast<double>(scheduled_periods_ - 1) * period_s_;
         for (int axis = 0; axis < kMaxAxes; ++axis) {
             const auto i = static_cast<std::size_t>(axis);
-            record_.x_m[i] = x_d[axis];
-            record_.v_mps[i] = v_d[axis];
-            record_.xe_m[i] = x_e[axis];
+            record_.x_m[i] = sensed.x_d[axis];
+            record_.v_mps[i] = coupled.v_d[axis];
+            record_.xe_m[i] = coupled.x_e[axis];
             record_.f_n[i] = held_force_n_[i];
         }
         record_.status = sample.status;
@@ -488,14 +578,6 @@ class ServoLoop {
         record_.wake_latency_us = paced ? static_cast<double>(wake.latency_ns) * 1e-3 : 0.0;
         record_.compute_us = static_cast<double>(compute_ns) * 1e-3;
         record_.energy_j = safety_.passivity().energy_j();
-        if (telemetry_ != nullptr) telemetry_->try_push(record_);
-        ++stats_.ticks;
-        if (link_action == LinkAction::recover) {
-            clear_fault_latch();
-            ++stats_.link_recoveries;
-        }
-        publish_status(safe.soft_start_scale, armed);
-        return record_;
     }
 
     void write_command(const Command& command) noexcept {

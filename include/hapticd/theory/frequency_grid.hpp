@@ -8,7 +8,9 @@ namespace hapticd::theory {
 
 /// `points` normalised frequencies θ in (0, π]: geometric from `lowest_theta` to 0.1 so
 /// the low band is resolved, then uniform to π so the band near Nyquist is too. Sorted,
-/// strictly increasing, last element exactly π.
+/// strictly increasing, last element exactly π. Throws std::invalid_argument for fewer than
+/// 16 points, a lowest_theta outside (0, 0.1), or one so close to 0.1 that the grid would
+/// not be strictly increasing.
 std::vector<double> frequency_grid(int points, double lowest_theta = 1e-5);
 
 /// The smallest value of f on a grid, refined by golden-section search between the grid
@@ -19,7 +21,8 @@ struct GridMinimum {
 };
 GridMinimum minimize_on_grid(const std::function<double(double)>& f,
                              const std::vector<double>& grid);
-/// The same with f already evaluated on the grid (values[i] = f(grid[i])).
+/// The same with f already evaluated on the grid (values[i] = f(grid[i])). Both throw
+/// std::invalid_argument for an empty grid, or a table of another size than the grid.
 GridMinimum minimize_tabulated(const std::function<double(double)>& f,
                                const std::vector<double>& grid, const std::vector<double>& values);
 

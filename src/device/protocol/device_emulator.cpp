@@ -261,7 +261,7 @@ void DeviceEmulator::on_configure(const Configure& configure, Outbox& outbox) no
     if (configure.watchdog_timeout_us < min_us ||
         configure.watchdog_timeout_us > max_watchdog_timeout_us_) {
         FrameHeader header;
-        header.type = MessageType::configure;
+        header.type = Configure::kType;
         header.session = configure.session;
         send_error(header, ErrorCode::out_of_range,
                    std::clamp(configure.watchdog_timeout_us, min_us, max_watchdog_timeout_us_),
@@ -280,7 +280,7 @@ void DeviceEmulator::on_configure(const Configure& configure, Outbox& outbox) no
 void DeviceEmulator::on_command(const ForceCommand& command, Outbox& outbox) noexcept {
     if (command.axes != identity_.axes) {
         FrameHeader header;
-        header.type = MessageType::command;
+        header.type = ForceCommand::kType;
         header.session = command.session;
         send_error(header, ErrorCode::wrong_axes, identity_.axes, outbox);
         return;

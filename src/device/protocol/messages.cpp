@@ -3,9 +3,12 @@
 // + 8).
 #include "hapticd/device/protocol/messages.hpp"
 
+#include <array>
 #include <cmath>
+#include <cstddef>
 #include <type_traits>
 #include <utility>
+#include <variant>
 
 #include "hapticd/device/protocol/wire.hpp"
 
@@ -266,60 +269,50 @@ Error read(Payload p, ErrorReport& m) noexcept {
     return check(m);
 }
 
-// ---- the type of each struct ----
+// ---- the message set ----
+
+/// Whether a message struct has a version member: all but the frozen hello and error.
 template <typename M>
-struct TypeOf;
-template <>
-struct TypeOf<Hello> {
-    static constexpr MessageType value = MessageType::hello;
-};
-template <>
-struct TypeOf<Identity> {
-    static constexpr MessageType value = MessageType::identity;
-};
-template <>
-struct TypeOf<Configure> {
-    static constexpr MessageType value = MessageType::configure;
-};
-template <>
-struct TypeOf<ConfigureAck> {
-    static constexpr MessageType value = MessageType::configure_ack;
-};
-template <>
-struct TypeOf<ForceCommand> {
-    static constexpr MessageType value = MessageType::command;
-};
-template <>
-struct TypeOf<EncoderSample> {
-    static constexpr MessageType value = MessageType::sample;
-};
-template <>
-struct TypeOf<Poll> {
-    static constexpr MessageType value = MessageType::poll;
-};
-template <>
-struct TypeOf<Bye> {
-    static constexpr MessageType value = MessageType::bye;
-};
-template <>
-struct TypeOf<ByeAck> {
-    static constexpr MessageType value = MessageType::bye_ack;
-};
-template <>
-struct TypeOf<ErrorReport> {
-    static constexpr MessageType value = MessageType::error;
+constexpr bool has_version = requires(const M& m) {
+    m.version;
 };
 
 /// The header version a struct is laid out in: its own, or the frozen version of hello and
-/// error (which have no version member).
+/// error.
 template <typename M>
 constexpr std::uint8_t version_of(const M& m) noexcept {
-    if constexpr (requires { m.version; }) {
+    if constexpr (has_version<M>) {
         return m.version;
     } else {
         return kFrozenVersion;
     }
 }
+
+/// Message's alternatives are the messages: each says its type once (kType), no two the same,
+/// every type that decode_frame() lets through has one, and exactly the frozen types (hello,
+/// error) have no version member.
+template <std::size_t... I>
+constexpr bool consistent_message_set(std::index_sequence<I...>) noexcept {
+    constexpr std::array<MessageType, sizeof...(I)> types{
+        std::variant_alternative_t<I, Message>::kType...};
+    constexpr std::array<bool, sizeof...(I)> versioned{
+        has_version<std::variant_alternative_t<I, Message>>...};
+    std::size_t message_types = 0;
+    for (int value = 0; value <= 0xFF; ++value) {
+        if (is_message_type(static_cast<std::uint8_t>(value))) ++message_types;
+    }
+    if (message_types != types.size()) return false;
+    for (std::size_t i = 0; i < types.size(); ++i) {
+        if (!is_message_type(static_cast<std::uint8_t>(types[i]))) return false;
+        if (versioned[i] == is_frozen_type(types[i])) return false;
+        for (std::size_t j = i + 1; j < types.size(); ++j) {
+            if (types[i] == types[j]) return false;
+        }
+    }
+    return true;
+}
+static_assert(consistent_message_set(std::make_index_sequence<std::variant_size_v<Message>>{}),
+              "every message type has exactly one struct in Message, whose kType it is");
 
 template <typename M>
 Encoded encode_message(const M& m, std::span<std::byte> out) noexcept {
@@ -329,7 +322,7 @@ Encoded encode_message(const M& m, std::span<std::byte> out) noexcept {
     if (out.size() < kMinFrameSize + size) return {0, Error::no_space};
     write(m, out.subspan(kHeaderSize, size));
     FrameHeader header;
-    header.type = TypeOf<M>::value;
+    header.type = M::kType;
     header.version = version_of(m);
     header.payload_size = static_cast<std::uint8_t>(size);
     header.session = m.session;
@@ -340,7 +333,7 @@ template <typename M>
 Error read_message(const FrameView& frame, M& m) noexcept {
     m = M{};
     m.session = frame.header.session;
-    if constexpr (requires { m.version; }) m.version = frame.header.version;
+    if constexpr (has_version<M>) m.version = frame.header.version;
     return read(frame.payload, m);
 }
 
@@ -348,13 +341,20 @@ template <typename M>
 Error decode_typed(std::span<const std::byte> bytes, M& m) noexcept {
     FrameView frame;
     if (const Error error = decode_frame(bytes, frame); error != Error::none) return error;
-    if (frame.header.type != TypeOf<M>::value) return Error::wrong_type;
+    if (frame.header.type != M::kType) return Error::wrong_type;
     return read_message(frame, m);
 }
 
-template <typename M>
+/// Reads the frame into the alternative of Message whose kType is the frame's type.
+template <std::size_t I = 0>
 Error emplace_and_read(const FrameView& frame, Message& message) noexcept {
-    return read_message(frame, message.emplace<M>());
+    using M = std::variant_alternative_t<I, Message>;
+    if (frame.header.type == M::kType) return read_message(frame, message.emplace<M>());
+    if constexpr (I + 1 < std::variant_size_v<Message>) {
+        return emplace_and_read<I + 1>(frame, message);
+    } else {
+        return Error::unknown_type;  // decode_frame() lets no other type through
+    }
 }
 
 /// std::visit without its bad_variant_access path: a Message is never valueless, because its
@@ -389,8 +389,7 @@ bool Identity::set_serial_number(std::string_view text) noexcept {
 }
 
 MessageType type_of(const Message& message) noexcept {
-    return visit_message(message,
-                         [](const auto& m) { return TypeOf<std::decay_t<decltype(m)>>::value; });
+    return visit_message(message, [](const auto& m) { return std::decay_t<decltype(m)>::kType; });
 }
 
 std::uint32_t session_of(const Message& message) noexcept {
@@ -426,29 +425,7 @@ Encoded encode(const Message& message, std::span<std::byte> out) noexcept {
 }
 
 Error decode_payload(const FrameView& frame, Message& message) noexcept {
-    switch (frame.header.type) {
-        case MessageType::hello:
-            return emplace_and_read<Hello>(frame, message);
-        case MessageType::identity:
-            return emplace_and_read<Identity>(frame, message);
-        case MessageType::configure:
-            return emplace_and_read<Configure>(frame, message);
-        case MessageType::configure_ack:
-            return emplace_and_read<ConfigureAck>(frame, message);
-        case MessageType::command:
-            return emplace_and_read<ForceCommand>(frame, message);
-        case MessageType::sample:
-            return emplace_and_read<EncoderSample>(frame, message);
-        case MessageType::poll:
-            return emplace_and_read<Poll>(frame, message);
-        case MessageType::bye:
-            return emplace_and_read<Bye>(frame, message);
-        case MessageType::bye_ack:
-            return emplace_and_read<ByeAck>(frame, message);
-        case MessageType::error:
-            return emplace_and_read<ErrorReport>(frame, message);
-    }
-    return Error::unknown_type;  // decode_frame() lets no other type through
+    return emplace_and_read(frame, message);
 }
 
 Error decode(std::span<const std::byte> bytes, Message& message) noexcept {

@@ -6,6 +6,9 @@
 // versions are the same except the sample's, whose reserved bytes become applied_lag and
 // applied_age_us in version 2 (section 4.6).
 //
+// Each struct declares its MessageType once, as kType; the codec takes the header's type, and
+// the struct a frame of that type decodes into, from there.
+//
 // Encoders write one whole frame (header, payload, CRC) into the caller's buffer and return
 // its size; decoders check one whole frame and fill the struct. Neither allocates nor throws.
 // A struct's fields are exactly the frame's fields, so a frame that decodes re-encodes to the
@@ -84,6 +87,8 @@ inline constexpr std::uint16_t kAppliedAgeUnknown = 0xFFFF;
 
 /// 4.1 hello, host -> device. Opens a session; header version is always 1.
 struct Hello {
+    static constexpr MessageType kType = MessageType::hello;  ///< the header's type
+
     std::uint32_t session = 0;     ///< the new session id, != 0, chosen at random by the host
     std::uint8_t min_version = 1;  ///< oldest version the host speaks, >= 1
     std::uint8_t max_version = 1;  ///< newest, >= min_version
@@ -93,6 +98,8 @@ struct Hello {
 
 /// 4.2 identity, device -> host: the answer to hello, in the chosen version (`version`).
 struct Identity {
+    static constexpr MessageType kType = MessageType::identity;  ///< the header's type
+
     std::uint32_t session = 0;              ///< the hello's session
     std::uint8_t axes = 1;                  ///< 1..3
     std::int32_t force_limit_un = 1;        ///< largest |force| per axis, uN, > 0
@@ -116,6 +123,8 @@ struct Identity {
 
 /// 4.3 configure, host -> device.
 struct Configure {
+    static constexpr MessageType kType = MessageType::configure;  ///< the header's type
+
     std::uint32_t session = 0;
     std::uint32_t watchdog_timeout_us = 1;  ///< > 0; the device's range: section 5.4
 
@@ -126,6 +135,8 @@ struct Configure {
 
 /// 4.4 configure_ack, device -> host: the values now in force.
 struct ConfigureAck {
+    static constexpr MessageType kType = MessageType::configure_ack;  ///< the header's type
+
     std::uint32_t session = 0;
     std::uint32_t watchdog_timeout_us = 1;
 
@@ -136,6 +147,8 @@ struct ConfigureAck {
 
 /// 4.5 command, host -> device: the force to hold until the next command.
 struct ForceCommand {
+    static constexpr MessageType kType = MessageType::command;  ///< the header's type
+
     std::uint32_t session = 0;
     std::uint32_t sequence = 0;                             ///< +1 per command; wraps modulo 2^32
     std::uint8_t flags = 0;                                 ///< CommandFlag
@@ -151,6 +164,8 @@ struct ForceCommand {
 
 /// 4.6 sample, device -> host: the answer to command and poll.
 struct EncoderSample {
+    static constexpr MessageType kType = MessageType::sample;  ///< the header's type
+
     std::uint32_t session = 0;
     /// The command this sample answers: the last one received in this session (0: none).
     /// Version 1 also promises that its force is in effect (section 5.2); version 2 says
@@ -181,6 +196,8 @@ struct EncoderSample {
 
 /// 4.7 poll, host -> device: answered with a sample; nothing changes, time does not advance.
 struct Poll {
+    static constexpr MessageType kType = MessageType::poll;  ///< the header's type
+
     std::uint32_t session = 0;
 
     std::uint8_t version = kProtocolVersion;  ///< header version: the session's (1 or 2)
@@ -190,6 +207,8 @@ struct Poll {
 
 /// 4.8 bye, host -> device: zero force, close the session.
 struct Bye {
+    static constexpr MessageType kType = MessageType::bye;  ///< the header's type
+
     std::uint32_t session = 0;
 
     std::uint8_t version = kProtocolVersion;  ///< header version: the session's (1 or 2)
@@ -199,6 +218,8 @@ struct Bye {
 
 /// 4.9 bye_ack, device -> host.
 struct ByeAck {
+    static constexpr MessageType kType = MessageType::bye_ack;  ///< the header's type
+
     std::uint32_t session = 0;
 
     std::uint8_t version = kProtocolVersion;  ///< header version: the session's (1 or 2)
@@ -209,6 +230,8 @@ struct ByeAck {
 /// 4.10 error, device -> host: the request was refused (nothing was applied). Header version
 /// is always 1.
 struct ErrorReport {
+    static constexpr MessageType kType = MessageType::error;  ///< the header's type
+
     std::uint32_t session = 0;              ///< the refused request's session field
     ErrorCode code = ErrorCode::bad_field;  ///< != 0; codes above kMaxErrorCode may come from
                                             ///< newer devices and are passed through
