@@ -572,7 +572,10 @@ TEST(ServoLoop, RealClockRunThroughAnAbstractDevice) {
 TEST(ServoSeqlock, ReaderNeverSeesATornSnapshot) {
     Seqlock<StatusSnapshot> seqlock;
     std::atomic<bool> done{false};
+    std::atomic<bool> reading{false};  // the writer starts once the reader does (a loaded
+                                       // machine once ran all the stores before one read)
     std::thread writer([&] {
+        while (!reading.load(std::memory_order_acquire)) std::this_thread::yield();
         StatusSnapshot snapshot;
         for (std::uint64_t i = 1; i <= 200'000; ++i) {
             snapshot.tick = i;
@@ -587,7 +590,8 @@ TEST(ServoSeqlock, ReaderNeverSeesATornSnapshot) {
     bool consistent = true;
     std::uint64_t last = 0;
     bool monotonic = true;
-    while (!done.load(std::memory_order_acquire)) {
+    reading.store(true, std::memory_order_release);
+    do {
         const StatusSnapshot snapshot = seqlock.load();
         const auto i = static_cast<double>(snapshot.tick);
         if (snapshot.t_s != i || snapshot.x_m[2] != i || snapshot.overruns != snapshot.tick) {
@@ -596,7 +600,7 @@ TEST(ServoSeqlock, ReaderNeverSeesATornSnapshot) {
         if (snapshot.tick < last) monotonic = false;
         last = snapshot.tick;
         ++reads;
-    }
+    } while (!done.load(std::memory_order_acquire));
     writer.join();
     EXPECT_TRUE(consistent);
     EXPECT_TRUE(monotonic);

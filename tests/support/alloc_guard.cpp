@@ -5,29 +5,39 @@
 #include <cstdlib>
 #include <new>
 
-// ThreadSanitizer and AddressSanitizer replace operator new themselves; under them the
-// guard does not count (allocations() stays 0), and the release build's tests are the proof.
+// ThreadSanitizer and AddressSanitizer define operator new themselves, so under them the
+// guard counts through the sanitizer's allocation hooks instead: every allocation of the
+// program, operator new and malloc alike (a stricter count than the replacements').
 #if defined(__SANITIZE_THREAD__) || defined(__SANITIZE_ADDRESS__)
-#define HAPTICD_ALLOC_GUARD_COUNTS 0
+#define HAPTICD_ALLOC_GUARD_HOOKS 1
 #elif defined(__has_feature)
 #if __has_feature(thread_sanitizer) || __has_feature(address_sanitizer)
-#define HAPTICD_ALLOC_GUARD_COUNTS 0
+#define HAPTICD_ALLOC_GUARD_HOOKS 1
 #endif
 #endif
-#ifndef HAPTICD_ALLOC_GUARD_COUNTS
-#define HAPTICD_ALLOC_GUARD_COUNTS 1
+#ifndef HAPTICD_ALLOC_GUARD_HOOKS
+#define HAPTICD_ALLOC_GUARD_HOOKS 0
+#endif
+
+#if HAPTICD_ALLOC_GUARD_HOOKS
+#include <sanitizer/allocator_interface.h>
 #endif
 
 namespace {
-
-#if !HAPTICD_ALLOC_GUARD_COUNTS
-#pragma GCC diagnostic ignored "-Wunused-function"
-#endif
 
 // Plain integers: thread_local without dynamic initialisation, so no allocation here.
 thread_local std::uint64_t t_allocations = 0;
 thread_local std::uint64_t t_deallocations = 0;
 
+#if HAPTICD_ALLOC_GUARD_HOOKS
+void count_allocation(const volatile void*, std::size_t) { ++t_allocations; }
+void count_deallocation(const volatile void* pointer) {
+    if (pointer != nullptr) ++t_deallocations;
+}
+// Installed before main(), as the replacements are in place before main() in other builds.
+[[maybe_unused]] const int g_hooks_installed =
+    __sanitizer_install_malloc_and_free_hooks(count_allocation, count_deallocation);
+#else
 void* allocate(std::size_t size) noexcept {
     ++t_allocations;
     return std::malloc(size == 0 ? 1 : size);
@@ -57,6 +67,7 @@ void* allocate_aligned_or_throw(std::size_t size, std::align_val_t alignment) {
     throw std::bad_alloc();
 }
 
+#endif  // HAPTICD_ALLOC_GUARD_HOOKS
 }  // namespace
 
 namespace hapticd::testing {
@@ -64,7 +75,7 @@ std::uint64_t thread_allocation_count() noexcept { return t_allocations; }
 std::uint64_t thread_deallocation_count() noexcept { return t_deallocations; }
 }  // namespace hapticd::testing
 
-#if HAPTICD_ALLOC_GUARD_COUNTS
+#if !HAPTICD_ALLOC_GUARD_HOOKS
 void* operator new(std::size_t size) { return allocate_or_throw(size); }
 void* operator new[](std::size_t size) { return allocate_or_throw(size); }
 void* operator new(std::size_t size, const std::nothrow_t&) noexcept { return allocate(size); }
@@ -98,4 +109,4 @@ void operator delete(void* pointer, std::align_val_t, const std::nothrow_t&) noe
 void operator delete[](void* pointer, std::align_val_t, const std::nothrow_t&) noexcept {
     release(pointer);
 }
-#endif  // HAPTICD_ALLOC_GUARD_COUNTS
+#endif  // !HAPTICD_ALLOC_GUARD_HOOKS

@@ -8,7 +8,8 @@
 //
 // Counts are per thread: the guard sees what the thread that created it allocates, not what
 // other threads do. Every form of operator new is counted (plain, array, aligned, nothrow);
-// direct calls to malloc() are not.
+// direct calls to malloc() are not, except under ASan and TSan, where the sanitizer's hooks
+// count every allocation.
 #pragma once
 
 #include <cstdint>
