@@ -170,6 +170,32 @@ TEST(ServoLoop, VelocitySpansTheDeviceClockAcrossAStall) {
     EXPECT_NEAR(loop.tick().v_mps[0], 0.05, 1e-12);
 }
 
+// A device that paces the loop (lockstep) numbers the samples it produced, not the periods
+// between them. The protocol's reference device answers the poll after a lost reply one
+// period after the last sample the host took, but two sequence numbers on; hung for four
+// periods, it answers with the next sequence number. The serial fault campaign found both
+// (seed 1: a reply held back behind the next answer gave half the velocity). The backward
+// difference spans the device's clock.
+TEST(ServoLoop, APacedDeviceDifferencesOverItsClockNotItsSampleCount) {
+    VirtualTime time;
+    FakeDevice device;  // no virtual time of its own: one period of its clock per read
+    device.set_position_counts(10'000);  // free space
+    device.counts_per_read[0] = 50;      // 50 um per read
+    PlaneWall wall{.wall_m = 0.0};
+    ServoConfig config = test_config();
+    config.device_paces_loop = true;
+    TestLoop<PlaneWall> loop(device, wall, config, nullptr, FakeClock{&time});
+    loop.tick();
+    EXPECT_NEAR(loop.tick().v_mps[0], 0.05, 1e-12);
+    device.next.sequence += 1;  // a sample lost on the way, and its period with it ...
+    EXPECT_NEAR(loop.tick().v_mps[0], 0.05, 1e-12);  // ... but 50 um in one period of its clock
+    device.next.device_time_s += 0.004;              // hung for four periods: 50 um in five
+    const TelemetryRecord& after = loop.tick();
+    EXPECT_NEAR(after.v_mps[0], 50e-6 / 0.005, 1e-12);
+    EXPECT_EQ(after.flags & kFlagIntervalUnknown, 0u);
+    EXPECT_NEAR(loop.tick().v_mps[0], 0.05, 1e-12);
+}
+
 // A device clock that stands still or runs backwards leaves the interval unknown: no
 // velocity-based force in that tick (zero force), the history starts again there.
 TEST(ServoLoop, UnknownIntervalZeroesTheForceAndRestartsTheHistory) {
