@@ -196,6 +196,28 @@ TEST(ServoLoop, APacedDeviceDifferencesOverItsClockNotItsSampleCount) {
     EXPECT_NEAR(loop.tick().v_mps[0], 0.05, 1e-12);
 }
 
+// A write that fails after a good read (the device unplugged between the two) latches the
+// fault in that tick, and the tick's record holds zero force, like every record with a fault
+// latched: the command the servo tried last, not the one that never arrived. The serial
+// fault campaign found it (seed 24: -2.4 N recorded with device_lost latched).
+TEST(ServoLoop, AFailedWriteRecordsTheZeroForceItTriedLast) {
+    for (const IoResult failure : {IoResult::disconnected, IoResult::error}) {
+        VirtualTime time;
+        FakeDevice device;
+        device.set_position_counts(-2000);  // 2 mm inside the wall
+        PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 6000.0};
+        TestLoop<PlaneWall> loop(device, wall, test_config(), nullptr, FakeClock{&time});
+        for (int n = 0; n < 3; ++n) loop.tick();
+        ASSERT_GT(device.last_command.force_n[0], 1.0);
+        device.write_result = failure;
+        const TelemetryRecord& record = loop.tick();
+        EXPECT_NE(record.faults, 0u);
+        EXPECT_EQ(record.f_n[0], 0.0);
+        EXPECT_FALSE(device.last_command.enable);  // one more try, at zero force
+        EXPECT_EQ(device.last_command.force_n[0], 0.0);
+    }
+}
+
 // A device clock that stands still or runs backwards leaves the interval unknown: no
 // velocity-based force in that tick (zero force), the history starts again there.
 TEST(ServoLoop, UnknownIntervalZeroesTheForceAndRestartsTheHistory) {

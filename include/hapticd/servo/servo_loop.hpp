@@ -433,8 +433,9 @@ class ServoLoop {
         }
         if (safety_.faulted()) command = Command{};  // zero force in the tick that faulted
         if (write) {
-            write_command(command);
-            held_force_n_ = command.force_n;
+            // A write that failed tried zero force once more: that is what the tick commanded.
+            held_force_n_ =
+                write_command(command) ? command.force_n : std::array<double, kMaxAxes>{};
         }
         if (safe.saturated) {
             flags |= kFlagSaturated;
@@ -494,11 +495,13 @@ class ServoLoop {
         return record_;
     }
 
-    void write_command(const Command& command) noexcept {
+    // False when the write failed: the fault is raised and zero force tried once more.
+    bool write_command(const Command& command) noexcept {
         const IoResult result = device_.write(command);
-        if (result == IoResult::ok) return;
+        if (result == IoResult::ok) return true;
         raise(result == IoResult::disconnected ? kFaultDeviceLost : kFaultDeviceIo);
         if (command.enable) (void)device_.write(Command{});  // one more try at zero force
+        return false;
     }
 
     void publish_status(double soft_start_scale, bool armed) noexcept {
