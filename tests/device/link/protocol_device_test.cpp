@@ -334,7 +334,7 @@ TEST_F(ProtocolDeviceTest, AReplyFromADeviceThatLostTheSessionStartsANewHandshak
 // puts the host ahead of the device: every later sample looks like a repeat and is refused,
 // although the device answers every command. Three such reads in a row end the session as a
 // lost device, and the reconnect thread starts a new one. (The serial fault campaign found
-// the link stuck for good with the device answering: seed 2 of a forged-sequence run.)
+// the link stuck for good with the device answering: seed 193.)
 TEST_F(ProtocolDeviceTest, AHostAheadOfTheDevicesSequenceStartsANewSession) {
     auto d = open_device();
     Sample s;
