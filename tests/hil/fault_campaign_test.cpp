@@ -12,18 +12,20 @@
 //   - every tick logged, every value finite;
 // and on every sequence: the run ends (no hang) with the outcome the configuration says:
 // non-link faults end it, link faults recover with [safety] reconnect once the device is
-// back, and end it without.
+// back, and end it without. The scenario and the checks that hold whatever the faults are
+// shared with the campaign on the wire (fault_campaign.hpp).
 //
 // ctest runs HAPTICD_CAMPAIGN_SEQUENCES sequences (default 400, seconds); the record in
 // docs/reliability.md ran 10,000:
 //   HAPTICD_CAMPAIGN_SEQUENCES=10000 build/release/bin/hil_fault_campaign_test
+#include "fault_campaign.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdint>
-#include <cstdlib>
 #include <iostream>
 #include <limits>
 #include <random>
@@ -31,8 +33,6 @@
 #include <vector>
 
 #include "hapticd/device/sim/sim_device.hpp"
-#include "hapticd/env/scene.hpp"
-#include "hapticd/servo/servo_loop.hpp"
 
 namespace hapticd::testing {
 namespace {
@@ -149,46 +149,10 @@ class CampaignEnvironment {
     const CampaignDevice& device_;
 };
 
-constexpr double kMaxForceN = 8.0;
-constexpr double kCountsPerMeter = 1e5;
-constexpr double kPeriodS = 1e-3;
+using campaign::kPeriodS;
+using campaign::kSettleTicks;
+using campaign::kTimeoutTicks;
 constexpr std::int64_t kTicks = 900;
-constexpr std::int64_t kSettleTicks = 30;    ///< link_recovery.settle_s
-constexpr std::int64_t kTimeoutTicks = 250;  ///< link_recovery.timeout_s
-
-device::sim::SimConfig sim_config() {
-    device::sim::SimConfig c;
-    c.clock = device::sim::SimClock::lockstep;
-    c.mass_kg = 0.1;
-    c.damping_n_s_per_m = 2.0;
-    c.counts_per_meter = kCountsPerMeter;
-    c.force_limit_n = 20.0;
-    c.initial_position_m[0] = -0.002;
-    c.human[0].family = device::sim::HumanFamily::stiff_grasp;
-    c.human[0].hand_mass_kg = 0.3;
-    c.human[0].hand_stiffness_n_per_m = 500.0;
-    c.human[0].hand_damping_n_s_per_m = 5.0;
-    c.human[0].push = {
-        .from_m = -0.002, .to_m = 0.006, .start_s = 0.05, .ramp_s = 0.2, .hold_s = 5.0};
-    return c;
-}
-
-servo::ServoConfig servo_config(bool reconnect) {
-    servo::ServoConfig c;
-    c.rate_hz = 1.0 / kPeriodS;
-    c.counts_per_meter = kCountsPerMeter;
-    c.coupling = {.stiffness_n_per_m = 3600.0, .damping_n_s_per_m = 0.0};
-    c.safety.max_force_n = kMaxForceN;
-    c.safety.max_speed_mps = 1.0;
-    c.safety.encoder_jump_m = 10.0 * 1.0 * kPeriodS;
-    c.safety.soft_start = {.still_speed_mps = 0.02, .still_time_s = 0.01, .ramp_time_s = 0.05};
-    c.realtime.mode = servo::RealtimeMode::off;
-    c.device_paces_loop = true;
-    c.link_recovery = {.enabled = reconnect,
-                       .settle_s = kSettleTicks * kPeriodS,
-                       .timeout_s = kTimeoutTicks * kPeriodS};
-    return c;
-}
 
 std::vector<Event> random_events(std::mt19937_64& rng) {
     std::uniform_int_distribution<int> count(1, 4), kind(0, kKinds - 1);
@@ -228,16 +192,12 @@ void run_sequence(std::uint64_t seed, Counts& counts) {
     SCOPED_TRACE("seed " + std::to_string(seed) + (reconnect ? " reconnect" : " no reconnect"));
 
     device::sim::SimDevice sim;
-    sim.open(sim_config());
+    sim.open(campaign::sim_config());
     CampaignDevice device(sim, events);
-    env::Scene scene = env::parse_scene(
-        "[scene]\nname = \"wall\"\naxes = 1\n[[wall]]\nnormal = [-1.0]\nstiffness = 2e4\n"
-        "damping = 5.0\n",
-        "campaign", 1);
+    env::Scene scene = campaign::wall_scene();
     CampaignEnvironment environment(*scene.impedance, device);
     servo::TelemetryRing ring(4096);
-    const servo::ServoConfig config = servo_config(reconnect);
-    std::vector<servo::TelemetryRecord> records;
+    const servo::ServoConfig config = campaign::servo_config(reconnect);
     servo::RunExit exit{};
     std::uint32_t faults_seen = 0;
     std::uint64_t recoveries = 0;
@@ -251,26 +211,17 @@ void run_sequence(std::uint64_t seed, Counts& counts) {
         ASSERT_EQ(loop.stats().ticks, static_cast<std::uint64_t>(device.tick() + 1));
         ASSERT_EQ(ring.dropped(), 0u);
     }
-    servo::TelemetryRecord r;
-    while (ring.try_pop(r)) records.push_back(r);
+    const std::vector<servo::TelemetryRecord> records = campaign::drain(ring);
     ASSERT_EQ(records.size(), static_cast<std::size_t>(device.tick() + 1));
     // Zero force on every exit path: the last command the device got is a disabled zero.
     ASSERT_FALSE(device.last_command().enable) << "the run ended on an enabled command";
     ASSERT_EQ(device.last_command().force_n[0], 0.0);
 
-    const std::uint32_t non_link = ~servo::kLinkFaults;
+    campaign::check_every_tick(records);
+    if (::testing::Test::HasFatalFailure()) return;
     for (std::size_t n = 0; n < records.size(); ++n) {
         const servo::TelemetryRecord& rec = records[n];
         const double f = rec.f_n[0];
-        ASSERT_TRUE(std::isfinite(f) && std::isfinite(rec.x_m[0]) && std::isfinite(rec.v_mps[0]))
-            << "tick " << n;
-        ASSERT_LE(std::abs(f), kMaxForceN + 1e-9) << "tick " << n;
-        if (rec.faults != 0u) {
-            ASSERT_EQ(f, 0.0) << "tick " << n << " faults " << rec.faults;
-        }
-        if ((rec.flags & servo::kFlagIntervalUnknown) != 0u) {
-            ASSERT_EQ(f, 0.0) << "tick " << n;
-        }
         // Detection in the same tick, while nothing else holds the latch.
         const bool clean = n == 0 || records[n - 1].faults == 0u;
         for (const Event& e : events) {
@@ -309,46 +260,8 @@ void run_sequence(std::uint64_t seed, Counts& counts) {
             }
         }
     }
-    // Outcome as configured.
-    const bool non_link_fault = (faults_seen & non_link) != 0u;
-    if (non_link_fault) {
-        ASSERT_EQ(exit, servo::RunExit::fault);
-    }
-    if (!reconnect && faults_seen != 0u) {
-        ASSERT_EQ(exit, servo::RunExit::fault);
-    }
-    if (reconnect && !non_link_fault && faults_seen != 0u) {
-        // Link faults only. Each latch either clears after the device was good for the whole
-        // settle time (the tick flagged link-recovered), within the timeout, or is still held
-        // at the end: then the run gave up if the timeout ran out, and ran on otherwise.
-        std::size_t n = 0;
-        while (n < records.size()) {
-            if (records[n].faults == 0u) {
-                ++n;
-                continue;
-            }
-            const std::size_t start = n;
-            while (n < records.size() && records[n].faults != 0u) ++n;
-            const std::size_t last = n - 1;
-            const auto held = static_cast<std::int64_t>(last - start);
-            if (n < records.size()) {
-                ASSERT_NE(records[last].flags & servo::kFlagLinkRecovered, 0u) << "tick " << last;
-                ASSERT_LE(held, kTimeoutTicks) << "latched at " << start;
-                for (std::int64_t k = 0; k < kSettleTicks; ++k) {
-                    const servo::TelemetryRecord& good =
-                        records[last - static_cast<std::size_t>(k)];
-                    ASSERT_EQ(good.flags & servo::kFlagNoSample, 0u) << "recovered over a bad tick";
-                }
-            } else if (exit == servo::RunExit::fault) {
-                ASSERT_GE(held, kTimeoutTicks - 1) << "gave up early, latched at " << start;
-            } else {
-                ASSERT_LT(held, kTimeoutTicks + 1) << "did not give up, latched at " << start;
-            }
-        }
-    }
-    if (exit == servo::RunExit::fault) {
-        ASSERT_NE(records.back().faults, 0u);
-    }
+    campaign::check_outcome(records, exit, faults_seen, reconnect);
+    if (::testing::Test::HasFatalFailure()) return;
     ++counts.sequences;
     counts.ticks += records.size();
     counts.recoveries += recoveries;
@@ -356,13 +269,11 @@ void run_sequence(std::uint64_t seed, Counts& counts) {
 }
 
 TEST(HilFaultCampaign, EveryTickOfEverySequenceKeepsTheSafetyInvariants) {
-    const char* env = std::getenv("HAPTICD_CAMPAIGN_SEQUENCES");
-    const std::uint64_t sequences = env != nullptr ? std::strtoull(env, nullptr, 10) : 400;
+    const std::uint64_t sequences = campaign::env_count("HAPTICD_CAMPAIGN_SEQUENCES").value_or(400);
     // HAPTICD_CAMPAIGN_SEED=S replays sequence S alone (a failure names its seed).
-    const char* only = std::getenv("HAPTICD_CAMPAIGN_SEED");
-    if (only != nullptr) {
+    if (const auto only = campaign::env_count("HAPTICD_CAMPAIGN_SEED")) {
         Counts counts;
-        run_sequence(std::strtoull(only, nullptr, 10), counts);
+        run_sequence(*only, counts);
         return;
     }
     Counts counts;

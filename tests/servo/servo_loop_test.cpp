@@ -170,6 +170,54 @@ TEST(ServoLoop, VelocitySpansTheDeviceClockAcrossAStall) {
     EXPECT_NEAR(loop.tick().v_mps[0], 0.05, 1e-12);
 }
 
+// A device that paces the loop (lockstep) numbers the samples it produced, not the periods
+// between them. The protocol's reference device answers the poll after a lost reply one
+// period after the last sample the host took, but two sequence numbers on; hung for four
+// periods, it answers with the next sequence number. The serial fault campaign found both
+// (seed 1: a reply held back behind the next answer gave half the velocity). The backward
+// difference spans the device's clock.
+TEST(ServoLoop, APacedDeviceDifferencesOverItsClockNotItsSampleCount) {
+    VirtualTime time;
+    FakeDevice device;  // no virtual time of its own: one period of its clock per read
+    device.set_position_counts(10'000);  // free space
+    device.counts_per_read[0] = 50;      // 50 um per read
+    PlaneWall wall{.wall_m = 0.0};
+    ServoConfig config = test_config();
+    config.device_paces_loop = true;
+    TestLoop<PlaneWall> loop(device, wall, config, nullptr, FakeClock{&time});
+    loop.tick();
+    EXPECT_NEAR(loop.tick().v_mps[0], 0.05, 1e-12);
+    device.next.sequence += 1;  // a sample lost on the way, and its period with it ...
+    EXPECT_NEAR(loop.tick().v_mps[0], 0.05, 1e-12);  // ... but 50 um in one period of its clock
+    device.next.device_time_s += 0.004;              // hung for four periods: 50 um in five
+    const TelemetryRecord& after = loop.tick();
+    EXPECT_NEAR(after.v_mps[0], 50e-6 / 0.005, 1e-12);
+    EXPECT_EQ(after.flags & kFlagIntervalUnknown, 0u);
+    EXPECT_NEAR(loop.tick().v_mps[0], 0.05, 1e-12);
+}
+
+// A write that fails after a good read (the device unplugged between the two) latches the
+// fault in that tick, and the tick's record holds zero force, like every record with a fault
+// latched: the command the servo tried last, not the one that never arrived. The serial
+// fault campaign found it (seed 24: -2.4 N recorded with device_lost latched).
+TEST(ServoLoop, AFailedWriteRecordsTheZeroForceItTriedLast) {
+    for (const IoResult failure : {IoResult::disconnected, IoResult::error}) {
+        VirtualTime time;
+        FakeDevice device;
+        device.set_position_counts(-2000);  // 2 mm inside the wall
+        PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 6000.0};
+        TestLoop<PlaneWall> loop(device, wall, test_config(), nullptr, FakeClock{&time});
+        for (int n = 0; n < 3; ++n) loop.tick();
+        ASSERT_GT(device.last_command.force_n[0], 1.0);
+        device.write_result = failure;
+        const TelemetryRecord& record = loop.tick();
+        EXPECT_NE(record.faults, 0u);
+        EXPECT_EQ(record.f_n[0], 0.0);
+        EXPECT_FALSE(device.last_command.enable);  // one more try, at zero force
+        EXPECT_EQ(device.last_command.force_n[0], 0.0);
+    }
+}
+
 // A device clock that stands still or runs backwards leaves the interval unknown: no
 // velocity-based force in that tick (zero force), the history starts again there.
 TEST(ServoLoop, UnknownIntervalZeroesTheForceAndRestartsTheHistory) {

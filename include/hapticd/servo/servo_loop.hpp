@@ -317,23 +317,20 @@ class ServoLoop {
     // The time since the previous sample used, in whole periods times T: the backward
     // difference must span the time between the two samples, not the period the loop meant
     // to keep (a host stalled for 55 ms between its wake and the read would otherwise see
-    // the handle move 55 periods' worth in one). When the device paces the loop its sequence
-    // numbers count the periods; otherwise its clock says when it latched each sample,
-    // rounded to periods (the models' T; jitter within half a period is ignored, as the
-    // pacer's schedule ignores it). 0 when unknown: the device's clock stood still, went
-    // backwards or is not a number although a new sample came (the caller then restarts the
-    // history at this sample, with no velocity-based force in this tick).
+    // the handle move 55 periods' worth in one). The device's clock says when it latched
+    // each sample, rounded to periods (the models' T; jitter within half a period is
+    // ignored, as the pacer's schedule ignores it). So even when the device paces the loop:
+    // its sequence numbers count the samples it produced, not the periods between them (a
+    // protocol device answers a poll after a lost reply one period on but two numbers on,
+    // and a hung one answers with the next number however long it hung). 0 when unknown:
+    // the device's clock stood still, went backwards or is not a number although a new
+    // sample came (the caller then restarts the history at this sample, with no
+    // velocity-based force in this tick).
     double sample_interval_s(const Sample& sample) noexcept {
         double periods = 0.0;
-        if (config_.device_paces_loop) {
-            if (sample.sequence > last_sequence_) {
-                periods = static_cast<double>(sample.sequence - last_sequence_);
-            }
-        } else {
-            const double elapsed_s = sample.device_time_s - last_device_time_s_;
-            if (elapsed_s > 0.0 && elapsed_s < kMaxIntervalPeriods * period_s_) {
-                periods = std::max(1.0, std::round(elapsed_s / period_s_));
-            }
+        const double elapsed_s = sample.device_time_s - last_device_time_s_;
+        if (elapsed_s > 0.0 && elapsed_s < kMaxIntervalPeriods * period_s_) {
+            periods = std::max(1.0, std::round(elapsed_s / period_s_));
         }
         start_history(sample);
         return periods * period_s_;
@@ -341,7 +338,6 @@ class ServoLoop {
 
     // Starts the velocity history at `sample` (no interval is needed for the first one).
     void start_history(const Sample& sample) noexcept {
-        last_sequence_ = sample.sequence;
         last_device_time_s_ = sample.device_time_s;
     }
 
@@ -445,8 +441,9 @@ class ServoLoop {
         }
         if (safety_.faulted()) force_command = Command{};  // zero force in the tick that faulted
         if (write) {
-            write_command(force_command);
-            held_force_n_ = force_command.force_n;
+            // A write that failed tried zero force once more: that is what the tick commanded.
+            held_force_n_ = write_command(force_command) ? force_command.force_n
+                                                         : std::array<double, kMaxAxes>{};
         }
         flag_safety_actions(safe, force_command.enable, flags);
         faults_seen_ |= safety_.faults();
@@ -580,11 +577,13 @@ class ServoLoop {
         record_.energy_j = safety_.passivity().energy_j();
     }
 
-    void write_command(const Command& command) noexcept {
+    // False when the write failed: the fault is raised and zero force tried once more.
+    bool write_command(const Command& command) noexcept {
         const IoResult result = device_.write(command);
-        if (result == IoResult::ok) return;
+        if (result == IoResult::ok) return true;
         raise(result == IoResult::disconnected ? kFaultDeviceLost : kFaultDeviceIo);
         if (command.enable) (void)device_.write(Command{});  // one more try at zero force
+        return false;
     }
 
     void publish_status(double soft_start_scale, bool armed) noexcept {
@@ -627,7 +626,6 @@ class ServoLoop {
     int consecutive_overruns_ = 0;
     int consecutive_timeouts_ = 0;
     std::uint64_t scheduled_periods_ = 0;
-    std::uint64_t last_sequence_ = 0;
     double last_device_time_s_ = 0.0;
     std::uint32_t faults_seen_ = 0;
     std::uint32_t raised_this_tick_ = 0;           ///< Fault bits raised in the current tick

@@ -24,6 +24,9 @@ constexpr int kHelloAttempts = 3;  // section 5.1, step 3
 constexpr std::int64_t kLockstepReplyTimeoutNs = 1'000'000'000;
 constexpr double kRealtimeReplyFraction = 0.3;  // of a period: leaves 70 % for the tick
 constexpr std::int64_t kByeTimeoutNs = 50'000'000;
+// 5.3, "Out of step": reads in a row that the device answered only with samples behind the
+// host's count before the session is given up.
+constexpr int kOutOfStepReads = 3;
 
 std::uint32_t random_session() {
     std::uint32_t session = 0;
@@ -221,6 +224,7 @@ void ProtocolDevice::handshake() {
     (void)tracker_.check(*sample);
     device_faulted_ = sample->faults != 0;
     reply_outstanding_ = false;
+    behind_reads_ = 0;
 }
 
 bool ProtocolDevice::adopt_if_ready() noexcept {
@@ -294,6 +298,7 @@ IoResult ProtocolDevice::read(Sample& sample) noexcept {
     }
 
     const std::int64_t deadline = monotonic_now_ns() + reply_timeout_ns_;
+    bool behind = false;  // the device answered this session's last request from behind
     for (;;) {
         std::size_t size = 0;
         const LinkResult result = link_->receive(rx_, size, deadline);
@@ -302,6 +307,13 @@ IoResult ProtocolDevice::read(Sample& sample) noexcept {
             sample.status = kStatusDropped;
             if (result == LinkResult::timeout) {
                 counts_.reply_timeouts.fetch_add(1, std::memory_order_relaxed);
+                behind_reads_ = behind ? behind_reads_ + 1 : 0;
+                if (behind_reads_ >= kOutOfStepReads) {
+                    // 5.3, "Out of step": no sample of this session can be taken again.
+                    counts_.out_of_step.fetch_add(1, std::memory_order_relaxed);
+                    sample.status |= kStatusDisconnected;
+                    return lost();
+                }
                 return IoResult::timeout;
             }
             if (result == LinkResult::disconnected) {
@@ -318,7 +330,10 @@ IoResult ProtocolDevice::read(Sample& sample) noexcept {
         }
         if (const auto* reply = std::get_if<proto::EncoderSample>(&message)) {
             const proto::ReplyTracker::Result verdict = tracker_.check(*reply);
+            // A repeat echoes the last request: the device is answering, from behind.
+            if (verdict.verdict == proto::ReplyTracker::Verdict::duplicate) behind = true;
             if (verdict.verdict != proto::ReplyTracker::Verdict::accept) continue;
+            behind_reads_ = 0;
             sample = proto::to_servo_sample(*reply, verdict.sequence, verdict.host_status);
             pass_on_applied(verdict, sample);
             device_faulted_ = reply->faults != 0;
@@ -447,6 +462,7 @@ ProtocolCounters ProtocolDevice::counters() const noexcept {
     c.bad_frames = counts_.bad_frames.load(std::memory_order_relaxed);
     c.device_errors = counts_.device_errors.load(std::memory_order_relaxed);
     c.disconnects = counts_.disconnects.load(std::memory_order_relaxed);
+    c.out_of_step = counts_.out_of_step.load(std::memory_order_relaxed);
     c.reconnects = counts_.reconnects.load(std::memory_order_relaxed);
     c.refused_devices = counts_.refused_devices.load(std::memory_order_relaxed);
     const proto::ReplyTracker::Counters& t = tracker_.counters();

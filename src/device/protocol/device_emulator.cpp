@@ -404,6 +404,10 @@ void DeviceEmulator::damage_sample(EncoderSample& message) noexcept {
         message.applied_age_us = static_cast<std::uint16_t>(age);
         faults_.applied_early_us = 0;
     }
+    if (faults_.sequence_ahead > 0) {
+        message.sample_sequence += faults_.sequence_ahead;
+        faults_.sequence_ahead = 0;
+    }
     if (faults_.clock_back_us > 0) {
         message.time_us -= std::min<std::uint64_t>(message.time_us, faults_.clock_back_us);
         if (message.applied_age_us != kAppliedAgeUnknown &&

@@ -330,6 +330,35 @@ TEST_F(ProtocolDeviceTest, AReplyFromADeviceThatLostTheSessionStartsANewHandshak
     EXPECT_EQ(d->counters().device_errors, 1u);
 }
 
+// A sample_sequence that jumped ahead past the CRC (or a firmware that restarted its count)
+// puts the host ahead of the device: every later sample looks like a repeat and is refused,
+// although the device answers every command. Three such reads in a row end the session as a
+// lost device, and the reconnect thread starts a new one. (The serial fault campaign found
+// the link stuck for good with the device answering: seed 193.)
+TEST_F(ProtocolDeviceTest, AHostAheadOfTheDevicesSequenceStartsANewSession) {
+    auto d = open_device();
+    Sample s;
+    ASSERT_EQ(d->read(s), IoResult::ok);
+    ASSERT_EQ(d->write(Command{}), IoResult::ok);
+    ASSERT_EQ(d->read(s), IoResult::ok);
+    bench_.device->faults().sequence_ahead = 100'000;
+    ASSERT_EQ(d->write(Command{}), IoResult::ok);
+    ASSERT_EQ(d->read(s), IoResult::ok);  // taken: a gap, as far as any host can tell
+    for (int n = 0; n < 2; ++n) {
+        ASSERT_EQ(d->write(Command{}), IoResult::ok);
+        EXPECT_EQ(d->read(s), IoResult::timeout);  // answered, but behind the host: refused
+    }
+    ASSERT_EQ(d->write(Command{}), IoResult::ok);
+    EXPECT_EQ(d->read(s), IoResult::disconnected);
+    EXPECT_NE(s.status & servo::kStatusDisconnected, 0u);
+    EXPECT_EQ(d->counters().out_of_step, 1u);
+    EXPECT_EQ(d->counters().duplicate, 3u);
+    const int reads = tick_until(
+        *d, [](IoResult r, const Sample&) { return r == IoResult::ok; }, 5000);
+    EXPECT_GT(reads, 0) << "never reconnected";
+    EXPECT_EQ(d->counters().reconnects, 1u);
+}
+
 TEST_F(ProtocolDeviceTest, CloseLeavesZeroForceAndEndsTheSession) {
     auto d = open_device();
     Command push;

@@ -619,6 +619,20 @@ TEST(ProtocolEmulatorFaults, SequenceGapGivesMissedSamples) {
     EXPECT_EQ(host.tracker().check(host.command({0, 0, 0})).missed, 0u);
 }
 
+TEST(ProtocolEmulatorFaults, SequenceAheadPutsTheHostAheadOfTheDevice) {
+    DeviceEmulator device(config());
+    Host host(device);
+    host.hello();
+    ASSERT_EQ(host.tracker().check(host.command({0, 0, 0})).verdict, Verdict::accept);
+    device.faults().sequence_ahead = 1000;
+    const ReplyTracker::Result r = host.tracker().check(host.command({0, 0, 0}));
+    EXPECT_EQ(r.verdict, Verdict::accept);  // no host can tell it from a real gap
+    EXPECT_EQ(r.missed, 1000u);
+    // The count went on from where it was: every later sample is behind the host's.
+    EXPECT_EQ(host.tracker().check(host.command({0, 0, 0})).verdict, Verdict::duplicate);
+    EXPECT_EQ(device.faults().sequence_ahead, 0u);
+}
+
 TEST(ProtocolEmulatorFaults, DelayGivesALateReplyBeforeTheNextOne) {
     DeviceEmulator device(config());
     Host host(device);

@@ -113,6 +113,11 @@ void PtyDevice::set_request_hook(RequestHook hook) {
     hook_ = std::move(hook);
 }
 
+void PtyDevice::set_line_tap(LineTap tap) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    tap_ = std::move(tap);
+}
+
 void PtyDevice::set_answering(bool answering) {
     std::lock_guard<std::mutex> lock(mutex_);
     answering_ = answering;
@@ -147,8 +152,20 @@ void PtyDevice::handle(std::span<const std::byte> bytes) {
     if (!answering_) return;
     const bool ends_frame = !bytes.empty() && bytes.back() == std::byte{0};
     if (ends_frame && hook_) hook_(emulator_, emulator_.counters().requests);
-    const std::size_t size = emulator_.handle_stream(bytes, reply_);
-    write_all(std::span<const std::byte>(reply_.data(), size));
+    std::span<const std::byte> request = bytes;
+    if (tap_.to_device) {
+        tapped_.assign(bytes.begin(), bytes.end());
+        tap_.to_device(tapped_);
+        request = tapped_;
+    }
+    const std::size_t size = emulator_.handle_stream(request, reply_);
+    std::span<const std::byte> answer(reply_.data(), size);
+    if (tap_.to_host) {
+        tapped_.assign(answer.begin(), answer.end());
+        tap_.to_host(tapped_);
+        answer = tapped_;
+    }
+    write_all(answer);
     requests_ = emulator_.counters().requests;
 }
 

@@ -9,9 +9,11 @@
 //   PtyDevice  the emulator served on a PtyPair in its own thread. Tests reach the emulator
 //              (fault knobs, inspection) through with_emulator(), serialised with the
 //              serving thread; a request hook runs before each request (deterministic fault
-//              injection at the n-th command); the device can go silent, send raw bytes
-//              (garbage), hang up (close the master: the host sees POLLHUP/EIO, as when a
-//              USB adapter is unplugged) and be plugged in again on a new pty.
+//              injection at the n-th command); a line tap sees (and may change) the bytes
+//              of each request before the emulator and of its answer before the line
+//              (faults on the wire); the device can go silent, send raw bytes (garbage),
+//              hang up (close the master: the host sees POLLHUP/EIO, as when a USB adapter
+//              is unplugged) and be plugged in again on a new pty.
 //
 // A pty's slave path cannot outlive its master: /dev/pts/N is gone when the master closes,
 // and a new pair may get another number. So a device that "comes back" is served on a new
@@ -90,7 +92,19 @@ class PtyDevice {
         return f(emulator_);
     }
 
+    /// The wire between the host and the emulator, both ways (a fault injector). Called
+    /// under the lock, in order: to_device with the bytes of one request as they came off
+    /// the line (up to and including its delimiter; a request split across reads comes in
+    /// pieces), before the emulator sees them; then to_host with the emulator's answer to
+    /// them (COBS frames with their delimiters; empty when it answered nothing), before they
+    /// are written. Each may change its bytes in any way. Either may be empty.
+    struct LineTap {
+        std::function<void(std::vector<std::byte>& bytes)> to_device;
+        std::function<void(std::vector<std::byte>& bytes)> to_host;
+    };
+
     void set_request_hook(RequestHook hook);
+    void set_line_tap(LineTap tap);
     /// false: read and drop every byte the host sends, answer nothing (a silent device on a
     /// live line). true (the default): answer.
     void set_answering(bool answering);
@@ -128,10 +142,12 @@ class PtyDevice {
     std::mutex mutex_;  // emulator_, hook_, answering_, writes to the master
     std::condition_variable served_;
     RequestHook hook_;
+    LineTap tap_;
     bool answering_ = true;
     std::atomic<std::uint64_t> bytes_received_{0};
     std::atomic<std::uint64_t> requests_{0};
     std::vector<std::byte> reply_;
+    std::vector<std::byte> tapped_;  // the bytes a line tap passes on
 };
 
 }  // namespace hapticd::testing

@@ -9,7 +9,9 @@
 //                   repeated ones, and turns sequence gaps into a jump in Sample::sequence.
 //   Bad frames (CRC, truncated, wrong version) are counted and skipped; no valid reply by
 //   the deadline is IoResult::timeout with kStatusDropped (the servo latches read_timeout
-//   after [safety] read_timeouts_allowed of them and zeroes force in that tick).
+//   after [safety] read_timeouts_allowed of them and zeroes force in that tick). Three
+//   timeouts in a row in which the device answered, but only with samples behind the host's
+//   count (5.3, "Out of step"), end the session as a disconnect.
 //
 // Versions: the hello offers 1..2; the device's identity picks one and every later frame of
 // the session is in it. In version 2 each sample says which command is in effect and since
@@ -70,6 +72,7 @@ struct ProtocolCounters {
     std::uint64_t missed_samples = 0;  ///< sequence gaps, summed
     std::uint64_t device_errors = 0;   ///< error messages from the device
     std::uint64_t disconnects = 0;
+    std::uint64_t out_of_step = 0;  ///< sessions ended: the device's samples all behind ours
     std::uint64_t reconnects = 0;
     std::uint64_t refused_devices = 0;      ///< reconnect attempts answered by another device
     std::uint64_t applied_reported = 0;     ///< version-2 acknowledgements passed on
@@ -138,6 +141,7 @@ class ProtocolDevice final : public Device {
     std::array<std::uint64_t, 256> write_of_sequence_{};
     bool reply_outstanding_ = false;  ///< a command or poll was sent and not yet answered
     bool device_faulted_ = false;     ///< the last sample reported latched device faults
+    int behind_reads_ = 0;            ///< reads in a row answered only from behind (5.3)
     std::int64_t reply_timeout_ns_ = 0;
     std::array<std::byte, protocol::kMaxFrameSize> tx_{};
     std::array<std::byte, protocol::kMaxFrameSize> rx_{};
@@ -145,8 +149,8 @@ class ProtocolDevice final : public Device {
     /// Counters written by one thread at a time, read by any (relaxed atomics).
     struct Counts {
         std::atomic<std::uint64_t> commands_sent{0}, polls_sent{0}, samples_accepted{0},
-            reply_timeouts{0}, bad_frames{0}, device_errors{0}, disconnects{0}, reconnects{0},
-            refused_devices{0};
+            reply_timeouts{0}, bad_frames{0}, device_errors{0}, disconnects{0}, out_of_step{0},
+            reconnects{0}, refused_devices{0};
     };
     Counts counts_;
 };

@@ -64,6 +64,9 @@ struct EmulatorFaults {
     std::uint32_t drop = 0;           ///< next n replies: processed but not sent -> timeout
     std::uint32_t wrong_session = 0;  ///< next n replies: another session id -> wrong_session
     std::uint32_t sequence_gap = 0;   ///< next sample skips this many sample_sequence values
+    /// Next sample only: sample_sequence this far ahead, the count going on from where it was
+    /// (a field corrupted past the CRC): the host is ahead of the device from then on.
+    std::uint32_t sequence_ahead = 0;
     std::uint32_t delay = 0;          ///< next n replies: held back, sent before the next one
     std::uint32_t stall = 0;          ///< next n requests: ignored (a period passes for each)
     std::uint16_t device_faults = 0;  ///< fault bits raised (latched) at the next request
