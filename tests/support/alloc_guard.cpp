@@ -5,20 +5,6 @@
 #include <cstdlib>
 #include <new>
 
-// ThreadSanitizer and AddressSanitizer define operator new themselves, so under them the
-// guard counts through the sanitizer's allocation hooks instead: every allocation of the
-// program, operator new and malloc alike (a stricter count than the replacements').
-#if defined(__SANITIZE_THREAD__) || defined(__SANITIZE_ADDRESS__)
-#define HAPTICD_ALLOC_GUARD_HOOKS 1
-#elif defined(__has_feature)
-#if __has_feature(thread_sanitizer) || __has_feature(address_sanitizer)
-#define HAPTICD_ALLOC_GUARD_HOOKS 1
-#endif
-#endif
-#ifndef HAPTICD_ALLOC_GUARD_HOOKS
-#define HAPTICD_ALLOC_GUARD_HOOKS 0
-#endif
-
 #if HAPTICD_ALLOC_GUARD_HOOKS
 #include <sanitizer/allocator_interface.h>
 #endif

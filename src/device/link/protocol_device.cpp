@@ -222,6 +222,7 @@ void ProtocolDevice::handshake() {
     const auto* sample = std::get_if<proto::EncoderSample>(&first);
     if (sample == nullptr) throw std::runtime_error(where + " did not answer the first poll");
     (void)tracker_.check(*sample);
+    tracker_counts_.store(tracker_.counters());
     device_faulted_ = sample->faults != 0;
     reply_outstanding_ = false;
     behind_reads_ = 0;
@@ -330,6 +331,7 @@ IoResult ProtocolDevice::read(Sample& sample) noexcept {
         }
         if (const auto* reply = std::get_if<proto::EncoderSample>(&message)) {
             const proto::ReplyTracker::Result verdict = tracker_.check(*reply);
+            tracker_counts_.store(tracker_.counters());
             // A repeat echoes the last request: the device is answering, from behind.
             if (verdict.verdict == proto::ReplyTracker::Verdict::duplicate) behind = true;
             if (verdict.verdict != proto::ReplyTracker::Verdict::accept) continue;
@@ -465,7 +467,7 @@ ProtocolCounters ProtocolDevice::counters() const noexcept {
     c.out_of_step = counts_.out_of_step.load(std::memory_order_relaxed);
     c.reconnects = counts_.reconnects.load(std::memory_order_relaxed);
     c.refused_devices = counts_.refused_devices.load(std::memory_order_relaxed);
-    const proto::ReplyTracker::Counters& t = tracker_.counters();
+    const proto::ReplyTracker::Counters t = tracker_counts_.load();
     c.wrong_session = t.wrong_session;
     c.unexpected = t.unexpected;
     c.late = t.late;

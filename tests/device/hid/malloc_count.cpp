@@ -4,6 +4,15 @@
 
 #include <cstddef>
 
+#include "alloc_guard.hpp"
+
+#if HAPTICD_ALLOC_GUARD_HOOKS
+// ASan and TSan own malloc; their hooks (alloc_guard.cpp) count it with operator new.
+namespace hapticd::testing {
+std::uint64_t thread_malloc_count() noexcept { return thread_allocation_count(); }
+}  // namespace hapticd::testing
+#else
+
 extern "C" {
 void* __libc_malloc(std::size_t size);
 void* __libc_calloc(std::size_t count, std::size_t size);
@@ -33,3 +42,4 @@ void* realloc(void* pointer, std::size_t size) {
 namespace hapticd::testing {
 std::uint64_t thread_malloc_count() noexcept { return t_mallocs; }
 }  // namespace hapticd::testing
+#endif  // HAPTICD_ALLOC_GUARD_HOOKS

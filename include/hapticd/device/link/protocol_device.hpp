@@ -44,6 +44,7 @@
 #include "hapticd/device/protocol/messages.hpp"
 #include "hapticd/device/protocol/reply_tracker.hpp"
 #include "hapticd/device/table_reader.hpp"
+#include "hapticd/servo/seqlock.hpp"
 
 namespace hapticd::device::link {
 
@@ -132,6 +133,9 @@ class ProtocolDevice final : public Device {
 
     // Tick state (the tick thread, or the reconnect thread while it owns the link).
     protocol::ReplyTracker tracker_;
+    /// The tracker's counters as of its last check, for counters() on any thread (TSan
+    /// caught it copying them while the reconnect thread's handshake wrote them).
+    servo::Seqlock<protocol::ReplyTracker::Counters> tracker_counts_;
     std::uint32_t session_ = 0;
     std::uint8_t version_ = protocol::kProtocolVersion1;  ///< the session's
     std::uint32_t command_sequence_ = 0;
