@@ -14,6 +14,7 @@
 #include <tuple>
 #include <utility>
 
+#include "hapticd/input/range.hpp"
 #include "hapticd/tune/identification_model.hpp"
 #include "identification_data.hpp"
 
@@ -552,9 +553,8 @@ std::string_view to_string(RefusalReason reason) {
 }
 
 void IdentificationOptions::validate() const {
-    const auto reject = [](const std::string& name, double value, const std::string& allowed) {
-        throw std::invalid_argument("identification option " + name + " = " + format(value) +
-                                    " is out of range: allowed " + allowed);
+    const auto reject = [](const char* name, double value, const char* allowed) {
+        input::reject_out_of_range(std::string("identification option ") + name, value, allowed);
     };
     if (!(std::isfinite(segment_s) && segment_s > 0.0)) reject("segment_s", segment_s, "> 0 s");
     if (resolution_m && !(std::isfinite(*resolution_m) && *resolution_m > 0.0)) {

@@ -3,7 +3,12 @@
 // that starts inside a wall is not thrown by a full-stiffness step.
 #pragma once
 
+#include "hapticd/input/range.hpp"
+
 namespace hapticd::servo {
+
+/// The force ramp's length ([safety] soft_start_ramp).
+inline constexpr input::Range kRampTimeRange{.lo = 0.0, .hi = 10.0, .unit = "s"};
 
 struct SoftStartSettings {
     double still_speed_mps = 0.02;  ///< |v_d| below this counts as still
