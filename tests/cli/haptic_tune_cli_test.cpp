@@ -235,7 +235,7 @@ TEST(HapticTuneConfig, ErrorsNameTheFileTheKeyAndTheRange) {
     EXPECT_EQ(result.exit_code, 2);
     EXPECT_NE(result.err.find(path), std::string::npos) << result.err;
     EXPECT_NE(result.err.find("[device.model] mass = -0.5"), std::string::npos) << result.err;
-    EXPECT_NE(result.err.find("> 0"), std::string::npos) << result.err;
+    EXPECT_NE(result.err.find(">= 0.0001 and <= 1000 (kg)"), std::string::npos) << result.err;
     f = std::fopen(path.c_str(), "w");
     std::fputs("[device.model]\nmass = 0.1\ndamping = 2\ninertia = 3\n", f);
     std::fclose(f);

@@ -129,6 +129,7 @@ GuardedRun run_scene(const SceneCase& scene_case, const std::string& passivity,
     device_config.rate_hz = config.servo.rate_hz;
     device_config.lockstep = true;
     device_config.plugin_table_toml = config.device.plugin_table_toml;
+    device_config.plugin_table_path = config.device.plugin_table_path;
     device_config.source = config.source;
     device->open(device_config);
     const device::DeviceInfo info = device->info();

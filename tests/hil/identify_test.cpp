@@ -268,7 +268,8 @@ TEST(HilIdentify, BadIdentifyKeysAreRejectedByName) {
     const ScratchDir dir;
     const IdentifyRun typo = run_identify(dir, pen_config("forse_amplitude = 1.0\n"));
     EXPECT_EQ(typo.exit_code, 2);
-    EXPECT_NE(typo.err.find("unknown key [identify] forse_amplitude"), std::string::npos)
+    EXPECT_NE(typo.err.find("[identify] forse_amplitude = 1.0 is not a known key"),
+              std::string::npos)
         << typo.err;
     EXPECT_EQ(typo.log.rows(), 0u);
     const IdentifyRun range = run_identify(dir, pen_config("workspace = -0.01\n"));
@@ -295,6 +296,7 @@ TEST(HilIdentify, TicksOfTheExcitationDoNotAllocate) {
     device_config.rate_hz = config.servo.rate_hz;
     device_config.lockstep = true;
     device_config.plugin_table_toml = config.device.plugin_table_toml;
+    device_config.plugin_table_path = config.device.plugin_table_path;
     device_config.source = config.source;
     device->open(device_config);
     const device::DeviceInfo info = device->info();

@@ -47,9 +47,13 @@ struct DeviceConfig {
     int axes = 1;             ///< [device] axes
     double rate_hz = 1000.0;  ///< [servo] rate_hz
     bool lockstep = false;    ///< hapticd --lockstep: virtual time, as fast as the CPU goes
-    /// The plugin's own table, [device.<plugin>], as TOML text. The plugin validates it and
-    /// rejects unknown keys, naming `source` (the config file) and the key.
+    /// The plugin's own table, [device.<plugin>]: a TOML document (the daemon hands over the
+    /// config file's own text, so that the plugin's messages carry its lines) and the
+    /// table's dotted path in it ("device.sim"; empty: the document is the table). The plugin
+    /// reads it with device::PluginTable, rejects unknown keys, and names `source` (the
+    /// config file), the line and the key.
     std::string plugin_table_toml;
+    std::string plugin_table_path;
     std::string source = "<config>";
 };
 
