@@ -68,9 +68,8 @@ std::optional<double> as_number(const toml::node& node) {
 }  // namespace
 
 double TableReader::read(const Number& field) {
-    const std::optional<double> value = read_optional(field);
+    const std::optional<double> value = read_optional(field);  // the default when absent
     if (value) return *value;
-    if (field.default_value) return *field.default_value;
     fail(field.key, "is missing: required, allowed " + field.range.describe());
 }
 

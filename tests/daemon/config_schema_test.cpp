@@ -8,6 +8,7 @@
 
 #include "hapticd/daemon/config.hpp"
 #include "hapticd/daemon/servo_settings.hpp"
+#include "hapticd/device/plugin_loader.hpp"
 
 namespace hapticd::daemon {
 namespace {
@@ -108,6 +109,44 @@ TEST(DaemonConfigSchema, TheServoConfigurationIsCheckedBeforeTheLoop) {
                   std::string::npos)
             << e.what();
     }
+}
+
+// A plugin's table reaches the plugin where it is in the file: its errors carry the line,
+// as the daemon's and a scene's do.
+TEST(DaemonConfigSchema, APluginsErrorsCarryTheLineInTheConfig) {
+    const Config config = parse_config(
+        "[servo]\nrate_hz = 1000\n\n[device]\nplugin = \"sim\"\n\n[device.sim]\nmass = 0.1\n"
+        "damping = -2\n[device.sim.human]\nmodel = \"heavy-hand\"\nhand_mas = 1\n" +
+            kCoupled,
+        "lab.toml", "");
+    EXPECT_EQ(config.device.plugin_table_path, "device.sim");
+    device::DeviceHandle sim = device::load_device(config.device.plugin);
+    device::DeviceConfig device_config;
+    device_config.plugin_table_toml = config.device.plugin_table_toml;
+    device_config.plugin_table_path = config.device.plugin_table_path;
+    device_config.source = config.source;
+    try {
+        sim->open(device_config);
+        FAIL() << "damping = -2 accepted";
+    } catch (const std::exception& e) {
+        EXPECT_EQ(std::string(e.what()),
+                  "lab.toml:9: [device.sim] damping = -2 is out of range: allowed >= 0 and <= "
+                  "1e+06 (N s/m)");
+    }
+    sim->close();
+    device_config.plugin_table_toml.replace(device_config.plugin_table_toml.find("-2"), 2, "2");
+    try {
+        sim->open(device_config);
+        FAIL() << "hand_mas accepted";
+    } catch (const std::exception& e) {
+        EXPECT_EQ(std::string(e.what()).rfind(
+                      "lab.toml:12: [device.sim.human] hand_mas = 1 is not a known key: allowed "
+                      "model, hand_mass",
+                      0),
+                  0u)
+            << e.what();
+    }
+    sim->close();
 }
 
 TEST(DaemonConfigSchema, ModeStringsAreEnumsOnceRead) {
