@@ -411,9 +411,8 @@ struct EmulatedUsbDevice::Handler {
 
 // ---------------------------------------------------------------------------------------------
 
-EmulatedUsbDevice::EmulatedUsbDevice(UsbTestbed& testbed, UsbDeviceSpec spec, int port)
-    : testbed_(testbed),
-      spec_(std::move(spec)),
+EmulatedUsbDevice::EmulatedUsbDevice(UsbDeviceSpec spec, int port)
+    : spec_(std::move(spec)),
       port_(port),
       emulator_(std::make_unique<proto::DeviceEmulator>(spec_.emulator)),
       handler_(std::make_shared<Handler>()) {
@@ -527,7 +526,7 @@ UsbTestbed::~UsbTestbed() {
 EmulatedUsbDevice& UsbTestbed::add(UsbDeviceSpec spec) {
     const int port = static_cast<int>(devices_.size()) + 1;
     devices_.push_back(
-        std::unique_ptr<EmulatedUsbDevice>(new EmulatedUsbDevice(*this, std::move(spec), port)));
+        std::unique_ptr<EmulatedUsbDevice>(new EmulatedUsbDevice(std::move(spec), port)));
     EmulatedUsbDevice& device = *devices_.back();
     device.address_ = next_address_++;
     device.plugged_ = true;

@@ -117,9 +117,8 @@ class EmulatedUsbDevice {
     struct Client;
     struct Handler;
 
-    EmulatedUsbDevice(UsbTestbed& testbed, UsbDeviceSpec spec, int port);
+    EmulatedUsbDevice(UsbDeviceSpec spec, int port);
 
-    UsbTestbed& testbed_;
     UsbDeviceSpec spec_;
     int port_;
     mutable std::mutex mutex_;
