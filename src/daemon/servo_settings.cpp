@@ -85,7 +85,7 @@ std::string format(double value) {
     return out.str();
 }
 
-// Seconds of full periods a default run covers (the "10 s log" of issue 5).
+// Seconds of full periods a default run covers (docs/daemon.md, "Identification run").
 constexpr double kDefaultExcitedTime_s = 10.0;
 // Zero force logged after the excitation: the handle coming to rest.
 constexpr double kTail_s = 0.5;

@@ -1,5 +1,5 @@
-// hapticd and haptic-tune read a config the same way (issue 11): for every config in
-// config/ and for a set of bad files, `hapticd --config F` and `haptic-tune check --config F`
+// hapticd and haptic-tune read a config the same way (docs/architecture.md §2.3): for every config
+// in config/ and for a set of bad files, `hapticd --config F` and `haptic-tune check --config F`
 // give the same verdict with the same message. hapticd logs its start-up check's line and
 // haptic-tune check prints the same line as "verdict"; a file one refuses, the other refuses
 // with the same message (exit 2 from both).

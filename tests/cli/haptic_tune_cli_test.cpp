@@ -39,7 +39,8 @@ TEST(HapticTuneSize, ReadsTheDeviceFromAConfigFileAndFlagsOverrideIt) {
 }
 
 // The encoder model's optimised pair is stiffer, and the exact model rejects it: size says
-// so and exits 1 (issue 9). The passive model's optimum is no damping at 2b/T, and passes.
+// so and exits 1 (docs/stability-models.md, "What the tools do"). The passive model's optimum
+// is no damping at 2b/T, and passes.
 TEST(HapticTuneSize, AnAnswerTheExactModelRejectsExitsOne) {
     const auto result = run_command(
         tune("size --mass 0.1 --damping 2 --rate 1000 --optimize-damping --model encoder --json"));

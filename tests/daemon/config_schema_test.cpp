@@ -1,6 +1,6 @@
 // One schema: the config's keys and the servo layer's settings cannot disagree. Each test
-// reproduces a disagreement that existed before the config had one reader (issue 11): the
-// rate's three ranges, max_force's defaults (10 N here, 5 N in SafetyLimits) and
+// reproduces a disagreement that existed before the config had one reader (docs/architecture.md
+// §2.3): the rate's three ranges, max_force's defaults (10 N here, 5 N in SafetyLimits) and
 // reconnect's (on here, off in LinkRecoverySettings).
 #include <gtest/gtest.h>
 

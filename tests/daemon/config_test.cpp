@@ -1,4 +1,5 @@
-// hapticd's config file: every key DESIGN.md names, checked for type and range.
+// hapticd's config file: every key of docs/daemon.md "Config" (docs/architecture.md §5.3),
+// checked for type and range.
 #include "hapticd/daemon/config.hpp"
 
 #include <gtest/gtest.h>

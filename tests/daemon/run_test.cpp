@@ -378,9 +378,9 @@ TEST_F(DaemonRun, ABadSceneIsNamed) {
     EXPECT_NE(outcome.log.find("stiffness = -5"), std::string::npos) << outcome.log;
 }
 
-// Issue 10: a detent with period = 1e-300 was accepted, and the series solve (17) then failed
-// on every tick without a word. Its stiffness between notches, -2π peak_force/period, must
-// stay above -k_c.
+// docs/architecture.md §7.9 (a scene the coupling cannot render): a detent with period =
+// 1e-300 was once accepted, and the series solve (17) then failed on every tick without a
+// word. Its stiffness between notches, -2π peak_force/period, must stay above -k_c.
 TEST_F(DaemonRun, ADetentTheCouplingCannotRenderIsRefusedBeforeTheRun) {
     RunOptions options;
     options.config_path = config(kEncoderGains);

@@ -121,7 +121,8 @@ TEST(HilIdentify, PenDisplayLogsTheSignalItCommandedAndStaysInTheWorkspace) {
               "none (identify: open loop, nothing coupled)");
     EXPECT_EQ(run.summary.at("saturated_ticks"), 0);
 
-    // Complete: DESIGN.md's columns, one row per tick of the whole excitation and its tail.
+    // Complete: the columns of docs/architecture.md §4.5, one row per tick of the whole
+    // excitation and its tail.
     EXPECT_EQ(run.header,
               "tick,t_s,x0_m,v0_mps,xe0_m,f0_n,status,flags,faults,wake_latency_us,compute_us,"
               "energy_j");

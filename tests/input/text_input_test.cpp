@@ -1,5 +1,6 @@
-// Bounds on the text files every reader parses (issue 10: a dotted key of 35,000 parts
-// overflowed the stack inside toml++, and --config /dev/zero read until memory ran out).
+// Bounds on the text files every reader parses (docs/architecture.md §2.3: a dotted key of
+// 35,000 parts overflowed the stack inside toml++, and --config /dev/zero read until memory ran
+// out).
 #include "hapticd/input/text_input.hpp"
 
 #include <gtest/gtest.h>

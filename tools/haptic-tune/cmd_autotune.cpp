@@ -1,5 +1,5 @@
 // haptic-tune autotune: from the device to verified coupling gains in its config, in one
-// command (issue 5; docs/autotune.md). The computing half (identify, size, verify) is
+// command (docs/autotune.md). The computing half (identify, size, verify) is
 // tune::autotune (hapticd/tune/autotune.hpp); this file is the glue to the daemon: its
 // config (read, edited keeping comments, checked at start-up, written with a backup) and
 // its executable (`hapticd --identify` when no --log is given).

@@ -1,5 +1,5 @@
-// hapticd's configuration file (TOML), with the keys DESIGN.md fixes (their units, ranges
-// and defaults: config_schema.hpp; the table of them: docs/daemon.md "Config"):
+// hapticd's configuration file (TOML), with the keys docs/architecture.md §5.3 names (their units,
+// ranges and defaults: config_schema.hpp; the table of them: docs/daemon.md "Config"):
 //
 //   [servo]        rate_hz, realtime ("enforce"|"warn"|"off"), priority (SCHED_FIFO),
 //                  cpu (the core to pin the servo thread to)

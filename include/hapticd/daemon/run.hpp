@@ -1,8 +1,8 @@
 // hapticd's run: config -> start-up stability check -> scene -> device plugin -> the servo
 // loop on its own thread, the telemetry writer on another, a status line each second on
 // this one, and the summary at the end. With --identify: config -> device plugin -> the
-// excitation (env/excitation.hpp) open loop in place of the scene, logged. Glue only (DESIGN.md):
-// every piece it wires is a library of its own layer.
+// excitation (env/excitation.hpp) open loop in place of the scene, logged. Glue only
+// (docs/architecture.md §2.8): every piece it wires is a library of its own layer.
 #pragma once
 
 #include <atomic>

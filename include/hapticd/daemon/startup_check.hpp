@@ -1,4 +1,4 @@
-// The start-up stability check (DESIGN.md, Safety model): hapticd refuses to arm with
+// The start-up stability check (docs/architecture.md §7.9): hapticd refuses to arm with
 // coupling gains that fail the configured stability model ([coupling] check) for the
 // configured device model ([device.model]) at [servo] rate_hz.
 #pragma once

@@ -1,4 +1,5 @@
-// The Device interface (DESIGN.md): what the servo loop reads and writes each tick.
+// The Device interface (docs/architecture.md §4.1): what the servo loop reads and writes each
+// tick.
 //
 // Units: encoder counts are integers, converted to metres with DeviceInfo::counts_per_meter;
 // Command::force_n is the force the device applies to the handle along each +axis, in

@@ -1,5 +1,5 @@
 // Scenes: a TOML file lists the objects of one virtual environment; the loader validates it
-// and builds only what it needs (DESIGN.md "Interfaces"): penalty objects make a
+// and builds only what it needs (docs/architecture.md §2.5, §4.2): penalty objects make a
 // PenaltyScene (an ImpedanceEnvironment), constraint objects a GodObject or a VirtualMass
 // (an AdmittanceEnvironment). One scene has one causality.
 //

@@ -1,8 +1,8 @@
-// Bounds on every text file hapticd and haptic-tune read before a parser sees it (issue 10):
-// a config or scene must not exhaust memory (`--config /dev/zero` read until it ran out) or
-// the stack (toml++ 3.3 recurses once per part of a dotted key: one key of 35,000 parts
-// overflowed it). The checks are lexical and cheap; parse_document (table_reader.hpp) runs
-// them before every parse.
+// Bounds on every text file hapticd and haptic-tune read before a parser sees it
+// (docs/architecture.md §7.10): a config or scene must not exhaust memory (`--config /dev/zero`
+// read until it ran out) or the stack (toml++ 3.3 recurses once per part of a dotted key: one key
+// of 35,000 parts overflowed it). The checks are lexical and cheap; parse_document
+// (table_reader.hpp) runs them before every parse.
 #pragma once
 
 #include <cstddef>

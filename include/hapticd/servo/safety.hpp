@@ -1,5 +1,5 @@
-// The safety stage of the tick (DESIGN.md "Safety model"): takes the coupling's handle force
-// and the handle velocity and returns the force to command. In order:
+// The safety stage of the tick (docs/architecture.md §3.3, §7): takes the coupling's handle
+// force and the handle velocity and returns the force to command. In order:
 //   fault latch (latched -> zero force, enable = false, in the same tick),
 //   non-finite check (-> kFaultNonFinite),
 //   velocity limit (fault, or damping on the speed above max_speed_mps),

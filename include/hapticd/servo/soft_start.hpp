@@ -1,4 +1,4 @@
-// Soft start (DESIGN.md "Safety model"): no force until the handle has been still for a
+// Soft start (docs/architecture.md §7.3): no force until the handle has been still for a
 // while, then a linear ramp of the force scale from 0 to 1. A person who grabs a handle
 // that starts inside a wall is not thrown by a full-stiffness step.
 #pragma once
