@@ -139,10 +139,10 @@ void BM_CheckPassiveScene(benchmark::State& state) {
 }
 BENCHMARK(BM_CheckPassiveScene)->Unit(benchmark::kMillisecond);
 
-// The admittance display (issue 9): the exact admittance check of one design (the default
-// sweep, 637 operators x 87 environments) with a delay in hundredths of a period, and the
-// exact sizing (a bisection on it with cutting planes). Device: m = 2 kg, b = 5 N s/m,
-// k_p = 2 N s/m, a pure-mass coupling, 1 kHz.
+// The admittance display (docs/benchmarks.md, "The admittance display"): the exact admittance
+// check of one design (the default sweep, 637 operators x 87 environments) with a delay in
+// hundredths of a period, and the exact sizing (a bisection on it with cutting planes). Device:
+// m = 2 kg, b = 5 N s/m, k_p = 2 N s/m, a pure-mass coupling, 1 kHz.
 const DeviceModel kArm{2.0, 5.0};
 
 void BM_CheckExactAdmittance(benchmark::State& state) {

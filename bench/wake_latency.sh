@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Wake-up latency of hapticd's servo loop against cyclictest (Debian rt-tests), on the same
-# machine, back to back in the same run (DESIGN.md "Evidence"). Both sleep to an absolute
-# 1 ms deadline with clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME) in a SCHED_FIFO 80
+# machine, back to back in the same run (docs/architecture.md §2.11). Both sleep to an
+# absolute 1 ms deadline with clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME) in a SCHED_FIFO 80
 # thread with mlockall and /dev/cpu_dma_latency = 0, unpinned, and measure wake - deadline:
 #   cyclictest -m -p80 -i1000 -l N -q        (1 us histogram buckets)
 #   hapticd --duration S --summary -         (the embedded default: sim device, demo wall,

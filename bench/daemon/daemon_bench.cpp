@@ -1,6 +1,6 @@
 // Full-stack servo tick: hapticd's ServoLoop over the dlopen()ed `sim` plugin in lockstep,
 // with the scene loaded from config/scenes/ and the settings from the daemon's embedded
-// default config (full_stack.hpp), the handle held in contact. Issue 3's targets:
+// default config (full_stack.hpp), the handle held in contact. Targets (docs/benchmarks.md):
 //   demo wall, 1 axis:           tick compute median < 1 us, p99 < 3 us
 //   box-16-planes, 3 axes:       tick compute p99 < 5 us
 // Time per iteration is one ServoLoop::tick(). The counters p50/p99/p999/max_compute_us

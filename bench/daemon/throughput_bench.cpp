@@ -1,7 +1,8 @@
-// Lockstep throughput of the 1-axis demo wall in contact (issue 3's target: more than
-// 500,000 ticks per second, 500x real time at 1 kHz): ServoLoop::run() as hapticd
-// --lockstep runs it, the sim pacing the loop, in batches of kTicksPerRun. Wall-clock time;
-// items_per_second is ticks per second and x_realtime is virtual seconds per second.
+// Lockstep throughput of the 1-axis demo wall in contact (the target in docs/benchmarks.md,
+// "Lockstep throughput": more than 500,000 ticks per second, 500x real time at 1 kHz):
+// ServoLoop::run() as hapticd --lockstep runs it, the sim pacing the loop, in batches of
+// kTicksPerRun. Wall-clock time; items_per_second is ticks per second and x_realtime is
+// virtual seconds per second.
 //
 // Telemetry variants:
 //   no_ring      hapticd --lockstep (no --log): no records pushed

@@ -1,4 +1,4 @@
-// Tick compute time of the servo loop (DESIGN.md "Evidence": benchmarks, not timed tests):
+// Tick compute time of the servo loop (docs/architecture.md §2.11: benchmarks, not timed tests):
 // a 1-axis wall scene, a fake device returning a fixed sample, no sleeping. Target: median
 // well under 1 us.
 #include <benchmark/benchmark.h>

@@ -165,6 +165,7 @@ DiagReport run_link_diag(const Config& config, const DiagOptions& options, std::
     device_config.rate_hz = config.servo.rate_hz;
     device_config.lockstep = options.lockstep;
     device_config.plugin_table_toml = config.device.plugin_table_toml;
+    device_config.plugin_table_path = config.device.plugin_table_path;
     device_config.source = config.source;
     try {
         device->open(device_config);

@@ -171,6 +171,9 @@ StartupCheck run_startup_check(const Config& config, std::ostream& log) {
         log << "hapticd: WARNING: " << check.describe() << "\n";
         return check;
     }
+    // The verdict's own line first, as haptic-tune check gives it for this config.
+    log << "hapticd: " << (check.guarantee && check.passed ? "" : "WARNING: ") << check.describe()
+        << "\n";
     if (!check.passed) {
         std::ostringstream m;
         m << config.source
@@ -179,9 +182,9 @@ StartupCheck run_startup_check(const Config& config, std::ostream& log) {
         if (config.coupling.velocity_filter_hz > 0.0) {
             m << ", velocity_filter = " << config.coupling.velocity_filter_hz << " Hz";
         }
-        m << " fail the " << check.model << " model for [device.model] at " << config.servo.rate_hz
-          << " Hz: worst margin " << check.worst_margin << " at " << check.worst_frequency_hz
-          << " Hz";
+        m << " fail the " << check.model_name() << " model for [device.model] at "
+          << config.servo.rate_hz << " Hz: worst margin " << check.worst_margin << " at "
+          << check.worst_frequency_hz << " Hz";
         if (!check.worst_case.empty()) m << " (" << check.worst_case << ")";
         if (config.device.model_delay_s > 0.0) {
             m << " with a loop delay of " << config.device.model_delay_s << " s";
@@ -194,7 +197,7 @@ StartupCheck run_startup_check(const Config& config, std::ostream& log) {
             m << " --velocity-filter " << config.coupling.velocity_filter_hz;
         }
         if (config.operators) m << " --model exact --operator-class " << config.source;
-        if (config.coupling.environments == "scene") {
+        if (config.coupling.environments == EnvironmentClass::scene) {
             m << " --scene "
               << (config.scene_file.empty() ? std::string("config/scenes/demo-wall.toml")
                                             : config.scene_file);
@@ -202,7 +205,6 @@ StartupCheck run_startup_check(const Config& config, std::ostream& log) {
         m << " (the check holds for " << check.holds_for << ")";
         throw StartError(kExitBadInput, m.str());
     }
-    log << "hapticd: " << (check.guarantee ? "" : "WARNING: ") << check.describe() << "\n";
     return check;
 }
 
@@ -219,6 +221,7 @@ device::DeviceHandle open_device(const Config& config, bool lockstep) {
     device_config.rate_hz = config.servo.rate_hz;
     device_config.lockstep = lockstep;
     device_config.plugin_table_toml = config.device.plugin_table_toml;
+    device_config.plugin_table_path = config.device.plugin_table_path;
     device_config.source = config.source;
     try {
         device->open(device_config);
@@ -571,7 +574,7 @@ int run_identify(const RunOptions& options, std::atomic<bool>& stop, std::ostrea
     context.config_source = config.source;
     context.lockstep = options.lockstep;
     context.check.skipped = true;
-    context.check.model = "none (identify: open loop, nothing coupled)";
+    context.check.skipped_model = "none (identify: open loop, nothing coupled)";
     context.scene = "identify-multisine";
     context.causality = env::to_string(env::Causality::impedance);
     check_duration(options, config.servo.rate_hz);

@@ -10,9 +10,11 @@
 #include <string>
 
 namespace hapticd::daemon {
+namespace {
 
-servo::ServoConfig make_servo_config(const Config& config, const device::DeviceInfo& info,
-                                     bool lossless_log) {
+/// make_servo_config() before its check.
+servo::ServoConfig servo_config_of(const Config& config, const device::DeviceInfo& info,
+                                   bool lossless_log) {
     if (info.axes != config.device.axes) {
         throw ConfigError(config.source +
                           ": [device] axes = " + std::to_string(config.device.axes) + " but the " +
@@ -32,11 +34,8 @@ servo::ServoConfig make_servo_config(const Config& config, const device::DeviceI
     servo.safety.max_speed_mps = config.safety.max_speed_mps;
     servo.safety.encoder_jump_m = 10.0 * config.safety.max_speed_mps / config.servo.rate_hz;
     servo.safety.soft_start.ramp_time_s = config.safety.soft_start_ramp_s;
-    servo.safety.passivity.mode = config.safety.passivity == "control"
-                                      ? servo::PassivityMode::control
-                                      : servo::PassivityMode::observe;
-    servo.realtime.mode = info.lockstep ? servo::RealtimeMode::off
-                                        : servo::parse_realtime_mode(config.servo.realtime);
+    servo.safety.passivity.mode = config.safety.passivity;
+    servo.realtime.mode = info.lockstep ? servo::RealtimeMode::off : config.servo.realtime;
     servo.realtime.priority = config.servo.priority;
     servo.realtime.cpu = config.servo.cpu.value_or(-1);
     servo.device_paces_loop = info.paces_loop;
@@ -51,16 +50,31 @@ servo::ServoConfig make_servo_config(const Config& config, const device::DeviceI
     return servo;
 }
 
+/// The whole servo configuration, checked once, before the servo thread exists.
+servo::ServoConfig checked(servo::ServoConfig servo, const Config& config) {
+    if (std::string error; !servo.is_valid(&error)) {
+        throw ConfigError(config.source + ": " + error);
+    }
+    return servo;
+}
+
+}  // namespace
+
+servo::ServoConfig make_servo_config(const Config& config, const device::DeviceInfo& info,
+                                     bool lossless_log) {
+    return checked(servo_config_of(config, info, lossless_log), config);
+}
+
 servo::ServoConfig make_identify_servo_config(const Config& config, const device::DeviceInfo& info,
                                               bool lossless_log) {
-    servo::ServoConfig servo = make_servo_config(config, info, lossless_log);
+    servo::ServoConfig servo = servo_config_of(config, info, lossless_log);
     servo.coupling_enabled = false;
     servo.coupling = {};
     servo.safety.soft_start.still_time_s = 0.0;
     servo.safety.soft_start.ramp_time_s = 0.0;
     servo.safety.passivity.mode = servo::PassivityMode::observe;
     servo.link_recovery.enabled = false;
-    return servo;
+    return checked(servo, config);
 }
 
 namespace {
@@ -71,7 +85,7 @@ std::string format(double value) {
     return out.str();
 }
 
-// Seconds of full periods a default run covers (the "10 s log" of issue 5).
+// Seconds of full periods a default run covers (docs/daemon.md, "Identification run").
 constexpr double kDefaultExcitedTime_s = 10.0;
 // Zero force logged after the excitation: the handle coming to rest.
 constexpr double kTail_s = 0.5;
@@ -91,7 +105,7 @@ IdentifyPlan make_identify_plan(const Config& config, const device::DeviceInfo& 
     settings.signal.axes = config.device.axes;
     settings.signal.lines_per_decade = identify.lines_per_decade;
     settings.workspace_half_width_m = identify.workspace_m;
-    settings.force_limit_n = make_servo_config(config, info, false).safety.max_force_n;
+    settings.force_limit_n = servo_config_of(config, info, false).safety.max_force_n;
     const servo::SoftStartSettings soft_start;  // the still wait, as in any run
     settings.still_speed_mps = soft_start.still_speed_mps;
     settings.still_time_s = soft_start.still_time_s;

@@ -50,7 +50,7 @@ std::string summary_json(const servo::Summary& s, const RunContext& c) {
     j["device"] = c.device;
     j["scene"] = {{"name", c.scene}, {"causality", c.causality}};
     nlohmann::ordered_json check;
-    check["model"] = c.check.model;
+    check["model"] = c.check.model_name();
     if (!c.check.skipped) {
         check["passed"] = c.check.passed;
         check["worst_margin"] = c.check.worst_margin;

@@ -3,32 +3,31 @@
 #include <cmath>
 #include <glm/geometric.hpp>
 #include <numbers>
-#include <sstream>
 #include <stdexcept>
+
+#include "hapticd/input/range.hpp"
 
 namespace hapticd::env {
 namespace {
 
-[[noreturn]] void reject(const char* what, double value, const char* expected) {
-    std::ostringstream m;
-    m << "excitation: " << what << " = " << value << " is not allowed: must be " << expected;
-    throw std::invalid_argument(m.str());
-}
-
 const ExcitationSettings& validated(const ExcitationSettings& s) {
-    if (s.periods < 1 || s.periods > 100'000) reject("periods", s.periods, "in 1..100000");
-    if (!(s.fade_s >= 0.0) || !std::isfinite(s.fade_s)) reject("fade_s", s.fade_s, ">= 0");
+    if (s.periods < 1 || s.periods > 100'000)
+        input::reject_out_of_range("excitation: periods", s.periods, "1..100000");
+    if (!(s.fade_s >= 0.0) || !std::isfinite(s.fade_s))
+        input::reject_out_of_range("excitation: fade_s", s.fade_s, ">= 0");
     if (!(s.workspace_half_width_m > 0.0) || !std::isfinite(s.workspace_half_width_m)) {
-        reject("workspace_half_width_m", s.workspace_half_width_m, "finite and > 0");
+        input::reject_out_of_range("excitation: workspace_half_width_m", s.workspace_half_width_m,
+                                   "finite and > 0");
     }
     if (!(s.force_limit_n > 0.0) || !std::isfinite(s.force_limit_n)) {
-        reject("force_limit_n", s.force_limit_n, "finite and > 0");
+        input::reject_out_of_range("excitation: force_limit_n", s.force_limit_n, "finite and > 0");
     }
     if (!(s.still_speed_mps >= 0.0) || !std::isfinite(s.still_speed_mps)) {
-        reject("still_speed_mps", s.still_speed_mps, "finite and >= 0");
+        input::reject_out_of_range("excitation: still_speed_mps", s.still_speed_mps,
+                                   "finite and >= 0");
     }
     if (!(s.still_time_s >= 0.0) || !std::isfinite(s.still_time_s)) {
-        reject("still_time_s", s.still_time_s, "finite and >= 0");
+        input::reject_out_of_range("excitation: still_time_s", s.still_time_s, "finite and >= 0");
     }
     return s;
 }

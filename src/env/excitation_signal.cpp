@@ -7,37 +7,35 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "hapticd/input/range.hpp"
+
 namespace hapticd::env {
 namespace {
 
 // A table longer than this (32 MiB per axis) is a configuration mistake, not a signal.
 constexpr std::size_t kMaxPeriodSamples = std::size_t{1} << 22;
 
-[[noreturn]] void reject(const char* what, double value, const char* expected) {
-    std::ostringstream m;
-    m << "multisine: " << what << " = " << value << " is not allowed: must be " << expected;
-    throw std::invalid_argument(m.str());
-}
-
 void validate(const MultisineSettings& s) {
     if (!(s.sample_rate_hz > 0.0) || !std::isfinite(s.sample_rate_hz)) {
-        reject("sample_rate_hz", s.sample_rate_hz, "finite and > 0");
+        input::reject_out_of_range("multisine: sample_rate_hz", s.sample_rate_hz, "finite and > 0");
     }
-    if (s.axes < 1 || s.axes > 3) reject("axes", s.axes, "in 1..3");
+    if (s.axes < 1 || s.axes > 3) input::reject_out_of_range("multisine: axes", s.axes, "1..3");
     if (!(s.band_low_hz > 0.0) || !std::isfinite(s.band_low_hz)) {
-        reject("band_low_hz", s.band_low_hz, "finite and > 0");
+        input::reject_out_of_range("multisine: band_low_hz", s.band_low_hz, "finite and > 0");
     }
     if (!(s.band_high_hz > s.band_low_hz) || !(s.band_high_hz < 0.5 * s.sample_rate_hz)) {
-        reject("band_high_hz", s.band_high_hz, "> band_low_hz and < half the sample rate");
+        input::reject_out_of_range("multisine: band_high_hz", s.band_high_hz,
+                                   "> band_low_hz and < half the sample rate");
     }
     if (!(s.period_s > 0.0) || !std::isfinite(s.period_s)) {
-        reject("period_s", s.period_s, "finite and > 0");
+        input::reject_out_of_range("multisine: period_s", s.period_s, "finite and > 0");
     }
     if (!(s.lines_per_decade > 0.0) || !std::isfinite(s.lines_per_decade)) {
-        reject("lines_per_decade", s.lines_per_decade, "finite and > 0");
+        input::reject_out_of_range("multisine: lines_per_decade", s.lines_per_decade,
+                                   "finite and > 0");
     }
     if (!(s.peak_force_n > 0.0) || !std::isfinite(s.peak_force_n)) {
-        reject("peak_force_n", s.peak_force_n, "finite and > 0");
+        input::reject_out_of_range("multisine: peak_force_n", s.peak_force_n, "finite and > 0");
     }
 }
 

@@ -1,10 +1,5 @@
 // The scene loader: TOML -> validated objects -> the one environment the scene needs.
-#include <cerrno>
-#include <cstring>
-#include <fstream>
-#include <limits>
 #include <numbers>
-#include <sstream>
 #include <utility>
 
 #include "hapticd/env/god_object.hpp"
@@ -22,40 +17,59 @@ const char* to_string(Causality causality) noexcept {
 
 namespace {
 
-using detail::kMaxCoefficient;
-using detail::kMaxDamping_n_s_per_m;
-using detail::kMaxForce_n;
-using detail::kMaxLength_m;
-using detail::kMaxMass_kg;
-using detail::kMaxStiffness_n_per_m;
+using detail::kCoefficient;
+using detail::kCoordinate;
+using detail::kDamping;
+using detail::kMass;
+using detail::kPositiveDamping;
+using detail::kPositiveForce;
+using detail::kPositiveLength;
+using detail::kPositiveStiffness;
+using detail::kStiffness;
 using detail::Range;
+using detail::read_vector;
 using detail::TableReader;
-using detail::where;
+using input::Number;
 
-constexpr Range kPositiveStiffness{0.0, false, kMaxStiffness_n_per_m, true, "N/m"};
-constexpr Range kStiffness{0.0, true, kMaxStiffness_n_per_m, true, "N/m"};
-constexpr Range kPositiveDamping{0.0, false, kMaxDamping_n_s_per_m, true, "N s/m"};
-constexpr Range kDamping{0.0, true, kMaxDamping_n_s_per_m, true, "N s/m"};
-constexpr Range kPositiveForce{0.0, false, kMaxForce_n, true, "N"};
-constexpr Range kPositiveLength{0.0, false, kMaxLength_m, true, "m"};
-constexpr Range kOffset{-kMaxLength_m, true, kMaxLength_m, true, "m"};
-constexpr Range kMass{0.0, false, kMaxMass_kg, true, "kg"};
-constexpr Range kCoefficient{0.0, false, kMaxCoefficient, true, ""};
+// The keys of the schema (scene.hpp), each with its range and default; vectors are read
+// with read_vector.
+constexpr Number kOffset{"offset", kCoordinate, 0.0};
+constexpr Number kObjectStiffness{"stiffness", kPositiveStiffness};
+constexpr Number kWallDamping{"damping", kDamping, 0.0};
+constexpr Number kDamperDamping{"damping", kPositiveDamping};
+constexpr Number kDetentPeriod{"period", kPositiveLength};
+constexpr Number kDetentPeakForce{"peak_force", kPositiveForce};
+constexpr input::Flag kDetentPeriodic{"periodic", true};
+constexpr Number kNormalForce{"normal_force", kPositiveForce};
+constexpr Number kStaticCoefficient{"static_coefficient", kCoefficient};
+constexpr Number kRadius{"radius", kPositiveLength};
+constexpr Number kVirtualMass{"mass", kMass};
+constexpr Number kVirtualMassStiffness{"stiffness", kStiffness, 0.0};
+constexpr Number kVirtualMassDamping{"damping", kDamping, 0.0};
+
+std::string_view side_name(SphereSide side) noexcept {
+    return side == SphereSide::inside ? "inside" : "outside";
+}
+constexpr SphereSide kSides[] = {SphereSide::outside, SphereSide::inside};
+constexpr input::Choice<SphereSide> kSide{"side", kSides, &side_name, SphereSide::outside};
 
 const char* const kPenaltyKinds[] = {"wall", "spring", "damper", "detent", "friction"};
-const char* const kTopLevelKeys[] = {"scene",       "wall",         "spring",
-                                     "damper",      "detent",       "friction",
-                                     "proxy_plane", "proxy_sphere", "virtual_mass"};
+const char* const kArrayKinds[] = {"wall",     "spring",      "damper",      "detent",
+                                   "friction", "proxy_plane", "proxy_sphere"};
 
 class SceneParser {
   public:
     SceneParser(const toml::table& root, std::string source)
-        : root_(root), source_(std::move(source)) {}
+        : root_(root), source_(std::move(source)), file_(root, source_, "") {}
 
     Scene parse(int device_axes) {
-        reject_unknown_tables();
+        // Every table the schema has, then the rest refused, before anything is read.
+        const toml::table* header = file_.subtable("scene");
+        for (const char* kind : kArrayKinds) (void)file_.array_of_tables(kind);
+        (void)file_.subtable("virtual_mass");
+        file_.finish();
         Scene scene;
-        read_header(scene, device_axes);
+        read_header(header, scene, device_axes);
         axes_ = scene.axes;
 
         const bool has_penalty = first_present(kPenaltyKinds) != nullptr;
@@ -95,20 +109,6 @@ class SceneParser {
     }
 
   private:
-    void reject_unknown_tables() const {
-        for (const auto& [key, node] : root_) {
-            bool known = false;
-            for (const char* allowed : kTopLevelKeys) known = known || key.str() == allowed;
-            if (known) continue;
-            std::string allowed_list;
-            for (const char* allowed : kTopLevelKeys) {
-                allowed_list += (allowed_list.empty() ? "" : ", ") + std::string(allowed);
-            }
-            throw SceneError(where(source_, &node) + "unknown table or key '" +
-                             std::string(key.str()) + "': allowed are " + allowed_list);
-        }
-    }
-
     const char* first_present(const char* const (&kinds)[5]) const {
         for (const char* kind : kinds) {
             if (root_.contains(kind)) return kind;
@@ -116,86 +116,71 @@ class SceneParser {
         return nullptr;
     }
 
-    void read_header(Scene& scene, int device_axes) const {
+    void read_header(const toml::table* table, Scene& scene, int device_axes) const {
         if (device_axes < 1 || device_axes > 3) {
             throw SceneError(source_ + ": the device has " + std::to_string(device_axes) +
                              " axes: allowed 1 to 3");
         }
-        const toml::node* node = root_.get("scene");
-        if (node == nullptr) {
+        if (table == nullptr) {
             throw SceneError(source_ + ": [scene] is missing: required, with name and axes");
         }
-        const toml::table* table = node->as_table();
-        if (table == nullptr) {
-            throw SceneError(where(source_, node) + "scene must be a table ([scene])");
-        }
-        TableReader reader(*table, source_, "[scene]", 0, {"name", "axes"});
-        scene.name = reader.string("name");
-        if (scene.name.empty()) reader.fail("name", " = \"\" is empty: allowed a non-empty string");
-        const Range axes_range{
-            1.0, true, static_cast<double>(device_axes), true,
-            device_axes == 1 ? "(the device has 1 axis)" : "(the device's axes)"};
-        const double axes = reader.number("axes", axes_range);
-        if (axes != static_cast<double>(static_cast<int>(axes))) {
-            reader.fail("axes", " = " + detail::format_number(axes) +
-                                    " is not an integer: allowed " + axes_range.describe());
-        }
-        scene.axes = static_cast<int>(axes);
+        TableReader reader = file_.nested(*table, "scene");
+        reader.only({"name", "axes"});
+        scene.name = reader.read(input::Text{"name", std::nullopt, false, "a non-empty name"});
+        scene.axes = static_cast<int>(reader.read(
+            input::Integer{"axes", 1, device_axes, std::nullopt,
+                           device_axes == 1 ? "the device has 1 axis" : "the device's axes"}));
+        reader.finish();
     }
 
-    /// Calls read(reader) for each table of the array of tables `kind`.
+    /// Calls read(reader) for each table of the array of tables `kind` in `parent`, then
+    /// refuses the keys it did not read.
     template <typename Read>
-    void for_each(const char* kind, std::initializer_list<std::string_view> keys, Read read,
-                  const toml::table* parent = nullptr, const std::string& parent_name = "") const {
-        const toml::table& where_from = parent != nullptr ? *parent : root_;
-        const toml::node* node = where_from.get(kind);
-        if (node == nullptr) return;
-        const std::string name = parent_name.empty() ? kind : parent_name + "." + kind;
-        const toml::array* array = node->as_array();
-        if (array == nullptr || !array->is_array_of_tables()) {
-            throw SceneError(where(source_, node) + name + " must be an array of tables: write [[" +
-                             name + "]] for each one");
-        }
+    void for_each(TableReader& parent, const char* kind,
+                  std::initializer_list<std::string_view> keys, Read read) const {
+        const toml::array* array = parent.array_of_tables(kind);
+        if (array == nullptr) return;
         for (std::size_t i = 0; i < array->size(); ++i) {
-            const toml::table& table = *array->get(i)->as_table();
-            TableReader reader(table, source_, "[[" + name + "]] #" + std::to_string(i + 1), axes_,
-                               keys);
+            TableReader reader =
+                parent.nested(*array->get(i)->as_table(), kind, static_cast<int>(i + 1));
+            reader.only(keys);
             read(reader);
+            reader.finish();
         }
     }
 
     std::unique_ptr<ImpedanceEnvironment> build_penalty_scene() {
         PenaltyObjects objects;
-        for_each("wall", {"normal", "offset", "stiffness", "damping"}, [&](TableReader& r) {
+        for_each(file_, "wall", {"normal", "offset", "stiffness", "damping"}, [&](TableReader& r) {
             Wall wall;
-            wall.normal_in_free_space = r.vector("normal", true);
-            wall.offset_m = r.number("offset", kOffset, 0.0);
-            wall.stiffness_n_per_m = r.number("stiffness", kPositiveStiffness);
-            wall.damping_n_s_per_m = r.number("damping", kDamping, 0.0);
+            wall.normal_in_free_space = read_vector(r, "normal", axes_, true);
+            wall.offset_m = r.read(kOffset);
+            wall.stiffness_n_per_m = r.read(kObjectStiffness);
+            wall.damping_n_s_per_m = r.read(kWallDamping);
             objects.walls.push_back(wall);
             linear("wall", objects.walls.size(), 0.0, wall.stiffness_n_per_m,
                    wall.damping_n_s_per_m);
         });
-        for_each("spring", {"anchor", "stiffness"}, [&](TableReader& r) {
+        for_each(file_, "spring", {"anchor", "stiffness"}, [&](TableReader& r) {
             Spring spring;
-            spring.anchor_m = r.vector("anchor", false, Vec3(0.0));
-            spring.stiffness_n_per_m = r.number("stiffness", kPositiveStiffness);
+            spring.anchor_m = read_vector(r, "anchor", axes_, false, Vec3(0.0));
+            spring.stiffness_n_per_m = r.read(kObjectStiffness);
             objects.springs.push_back(spring);
             linear("spring", objects.springs.size(), 0.0, spring.stiffness_n_per_m, 0.0);
         });
-        for_each("damper", {"damping"}, [&](TableReader& r) {
-            objects.dampers.push_back(Damper{r.number("damping", kPositiveDamping)});
+        for_each(file_, "damper", {"damping"}, [&](TableReader& r) {
+            objects.dampers.push_back(Damper{r.read(kDamperDamping)});
             linear("damper", objects.dampers.size(), 0.0, 0.0,
                    objects.dampers.back().damping_n_s_per_m);
         });
-        for_each("detent", {"axis", "center", "period", "peak_force", "periodic"},
+        for_each(file_, "detent", {"axis", "center", "period", "peak_force", "periodic"},
                  [&](TableReader& r) {
                      Detent detent;
-                     detent.axis = r.vector("axis", true);
-                     detent.center_m = r.vector("center", false, Vec3(0.0));
-                     detent.period_m = r.number("period", kPositiveLength);
-                     detent.peak_force_n = r.number("peak_force", kPositiveForce);
-                     detent.periodic = r.boolean("periodic", true);
+                     detent.axis = read_vector(r, "axis", axes_, true);
+                     detent.center_m = read_vector(r, "center", axes_, false, Vec3(0.0));
+                     detent.period_m = r.read(kDetentPeriod);
+                     detent.peak_force_n = r.read(kDetentPeakForce);
+                     detent.periodic = r.read(kDetentPeriodic);
                      objects.detents.push_back(detent);
                      const double slope_n_per_m =
                          -2.0 * std::numbers::pi * detent.peak_force_n / detent.period_m;
@@ -208,16 +193,19 @@ class SceneParser {
                                 ": its force is periodic in position, with a slope that "
                                 "changes sign, so it has no passive linear model");
                  });
-        for_each("friction",
+        for_each(file_, "friction",
                  {"normal_force", "static_coefficient", "kinetic_coefficient", "stiffness"},
                  [&](TableReader& r) {
                      StickSlipFriction friction;
-                     friction.normal_force_n = r.number("normal_force", kPositiveForce);
-                     friction.static_coefficient = r.number("static_coefficient", kCoefficient);
-                     const Range kinetic{0.0, false, friction.static_coefficient, true,
-                                         "(at most static_coefficient)"};
-                     friction.kinetic_coefficient = r.number("kinetic_coefficient", kinetic);
-                     friction.stiffness_n_per_m = r.number("stiffness", kPositiveStiffness);
+                     friction.normal_force_n = r.read(kNormalForce);
+                     friction.static_coefficient = r.read(kStaticCoefficient);
+                     friction.kinetic_coefficient =
+                         r.read(Number{"kinetic_coefficient",
+                                       {.lo = 0.0,
+                                        .hi = friction.static_coefficient,
+                                        .lo_open = true,
+                                        .unit = "at most static_coefficient"}});
+                     friction.stiffness_n_per_m = r.read(kObjectStiffness);
                      objects.frictions.push_back(friction);
                      unmodelled("[[friction]] #" + std::to_string(objects.frictions.size()) +
                                 ": stick-slip switches between a spring and a sliding force, "
@@ -237,42 +225,27 @@ class SceneParser {
         return scene;
     }
 
-    ConstraintSet read_constraints(const char* plane_kind, const char* sphere_kind,
-                                   const toml::table* parent,
-                                   const std::string& parent_name) const {
+    ConstraintSet read_constraints(TableReader& parent, const char* plane_kind,
+                                   const char* sphere_kind) const {
         ConstraintSet constraints;
-        for_each(
-            plane_kind, {"normal", "offset"},
-            [&](TableReader& r) {
-                PlaneConstraint plane;
-                plane.normal_in_free_space = r.vector("normal", true);
-                plane.offset_m = r.number("offset", kOffset, 0.0);
-                constraints.planes.push_back(plane);
-            },
-            parent, parent_name);
-        for_each(
-            sphere_kind, {"center", "radius", "side"},
-            [&](TableReader& r) {
-                SphereConstraint sphere;
-                sphere.center_m = r.vector("center", false, Vec3(0.0));
-                sphere.radius_m = r.number("radius", kPositiveLength);
-                const std::string side = r.string("side", "outside");
-                if (side == "outside") {
-                    sphere.side = SphereSide::outside;
-                } else if (side == "inside") {
-                    sphere.side = SphereSide::inside;
-                } else {
-                    r.fail("side",
-                           " = \"" + side + "\" is not allowed: allowed \"outside\" or \"inside\"");
-                }
-                constraints.spheres.push_back(sphere);
-            },
-            parent, parent_name);
+        for_each(parent, plane_kind, {"normal", "offset"}, [&](TableReader& r) {
+            PlaneConstraint plane;
+            plane.normal_in_free_space = read_vector(r, "normal", axes_, true);
+            plane.offset_m = r.read(kOffset);
+            constraints.planes.push_back(plane);
+        });
+        for_each(parent, sphere_kind, {"center", "radius", "side"}, [&](TableReader& r) {
+            SphereConstraint sphere;
+            sphere.center_m = read_vector(r, "center", axes_, false, Vec3(0.0));
+            sphere.radius_m = r.read(kRadius);
+            sphere.side = r.read(kSide);
+            constraints.spheres.push_back(sphere);
+        });
         return constraints;
     }
 
     std::unique_ptr<AdmittanceEnvironment> build_god_object() {
-        ConstraintSet constraints = read_constraints("proxy_plane", "proxy_sphere", nullptr, "");
+        ConstraintSet constraints = read_constraints(file_, "proxy_plane", "proxy_sphere");
         auto god_object = std::make_unique<GodObject>(std::move(constraints), axes_);
         linear_.push_back({"the god-object in contact with its constraints", 0.0, 0.0, 0.0, true});
         if (!god_object->constraints().is_free(god_object->proxy_m())) {
@@ -285,23 +258,17 @@ class SceneParser {
     }
 
     std::unique_ptr<AdmittanceEnvironment> build_virtual_mass() {
-        const toml::node* node = root_.get("virtual_mass");
-        const toml::table* table = node->as_table();
-        if (table == nullptr) {
-            throw SceneError(where(source_, node) +
-                             "virtual_mass must be a table ([virtual_mass])");
-        }
-        TableReader reader(*table, source_, "[virtual_mass]", axes_,
-                           {"mass", "stiffness", "damping", "anchor", "plane", "sphere"});
+        TableReader reader = file_.nested(*file_.subtable("virtual_mass"), "virtual_mass");
+        reader.only({"mass", "stiffness", "damping", "anchor", "plane", "sphere"});
         VirtualMassParameters parameters;
-        parameters.mass_kg = reader.number("mass", kMass);
-        parameters.stiffness_n_per_m = reader.number("stiffness", kStiffness, 0.0);
-        parameters.damping_n_s_per_m = reader.number("damping", kDamping, 0.0);
-        parameters.anchor_m = reader.vector("anchor", false, Vec3(0.0));
-        ConstraintSet constraints = read_constraints("plane", "sphere", table, "virtual_mass");
+        parameters.mass_kg = reader.read(kVirtualMass);
+        parameters.stiffness_n_per_m = reader.read(kVirtualMassStiffness);
+        parameters.damping_n_s_per_m = reader.read(kVirtualMassDamping);
+        parameters.anchor_m = read_vector(reader, "anchor", axes_, false, Vec3(0.0));
+        ConstraintSet constraints = read_constraints(reader, "plane", "sphere");
+        reader.finish();
         if (!constraints.is_free(parameters.anchor_m)) {
-            reader.fail("anchor", " = " + detail::format_vector(parameters.anchor_m, axes_) +
-                                      " is inside a constraint: allowed a point in free space");
+            reader.fail("anchor", "is inside a constraint", "a point in free space");
         }
         linear_.push_back({"[virtual_mass]", parameters.mass_kg, parameters.stiffness_n_per_m,
                            parameters.damping_n_s_per_m, false});
@@ -323,6 +290,7 @@ class SceneParser {
 
     const toml::table& root_;
     std::string source_;
+    TableReader file_;
     int axes_ = 0;
     // What the stability check's scene model needs (Scene::linear_objects).
     std::vector<LinearObject> linear_;
@@ -333,28 +301,12 @@ class SceneParser {
 }  // namespace
 
 Scene parse_scene(std::string_view text, const std::string& source_name, int axes) {
-    if (const std::string e = input::toml_shape_error(text, source_name); !e.empty()) {
-        throw SceneError(e);
-    }
-    toml::table root;
-    try {
-        root = toml::parse(text, source_name);
-    } catch (const toml::parse_error& error) {
-        throw SceneError(source_name + ":" + std::to_string(error.source().begin.line) + ":" +
-                         std::to_string(error.source().begin.column) +
-                         ": TOML syntax error: " + std::string(error.description()));
-    }
+    const toml::table root = input::parse_document(text, source_name);
     return SceneParser(root, source_name).parse(axes);
 }
 
 Scene load_scene(const std::string& path, int axes) {
-    std::string text;
-    try {
-        text = input::read_text_file(path, "the scene file");
-    } catch (const input::InputError& e) {
-        throw SceneError(e.what());
-    }
-    return parse_scene(text, path, axes);
+    return parse_scene(input::read_text_file(path, "the scene file"), path, axes);
 }
 
 }  // namespace hapticd::env

@@ -138,27 +138,29 @@ class TomlShape {
 }  // namespace
 
 std::string read_text_file(const std::string& path, std::string_view what, std::size_t max_bytes) {
-    if (path.empty()) throw InputError(std::string(what) + ": the path is empty");
+    if (path.empty()) throw ConfigError(std::string(what) + ": the path is empty");
     struct stat st {};
     if (::stat(path.c_str(), &st) != 0) {
-        throw InputError(path + ": cannot read " + std::string(what) + ": " + std::strerror(errno));
+        throw ConfigError(path + ": cannot read " + std::string(what) + ": " +
+                          std::strerror(errno));
     }
     if (S_ISDIR(st.st_mode)) {
-        throw InputError(path + ": cannot read " + std::string(what) + ": it is a directory");
+        throw ConfigError(path + ": cannot read " + std::string(what) + ": it is a directory");
     }
     std::ifstream in(path, std::ios::binary);
-    if (!in) throw InputError(path + ": cannot read " + std::string(what));
+    if (!in) throw ConfigError(path + ": cannot read " + std::string(what));
     std::string text;
     std::array<char, 65536> chunk{};
     while (in) {
         in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
         text.append(chunk.data(), static_cast<std::size_t>(in.gcount()));
         if (text.size() > max_bytes) {
-            throw InputError(path + ": " + std::string(what) + " is larger than " + mib(max_bytes) +
-                             " (allowed at most " + mib(max_bytes) + "): not a hapticd file");
+            throw ConfigError(path + ": " + std::string(what) + " is larger than " +
+                              mib(max_bytes) + " (allowed at most " + mib(max_bytes) +
+                              "): not a hapticd file");
         }
     }
-    if (in.bad()) throw InputError(path + ": cannot read " + std::string(what));
+    if (in.bad()) throw ConfigError(path + ": cannot read " + std::string(what));
     return text;
 }
 

@@ -2,19 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 #include <stdexcept>
 
 namespace hapticd::servo {
 
 namespace {
-
-[[noreturn]] void reject(const char* field, double value, const char* expected) {
-    std::ostringstream message;
-    message << "servo config: link_recovery." << field << " must be " << expected << ", got "
-            << value;
-    throw std::invalid_argument(message.str());
-}
 
 std::uint64_t to_ticks(double seconds, double rate_hz) {
     return static_cast<std::uint64_t>(std::max<long long>(1, std::llround(seconds * rate_hz)));
@@ -22,11 +14,23 @@ std::uint64_t to_ticks(double seconds, double rate_hz) {
 
 }  // namespace
 
-void LinkRecoverySettings::validate() const {
-    if (!(settle_s > 0.0 && settle_s <= 60.0)) reject("settle_s", settle_s, "in (0, 60] s");
-    if (!(timeout_s == 0.0 || (timeout_s > settle_s && timeout_s <= 3600.0))) {
-        reject("timeout_s", timeout_s, "0 (wait for ever) or in (settle_s, 3600] s");
+bool LinkRecoverySettings::is_valid(std::string* error) const {
+    if (!kSettleRange.contains(settle_s)) {
+        return input::invalid(
+            error, input::out_of_range("link_recovery.settle_s", settle_s, kSettleRange));
     }
+    if (!(timeout_s == 0.0 || (timeout_s > settle_s && kTimeoutRange.contains(timeout_s)))) {
+        return input::invalid(
+            error, input::out_of_range("link_recovery.timeout_s", timeout_s,
+                                       "0 (wait for ever) or > settle_s = " +
+                                           input::format_number(settle_s) + " and <= 3600 (s)"));
+    }
+    return true;
+}
+
+void LinkRecoverySettings::validate() const {
+    std::string error;
+    if (!is_valid(&error)) throw std::invalid_argument(error);
 }
 
 LinkRecovery::LinkRecovery(const LinkRecoverySettings& settings, double rate_hz)

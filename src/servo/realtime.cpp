@@ -8,12 +8,15 @@
 #include <sys/mman.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <sstream>
 #include <stdexcept>
+
+#include "hapticd/input/range.hpp"
 
 namespace hapticd::servo {
 
@@ -46,9 +49,9 @@ bool prefault_heap(std::size_t bytes) {
 }  // namespace
 
 RealtimeMode parse_realtime_mode(std::string_view text) {
-    if (text == "enforce") return RealtimeMode::enforce;
-    if (text == "warn") return RealtimeMode::warn;
-    if (text == "off") return RealtimeMode::off;
+    for (const RealtimeMode mode : kRealtimeModes) {
+        if (to_string(mode) == text) return mode;
+    }
     throw std::invalid_argument("realtime: expected \"enforce\", \"warn\" or \"off\", got \"" +
                                 std::string(text) + "\"");
 }
@@ -97,6 +100,26 @@ RealtimeSession& RealtimeSession::operator=(RealtimeSession&& other) noexcept {
     return *this;
 }
 
+bool RealtimeRequest::is_valid(std::string* error) const {
+    if (mode == RealtimeMode::off) return true;  // nothing is asked of the system
+    const int min_priority = std::max(kMinPriority, sched_get_priority_min(SCHED_FIFO));
+    const int max_priority = std::min(kMaxPriority, sched_get_priority_max(SCHED_FIFO));
+    if (priority < min_priority || priority > max_priority) {
+        return input::invalid(
+            error, input::out_of_range("realtime.priority", priority,
+                                       std::to_string(min_priority) + ".." +
+                                           std::to_string(max_priority) + " (SCHED_FIFO)"));
+    }
+    const int cpu_count = std::min(static_cast<int>(sysconf(_SC_NPROCESSORS_CONF)), kMaxCpu + 1);
+    if (cpu < -1 || cpu >= cpu_count) {
+        return input::invalid(
+            error, input::out_of_range("realtime.cpu", cpu,
+                                       "-1 (none) or 0.." + std::to_string(cpu_count - 1) +
+                                           " (this machine's CPUs)"));
+    }
+    return true;
+}
+
 RealtimeReport RealtimeSession::apply(const RealtimeRequest& request) {
     RealtimeReport report;
     report.mode = request.mode;
@@ -104,19 +127,7 @@ RealtimeReport RealtimeSession::apply(const RealtimeRequest& request) {
         report_ = report;
         return report;
     }
-    const int min_priority = sched_get_priority_min(SCHED_FIFO);
-    const int max_priority = sched_get_priority_max(SCHED_FIFO);
-    if (request.priority < min_priority || request.priority > max_priority) {
-        throw std::invalid_argument(
-            "realtime: priority must be in " + std::to_string(min_priority) + ".." +
-            std::to_string(max_priority) + ", got " + std::to_string(request.priority));
-    }
-    const int cpu_count = static_cast<int>(sysconf(_SC_NPROCESSORS_CONF));
-    if (request.cpu < -1 || request.cpu >= cpu_count) {
-        throw std::invalid_argument("realtime: cpu must be -1 or in 0.." +
-                                    std::to_string(cpu_count - 1) + ", got " +
-                                    std::to_string(request.cpu));
-    }
+    if (std::string error; !request.is_valid(&error)) throw std::invalid_argument(error);
 
     sched_param parameters{};
     parameters.sched_priority = request.priority;

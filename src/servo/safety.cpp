@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <glm/geometric.hpp>
-#include <sstream>
 #include <stdexcept>
 
 #include "hapticd/servo/coupling.hpp"
@@ -12,34 +11,45 @@ namespace hapticd::servo {
 
 namespace {
 
-void require_non_negative(const char* name, double value) {
-    if (!(value >= 0.0) || !std::isfinite(value)) {
-        std::ostringstream message;
-        message << "safety: " << name << " must be a finite number >= 0, got " << value;
-        throw std::invalid_argument(message.str());
-    }
+/// A limit that must be finite and >= 0.
+bool non_negative(std::string* error, const char* name, double value) {
+    if (value >= 0.0 && std::isfinite(value)) return true;
+    return input::invalid(
+        error, input::out_of_range(std::string("safety.") + name, value, "finite and >= 0"));
 }
 
 }  // namespace
 
+bool SafetyLimits::is_valid(std::string* error) const {
+    if (!kMaxForceRange.contains(max_force_n)) {
+        return input::invalid(
+            error, input::out_of_range("safety.max_force_n", max_force_n, kMaxForceRange));
+    }
+    if (!kMaxSpeedRange.contains(max_speed_mps)) {
+        return input::invalid(
+            error, input::out_of_range("safety.max_speed_mps", max_speed_mps, kMaxSpeedRange));
+    }
+    if (!kRampTimeRange.contains(soft_start.ramp_time_s)) {
+        return input::invalid(error, input::out_of_range("safety.soft_start.ramp_time_s",
+                                                         soft_start.ramp_time_s, kRampTimeRange));
+    }
+    if (read_timeouts_allowed < 0) {
+        return input::invalid(error, input::out_of_range("safety.read_timeouts_allowed",
+                                                         read_timeouts_allowed, ">= 0"));
+    }
+    return non_negative(error, "overspeed_damping_n_s_per_m", overspeed_damping_n_s_per_m) &&
+           non_negative(error, "encoder_jump_m", encoder_jump_m) &&
+           non_negative(error, "soft_start.still_speed_mps", soft_start.still_speed_mps) &&
+           non_negative(error, "soft_start.still_time_s", soft_start.still_time_s) &&
+           non_negative(error, "passivity.max_damping_n_s_per_m", passivity.max_damping_n_s_per_m);
+}
+
 SafetySupervisor::SafetySupervisor(const SafetyLimits& limits, int axes)
     : limits_(limits), axes_(axes), soft_start_(limits.soft_start), passivity_(limits.passivity) {
     if (axes < 1 || axes > kMaxAxes) {
-        throw std::invalid_argument("safety: axes must be in 1.." + std::to_string(kMaxAxes) +
-                                    ", got " + std::to_string(axes));
+        input::reject_out_of_range("safety: axes", axes, "1.." + std::to_string(kMaxAxes));
     }
-    require_non_negative("max_force_n", limits.max_force_n);
-    require_non_negative("max_speed_mps", limits.max_speed_mps);
-    require_non_negative("overspeed_damping_n_s_per_m", limits.overspeed_damping_n_s_per_m);
-    require_non_negative("encoder_jump_m", limits.encoder_jump_m);
-    require_non_negative("soft_start.still_speed_mps", limits.soft_start.still_speed_mps);
-    require_non_negative("soft_start.still_time_s", limits.soft_start.still_time_s);
-    require_non_negative("soft_start.ramp_time_s", limits.soft_start.ramp_time_s);
-    require_non_negative("passivity.max_damping_n_s_per_m", limits.passivity.max_damping_n_s_per_m);
-    if (limits.read_timeouts_allowed < 0) {
-        throw std::invalid_argument("safety: read_timeouts_allowed must be >= 0, got " +
-                                    std::to_string(limits.read_timeouts_allowed));
-    }
+    if (std::string error; !limits.is_valid(&error)) throw std::invalid_argument(error);
 }
 
 void SafetySupervisor::reset() noexcept {

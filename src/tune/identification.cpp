@@ -14,6 +14,7 @@
 #include <tuple>
 #include <utility>
 
+#include "hapticd/input/range.hpp"
 #include "hapticd/tune/identification_model.hpp"
 #include "identification_data.hpp"
 
@@ -552,31 +553,36 @@ std::string_view to_string(RefusalReason reason) {
 }
 
 void IdentificationOptions::validate() const {
-    const auto reject = [](const std::string& name, double value, const std::string& allowed) {
-        throw std::invalid_argument("identification option " + name + " = " + format(value) +
-                                    " is out of range: allowed " + allowed);
-    };
-    if (!(std::isfinite(segment_s) && segment_s > 0.0)) reject("segment_s", segment_s, "> 0 s");
+    if (!(std::isfinite(segment_s) && segment_s > 0.0))
+        input::reject_out_of_range("identification option segment_s", segment_s, "> 0 s");
     if (resolution_m && !(std::isfinite(*resolution_m) && *resolution_m > 0.0)) {
-        reject("resolution_m", *resolution_m, "> 0 m");
+        input::reject_out_of_range("identification option resolution_m", *resolution_m, "> 0 m");
     }
     if (force_limit_n && !(std::isfinite(*force_limit_n) && *force_limit_n > 0.0)) {
-        reject("force_limit_n", *force_limit_n, "> 0 N");
+        input::reject_out_of_range("identification option force_limit_n", *force_limit_n, "> 0 N");
     }
-    if (!(min_duration_s >= 0.0)) reject("min_duration_s", min_duration_s, ">= 0 s");
+    if (!(min_duration_s >= 0.0)) {
+        input::reject_out_of_range("identification option min_duration_s", min_duration_s,
+                                   ">= 0 s");
+    }
     if (!(max_saturated_fraction >= 0.0 && max_saturated_fraction <= 1.0)) {
-        reject("max_saturated_fraction", max_saturated_fraction, "0 .. 1");
+        input::reject_out_of_range("identification option max_saturated_fraction",
+                                   max_saturated_fraction, "0 .. 1");
     }
     if (!(max_masked_fraction >= 0.0 && max_masked_fraction <= 1.0)) {
-        reject("max_masked_fraction", max_masked_fraction, "0 .. 1");
+        input::reject_out_of_range("identification option max_masked_fraction", max_masked_fraction,
+                                   "0 .. 1");
     }
     if (!(max_stuck_fraction >= 0.0 && max_stuck_fraction <= 1.0)) {
-        reject("max_stuck_fraction", max_stuck_fraction, "0 .. 1");
+        input::reject_out_of_range("identification option max_stuck_fraction", max_stuck_fraction,
+                                   "0 .. 1");
     }
     if (!(max_relative_std_error > 0.0)) {
-        reject("max_relative_std_error", max_relative_std_error, "> 0 (inf: no check)");
+        input::reject_out_of_range("identification option max_relative_std_error",
+                                   max_relative_std_error, "> 0 (inf: no check)");
     }
-    if (max_iterations < 1) reject("max_iterations", max_iterations, ">= 1");
+    if (max_iterations < 1)
+        input::reject_out_of_range("identification option max_iterations", max_iterations, ">= 1");
 }
 
 IdentifiedAxis identify_axis(const TelemetryLog& log, int axis,

@@ -1,40 +1,32 @@
 #include "hapticd/tune/input_checks.hpp"
 
 #include <cmath>
-#include <sstream>
 #include <stdexcept>
+#include <string>
+
+#include "hapticd/input/range.hpp"
 
 namespace hapticd::tune {
-namespace {
-
-[[noreturn]] void reject(std::string_view name, double value, std::string_view unit,
-                         std::string_view allowed) {
-    std::ostringstream message;
-    message << name << " = " << value << (unit.empty() ? "" : " ") << unit << " is out of range: "
-            << "allowed " << allowed;
-    throw std::invalid_argument(message.str());
-}
-
-}  // namespace
-
 void check_positive(std::string_view name, double value, std::string_view unit) {
-    if (!(std::isfinite(value) && value > 0.0)) reject(name, value, unit, "finite and > 0");
+    if (!(std::isfinite(value) && value > 0.0))
+        input::reject_out_of_range(name, input::format_quantity(value, unit), "finite and > 0");
 }
 
 void check_non_negative(std::string_view name, double value, std::string_view unit) {
-    if (!(std::isfinite(value) && value >= 0.0)) reject(name, value, unit, "finite and >= 0");
+    if (!(std::isfinite(value) && value >= 0.0))
+        input::reject_out_of_range(name, input::format_quantity(value, unit), "finite and >= 0");
 }
 
 void check_positive_or_infinite(std::string_view name, double value, std::string_view unit) {
-    if (!(value > 0.0)) reject(name, value, unit, "> 0 (inf for none)");
+    if (!(value > 0.0))
+        input::reject_out_of_range(name, input::format_quantity(value, unit), "> 0 (inf for none)");
 }
 
 void check_in_range(std::string_view name, double value, double lo, double hi,
                     std::string_view unit) {
     if (!(value >= lo && value <= hi)) {  // false for NaN
-        std::ostringstream allowed;
-        allowed << lo << " to " << hi;
-        reject(name, value, unit, allowed.str());
+        input::reject_out_of_range(name, input::format_quantity(value, unit),
+                                   input::format_number(lo) + " to " + input::format_number(hi));
     }
 }
 
@@ -58,11 +50,9 @@ void check_coupling_gains(const theory::SpringDamperCoupling& coupling) {
 void check_delay_periods(double delay_periods) {
     if (!(std::isfinite(delay_periods) && delay_periods >= 0.0 &&
           delay_periods < kMaxDelayPeriods)) {
-        std::ostringstream message;
-        message << "loop delay = " << delay_periods
-                << " periods is out of range: allowed 0 <= delay < " << kMaxDelayPeriods
-                << " periods";
-        throw std::invalid_argument(message.str());
+        input::reject_out_of_range(
+            "loop delay", input::format_quantity(delay_periods, "periods"),
+            "0 <= delay < " + input::format_quantity(kMaxDelayPeriods, "periods"));
     }
 }
 
@@ -70,11 +60,11 @@ void check_velocity_filter(double cutoff_hz, double rate_hz) {
     if (cutoff_hz == 0.0 || (cutoff_hz >= kMinVelocityFilterHz && cutoff_hz < rate_hz / 2.0)) {
         return;
     }
-    std::ostringstream message;
-    message << "velocity filter cutoff f_c = " << cutoff_hz << " Hz is out of range: allowed 0 "
-            << "(no filter) or " << kMinVelocityFilterHz << " Hz <= f_c < " << rate_hz / 2.0
-            << " Hz (below Nyquist, rate/2 at " << rate_hz << " Hz)";
-    throw std::invalid_argument(message.str());
+    input::reject_out_of_range(
+        "velocity filter cutoff f_c", input::format_quantity(cutoff_hz, "Hz"),
+        "0 (no filter) or " + input::format_quantity(kMinVelocityFilterHz, "Hz") + " <= f_c < " +
+            input::format_quantity(rate_hz / 2.0, "Hz") + " (below Nyquist, rate/2 at " +
+            input::format_quantity(rate_hz, "Hz") + ")");
 }
 
 }  // namespace hapticd::tune

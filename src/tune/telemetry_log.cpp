@@ -174,8 +174,8 @@ TelemetryLog parse_telemetry_log(std::istream& in, const std::string& source,
     }
     const auto missing = [&](const std::string& what) {
         return fail(header_line, what +
-                                     " (DESIGN.md: tick, t_s, then per axis i x{i}_m, "
-                                     "v{i}_mps, xe{i}_m, f{i}_n); the header has: " +
+                                     " (docs/daemon.md, \"Telemetry\": tick, t_s, then per axis "
+                                     "i x{i}_m, v{i}_mps, xe{i}_m, f{i}_n); the header has: " +
                                      column_list(log.columns));
     };
     if (!index.contains("t_s")) throw missing("no column t_s (time, s)");

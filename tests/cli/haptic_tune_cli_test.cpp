@@ -39,7 +39,8 @@ TEST(HapticTuneSize, ReadsTheDeviceFromAConfigFileAndFlagsOverrideIt) {
 }
 
 // The encoder model's optimised pair is stiffer, and the exact model rejects it: size says
-// so and exits 1 (issue 9). The passive model's optimum is no damping at 2b/T, and passes.
+// so and exits 1 (docs/stability-models.md, "What the tools do"). The passive model's optimum
+// is no damping at 2b/T, and passes.
 TEST(HapticTuneSize, AnAnswerTheExactModelRejectsExitsOne) {
     const auto result = run_command(
         tune("size --mass 0.1 --damping 2 --rate 1000 --optimize-damping --model encoder --json"));
@@ -235,7 +236,7 @@ TEST(HapticTuneConfig, ErrorsNameTheFileTheKeyAndTheRange) {
     EXPECT_EQ(result.exit_code, 2);
     EXPECT_NE(result.err.find(path), std::string::npos) << result.err;
     EXPECT_NE(result.err.find("[device.model] mass = -0.5"), std::string::npos) << result.err;
-    EXPECT_NE(result.err.find("> 0"), std::string::npos) << result.err;
+    EXPECT_NE(result.err.find(">= 0.0001 and <= 1000 (kg)"), std::string::npos) << result.err;
     f = std::fopen(path.c_str(), "w");
     std::fputs("[device.model]\nmass = 0.1\ndamping = 2\ninertia = 3\n", f);
     std::fclose(f);

@@ -1,4 +1,5 @@
-// hapticd's config file: every key DESIGN.md names, checked for type and range.
+// hapticd's config file: every key of docs/daemon.md "Config" (docs/architecture.md §5.3),
+// checked for type and range.
 #include "hapticd/daemon/config.hpp"
 
 #include <gtest/gtest.h>
@@ -50,7 +51,7 @@ reconnect_timeout = 30
 )",
                                   "lab.toml", "/etc/hapticd");
     EXPECT_EQ(c.servo.rate_hz, 2000.0);
-    EXPECT_EQ(c.servo.realtime, "enforce");
+    EXPECT_EQ(c.servo.realtime, servo::RealtimeMode::enforce);
     EXPECT_EQ(c.servo.priority, 90);
     EXPECT_EQ(c.servo.cpu, 1);
     EXPECT_EQ(c.device.plugin, "sim");
@@ -61,12 +62,12 @@ reconnect_timeout = 30
     EXPECT_EQ(c.coupling.stiffness_n_per_m, 5000.0);
     EXPECT_EQ(c.coupling.damping_n_s_per_m, 0.5);
     EXPECT_EQ(c.coupling.velocity_filter_hz, 300.0);
-    EXPECT_EQ(c.coupling.check, "exact");
+    EXPECT_EQ(c.coupling.check, tune::StabilityModel::exact);
     EXPECT_EQ(c.scene_file, "/etc/hapticd/scenes/box.toml");
     EXPECT_EQ(c.safety.max_force_n, 12.0);
     EXPECT_EQ(c.safety.max_speed_mps, 0.5);
     EXPECT_EQ(c.safety.soft_start_ramp_s, 0.25);
-    EXPECT_EQ(c.safety.passivity, "control");
+    EXPECT_EQ(c.safety.passivity, servo::PassivityMode::control);
     EXPECT_TRUE(c.safety.reconnect);
     EXPECT_EQ(c.safety.reconnect_settle_s, 1.5);
     EXPECT_EQ(c.safety.reconnect_timeout_s, 30.0);
@@ -101,16 +102,16 @@ TEST(DaemonConfig, TheOverrunBudgetIsASafetyKeyWithItsDefault) {
 TEST(DaemonConfig, NoCouplingMustBeDeliberate) {
     const Config c = parse_config("[coupling]\nenabled = false\ncheck = \"off\"\n", "lab.toml", "");
     EXPECT_FALSE(c.coupling.enabled);
-    EXPECT_EQ(c.coupling.check, "off");
+    EXPECT_EQ(c.coupling.check, std::nullopt);  // "off"
 }
 
 TEST(DaemonConfig, DefaultsFillWhatIsMissing) {
     const Config c = parse_config("", "empty.toml", "");
     EXPECT_EQ(c.servo.rate_hz, 1000.0);
-    EXPECT_EQ(c.servo.realtime, "warn");
+    EXPECT_EQ(c.servo.realtime, servo::RealtimeMode::warn);
     EXPECT_FALSE(c.servo.cpu.has_value());
     EXPECT_EQ(c.device.plugin, "sim");
-    EXPECT_EQ(c.coupling.check, "passive");
+    EXPECT_EQ(c.coupling.check, tune::StabilityModel::passive);
     EXPECT_EQ(c.coupling.velocity_filter_hz, 0.0);  // no filter: the damper on v_d - v_e
     EXPECT_EQ(c.device.model_delay_s, 0.0);
     EXPECT_TRUE(c.scene_file.empty());
@@ -134,39 +135,51 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(
         Bad{"[servo]\nrate_hz = 50\n",
             "[servo] rate_hz = 50 is out of range: allowed >= 100 and <= 20000 (Hz)"},
-        Bad{"[servo]\nrate_hz = \"fast\"\n", "[servo] rate_hz must be a number"},
+        Bad{"[servo]\nrate_hz = \"fast\"\n",
+            "[servo] rate_hz = \"fast\" is not a number: allowed >= 100 and <= 20000 (Hz)"},
         Bad{"[servo]\nrealtime = \"always\"\n", "[servo] realtime = \"always\" is not allowed"},
         Bad{"[servo]\npriority = 0\n", "[servo] priority = 0 is out of range: allowed 1..99"},
-        Bad{"[servo]\nrate = 1000\n", "unknown key [servo] rate"},
+        Bad{"[servo]\nrate = 1000\n",
+            "lab.toml:2: [servo] rate = 1000 is not a known key: allowed rate_hz, realtime, "
+            "priority, cpu"},
         Bad{"[device]\naxes = 4\n", "[device] axes = 4 is out of range: allowed 1..3"},
-        Bad{"[device]\nplugin = \"sim\"\n[device.usb]\nvid = 1\n", "unknown key [device] usb"},
+        Bad{"[device]\nplugin = \"sim\"\n[device.usb]\nvid = 1\n",
+            "lab.toml:3: [device.usb] is not a known table: allowed plugin, axes, [device.model], "
+            "[device.sim]"},
         Bad{"[device.model]\nmass = -1\n",
             "[device.model] mass = -1 is out of range: allowed >= 0.0001 and <= 1000 (kg)"},
         Bad{"[device.model]\nmass = 1e-20\n", "[device.model] mass = 1e-20 is out of range"},
         Bad{"[device.model]\ndelay = -0.001\n",
-            "[device.model] delay = -0.001 is out of range: allowed >= 0 (s)"},
+            "[device.model] delay = -0.001 is out of range: allowed >= 0 and < 0.01 (s: 10 periods "
+            "at "
+            "[servo] rate_hz = 1000)"},
         Bad{"[device.model]\ndelay = nan\n", "[device.model] delay = nan is out of range"},
         Bad{"[coupling]\nstiffness = 2e9\n",
             "[coupling] stiffness = 2e+09 is out of range: allowed >= 0 and <= 1e+09 (N/m)"},
         Bad{"[coupling]\ndamping = 1e307\n",
             "[coupling] damping = 1e+307 is out of range: allowed >= 0 and <= 100000 (N s/m)"},
         Bad{"[device.model]\ndelay = 0.01\n",
-            "[device.model] delay = 0.01 s is out of range: allowed >= 0 and < 10 periods "
-            "(0.01 s at [servo] rate_hz = 1000)"},
+            "[device.model] delay = 0.01 is out of range: allowed >= 0 and < 0.01 (s: 10 "
+            "periods at [servo] rate_hz = 1000)"},
         Bad{"[device.model]\ndamping = nan\n", "[device.model] damping = nan"},
-        Bad{"[device.model]\ninertia = 1\n", "unknown key [device.model] inertia"},
+        Bad{"[device.model]\ninertia = 1\n",
+            "[device.model] inertia = 1 is not a known key: allowed mass, damping, delay"},
         Bad{"[coupling]\nstiffness = -3\n",
             "[coupling] stiffness = -3 is out of range: allowed >= 0 and <= 1e+09 (N/m)"},
         Bad{"[coupling]\ncheck = \"none\"\n", "[coupling] check = \"none\" is not allowed"},
         Bad{"[safety]\nmax_force = 0\n",
             "[safety] max_force = 0 is out of range: allowed > 0 and <= 10000 (N)"},
-        Bad{"[safety]\nmax_torque = 1\n", "unknown key [safety] max_torque"},
-        Bad{"[telemetry]\nfile = \"x\"\n", "unknown table [telemetry]"},
-        Bad{"rate_hz = 1000\n", "top-level key rate_hz"}, Bad{"[servo\n", "lab.toml:1"},
+        Bad{"[safety]\nmax_torque = 1\n", "[safety] max_torque = 1 is not a known key"},
+        Bad{"[telemetry]\nfile = \"x\"\n",
+            "lab.toml:1: [telemetry] is not a known table: allowed [servo], [device], [coupling], "
+            "[operator], [scene], [safety], [identify]"},
+        Bad{"rate_hz = 1000\n", "lab.toml:1: rate_hz = 1000 is not a known key: allowed [servo]"},
+        Bad{"[servo\n", "lab.toml:1"},
         Bad{"[coupling]\nenabled = false\n", "set check = \"off\" to run it deliberately"},
         Bad{"[coupling]\nenabled = false\ncheck = \"off\"\nstiffness = 100\n",
             "[coupling] stiffness has no effect with enabled = false"},
-        Bad{"[coupling]\nenabled = 1\n", "[coupling] enabled must be true or false"},
+        Bad{"[coupling]\nenabled = 1\n",
+            "[coupling] enabled = 1 is not a boolean: allowed true or false"},
         Bad{"[coupling]\nvelocity_filter = 500\n",
             "[coupling] velocity_filter = 500 is out of range: allowed 0 (no filter) or >= 1 and "
             "< 500 (Hz, below Nyquist: [servo] rate_hz = 1000)"},
@@ -176,16 +189,17 @@ INSTANTIATE_TEST_SUITE_P(
             "[coupling] velocity_filter = 250 is out of range: allowed 0 (no filter) or >= 1 and "
             "< 200 (Hz, below Nyquist: [servo] rate_hz = 400)"},
         Bad{"[coupling]\nvelocity_filter = -5\n",
-            "[coupling] velocity_filter = -5 is out of range: allowed >= 0 (Hz; 0: no filter, or "
-            ">= 1 and < 500, below Nyquist)"},
+            "[coupling] velocity_filter = -5 is out of range: allowed 0 (no filter) or >= 1 and "
+            "< 500 (Hz, below Nyquist: [servo] rate_hz = 1000)"},
         Bad{"[coupling]\nvelocity_filter = \"fast\"\n",
-            "[coupling] velocity_filter must be a number"},
+            "[coupling] velocity_filter = \"fast\" is not a number"},
         Bad{"[coupling]\nenabled = false\ncheck = \"off\"\nvelocity_filter = 100\n",
             "[coupling] velocity_filter has no effect with enabled = false"},
         Bad{"[safety]\nsoft_start_ramp = 20\n",
             "[safety] soft_start_ramp = 20 is out of range: allowed >= 0 and <= 10 (s)"},
         Bad{"[safety]\npassivity = \"on\"\n", "[safety] passivity = \"on\" is not allowed"},
-        Bad{"[safety]\nreconnect = \"yes\"\n", "[safety] reconnect must be true or false"},
+        Bad{"[safety]\nreconnect = \"yes\"\n",
+            "[safety] reconnect = \"yes\" is not a boolean: allowed true or false"},
         Bad{"[safety]\nreconnect_settle = 0\n",
             "[safety] reconnect_settle = 0 is out of range: allowed > 0 and <= 60 (s)"},
         Bad{"[safety]\nreconnect_settle = 61\n",
@@ -206,7 +220,7 @@ INSTANTIATE_TEST_SUITE_P(
         Bad{"[safety]\nmax_missed_periods = -1\n",
             "[safety] max_missed_periods = -1 is out of range: allowed 0..1000000"},
         Bad{"[safety]\nmax_consecutive_overruns = 2.5\n",
-            "[safety] max_consecutive_overruns must be an integer"},
+            "[safety] max_consecutive_overruns = 2.5 is not an integer: allowed 0..1000000"},
         Bad{"[safety]\nreconnect_timeout = -1\n",
             "[safety] reconnect_timeout = -1 is out of range: allowed >= 0 and <= 3600 (s; 0: "
             "wait for ever)"},
@@ -236,11 +250,11 @@ TEST(DaemonConfig, ReadsAnOperatorClass) {
     EXPECT_EQ(c.operators->arm_damping_n_s_per_m.min, 5.0);  // one number: [5, 5]
     EXPECT_EQ(c.operators->arm_damping_n_s_per_m.max, 5.0);
     EXPECT_EQ(c.operators->max_resonance_hz, 40.0);
-    EXPECT_EQ(c.coupling.environments, "every-passive");
+    EXPECT_EQ(c.coupling.environments, EnvironmentClass::every_passive);
     EXPECT_FALSE(parse_config("", "lab.toml", "/etc/hapticd").operators);
     EXPECT_EQ(parse_config("[coupling]\nenvironments = \"scene\"\n", "lab.toml", "/etc/hapticd")
                   .coupling.environments,
-              "scene");
+              EnvironmentClass::scene);
 }
 
 INSTANTIATE_TEST_SUITE_P(
@@ -256,11 +270,12 @@ INSTANTIATE_TEST_SUITE_P(
             "[operator] arm_damping = [20, 0] is an empty range"},
         Bad{kExact + kClass + "arm_damping = nan\n", "[operator] arm_damping = nan N s/m is out"},
         Bad{kExact + kClass + "arm_damping = [0, 1, 2]\n",
-            "[operator] arm_damping must be a number or an array [min, max] of two numbers"},
+            "[operator] arm_damping = [0, 1, 2] is not a number or an array [min, max] of two "
+            "numbers: allowed a number or [min, max] (N s/m)"},
         Bad{kExact + kClass + "arm_damping = \"low\"\n",
-            "[operator] arm_damping must be a number or an array"},
+            "[operator] arm_damping = \"low\" is not a number or an array"},
         Bad{kExact + kClass + "arm_damping = 0\nhand_size = 1\n",
-            "unknown key [operator] hand_size"},
+            "[operator] hand_size = 1 is not a known key"},
         Bad{kExact + "[operator]\nhand_mass = [0.1, 2]\ngrip_stiffness = [500, 3000]\n"
                      "grip_damping = 2\narm_stiffness = 0\narm_damping = 0\nmax_resonance = 1\n",
             "max_resonance = 1 Hz contradicts the ranges"},
@@ -314,12 +329,12 @@ TEST(DaemonConfig, IdentifyLeavesUnsetValuesToTheStartUp) {
 INSTANTIATE_TEST_SUITE_P(
     Identify, DaemonConfigRejects,
     ::testing::Values(
-        Bad{"[identify]\nforce_amplitud = 1\n", "unknown key [identify] force_amplitud"},
-        Bad{"[identify]\nseed = 3\n", "unknown key [identify] seed"},
+        Bad{"[identify]\nforce_amplitud = 1\n", "[identify] force_amplitud = 1 is not a known key"},
+        Bad{"[identify]\nseed = 3\n", "[identify] seed = 3 is not a known key"},
         Bad{"[identify]\nforce_amplitude = 0\n",
             "[identify] force_amplitude = 0 is out of range: allowed > 0"},
         Bad{"[identify]\nforce_amplitude = \"big\"\n",
-            "[identify] force_amplitude must be a number (N)"},
+            "[identify] force_amplitude = \"big\" is not a number: allowed > 0 and <= 10000 (N)"},
         Bad{"[safety]\nmax_force = 5\n[identify]\nforce_amplitude = 6\n",
             "[identify] force_amplitude = 6 is out of range: allowed <= [safety] max_force = 5"},
         Bad{"[identify]\nworkspace = 0\n",
@@ -337,11 +352,14 @@ INSTANTIATE_TEST_SUITE_P(
             "[identify] lines_per_decade = 0.5 is out of range: allowed >= 1 and <= 50"},
         Bad{"[identify]\nperiod = 0\n", "[identify] period = 0 is out of range"},
         Bad{"[identify]\nperiod = 100\n", "[identify] period = 100 is out of range"},
-        Bad{"[identify]\nperiods = 2.5\n", "[identify] periods must be an integer"},
+        Bad{"[identify]\nperiods = 2.5\n",
+            "[identify] periods = 2.5 is not an integer: allowed 1..1000"},
         Bad{"[identify]\nperiods = 0\n", "[identify] periods = 0 is out of range: allowed 1..1000"},
         Bad{"[identify]\nfade = -1\n", "[identify] fade = -1 is out of range"},
-        Bad{"[identify]\nfade = true\n", "[identify] fade must be a number (s)"},
-        Bad{"identify = 1\n", "top-level key identify"}));
+        Bad{"[identify]\nfade = true\n",
+            "[identify] fade = true is not a number: allowed >= 0 and <= 60 (s)"},
+        Bad{"identify = 1\n",
+            "lab.toml:1: identify = 1 is not a table: allowed a table [identify]"}));
 
 TEST(DaemonConfig, EmbeddedDefaultIsTheSimulatedDeviceAndTheDemoWall) {
     const Config c = default_config();

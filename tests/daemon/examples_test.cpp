@@ -37,6 +37,7 @@ TEST(DaemonExamples, EveryExampleIsAValidConfigWhosePluginAcceptsItsTable) {
         device_config.axes = config.device.axes;
         device_config.rate_hz = config.servo.rate_hz;
         device_config.plugin_table_toml = config.device.plugin_table_toml;
+        device_config.plugin_table_path = config.device.plugin_table_path;
         device_config.source = config.source;
         std::string message;
         try {

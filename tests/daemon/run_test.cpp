@@ -318,14 +318,14 @@ INSTANTIATE_TEST_SUITE_P(
     Cases, DaemonRunRefuses,
     ::testing::Values(
         BadStart{"unknown key", kEncoderGains, "[safety]\nmax_torque = 3\n",
-                 "lab.toml: unknown key [safety] max_torque"},
+                 "[safety] max_torque = 3 is not a known key"},
         BadStart{"sim table", kEncoderGains, "[device.sim.faults]\nseed = -1\n",
-                 "device.sim.faults.seed"},
+                 "[device.sim.faults] seed = -1 is out of range"},
         BadStart{"no gains", "[coupling]\ncheck = \"encoder\"\n", "",
                  "[coupling] stiffness and damping are both 0"},
         BadStart{"velocity filter above Nyquist",
                  "[coupling]\nstiffness = 3600\ndamping = 0.5\nvelocity_filter = 600\n", "",
-                 "lab.toml: [coupling] velocity_filter = 600 is out of range: "
+                 "lab.toml:24: [coupling] velocity_filter = 600 is out of range: "
                  "allowed 0 (no filter) or >= 1 and < 500"}),
     [](const ::testing::TestParamInfo<BadStart>& param_info) {
         std::string name = param_info.param.what;
@@ -378,9 +378,9 @@ TEST_F(DaemonRun, ABadSceneIsNamed) {
     EXPECT_NE(outcome.log.find("stiffness = -5"), std::string::npos) << outcome.log;
 }
 
-// Issue 10: a detent with period = 1e-300 was accepted, and the series solve (17) then failed
-// on every tick without a word. Its stiffness between notches, -2π peak_force/period, must
-// stay above -k_c.
+// docs/architecture.md §7.9 (a scene the coupling cannot render): a detent with period =
+// 1e-300 was once accepted, and the series solve (17) then failed on every tick without a
+// word. Its stiffness between notches, -2π peak_force/period, must stay above -k_c.
 TEST_F(DaemonRun, ADetentTheCouplingCannotRenderIsRefusedBeforeTheRun) {
     RunOptions options;
     options.config_path = config(kEncoderGains);

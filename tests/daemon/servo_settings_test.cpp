@@ -109,7 +109,8 @@ TEST(DaemonServoSettings, LinkFaultsRecoverByDefaultEveryOtherFaultStopsTheRun) 
     EXPECT_EQ(p.link_recovery.timeout_s, 0.0);
     EXPECT_NO_THROW(p.validate());
 
-    const Config strict = parse_config("[safety]\nreconnect = false\n", "lab.toml", "");
+    const Config strict =
+        parse_config("[coupling]\nstiffness = 3000\n[safety]\nreconnect = false\n", "lab.toml", "");
     const servo::ServoConfig off = make_servo_config(strict, pen_display(false), false);
     EXPECT_FALSE(off.link_recovery.enabled);
     EXPECT_TRUE(off.stop_on_fault);

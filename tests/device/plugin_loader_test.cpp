@@ -92,7 +92,8 @@ TEST(DevicePluginLoader, ConfigErrorsFromThePluginArriveAsRuntimeErrors) {
         device->open(config);
         FAIL() << "bad mass accepted";
     } catch (const std::runtime_error& e) {
-        EXPECT_NE(std::string(e.what()).find("bench.toml: device.sim.mass = -1"), std::string::npos)
+        EXPECT_NE(std::string(e.what()).find("bench.toml:1: [device.sim] mass = -1"),
+                  std::string::npos)
             << e.what();
     }
 }

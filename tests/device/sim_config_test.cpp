@@ -153,36 +153,37 @@ TEST(SimConfig, LockstepFlagOverridesTheClock) {
 TEST(SimConfig, OutOfRangeValuesNameFileKeyValueAndRange) {
     const std::string e = error_of("mass = -0.5");
     EXPECT_NE(e.find("lab.toml"), std::string::npos) << e;
-    EXPECT_NE(e.find("device.sim.mass"), std::string::npos) << e;
+    EXPECT_NE(e.find("[device.sim] mass"), std::string::npos) << e;
     EXPECT_NE(e.find("-0.5"), std::string::npos) << e;
     EXPECT_NE(e.find("> 0"), std::string::npos) << e;
     EXPECT_NE(e.find("kg"), std::string::npos) << e;
 
-    EXPECT_NE(error_of("damping = -1")
-                  .find("device.sim.damping = -1 is not allowed: must be a number >= 0"),
+    EXPECT_NE(
+        error_of("damping = -1").find("[device.sim] damping = -1 is out of range: allowed >= 0"),
+        std::string::npos);
+    EXPECT_NE(error_of("counts_per_meter = 0").find("[device.sim] counts_per_meter = 0"),
               std::string::npos);
-    EXPECT_NE(error_of("counts_per_meter = 0").find("device.sim.counts_per_meter = 0"),
+    EXPECT_NE(error_of("force_limit = \"lots\"").find("[device.sim] force_limit = \"lots\""),
               std::string::npos);
-    EXPECT_NE(error_of("force_limit = \"lots\"").find("device.sim.force_limit = \"lots\""),
-              std::string::npos);
-    EXPECT_NE(error_of("coulomb = nan").find("device.sim.coulomb = nan"), std::string::npos);
+    EXPECT_NE(error_of("coulomb = nan").find("[device.sim] coulomb = nan"), std::string::npos);
     const std::string clock = error_of("clock = \"wall\"");
-    EXPECT_NE(clock.find("device.sim.clock = \"wall\""), std::string::npos) << clock;
-    EXPECT_NE(clock.find("\"lockstep\" | \"realtime\""), std::string::npos) << clock;
+    EXPECT_NE(clock.find("[device.sim] clock = \"wall\""), std::string::npos) << clock;
+    EXPECT_NE(clock.find("\"lockstep\" or \"realtime\""), std::string::npos) << clock;
     EXPECT_NE(error_of("initial_position = [0.0]", 2).find("an array of 2 positions"),
               std::string::npos);
     EXPECT_NE(error_of("[human]\nmodel = \"stiff-grasp\"\nhand_stiffness = -5")
-                  .find("device.sim.human.hand_stiffness = -5"),
+                  .find("[device.sim.human] hand_stiffness = -5"),
               std::string::npos);
     EXPECT_NE(error_of("[faults]\ndrop_probability = 1.5")
-                  .find("device.sim.faults.drop_probability = 1.5"),
+                  .find("[device.sim.faults] drop_probability = 1.5"),
               std::string::npos);
-    EXPECT_NE(error_of("[faults]\njump_axis = 1").find("an integer from 0 to 0"),
-              std::string::npos);
-    EXPECT_NE(error_of("[faults]\ndrop_at = [0.1, -2]").find("device.sim.faults.drop_at = -2"),
+    EXPECT_NE(
+        error_of("[faults]\njump_axis = 1").find("jump_axis = 1 is out of range: allowed 0..0"),
+        std::string::npos);
+    EXPECT_NE(error_of("[faults]\ndrop_at = [0.1, -2]").find("[device.sim.faults] drop_at = -2"),
               std::string::npos);
     const std::string model = error_of("[human]\nmodel = \"firm-grip\"");
-    EXPECT_NE(model.find("device.sim.human.model = \"firm-grip\""), std::string::npos) << model;
+    EXPECT_NE(model.find("[device.sim.human] model = \"firm-grip\""), std::string::npos) << model;
     EXPECT_NE(model.find("\"two-mass-grasp\""), std::string::npos) << model;
 }
 
@@ -196,39 +197,38 @@ TEST(SimConfig, DelayIsFiniteNonNegativeAndBelowTenPeriods) {
     for (const char* bad : {"-1e-3", "nan", "inf", "-inf", "0.005", "1e9", "\"1 ms\"", "true"}) {
         const std::string e = error_of(std::string("delay = ") + bad);
         SCOPED_TRACE(e);
-        EXPECT_EQ(e.find("lab.toml: device.sim.delay = "), 0u);
-        EXPECT_NE(e.find("is not allowed: must be a number >= 0 and < 0.005 (s: 10 periods at "
-                         "servo.rate_hz = 2000 Hz)"),
+        EXPECT_EQ(e.find("lab.toml:1: [device.sim] delay = "), 0u);
+        EXPECT_NE(e.find(": allowed >= 0 and < 0.005 (s: 10 periods at [servo] rate_hz = 2000)"),
                   std::string::npos);
     }
-    EXPECT_NE(error_of("delay = -1e-3").find("delay = -0.001 is not allowed"), std::string::npos);
-    EXPECT_NE(error_of("delay = nan").find("delay = nan is not allowed"), std::string::npos);
-    // (the value as toml++ prints it: 0.0050000000000000001, to 17 digits)
+    EXPECT_NE(error_of("delay = -1e-3").find("delay = -0.001 is out of range"), std::string::npos);
+    EXPECT_NE(error_of("delay = nan").find("delay = nan is out of range"), std::string::npos);
     EXPECT_NE(error_of("delay = 0.005").find("delay = 0.005"), std::string::npos);
-    EXPECT_NE(error_of("delay = 1e9").find("delay = 1000000000.0 is not allowed"),
-              std::string::npos);
-    EXPECT_NE(error_of("delay = inf").find("delay = inf is not allowed"), std::string::npos);
+    EXPECT_NE(error_of("delay = 1e9").find("delay = 1e+09 is out of range"), std::string::npos);
+    EXPECT_NE(error_of("delay = inf").find("delay = inf is out of range"), std::string::npos);
 }
 
 TEST(SimConfig, UnknownKeysAreErrors) {
     const std::string e = error_of("mass = 0.1\nmas = 0.2");
-    EXPECT_NE(e.find("lab.toml: device.sim.mas is not a known key"), std::string::npos) << e;
-    EXPECT_NE(
-        error_of("[human]\nmodel = \"heavy-hand\"\nhand_mas = 1").find("device.sim.human.hand_mas"),
-        std::string::npos);
-    EXPECT_NE(error_of("[faults]\ndisconnect = 1.0").find("device.sim.faults.disconnect"),
+    EXPECT_NE(e.find("lab.toml:2: [device.sim] mas = 0.2 is not a known key"), std::string::npos)
+        << e;
+    EXPECT_NE(error_of("[human]\nmodel = \"heavy-hand\"\nhand_mas = 1")
+                  .find("[device.sim.human] hand_mas = 1 is not a known key"),
+              std::string::npos);
+    EXPECT_NE(error_of("[faults]\ndisconnect = 1.0")
+                  .find("[device.sim.faults] disconnect = 1.0 is not a known key"),
               std::string::npos);
     EXPECT_NE(error_of("[human]\nmodel = \"stiff-grasp\"\npush = { too = 1 }")
-                  .find("device.sim.human.push.too"),
+                  .find("[device.sim.human.push] too = 1 is not a known key"),
               std::string::npos);
     EXPECT_NE(error_of("[[human]]\n[[human]]\n[[human]]\nmodel = \"heavy-hand\"\nfoo = 1", 3)
-                  .find("device.sim.human[2].foo"),
+                  .find("[[device.sim.human]] #3 foo = 1 is not a known key"),
               std::string::npos);
 }
 
 TEST(SimConfig, KeysTheModelDoesNotUseAreErrors) {
     const std::string e = error_of("[human]\nmodel = \"heavy-hand\"\nhand_stiffness = 100");
-    EXPECT_NE(e.find("device.sim.human.hand_stiffness is not used by model = \"heavy-hand\""),
+    EXPECT_NE(e.find("[device.sim.human] hand_stiffness is not used by model = \"heavy-hand\""),
               std::string::npos)
         << e;
     EXPECT_NE(error_of("[human]\nhand_mass = 1").find("not used by model = \"hands-off\""),
@@ -241,9 +241,8 @@ TEST(SimConfig, KeysTheModelDoesNotUseAreErrors) {
 
 TEST(SimConfig, BadDeviceSettingsAndBadTomlAreErrors) {
     EXPECT_NE(error_of("", 4).find("lab.toml: device.axes = 4"), std::string::npos);
-    EXPECT_NE(error_of("mass = ").find("lab.toml: [device.sim] is not valid TOML"),
-              std::string::npos);
-    EXPECT_NE(error_of("human = 3").find("device.sim.human = 3"), std::string::npos);
+    EXPECT_NE(error_of("mass = ").find("lab.toml:1:"), std::string::npos);
+    EXPECT_NE(error_of("human = 3").find("[device.sim] human = 3"), std::string::npos);
     EXPECT_NE(error_of("[[human]]\n[[human]]", 3).find("3 tables [[device.sim.human]]"),
               std::string::npos);
     DeviceConfig d = config("");

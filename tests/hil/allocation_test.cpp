@@ -1,6 +1,7 @@
-// HilAllocation: the real-time rule "no allocation in the tick" (DESIGN.md), checked on the
-// daemon's own pieces wired as run_daemon wires them: the real sim plugin loaded through
-// the plugin loader, every shipped scene built by the scene loader, the ServoConfig from
+// HilAllocation: the real-time rule "no allocation in the tick" (docs/architecture.md §6.2,
+// §6.3), checked on the daemon's own pieces wired as run_daemon wires them: the real sim plugin
+// loaded through the plugin loader, every shipped scene built by the scene loader, the
+// ServoConfig from
 // make_servo_config, the lock-free telemetry ring drained by the daemon's TelemetryWriter
 // on its own thread, and ServoLoop::run, the loop the servo thread runs. Only the test
 // thread (the servo thread here) is counted, with the handle pressed into each scene by a
@@ -129,6 +130,7 @@ GuardedRun run_scene(const SceneCase& scene_case, const std::string& passivity,
     device_config.rate_hz = config.servo.rate_hz;
     device_config.lockstep = true;
     device_config.plugin_table_toml = config.device.plugin_table_toml;
+    device_config.plugin_table_path = config.device.plugin_table_path;
     device_config.source = config.source;
     device->open(device_config);
     const device::DeviceInfo info = device->info();

@@ -1,5 +1,5 @@
 // HilExit: every way a hapticd run ends leaves the device at zero force and its outputs
-// whole (issue 10, "Every exit path"). The real binary against the sim plugin: each stop
+// whole (docs/architecture.md §7.2). The real binary against the sim plugin: each stop
 // signal ends a run as SIGTERM does; a SIGKILL loses at most the writer's flush interval of
 // the log and never a half line; a full disk is an incomplete log in the summary and exit
 // 3; outputs that are inputs, shared, locked, unwritable or empty are refused (exit 2)

@@ -1,8 +1,8 @@
-// What the seeded fault campaigns share (issue 10): the scenario, the servo configuration,
-// and the checks that hold whatever the faults were. tests/hil/fault_campaign_test.cpp
-// injects faults at the servo's Device interface against the simulated device;
-// tests/device/serial/serial_fault_campaign_test.cpp puts them on the wire between the
-// device emulator and the serial plugin.
+// What the seeded fault campaigns share (docs/reliability.md): the scenario, the servo
+// configuration, and the checks that hold whatever the faults were.
+// tests/hil/fault_campaign_test.cpp injects faults at the servo's Device interface against the
+// simulated device; tests/device/serial/serial_fault_campaign_test.cpp puts them on the wire
+// between the device emulator and the serial plugin.
 //
 // The scenario: a stiff grasp pressed into a 2e4 N/m wall through the coupling (3600 N/m),
 // max_force 8 N, link recovery on or off (settle 30 ms, timeout 250 ms), in lockstep, the

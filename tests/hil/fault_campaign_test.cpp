@@ -1,6 +1,7 @@
-// HilFaultCampaign (issue 10): seeded random fault sequences in lockstep against the
-// simulated device, through the servo loop exactly as the daemon runs it (ServoLoop::run on
-// a device that paces the loop, the scene's penalty environment, link recovery on or off).
+// HilFaultCampaign (docs/reliability.md, "The seeded fault campaign"): seeded random fault
+// sequences in lockstep against the simulated device, through the servo loop exactly as the
+// daemon runs it (ServoLoop::run on a device that paces the loop, the scene's penalty
+// environment, link recovery on or off).
 // Each sequence presses a stiff grasp into a wall and injects, at random ticks, some of:
 // a disconnect and reconnect, dropped replies, late replies, a stale encoder, an encoder
 // jump, a stall (a gap in the device's sequence: the device ran on while the host saw

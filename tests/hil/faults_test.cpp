@@ -1,9 +1,9 @@
-// HilFaults: the sim plugin's fault injection, end to end through the daemon (DESIGN.md
-// "Safety model": a fault zeroes force in the same tick and is latched; hapticd stops on it
-// with exit 1, except a link fault with [safety] reconnect, which clears by itself once the
-// device has answered again for reconnect_settle, or ends the run reconnect_timeout after
-// the fault). The handle is pressed into the wall by a stiff grasp, so that the force before
-// the fault is well away from zero and the zero after it means something.
+// HilFaults: the sim plugin's fault injection, end to end through the daemon
+// (docs/architecture.md §7.1, §7.8: a fault zeroes force in the same tick and is latched;
+// hapticd stops on it with exit 1, except a link fault with [safety] reconnect, which clears by
+// itself once the device has answered again for reconnect_settle, or ends the run
+// reconnect_timeout after the fault). The handle is pressed into the wall by a stiff grasp, so
+// that the force before the fault is well away from zero and the zero after it means something.
 #include "hapticd/servo/faults.hpp"
 
 #include <gtest/gtest.h>
@@ -176,9 +176,9 @@ TEST(HilFaults, EncoderJumpLatchesAndZeroesForceInTheSameTick) {
     }
 }
 
-// Issue 10: with stale_at = 0.75 the status bit was ignored, the held force moved the
-// handle 31 mm and the summary said "faults: none". A stale sample latches encoder_stale and
-// zeroes the force in the tick that read it.
+// docs/architecture.md §7.1: a stale sample latches encoder_stale and zeroes the force in the
+// tick that read it (with stale_at = 0.75 the status bit was once ignored, the held force
+// moved the handle 31 mm and the summary said "faults: none").
 TEST(HilFaults, StaleEncoderLatchesAndZeroesForceInTheSameTick) {
     constexpr std::uint32_t kStatusStale = 1u << 1;  // servo/io.hpp
     const ScratchDir dir;

@@ -121,7 +121,8 @@ TEST(HilIdentify, PenDisplayLogsTheSignalItCommandedAndStaysInTheWorkspace) {
               "none (identify: open loop, nothing coupled)");
     EXPECT_EQ(run.summary.at("saturated_ticks"), 0);
 
-    // Complete: DESIGN.md's columns, one row per tick of the whole excitation and its tail.
+    // Complete: the columns of docs/architecture.md §4.5, one row per tick of the whole
+    // excitation and its tail.
     EXPECT_EQ(run.header,
               "tick,t_s,x0_m,v0_mps,xe0_m,f0_n,status,flags,faults,wake_latency_us,compute_us,"
               "energy_j");
@@ -268,7 +269,8 @@ TEST(HilIdentify, BadIdentifyKeysAreRejectedByName) {
     const ScratchDir dir;
     const IdentifyRun typo = run_identify(dir, pen_config("forse_amplitude = 1.0\n"));
     EXPECT_EQ(typo.exit_code, 2);
-    EXPECT_NE(typo.err.find("unknown key [identify] forse_amplitude"), std::string::npos)
+    EXPECT_NE(typo.err.find("[identify] forse_amplitude = 1.0 is not a known key"),
+              std::string::npos)
         << typo.err;
     EXPECT_EQ(typo.log.rows(), 0u);
     const IdentifyRun range = run_identify(dir, pen_config("workspace = -0.01\n"));
@@ -295,6 +297,7 @@ TEST(HilIdentify, TicksOfTheExcitationDoNotAllocate) {
     device_config.rate_hz = config.servo.rate_hz;
     device_config.lockstep = true;
     device_config.plugin_table_toml = config.device.plugin_table_toml;
+    device_config.plugin_table_path = config.device.plugin_table_path;
     device_config.source = config.source;
     device->open(device_config);
     const device::DeviceInfo info = device->info();

@@ -1,8 +1,9 @@
-// HilLog: the telemetry CSV of a lockstep run is complete and means what DESIGN.md says:
-// the header is exactly the public column names, there is one row per tick numbered from
-// 0 without a gap (the run is longer than the telemetry ring, so the loop must have waited
-// for the writer: lockstep backpressure), the summary's counts agree, t_s is virtual time,
-// and v is the backward difference of x that the coupling (16) uses.
+// HilLog: the telemetry CSV of a lockstep run is complete and means what
+// docs/architecture.md §4.5 says: the header is exactly the public column names, there is one
+// row per tick numbered from 0 without a gap (the run is longer than the telemetry ring, so the
+// loop must have waited for the writer: lockstep backpressure, §3.5), the summary's counts
+// agree, t_s is virtual time, and v is the backward difference of x that the coupling (16)
+// uses.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -1,5 +1,5 @@
-// HilServoSafety (issue 10): force the user did not ask for, end to end through the real
-// daemon and the sim plugin.
+// HilServoSafety (docs/architecture.md §7.3, §7.6): force the user did not ask for, end to end
+// through the real daemon and the sim plugin.
 //   - A host stall between a tick's wake and its read (kill -STOP for 55 ms in a real-time
 //     run): the backward difference must span the stall, so the velocity limit's brake does
 //     not fire on a velocity the handle never had (it commanded max_force before).

@@ -1,5 +1,5 @@
-// Reads a hapticd telemetry CSV (header row, DESIGN.md's column names) for the
-// hardware-in-the-loop tests.
+// Reads a hapticd telemetry CSV (header row, the column names of docs/architecture.md §4.5) for
+// the hardware-in-the-loop tests.
 #pragma once
 
 #include <fstream>

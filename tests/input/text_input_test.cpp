@@ -1,5 +1,6 @@
-// Bounds on the text files every reader parses (issue 10: a dotted key of 35,000 parts
-// overflowed the stack inside toml++, and --config /dev/zero read until memory ran out).
+// Bounds on the text files every reader parses (docs/architecture.md §2.3: a dotted key of
+// 35,000 parts overflowed the stack inside toml++, and --config /dev/zero read until memory ran
+// out).
 #include "hapticd/input/text_input.hpp"
 
 #include <gtest/gtest.h>
@@ -69,14 +70,14 @@ TEST(ReadTextFile, ReadsAFileAndRefusesDevicesThatNeverEnd) {
     try {
         (void)read_text_file("/dev/zero", "the config file");
         FAIL() << "read /dev/zero to its end";
-    } catch (const InputError& e) {
+    } catch (const ConfigError& e) {
         EXPECT_EQ(std::string(e.what()),
                   "/dev/zero: the config file is larger than 4 MiB (allowed at most 4 MiB): "
                   "not a hapticd file");
     }
-    EXPECT_THROW((void)read_text_file("/nonexistent/x.toml", "the scene file"), InputError);
-    EXPECT_THROW((void)read_text_file("/tmp", "the scene file"), InputError);
-    EXPECT_THROW((void)read_text_file("", "the scene file"), InputError);
+    EXPECT_THROW((void)read_text_file("/nonexistent/x.toml", "the scene file"), ConfigError);
+    EXPECT_THROW((void)read_text_file("/tmp", "the scene file"), ConfigError);
+    EXPECT_THROW((void)read_text_file("", "the scene file"), ConfigError);
 }
 
 }  // namespace

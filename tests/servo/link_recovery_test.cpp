@@ -1,6 +1,7 @@
-// Link-fault recovery (issue 4: on every link error the loop zeroes force in that tick,
-// reports the fault, and recovers when the device returns): the LinkRecovery counter on its
-// own, then the servo loop against a scripted device on virtual time, tick by tick.
+// Link-fault recovery (docs/architecture.md §7.8: on every link error the loop zeroes force
+// in that tick, reports the fault, and recovers when the device returns): the LinkRecovery
+// counter on its own, then the servo loop against a scripted device on virtual time, tick by
+// tick.
 #include "hapticd/servo/link_recovery.hpp"
 
 #include <gtest/gtest.h>

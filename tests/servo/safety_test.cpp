@@ -155,9 +155,9 @@ TEST(ServoSafety, SoftStartScalesTheForce) {
     EXPECT_NEAR(safety.filter(force, Vec3(0.0), kPeriod).handle_force_n.x, 2.0, 1e-12);
 }
 
-// Issue 10: a handle that starts deep in a wall asks for far more than max_force. The ramp
-// must bound the force commanded (scale x max_force), not the raw force before saturation,
-// which reached the limit 3 ms into a 0.5 s ramp.
+// docs/architecture.md §7.3: a handle that starts deep in a wall asks for far more than
+// max_force. The ramp must bound the force commanded (scale x max_force), not the raw force
+// before saturation (a ramp on that one reached the limit 3 ms into a 0.5 s ramp).
 TEST(ServoSafety, SoftStartBoundsTheForceCommandedNotTheRawForce) {
     SafetyLimits limits = plain_limits();
     limits.max_force_n = 20.0;

@@ -123,8 +123,9 @@ TEST(ServoAllocation, FaultPathDoesNotAllocate) {
     EXPECT_NE(loop.faults_seen(), 0u);
 }
 
-// Issue 10's paths: a device clock that runs backwards every 50 ticks (interval unknown:
-// zero force, the history and the soft start restart), and a stale sample at the end.
+// The interval-unknown and stale-sample paths (docs/architecture.md §7.6, §7.1): a device
+// clock that runs backwards every 50 ticks (zero force, the history and the soft start
+// restart), and a stale sample at the end.
 TEST(ServoAllocation, UnknownIntervalAndStalePathsDoNotAllocate) {
     VirtualTime time;
     SweepingDevice device;

@@ -28,6 +28,7 @@ ServoConfig test_config() {
     config.safety.soft_start = {.still_speed_mps = 1.0, .still_time_s = 0.0, .ramp_time_s = 0.0};
     config.safety.passivity.mode = PassivityMode::observe;
     config.realtime.mode = RealtimeMode::off;
+    config.link_recovery.enabled = false;  // a lost device ends the run
     return config;
 }
 
@@ -123,8 +124,9 @@ TEST(ServoLoop, EncoderJumpStatusFaultsInTheSameTick) {
     EXPECT_EQ(loop.faults(), kFaultEncoderJump);
 }
 
-// Issue 10: a stale sample (the counts repeat the last good ones) was ignored, and the held
-// force moved the handle 31 mm. It latches encoder_stale and zeroes the force in that tick.
+// docs/architecture.md §7.1: a stale sample (the counts repeat the last good ones) latches
+// encoder_stale and zeroes the force in that tick (ignored, it once let the held force move
+// the handle 31 mm).
 TEST(ServoLoop, StaleSampleFaultsInTheSameTick) {
     VirtualTime time;
     FakeDevice device;
@@ -146,9 +148,9 @@ TEST(ServoLoop, StaleSampleFaultsInTheSameTick) {
     EXPECT_FALSE(device.last_command.enable);
 }
 
-// Issue 10: a host stalled between its wake and the read (kill -STOP) saw the handle's move
-// over the stall as one period's and commanded max_force. The backward difference spans the
-// time between the samples, from the device's clock.
+// docs/architecture.md §3.1, §7.6: a host stalled between its wake and the read (kill -STOP)
+// once saw the handle's move over the stall as one period's and commanded max_force. The
+// backward difference spans the time between the samples, from the device's clock.
 TEST(ServoLoop, VelocitySpansTheDeviceClockAcrossAStall) {
     VirtualTime time;
     FakeDevice device;

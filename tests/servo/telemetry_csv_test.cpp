@@ -1,4 +1,5 @@
-// Telemetry CSV: the column names DESIGN.md fixes, and numbers that read back exactly.
+// Telemetry CSV: the column names of docs/architecture.md §4.5, and numbers that read back
+// exactly.
 #include "hapticd/servo/telemetry_csv.hpp"
 
 #include <gtest/gtest.h>

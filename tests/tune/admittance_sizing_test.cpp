@@ -1,6 +1,7 @@
-// The admittance display's models held against the exact admittance loop (issue 9): where
-// (37) is optimistic, the passive model's resonance count reached by alias-tuned operators,
-// and the exact sizing never optimistic and tight.
+// The admittance display's models held against the exact admittance loop (docs/sizing.md,
+// "The admittance display beyond (37)"): where (37) is optimistic, the passive model's
+// resonance count reached by alias-tuned operators, and the exact sizing never optimistic and
+// tight.
 #include "hapticd/tune/admittance_sizing.hpp"
 
 #include <gtest/gtest.h>

@@ -407,7 +407,8 @@ TEST(exactNyquist, SteelGripLimitOnCouplingDampingIsPiSquaredOverEightB) {
 // The (π²/8) b limit holds only for an operator with a single resonance. Damping beyond
 // Colgate and Schenkel's b > k_c T/2 + b_c but inside (π²/8) b passes the single Nyquist
 // grip, and an operator with free-handle modes on several odd harmonics of Nyquist (the
-// aliases of 500 Hz) destabilises it: Colgate's condition is the bound (issue 9).
+// aliases of 500 Hz) destabilises it: Colgate's condition is the bound
+// (docs/stability-models.md, "Why a sweep is not enough").
 TEST(exactNyquist, DampingBeyondColgateFallsToAMultiModeOperator) {
     const double kc = 1000.0;
     const double colgate_bc = kDevice.damping_n_s_per_m - kc * kPeriodS / 2.0;  // 1.5

@@ -131,8 +131,9 @@ TEST(IdentificationLog, ReadsAScriptsLogWithOnlyTheRequiredColumns) {
 }
 
 TEST(IdentificationLog, KeepsOnlyTheColumnsIdentificationReadsWithinTheirOwnSize) {
-    // Issue 10: a 172 MB daemon log took 2 GB to identify, 12 parsed columns grown by
-    // doubling among the causes. The reader's memory, counted by capacity: with
+    // docs/identification.md, "Memory": a 172 MB daemon log once took 2 GB to identify, 12
+    // parsed columns grown by doubling among the causes. The reader's memory, counted by
+    // capacity: with
     // TelemetryLogOptions::identification(), the kept columns (t_s, x0_m, f0_n, status,
     // flags, faults: 6 of the daemon's 12 for one axis) at 8 bytes a row, reserved once;
     // the default keeps all 12 and the line numbers, still reserved once.

@@ -1,5 +1,5 @@
 // The stability models held against each other, with the `exact` sampled-data model as the
-// ground truth (DESIGN.md):
+// ground truth (docs/architecture.md §7.9, docs/stability-models.md):
 // - gains sized with the `paper` model (13) are unstable for some passive operator;
 // - gains sized with the `encoder` model at b_c = 0 (the default) are stable for every
 //   operator and environment in the sweep;

@@ -1,6 +1,6 @@
-// The exact model held against the passive bound (issue 9): where the theory says the
-// bound is tight, the exact model's synthesised adversaries reach it; below it, nothing in
-// the sweep or among the adversaries is unstable.
+// The exact model held against the passive bound (docs/stability-models.md): where the theory
+// says the bound is tight, the exact model's synthesised adversaries reach it; below it,
+// nothing in the sweep or among the adversaries is unstable.
 //
 // The passive bound is a bisection on check_coupling(passive) here, not a closed form, so
 // the test holds the two implementations against each other; the closed forms are tested in

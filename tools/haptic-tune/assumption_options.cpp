@@ -37,13 +37,9 @@ tune::StabilityAssumption resolve_assumption(const AssumptionOptions& options,
                 "a stated class of environments), not " +
                 model);
         }
-        try {
-            // The scene's own axes: any count up to 3 is accepted here.
-            assumption.environments = daemon::scene_environments(
-                env::load_scene(options.scene_path, 3), options.scene_path);
-        } catch (const env::SceneError& e) {
-            throw daemon::ConfigError(e.what());
-        }
+        // The scene's own axes: any count up to 3 is accepted here.
+        assumption.environments =
+            daemon::scene_environments(env::load_scene(options.scene_path, 3), options.scene_path);
     }
     return assumption;
 }

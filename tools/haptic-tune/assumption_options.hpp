@@ -17,8 +17,8 @@ struct AssumptionOptions {
 
 void add_assumption_options(CLI::App& command, AssumptionOptions& options);
 
-/// Reads the files. Throws daemon::ConfigError (or env::SceneError) naming the file, key
-/// and value; UsageError when an operator class is given to a model other than exact.
+/// Reads the files. Throws daemon::ConfigError naming the file, key and value; UsageError
+/// when an operator class is given to a model other than exact.
 tune::StabilityAssumption resolve_assumption(const AssumptionOptions& options,
                                              const std::string& model);
 

@@ -5,7 +5,6 @@
 #include <iostream>
 #include <sstream>
 
-#include "device_file.hpp"
 #include "hapticd/tune/input_checks.hpp"
 
 namespace hapticd::tools {
@@ -74,12 +73,12 @@ void add_velocity_filter_option(CLI::App& command, DeviceOptions& options) {
         ->check(non_negative_finite("Hz"));
 }
 
-void add_model_option(CLI::App& command, std::string& model,
-                      const std::vector<std::string>& allowed) {
+CLI::Option* add_model_option(CLI::App& command, std::string& model,
+                              const std::vector<std::string>& allowed) {
     std::string list;
     for (const std::string& name : allowed) list += (list.empty() ? "" : ", ") + name;
     model = allowed.front();
-    command
+    return command
         .add_option("--model", model,
                     "stability model: " + list + " (default " + allowed.front() +
                         ": holds for every passive operator and environment; paper and "
@@ -88,25 +87,37 @@ void add_model_option(CLI::App& command, std::string& model,
 }
 
 DesignInput resolve_design_input(const DeviceOptions& options) {
-    DeviceFile file;
-    if (!options.config_path.empty()) file = read_device_file(options.config_path);
+    DesignInput input;
+    if (!options.config_path.empty()) input.config = daemon::load_config(options.config_path);
+    const daemon::Config* config = input.config ? &*input.config : nullptr;
+    if (config && !((options.mass_kg || config->device.model_mass_kg) &&
+                    (options.damping_n_s_per_m || config->device.model_damping_n_s_per_m))) {
+        daemon::require_device_model(*config);  // what the config lacks, in hapticd's words
+    }
     const auto pick = [](const std::optional<double>& flag, const std::optional<double>& cfg,
                          const char* what) {
         if (flag) return *flag;
         if (cfg) return *cfg;
         throw UsageError(std::string("missing ") + what);
     };
-    DesignInput input;
     input.device.mass_kg =
-        pick(options.mass_kg, file.mass_kg, "--mass (or [device.model] mass in --config)");
-    input.device.damping_n_s_per_m = pick(options.damping_n_s_per_m, file.damping_n_s_per_m,
-                                          "--damping (or [device.model] damping in --config)");
-    input.rate_hz = pick(options.rate_hz, file.rate_hz, "--rate (or [servo] rate_hz in --config)");
-    input.coupling_stiffness_n_per_m = file.coupling_stiffness_n_per_m;
-    input.coupling_damping_n_s_per_m = file.coupling_damping_n_s_per_m;
-    input.delay_s = options.delay_s.value_or(file.delay_s.value_or(0.0));
+        pick(options.mass_kg, config ? config->device.model_mass_kg : std::nullopt,
+             "--mass (or [device.model] mass in --config)");
+    input.device.damping_n_s_per_m = pick(
+        options.damping_n_s_per_m, config ? config->device.model_damping_n_s_per_m : std::nullopt,
+        "--damping (or [device.model] damping in --config)");
+    input.rate_hz =
+        pick(options.rate_hz, config ? std::optional<double>(config->servo.rate_hz) : std::nullopt,
+             "--rate (or [servo] rate_hz in --config)");
+    if (config) {
+        if (config->coupling.stiffness_n_per_m > 0.0) {
+            input.coupling_stiffness_n_per_m = config->coupling.stiffness_n_per_m;
+        }
+        input.coupling_damping_n_s_per_m = config->coupling.damping_n_s_per_m;
+    }
+    input.delay_s = options.delay_s.value_or(config ? config->device.model_delay_s : 0.0);
     input.velocity_filter_hz =
-        options.velocity_filter_hz.value_or(file.velocity_filter_hz.value_or(0.0));
+        options.velocity_filter_hz.value_or(config ? config->coupling.velocity_filter_hz : 0.0);
     try {
         tune::check_device(input.device);
         tune::check_rate(input.rate_hz);

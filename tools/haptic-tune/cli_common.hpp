@@ -10,13 +10,17 @@
 #include <utility>
 #include <vector>
 
+#include "hapticd/daemon/config.hpp"
+#include "hapticd/daemon/exit_code.hpp"
+#include "hapticd/daemon/startup_check.hpp"
 #include "hapticd/theory/benchmark.hpp"
 
 namespace hapticd::tools {
 
-/// Exit codes shared by every hapticd command (DESIGN.md): 0 success (or stable),
-/// 1 a negative verdict (not stable), 2 usage or input error.
-enum ExitCode : int { kExitOk = 0, kExitVerdictNo = 1, kExitUsage = 2 };
+// The exit codes every hapticd command shares (daemon/exit_code.hpp).
+using daemon::kExitBadInput;
+using daemon::kExitOk;
+using daemon::kExitVerdictNo;
 
 /// What the chosen subcommand runs once the command line has parsed.
 struct Invocation {
@@ -33,9 +37,9 @@ class UsageError : public std::runtime_error {
 CLI::Validator positive_finite(std::string unit);
 CLI::Validator non_negative_finite(std::string unit);
 
-/// The device and servo rate a design is for: from flags, or from a hapticd config file
-/// ([device.model] mass, damping; [servo] rate_hz; [coupling] stiffness, damping),
-/// flags overriding the file.
+/// The device and servo rate a design is for: from flags, or from a hapticd config file read
+/// exactly as hapticd reads it (daemon::load_config: [device.model] mass, damping, delay;
+/// [servo] rate_hz; [coupling] stiffness, damping, velocity_filter), flags overriding it.
 struct DeviceOptions {
     std::string config_path;
     std::optional<double> mass_kg;
@@ -53,20 +57,25 @@ void add_delay_option(CLI::App& command, DeviceOptions& options);
 void add_velocity_filter_option(CLI::App& command, DeviceOptions& options);
 
 /// --model for size/check/plot: `allowed` (the first is the default, passive).
-void add_model_option(CLI::App& command, std::string& model,
-                      const std::vector<std::string>& allowed);
+CLI::Option* add_model_option(CLI::App& command, std::string& model,
+                              const std::vector<std::string>& allowed);
 
 struct DesignInput {
     theory::DeviceModel device;
     double rate_hz = 0.0;
-    std::optional<double> coupling_stiffness_n_per_m;  ///< from [coupling] if present
-    std::optional<double> coupling_damping_n_s_per_m;
-    double delay_s = 0.0;  ///< checked: >= 0 and < 10 periods
+    /// [coupling] stiffness when the config has a spring (> 0): plot and zwidth size one
+    /// otherwise.
+    std::optional<double> coupling_stiffness_n_per_m;
+    std::optional<double> coupling_damping_n_s_per_m;  ///< [coupling] damping, with a config
+    double delay_s = 0.0;                              ///< checked: >= 0 and < 10 periods
     double delay_periods() const { return delay_s * rate_hz; }
     double velocity_filter_hz = 0.0;  ///< checked: 0, or 1 Hz up to below rate/2
+    /// The whole config, as hapticd read it (none without --config).
+    std::optional<daemon::Config> config;
 };
 /// Merges the config file and the flags; throws UsageError naming what is missing or a
-/// value out of its range (device, rate, delay, velocity filter).
+/// flag out of its range (device, rate, delay, velocity filter), daemon::ConfigError for
+/// the config (its message is the one hapticd gives).
 DesignInput resolve_design_input(const DeviceOptions& options);
 
 /// Prints `fields` as aligned "key  value" lines, or as one JSON object with --json.

@@ -1,5 +1,5 @@
 // haptic-tune autotune: from the device to verified coupling gains in its config, in one
-// command (issue 5; docs/autotune.md). The computing half (identify, size, verify) is
+// command (docs/autotune.md). The computing half (identify, size, verify) is
 // tune::autotune (hapticd/tune/autotune.hpp); this file is the glue to the daemon: its
 // config (read, edited keeping comments, checked at start-up, written with a backup) and
 // its executable (`hapticd --identify` when no --log is given).
@@ -72,7 +72,7 @@ class AutotuneError : public std::runtime_error {
 std::string read_file(const std::string& path) {
     try {
         return input::read_text_file(path, "the config file");
-    } catch (const input::InputError& e) {
+    } catch (const input::ConfigError& e) {
         throw AutotuneError(e.what());
     }
 }
@@ -102,8 +102,9 @@ std::string default_hapticd() {
 bool sim_lockstep(const daemon::Config& config) {
     if (config.device.plugin != "sim" || config.device.plugin_table_toml.empty()) return false;
     try {
-        const toml::table table = toml::parse(config.device.plugin_table_toml);
-        return table["clock"].value_or(std::string()) == "lockstep";
+        const toml::table document = toml::parse(config.device.plugin_table_toml);
+        return toml::at_path(document, config.device.plugin_table_path)["clock"].value_or(
+                   std::string()) == "lockstep";
     } catch (const toml::parse_error&) {
         return false;  // hapticd itself will say what is wrong with the table
     }
@@ -886,7 +887,7 @@ void add_autotune_command(CLI::App& app, Invocation& invocation) {
                 return run_autotune(*options);
             } catch (const AutotuneError& e) {
                 std::cerr << "haptic-tune: autotune: " << e.what() << '\n';
-                return static_cast<int>(kExitUsage);
+                return static_cast<int>(kExitBadInput);
             }
         };
     });

@@ -1,11 +1,13 @@
-// haptic-tune check: is a design unconditionally stable under a stability model?
-// Exit 0 when it is, 1 when it is not.
+// haptic-tune check: is a design unconditionally stable under a stability model? The same
+// function as hapticd's start-up check (tune::check_stability), on the same design: a
+// --config is read exactly as hapticd reads it, model and assumptions included
+// (daemon::stability_design), and flags override it. Exit 0 when it is stable, 1 when not.
 #include <memory>
 
 #include "assumption_options.hpp"
 #include "commands.hpp"
-#include "hapticd/theory/coupling_check.hpp"
-#include "hapticd/tune/input_checks.hpp"
+#include "hapticd/daemon/startup_check.hpp"
+#include "hapticd/tune/stability_check.hpp"
 
 namespace hapticd::tools {
 namespace {
@@ -15,92 +17,99 @@ struct CheckOptions {
     std::optional<double> stiffness;
     std::optional<double> coupling_damping;
     std::string model;
+    bool model_given = false;  ///< --model was on the command line
     AssumptionOptions assumption;
     bool json = false;
 };
 
-/// What a verdict rests on: the class of operators and environments it holds for.
-std::string holds_for(const std::string& model, const tune::StabilityAssumption& assumption) {
-    if (model == "passive") {
-        return assumption.describe() +
+/// What a verdict rests on: the class of operators and environments it holds for, and how.
+std::string holds_for(const tune::StabilityVerdict& verdict, const tune::StabilityDesign& design) {
+    if (verdict.model == tune::StabilityModel::passive) {
+        return verdict.holds_for +
                " (Colgate and Schenkel's sampled-data passivity condition at the device port)";
     }
-    if (model == "exact") {
-        return assumption.describe() +
+    if (verdict.model == tune::StabilityModel::exact) {
+        return verdict.holds_for +
                ", as far as the exact model's search reaches (its sweep, its synthesised "
                "adversaries: multi-mode operators on the aliases and worst lossless "
                "environments" +
-               (assumption.operators ? std::string(", and the search of the class)") : ")");
+               (design.assumption.operators ? std::string(", and the search of the class)") : ")");
     }
-    return "no class: the " + model +
+    return "no class: the " + std::string(tune::to_string(verdict.model)) +
            " model keeps one term of the hold's alias sum and is not a guarantee "
            "(docs/stability-models.md)";
 }
 
-int run_check(const CheckOptions& o) {
+/// The design: the config as hapticd reads it, with the flags over it, or the flags alone.
+tune::StabilityDesign design_of(const CheckOptions& o) {
     const DesignInput input = resolve_design_input(o.device);
-    theory::SpringDamperCoupling coupling;
+    daemon::Config config = input.config ? *input.config : daemon::Config{};
+    if (!input.config) config.source = "the command line";
+    config.device.model_mass_kg = input.device.mass_kg;
+    config.device.model_damping_n_s_per_m = input.device.damping_n_s_per_m;
+    config.servo.rate_hz = input.rate_hz;
+    config.device.model_delay_s = input.delay_s;
+    config.coupling.velocity_filter_hz = input.velocity_filter_hz;
     if (o.stiffness) {
-        coupling.stiffness_n_per_m = *o.stiffness;
-    } else if (input.coupling_stiffness_n_per_m) {
-        coupling.stiffness_n_per_m = *input.coupling_stiffness_n_per_m;
-    } else {
+        config.coupling.stiffness_n_per_m = *o.stiffness;
+    } else if (!input.config) {
         throw UsageError("missing --stiffness (or [coupling] stiffness in --config)");
     }
-    coupling.damping_n_s_per_m =
-        o.coupling_damping.value_or(input.coupling_damping_n_s_per_m.value_or(0.0));
-    coupling.velocity_filter_hz = input.velocity_filter_hz;
-    if (coupling.stiffness_n_per_m == 0.0 && coupling.damping_n_s_per_m == 0.0) {
+    if (o.coupling_damping) config.coupling.damping_n_s_per_m = *o.coupling_damping;
+    if ((o.stiffness || o.coupling_damping) && config.coupling.stiffness_n_per_m == 0.0 &&
+        config.coupling.damping_n_s_per_m == 0.0) {
         throw UsageError("--stiffness 0 with --coupling-damping 0 is no coupling at all");
     }
-    tune::check_coupling_gains(coupling);
-    const tune::StabilityAssumption assumption = resolve_assumption(o.assumption, o.model);
-
-    nlohmann::ordered_json out;
-    bool stable = false;
-    if (o.model == "exact") {
-        const tune::ExactCheck exact = tune::check_exact(input.device, coupling, input.rate_hz,
-                                                         assumption, input.delay_periods());
-        stable = exact.stable;
-        out = {{"unconditionally_stable", exact.stable},
-               {"worst_margin", exact.worst_margin},
-               {"worst_frequency_hz", exact.worst_frequency_hz},
-               {"model", "exact"},
-               {"worst_operator", exact.worst_operator.describe()},
-               {"worst_environment", exact.worst_environment.describe()},
-               {"worst_spectral_radius", exact.worst_spectral_radius},
-               {"cases_checked", exact.cases_checked}};
-    } else if (!assumption.environments.every_passive()) {
-        const tune::SceneCheck scene =
-            tune::check_passive_scene(input.device, coupling, input.rate_hz,
-                                      assumption.environments.scene, input.delay_periods());
-        stable = scene.stable;
-        out = {{"unconditionally_stable", scene.stable},
-               {"worst_margin", scene.margin},
-               {"worst_frequency_hz", scene.worst_frequency_hz},
-               {"model", o.model},
-               {"worst_environment", scene.worst_environment},
-               {"damping_needed", scene.damping_needed}};
-    } else {
-        const theory::HoldModel model = *theory::parse_hold_model(o.model);
-        const theory::CouplingCheck check = theory::check_coupling(
-            input.device, coupling, {model, input.delay_periods()}, input.rate_hz);
-        stable = check.unconditionally_stable;
-        out = {{"unconditionally_stable", check.unconditionally_stable},
-               {"worst_margin", check.worst_margin},
-               {"worst_frequency_hz", check.worst_frequency_hz},
-               {"model", o.model}};
+    // The model: --model, else the config's [coupling] check, else passive.
+    if (o.model_given || !input.config) {
+        config.coupling.check = tune::parse_stability_model(o.model);
+    } else if (!config.coupling.check) {
+        throw UsageError(config.source +
+                         ": [coupling] check = \"off\": hapticd checks nothing; give --model "
+                         "to check these gains");
     }
-    out["holds_for"] = holds_for(o.model, assumption);
-    out["delay_s"] = input.delay_s;
-    out["delay_periods"] = input.delay_periods();
-    out["stiffness"] = coupling.stiffness_n_per_m;
-    out["damping"] = coupling.damping_n_s_per_m;
-    out["velocity_filter_hz"] = coupling.velocity_filter_hz;
-    out["device"] = {{"mass", input.device.mass_kg}, {"damping", input.device.damping_n_s_per_m}};
-    out["rate_hz"] = input.rate_hz;
+    const tune::StabilityModel model = *config.coupling.check;
+    // What the chosen model cannot use of the config's assumptions goes (the passive model
+    // holds for every operator, paper and encoder for no class), and the flags replace it.
+    if (model != tune::StabilityModel::exact) config.operators.reset();
+    if (!tune::is_guarantee(model) || !o.assumption.scene_path.empty()) {
+        config.coupling.environments = daemon::EnvironmentClass::every_passive;
+    }
+    tune::StabilityDesign design = daemon::stability_design(config);
+    const tune::StabilityAssumption flags =
+        resolve_assumption(o.assumption, std::string(tune::to_string(model)));
+    if (flags.operators) design.assumption.operators = flags.operators;
+    if (!flags.environments.every_passive()) design.assumption.environments = flags.environments;
+    return design;
+}
+
+int run_check(const CheckOptions& o) {
+    const tune::StabilityDesign design = design_of(o);
+    const tune::StabilityVerdict verdict = tune::check_stability(design);
+    nlohmann::ordered_json out = {{"unconditionally_stable", verdict.passed},
+                                  {"worst_margin", verdict.worst_margin},
+                                  {"worst_frequency_hz", verdict.worst_frequency_hz},
+                                  {"model", std::string(tune::to_string(verdict.model))}};
+    if (verdict.exact) {
+        out["worst_operator"] = verdict.exact->worst_operator.describe();
+        out["worst_environment"] = verdict.exact->worst_environment.describe();
+        out["worst_spectral_radius"] = verdict.exact->worst_spectral_radius;
+        out["cases_checked"] = verdict.exact->cases_checked;
+    } else if (verdict.scene) {
+        out["worst_environment"] = verdict.scene->worst_environment;
+        out["damping_needed"] = verdict.scene->damping_needed;
+    }
+    out["holds_for"] = holds_for(verdict, design);
+    out["delay_s"] = design.delay_s;
+    out["delay_periods"] = design.delay_s * design.rate_hz;
+    out["stiffness"] = design.coupling.stiffness_n_per_m;
+    out["damping"] = design.coupling.damping_n_s_per_m;
+    out["velocity_filter_hz"] = design.coupling.velocity_filter_hz;
+    out["device"] = {{"mass", design.device.mass_kg}, {"damping", design.device.damping_n_s_per_m}};
+    out["rate_hz"] = design.rate_hz;
+    out["verdict"] = verdict.describe();  // the line hapticd logs for this design
     print_result(out, o.json);
-    return stable ? kExitOk : kExitVerdictNo;
+    return verdict.passed ? kExitOk : kExitVerdictNo;
 }
 
 }  // namespace
@@ -108,7 +117,9 @@ int run_check(const CheckOptions& o) {
 void add_check_command(CLI::App& app, Invocation& invocation) {
     auto options = std::make_shared<CheckOptions>();
     CLI::App* command = app.add_subcommand(
-        "check", "Check a coupling design; exit 0 if unconditionally stable, 1 if not");
+        "check",
+        "Check a coupling design; exit 0 if unconditionally stable, 1 if not. With --config: "
+        "the design and the verdict of hapticd's start-up check for that config");
     add_device_options(*command, options->device);
     add_delay_option(*command, options->device);
     add_velocity_filter_option(*command, options->device);
@@ -118,11 +129,14 @@ void add_check_command(CLI::App& app, Invocation& invocation) {
         ->add_option("--coupling-damping", options->coupling_damping,
                      "coupling damping b_c (N s/m), default 0")
         ->check(non_negative_finite("N s/m"));
-    add_model_option(*command, options->model, {"passive", "exact", "paper", "encoder"});
+    CLI::Option* model =
+        add_model_option(*command, options->model, {"passive", "exact", "paper", "encoder"});
     add_assumption_options(*command, options->assumption);
     command->add_flag("--json", options->json, "print the result as JSON");
-    command->callback(
-        [options, &invocation] { invocation.run = [options] { return run_check(*options); }; });
+    command->callback([options, model, &invocation] {
+        options->model_given = model->count() > 0;
+        invocation.run = [options] { return run_check(*options); };
+    });
 }
 
 }  // namespace hapticd::tools

@@ -37,7 +37,7 @@ int run_diag(const DiagCommandOptions& o) {
         throw UsageError(e.what());
     } catch (const std::exception& e) {
         std::cerr << "haptic-tune: device error: " << e.what() << '\n';
-        return kExitUsage;
+        return kExitBadInput;
     }
     const std::string text = daemon::diag_text(report);
     std::cout << (o.json ? daemon::diag_json(report) + "\n" : text) << std::flush;

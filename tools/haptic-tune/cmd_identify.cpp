@@ -64,7 +64,7 @@ int run_identify(const IdentifyOptions& o) {
         log = tune::read_telemetry_log(o.log_path, tune::TelemetryLogOptions::identification());
     } catch (const tune::LogFormatError& e) {
         std::cerr << "haptic-tune: bad log: " << e.what() << '\n';
-        return kExitUsage;
+        return kExitBadInput;
     }
     tune::IdentificationOptions options;
     options.segment_s = o.segment_s;
@@ -82,7 +82,7 @@ int run_identify(const IdentifyOptions& o) {
     } catch (const tune::IdentificationRefused& e) {
         std::cerr << "haptic-tune: " << o.log_path << ": " << e.what() << " ["
                   << tune::to_string(e.reason()) << "]\n";
-        return kExitUsage;
+        return kExitBadInput;
     }
     for (const tune::IdentifiedAxis& a : axes) {
         if (!a.report.converged) {

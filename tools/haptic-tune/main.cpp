@@ -3,7 +3,6 @@
 #include <iostream>
 
 #include "commands.hpp"
-#include "device_file.hpp"
 #include "hapticd/tune/coupling_sizing.hpp"
 
 int main(int argc, char** argv) {
@@ -29,13 +28,13 @@ int main(int argc, char** argv) {
         return app.exit(help);
     } catch (const CLI::ParseError& error) {
         app.exit(error);  // prints the message and the usage hint
-        return kExitUsage;
+        return kExitBadInput;
     }
     try {
         return invocation.run();
     } catch (const UsageError& error) {
         std::cerr << "haptic-tune: error: " << error.what() << '\n';
-    } catch (const ConfigError& error) {
+    } catch (const hapticd::daemon::ConfigError& error) {
         std::cerr << "haptic-tune: config error: " << error.what() << '\n';
     } catch (const hapticd::tune::InfeasibleCoupling& error) {
         std::cerr << "haptic-tune: infeasible: " << error.what() << '\n';
@@ -45,5 +44,5 @@ int main(int argc, char** argv) {
         // Anything else is a failure of the computation on this input, never a crash.
         std::cerr << "haptic-tune: error: " << error.what() << '\n';
     }
-    return kExitUsage;
+    return kExitBadInput;
 }

@@ -1,7 +1,7 @@
-// hapticd: the real-time servo daemon (DESIGN.md). With no arguments it runs the embedded
-// default, the simulated device touching the demo wall, in real time, with a status line
-// each second until SIGINT, SIGTERM or any other signal that would end it (stop_signals()),
-// then prints the summary.
+// hapticd: the real-time servo daemon (docs/architecture.md §2.10, docs/daemon.md). With no
+// arguments it runs the embedded default, the simulated device touching the demo wall, in real
+// time, with a status line each second until SIGINT, SIGTERM or any other signal that would end
+// it (stop_signals()), then prints the summary.
 #include <fcntl.h>
 #include <poll.h>
 #include <unistd.h>

@@ -1,6 +1,6 @@
 // Edits values in a hapticd TOML config as text, keeping everything else byte for byte:
 // comments, blank lines, key order, the alignment of trailing comments (haptic-tune autotune
-// writes [device.model] and [coupling] this way; issue 5).
+// writes [device.model] and [coupling] this way; docs/autotune.md, "What is written").
 //
 // A key that exists in its table ([device.model] mass = ...) gets its value replaced in
 // place; a missing key is added after the table's last key; a missing table is appended.

@@ -1,8 +1,8 @@
 // hapticd's run: config -> start-up stability check -> scene -> device plugin -> the servo
 // loop on its own thread, the telemetry writer on another, a status line each second on
 // this one, and the summary at the end. With --identify: config -> device plugin -> the
-// excitation (env/excitation.hpp) open loop in place of the scene, logged. Glue only (DESIGN.md):
-// every piece it wires is a library of its own layer.
+// excitation (env/excitation.hpp) open loop in place of the scene, logged. Glue only
+// (docs/architecture.md §2.8): every piece it wires is a library of its own layer.
 #pragma once
 
 #include <atomic>
@@ -10,19 +10,9 @@
 #include <optional>
 #include <string>
 
-namespace hapticd::daemon {
+#include "hapticd/daemon/exit_code.hpp"
 
-/// Exit codes of hapticd.
-enum ExitCode : int {
-    kExitOk = 0,        ///< stopped by a signal or at the end of --duration, no fault
-    kExitFault = 1,     ///< the run ended on a latched fault, or the loop could not run;
-                        ///< --identify: also when the handle left the workspace
-    kExitBadInput = 2,  ///< usage, config, scene or device-table errors; gains refused;
-                        ///< an output path that is empty, an input, another output, locked
-                        ///< by another daemon, or cannot be created (found before the run)
-    kExitOutput = 3,    ///< the run ended without a fault, but an output is not whole: the
-                        ///< --log (disk full, a write error, records dropped) or --summary
-};
+namespace hapticd::daemon {
 
 /// The longest --duration, seconds.
 inline constexpr double kMaxDurationS = 1e7;

@@ -24,7 +24,10 @@ namespace hapticd::daemon {
 /// - any fault ends the run (stop_on_fault), except link faults with [safety] reconnect:
 ///   those clear by themselves after reconnect_settle, or end the run after
 ///   reconnect_timeout (ServoConfig::link_recovery).
-/// Throws ConfigError if the device's axes differ from [device] axes.
+/// Then ServoConfig::is_valid(), once, before the servo thread exists: the safety limits and
+/// the real-time request included (a [servo] cpu this machine does not have).
+/// Throws ConfigError if the device's axes differ from [device] axes, or naming the file and
+/// the servo setting that is not valid.
 servo::ServoConfig make_servo_config(const Config& config, const device::DeviceInfo& info,
                                      bool lossless_log);
 

@@ -1,4 +1,4 @@
-// The start-up stability check (DESIGN.md, Safety model): hapticd refuses to arm with
+// The start-up stability check (docs/architecture.md §7.9): hapticd refuses to arm with
 // coupling gains that fail the configured stability model ([coupling] check) for the
 // configured device model ([device.model]) at [servo] rate_hz.
 #pragma once
@@ -8,30 +8,37 @@
 #include "hapticd/daemon/config.hpp"
 #include "hapticd/env/scene.hpp"
 #include "hapticd/tune/environment_assumption.hpp"
+#include "hapticd/tune/stability_check.hpp"
 
 namespace hapticd::daemon {
 
-struct StartupCheck {
-    bool passed = false;
-    bool skipped = false;  ///< check = "off": nothing was checked
-    std::string model;     ///< "passive", "exact", "paper" or "encoder"
-    /// passive and exact hold for every passive operator; paper and encoder do not.
-    bool guarantee = true;
-    double delay_s = 0.0;             ///< the loop delay the check assumed ([device.model] delay)
-    double velocity_filter_hz = 0.0;  ///< [coupling] velocity_filter, in Z_c of every model
-    double worst_margin = 0.0;
-    double worst_frequency_hz = 0.0;
-    std::string worst_case;  ///< exact model: the operator and environment
-    /// The class of operators and environments the verdict rests on.
-    std::string holds_for;
-    /// One line for the log: the verdict, the margin and the frequency.
+/// The verdict of the start-up check: tune::check_stability()'s, the one haptic-tune check
+/// gives for the same config, or nothing checked.
+struct StartupCheck : tune::StabilityVerdict {
+    bool skipped = false;  ///< nothing was checked: check = "off" (or an identify run)
+    /// What the summary names as the model when skipped: "off", or why there is none.
+    std::string skipped_model = "off";
+    /// The summary's "model": the stability model's name, or skipped_model.
+    std::string model_name() const;
+    /// One line for the log: the verdict, the margin and the frequency (the verdict's
+    /// describe()), or that nothing was checked.
     std::string describe() const;
 };
 
-/// Runs the check. Throws ConfigError when [device.model] is missing or the gains are
-/// zero, since there is then nothing to check against, and when [coupling] environments =
-/// "scene" meets a scene without a linear model. With environments = "scene" it reads the
-/// scene ([scene] file, or the embedded demo scene).
+/// What the start-up check checks: [device.model], the [coupling] gains and filter, [servo]
+/// rate_hz, [device.model] delay, [coupling] check, and what the verdict holds for
+/// ([operator]; [coupling] environments = "scene": the scene's own objects, from [scene]
+/// file or the embedded demo scene). Throws ConfigError naming the file when
+/// [device.model] is missing, the gains are both 0 (there is then nothing to check
+/// against), check = "off", or the scene has no linear model.
+tune::StabilityDesign stability_design(const Config& config);
+
+/// Throws stability_design()'s ConfigError when [device.model] lacks mass or damping.
+void require_device_model(const Config& config);
+
+/// Runs the check: stability_design() and tune::check_stability(); check = "off" skips it.
+/// Throws as stability_design() does, and std::invalid_argument from a model's own range
+/// checks.
 StartupCheck check_coupling_at_startup(const Config& config);
 
 /// The scene's linearised objects as the environments a check holds for. Throws

@@ -1,7 +1,8 @@
-// hapticd's --summary: the servo loop's Summary as JSON, with the fields DESIGN.md lists
-// (ticks, overruns, rate_hz, wake_latency_us {p50, p99, p999, max}, tick_compute_us
-// {p50, p99, max}, max_force_n, faults, telemetry_dropped) and the context a lab needs to
-// read it later: what ran, against what, how it ended and what real-time was granted.
+// hapticd's --summary (docs/architecture.md §4.6, docs/daemon.md "Summary"): the servo loop's
+// Summary as JSON, with its counters (ticks, overruns, rate_hz, wake_latency_us {p50, p99,
+// p999, max}, tick_compute_us {p50, p99, max}, max_force_n, faults, telemetry_dropped, ...)
+// and the context a lab needs to read it later: what ran, against what, how it ended and what
+// real-time was granted.
 #pragma once
 
 #include <cstdint>

@@ -1,5 +1,5 @@
 // The telemetry writer: a thread that drains the servo loop's SPSC ring into a CSV file
-// (DESIGN.md "Public names": tick, t_s, per axis x{i}_m, v{i}_mps, xe{i}_m, f{i}_n, then
+// (docs/architecture.md §4.5: tick, t_s, per axis x{i}_m, v{i}_mps, xe{i}_m, f{i}_n, then
 // the status columns; servo/telemetry_csv.hpp formats the lines).
 //
 // The servo thread only ever try_push()es (never blocks); this thread pops, formats whole

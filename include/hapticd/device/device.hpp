@@ -1,4 +1,5 @@
-// The Device interface (DESIGN.md): what the servo loop reads and writes each tick.
+// The Device interface (docs/architecture.md §4.1): what the servo loop reads and writes each
+// tick.
 //
 // Units: encoder counts are integers, converted to metres with DeviceInfo::counts_per_meter;
 // Command::force_n is the force the device applies to the handle along each +axis, in
@@ -47,9 +48,13 @@ struct DeviceConfig {
     int axes = 1;             ///< [device] axes
     double rate_hz = 1000.0;  ///< [servo] rate_hz
     bool lockstep = false;    ///< hapticd --lockstep: virtual time, as fast as the CPU goes
-    /// The plugin's own table, [device.<plugin>], as TOML text. The plugin validates it and
-    /// rejects unknown keys, naming `source` (the config file) and the key.
+    /// The plugin's own table, [device.<plugin>]: a TOML document (the daemon hands over the
+    /// config file's own text, so that the plugin's messages carry its lines) and the
+    /// table's dotted path in it ("device.sim"; empty: the document is the table). The plugin
+    /// reads it with device::PluginTable, rejects unknown keys, and names `source` (the
+    /// config file), the line and the key.
     std::string plugin_table_toml;
+    std::string plugin_table_path;
     std::string source = "<config>";
 };
 

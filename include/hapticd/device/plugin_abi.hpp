@@ -55,9 +55,9 @@ const hapticd_device_plugin* hapticd_device_plugin_entry(void);
 
 namespace hapticd::device {
 
-inline constexpr std::uint32_t kDeviceAbiVersion = 2;
+inline constexpr std::uint32_t kDeviceAbiVersion = 3;
 
-// The layout of ABI version 2: size, alignment and offset in bytes of every type and field
+// The layout of ABI version 3: size, alignment and offset in bytes of every type and field
 // that crosses the plugin boundary, on the LP64 Linux targets with libstdc++ that hapticd
 // builds on (x86_64, aarch64). The daemon and every plugin compile these asserts, so a
 // plugin built where a type lays out otherwise (another std::string ABI, say) fails to build.
@@ -67,8 +67,8 @@ inline constexpr std::uint32_t kDeviceAbiVersion = 2;
 // the vtable depends on, only a reviewer can see.)
 #if defined(__LP64__) && defined(__GLIBCXX__)
 
-static_assert(kDeviceAbiVersion == 2,
-              "plugin_abi.hpp: the layout figures below are device plugin ABI version 2's; "
+static_assert(kDeviceAbiVersion == 3,
+              "plugin_abi.hpp: the layout figures below are device plugin ABI version 3's; "
               "write the new version's figures and its number");
 
 #define HAPTICD_ABI_LAYOUT(expression, figure)                                           \
@@ -125,13 +125,14 @@ HAPTICD_ABI_FIELD(DeviceInfo, protocol_version, 28, int);
 HAPTICD_ABI_FIELD(DeviceInfo, name, 32, std::string);
 HAPTICD_ABI_FIELD(DeviceInfo, serial, 64, std::string);
 
-HAPTICD_ABI_LAYOUT(sizeof(DeviceConfig), 88);
+HAPTICD_ABI_LAYOUT(sizeof(DeviceConfig), 120);
 HAPTICD_ABI_LAYOUT(alignof(DeviceConfig), 8);
 HAPTICD_ABI_FIELD(DeviceConfig, axes, 0, int);
 HAPTICD_ABI_FIELD(DeviceConfig, rate_hz, 8, double);
 HAPTICD_ABI_FIELD(DeviceConfig, lockstep, 16, bool);
 HAPTICD_ABI_FIELD(DeviceConfig, plugin_table_toml, 24, std::string);
-HAPTICD_ABI_FIELD(DeviceConfig, source, 56, std::string);
+HAPTICD_ABI_FIELD(DeviceConfig, plugin_table_path, 56, std::string);
+HAPTICD_ABI_FIELD(DeviceConfig, source, 88, std::string);
 
 // The enumerations: their size and the values that cross.
 HAPTICD_ABI_LAYOUT(sizeof(IoResult), 4);

@@ -1,5 +1,5 @@
 // Scenes: a TOML file lists the objects of one virtual environment; the loader validates it
-// and builds only what it needs (DESIGN.md "Interfaces"): penalty objects make a
+// and builds only what it needs (docs/architecture.md §2.5, §4.2): penalty objects make a
 // PenaltyScene (an ImpedanceEnvironment), constraint objects a GodObject or a VirtualMass
 // (an AdmittanceEnvironment). One scene has one causality.
 //
@@ -37,19 +37,20 @@
 // lengths and coordinates within ±100 m, mass <= 1e3 kg, coefficients <= 10.
 // A scene with no objects is a free-space PenaltyScene.
 //
-// Errors are SceneError, with the file, the line, the table and its 1-based index, the
-// key, the value and the allowed range, e.g.
-//   config/scenes/x.toml:7: [[wall]] #2 stiffness = -5 is out of range: allowed > 0 N/m
+// Errors are SceneError, from the one field reader (input/table_reader.hpp), with the file,
+// the line, the table and its 1-based index, the key, the value and the allowed range, e.g.
+//   config/scenes/x.toml:7: [[wall]] #2 stiffness = -5 is out of range: allowed > 0 and
+//   <= 1e+07 (N/m)
 #pragma once
 
 #include <memory>
 #include <optional>
-#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "hapticd/env/environment.hpp"
+#include "hapticd/input/config_error.hpp"
 
 namespace hapticd::env {
 
@@ -57,11 +58,9 @@ enum class Causality { impedance, admittance };
 
 [[nodiscard]] const char* to_string(Causality causality) noexcept;
 
-/// A bad scene file or text; what() names the file, key, value and allowed range.
-class SceneError : public std::runtime_error {
-  public:
-    using std::runtime_error::runtime_error;
-};
+/// A bad scene file or text; what() names the file, key, value and allowed range. A scene
+/// error is a config error (the one ConfigError of every file hapticd reads).
+using SceneError = input::ConfigError;
 
 /// One object of a scene, linearised in contact, for the stability check's scene model
 /// (tune/environment_assumption.hpp): a penalty object is a massless spring-damper solved

@@ -1,14 +1,15 @@
-// Bounds on every text file hapticd and haptic-tune read before a parser sees it (issue 10):
-// a config or scene must not exhaust memory (`--config /dev/zero` read until it ran out) or
-// the stack (toml++ 3.3 recurses once per part of a dotted key: one key of 35,000 parts
-// overflowed it). The checks are lexical and cheap; each reader turns the message into its
-// own error type, so the file, line and limit reach the user in its usual format.
+// Bounds on every text file hapticd and haptic-tune read before a parser sees it
+// (docs/architecture.md §7.10): a config or scene must not exhaust memory (`--config /dev/zero`
+// read until it ran out) or the stack (toml++ 3.3 recurses once per part of a dotted key: one key
+// of 35,000 parts overflowed it). The checks are lexical and cheap; parse_document
+// (table_reader.hpp) runs them before every parse.
 #pragma once
 
 #include <cstddef>
-#include <stdexcept>
 #include <string>
 #include <string_view>
+
+#include "hapticd/input/config_error.hpp"
 
 namespace hapticd::input {
 
@@ -19,15 +20,9 @@ inline constexpr std::size_t kMaxTomlBytes = std::size_t{4} << 20;  // 4 MiB
 /// inline tables: real files use 3 and 2.
 inline constexpr int kMaxTomlNesting = 32;
 
-/// A file that could not be read, or was too large. The message names the path and limit.
-class InputError : public std::runtime_error {
-  public:
-    using std::runtime_error::runtime_error;
-};
-
 /// The whole of a regular file, read in chunks and refused past `max_bytes` (a device such
 /// as /dev/zero, or a huge file, is never read further). `what` names it in messages, e.g.
-/// "the config file". Throws InputError.
+/// "the config file". Throws ConfigError naming the path (and the limit).
 std::string read_text_file(const std::string& path, std::string_view what,
                            std::size_t max_bytes = kMaxTomlBytes);
 

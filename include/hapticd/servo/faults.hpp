@@ -1,4 +1,4 @@
-// Latched safety faults (DESIGN.md "Safety model"). A fault zeroes the force in the tick that
+// Latched safety faults (docs/architecture.md §7.1). A fault zeroes the force in the tick that
 // raises it and stays latched until reset outside the tick (request_fault_reset), or, for a
 // link fault only (kLinkFaults), until the device has been back for a while (LinkRecovery). Faults
 // form a bitmask so that several can be latched at once; each bit has a stable snake_case name for

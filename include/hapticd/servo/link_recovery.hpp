@@ -26,14 +26,21 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 
+#include "hapticd/input/range.hpp"
 #include "hapticd/servo/faults.hpp"
 
 namespace hapticd::servo {
 
+/// [safety] reconnect_settle, and reconnect_timeout (which must also exceed the settle).
+inline constexpr input::Range kSettleRange{.lo = 0.0, .hi = 60.0, .lo_open = true, .unit = "s"};
+inline constexpr input::Range kTimeoutRange{.lo = 0.0, .hi = 3600.0, .unit = "s; 0: wait for ever"};
+
 struct LinkRecoverySettings {
-    /// Off: link faults stay latched like any other ([safety] reconnect = false).
-    bool enabled = false;
+    /// Off: link faults stay latched like any other ([safety] reconnect = false). On by
+    /// default, as in the daemon's config: a replugged device comes back.
+    bool enabled = true;
     /// How long the device must send good samples without a break before the latch clears,
     /// s, in (0, 60] ([safety] reconnect_settle).
     double settle_s = 0.5;
@@ -41,7 +48,9 @@ struct LinkRecoverySettings {
     /// for ever. Otherwise > settle_s, <= 3600 ([safety] reconnect_timeout).
     double timeout_s = 5.0;
 
-    /// Throws std::invalid_argument naming the field and the value.
+    /// Ceres-style: false, with the field, its value and the allowed range in `error`.
+    bool is_valid(std::string* error) const;
+    /// Throws std::invalid_argument with is_valid()'s message.
     void validate() const;
 };
 

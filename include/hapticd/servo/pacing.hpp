@@ -1,4 +1,4 @@
-// Loop pacing on an absolute deadline (DESIGN.md "One servo tick"): sleep to
+// Loop pacing on an absolute deadline (docs/architecture.md §3.1): sleep to
 // deadline = start + n T with clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME), so that
 // errors never accumulate. When the previous tick ran past the deadline (an overrun), the
 // pacer counts the periods that were missed and moves to the latest deadline that has

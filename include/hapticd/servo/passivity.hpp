@@ -16,6 +16,8 @@
 // at max_damping_n_s_per_m). record() then books the force that was really commanded.
 #pragma once
 
+#include <string_view>
+
 #include "hapticd/servo/environment_port.hpp"
 
 namespace hapticd::servo {
@@ -25,6 +27,8 @@ enum class PassivityMode {
     observe,  ///< observe the energy only (telemetry, summary)
     control,  ///< observe and add damping when the energy goes negative
 };
+/// "off", "observe", "control" ([safety] passivity).
+std::string_view to_string(PassivityMode mode) noexcept;
 
 struct PassivitySettings {
     PassivityMode mode = PassivityMode::observe;

@@ -18,19 +18,31 @@
 namespace hapticd::servo {
 
 enum class RealtimeMode { enforce, warn, off };
+inline constexpr RealtimeMode kRealtimeModes[] = {RealtimeMode::enforce, RealtimeMode::warn,
+                                                  RealtimeMode::off};
 
 /// "enforce" | "warn" | "off"; throws std::invalid_argument naming the value otherwise.
 RealtimeMode parse_realtime_mode(std::string_view text);
 std::string_view to_string(RealtimeMode mode) noexcept;
 
+/// Linux's SCHED_FIFO priorities ([servo] priority), and the highest CPU a cpu_set_t holds.
+inline constexpr int kMinPriority = 1;
+inline constexpr int kMaxPriority = 99;
+inline constexpr int kMaxCpu = 1023;
+
 struct RealtimeRequest {
     RealtimeMode mode = RealtimeMode::warn;
-    int priority = 80;  ///< SCHED_FIFO priority, 1..99
+    int priority = 80;  ///< SCHED_FIFO priority, kMinPriority..kMaxPriority
     int cpu = -1;       ///< pin the servo thread to this CPU; -1: leave the affinity alone
     bool lock_memory = true;
     std::size_t prefault_stack_bytes = std::size_t{256} * 1024;
     std::size_t prefault_heap_bytes = std::size_t{8} * 1024 * 1024;
     bool hold_cpu_dma_latency = true;
+
+    /// Ceres-style: false, with the field, its value and the allowed range in `error`, for
+    /// a priority outside SCHED_FIFO's or a CPU this machine does not have. Before the
+    /// servo thread exists (ServoConfig::is_valid); apply() checks it again.
+    bool is_valid(std::string* error) const;
 };
 
 /// What was asked for and what was granted.

@@ -1,5 +1,5 @@
-// The safety stage of the tick (DESIGN.md "Safety model"): takes the coupling's handle force
-// and the handle velocity and returns the force to command. In order:
+// The safety stage of the tick (docs/architecture.md §3.3, §7): takes the coupling's handle
+// force and the handle velocity and returns the force to command. In order:
 //   fault latch (latched -> zero force, enable = false, in the same tick),
 //   non-finite check (-> kFaultNonFinite),
 //   velocity limit (fault, or damping on the speed above max_speed_mps),
@@ -11,7 +11,9 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 
+#include "hapticd/input/range.hpp"
 #include "hapticd/servo/environment_port.hpp"
 #include "hapticd/servo/faults.hpp"
 #include "hapticd/servo/passivity.hpp"
@@ -29,8 +31,15 @@ enum class SpeedAction {
     fault,  ///< latch kFaultOverspeed
 };
 
+/// The force and speed limits ([safety] max_force, max_speed): no haptic device pushes 10 kN
+/// or moves its handle at 100 m/s (and max_speed sets the encoder-jump threshold, which
+/// must stay finite).
+inline constexpr input::Range kMaxForceRange{.lo = 0.0, .hi = 1e4, .lo_open = true, .unit = "N"};
+inline constexpr input::Range kMaxSpeedRange{
+    .lo = 0.0, .hi = 100.0, .lo_open = true, .unit = "m/s"};
+
 struct SafetyLimits {
-    double max_force_n = 5.0;  ///< [safety] max_force; also cap it at the device's limit
+    double max_force_n = 10.0;  ///< [safety] max_force; also cap it at the device's limit
     ForceSaturation saturation = ForceSaturation::vector_norm;
     double max_speed_mps = 1.0;  ///< [safety] max_speed
     SpeedAction speed_action = SpeedAction::damp;
@@ -42,6 +51,10 @@ struct SafetyLimits {
     int read_timeouts_allowed = 2;
     SoftStartSettings soft_start{};
     PassivitySettings passivity{};
+
+    /// Ceres-style: false, with the offending field, its value and the allowed range in
+    /// `error`, when a limit is out of range.
+    bool is_valid(std::string* error) const;
 };
 
 /// What the safety stage decided this tick.
@@ -57,7 +70,7 @@ struct SafeForce {
 class SafetySupervisor {
   public:
     SafetySupervisor() = default;
-    /// `axes` in 1..kMaxAxes. Throws std::invalid_argument on negative or non-finite limits.
+    /// `axes` in 1..kMaxAxes. Throws std::invalid_argument when !limits.is_valid().
     SafetySupervisor(const SafetyLimits& limits, int axes);
 
     /// Latches `faults` (a Fault mask); the next filter() returns zero force.

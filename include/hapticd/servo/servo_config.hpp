@@ -1,10 +1,12 @@
-// Configuration of the servo loop, read once before it starts. validate() rejects bad values
-// with std::invalid_argument naming the field and the value (Ceres-style: errors are found
-// before work starts).
+// Configuration of the servo loop, read once before it starts. is_valid() checks all of it,
+// the safety limits and the real-time request included, Ceres-style: errors are found
+// before the servo thread exists (the daemon calls it in make_servo_config), not on it.
 #pragma once
 
 #include <cstdint>
+#include <string>
 
+#include "hapticd/input/range.hpp"
 #include "hapticd/servo/coupling.hpp"
 #include "hapticd/servo/environment_port.hpp"
 #include "hapticd/servo/io.hpp"
@@ -13,6 +15,11 @@
 #include "hapticd/servo/safety.hpp"
 
 namespace hapticd::servo {
+
+/// The servo rate ([servo] rate_hz): 10 ms to 50 us periods.
+inline constexpr input::Range kRateRange{.lo = 100.0, .hi = 20000.0, .unit = "Hz"};
+/// The largest overrun budget, either count ([safety] max_missed_periods, ...).
+inline constexpr std::int64_t kMaxOverrunBudget = 1'000'000;
 
 /// How much overrunning the loop tolerates before it latches kFaultOverrunBudget.
 struct OverrunBudget {
@@ -54,7 +61,10 @@ struct ServoConfig {
     double period_s() const noexcept { return 1.0 / rate_hz; }
     std::int64_t period_ns() const noexcept;
 
-    /// Throws std::invalid_argument naming the offending field and value.
+    /// Ceres-style: false, with the offending field, its value and the allowed range in
+    /// `error` (may be null).
+    bool is_valid(std::string* error) const;
+    /// Throws std::invalid_argument with is_valid()'s message.
     void validate() const;
 };
 

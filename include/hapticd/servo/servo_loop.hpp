@@ -1,5 +1,5 @@
-// The servo loop: one tick exactly as DESIGN.md "One servo tick" says, and the paced loop
-// around it.
+// The servo loop: one tick exactly as docs/architecture.md §3 describes it (§3.1 sense, §3.2
+// couple, §3.3 command, §3.4 record), and the paced loop around it (§3.5).
 //
 //   sleep to the absolute deadline (LoopPacer), or block in read() when the device paces
 //   read the sample; counts -> metres (counts_per_meter)

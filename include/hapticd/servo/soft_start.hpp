@@ -1,9 +1,14 @@
-// Soft start (DESIGN.md "Safety model"): no force until the handle has been still for a
+// Soft start (docs/architecture.md §7.3): no force until the handle has been still for a
 // while, then a linear ramp of the force scale from 0 to 1. A person who grabs a handle
 // that starts inside a wall is not thrown by a full-stiffness step.
 #pragma once
 
+#include "hapticd/input/range.hpp"
+
 namespace hapticd::servo {
+
+/// The force ramp's length ([safety] soft_start_ramp).
+inline constexpr input::Range kRampTimeRange{.lo = 0.0, .hi = 10.0, .unit = "s"};
 
 struct SoftStartSettings {
     double still_speed_mps = 0.02;  ///< |v_d| below this counts as still

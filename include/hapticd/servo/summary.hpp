@@ -1,5 +1,5 @@
-// The servo loop's summary: the fields of hapticd's --summary JSON (DESIGN.md "Public
-// names") plus a few more counters. The daemon serialises it.
+// The servo loop's summary: the fields of hapticd's --summary JSON (docs/architecture.md §4.6,
+// docs/daemon.md "Summary") plus a few more counters. The daemon serialises it.
 #pragma once
 
 #include <cstdint>

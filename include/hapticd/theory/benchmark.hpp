@@ -2,7 +2,7 @@
 // damping b, sampled with a zero-order hold, coupled to the virtual environment by the
 // spring-damper virtual coupling (16).
 //
-// The hold term is where the stability models differ (DESIGN.md, docs/stability-models.md):
+// The hold term is where the stability models differ (docs/stability-models.md):
 //   HoldModel::paper   ZOH(z) = (1/2)(z + 1)/z, (13) as printed;
 //   HoldModel::encoder e^{-jθ/2} sinc(θ/2), the exact zero-order hold, times the same
 //                      factor again for the backward-difference velocity, which averages

@@ -1,6 +1,6 @@
-// The `passive` stability model (DESIGN.md): Colgate and Schenkel's sampled-data passivity
-// condition at the device port, with the loop's delay, worst-cased over every passive
-// environment. The derivation is in docs/stability-models.md; in short:
+// The `passive` stability model (docs/architecture.md §1.3, §7.9): Colgate and Schenkel's
+// sampled-data passivity condition at the device port, with the loop's delay, worst-cased over
+// every passive environment. The derivation is in docs/stability-models.md; in short:
 //
 // The device (10) m dv/dt + b v = F_h - F_d is sampled at t = nT; a linear discrete
 // controller H(z) computes F[n] from the samples, and F[n] acts on [nT + D, (n+1)T + D),

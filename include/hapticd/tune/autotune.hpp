@@ -1,4 +1,4 @@
-// haptic-tune autotune, the computing half (issue 5; docs/autotune.md): from a recorded run
+// haptic-tune autotune, the computing half (docs/autotune.md): from a recorded run
 // to coupling gains that the `exact` model confirms.
 //
 //   1. identify every axis of the log (identification.hpp);
@@ -11,7 +11,7 @@
 //
 // Writing [device.model] and [coupling] into a config is the caller's job (haptic-tune's
 // cmd_autotune.cpp, through daemon/config_editor.hpp): the tune layer does not know the
-// daemon's config (DESIGN.md, Architecture).
+// daemon's config (docs/architecture.md §2.9).
 #pragma once
 
 #include <string>

@@ -1,8 +1,9 @@
-// The `exact` stability model (DESIGN.md): the sampled-data closed loop of the continuous
-// device (10) under an exact zero-order hold, a sampled encoder and a backward-difference
-// velocity, with the spring-damper virtual coupling (16), judged by the eigenvalues of the
-// discrete closed-loop state matrix against a sweep of passive human operators and passive
-// environments. It is the ground truth the `paper` and `encoder` models are held against.
+// The `exact` stability model (docs/architecture.md §7.9, docs/stability-models.md): the
+// sampled-data closed loop of the continuous device (10) under an exact zero-order hold, a
+// sampled encoder and a backward-difference velocity, with the spring-damper virtual coupling
+// (16), judged by the eigenvalues of the discrete closed-loop state matrix against a sweep of
+// passive human operators and passive environments. It is the ground truth the `paper` and
+// `encoder` models are held against.
 //
 // One servo tick n, as modelled (and as the runtime must implement it):
 //   x_d[n]  sampled encoder position (no quantisation); the force F[n] computed from it acts

@@ -1,4 +1,4 @@
-// Reading a telemetry log (DESIGN.md "Public names", docs/daemon.md "Telemetry"): CSV with a
+// Reading a telemetry log (docs/architecture.md §4.5, docs/daemon.md "Telemetry"): CSV with a
 // header row, `tick`, `t_s`, then per axis i from 0 `x{i}_m`, `v{i}_mps`, `xe{i}_m`,
 // `f{i}_n`, then status columns. What haptic-tune identify reads.
 //

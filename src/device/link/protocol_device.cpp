@@ -58,13 +58,13 @@ ProtocolDevice::~ProtocolDevice() { close(); }
 void ProtocolDevice::open(const DeviceConfig& config) {
     close();
     config_ = config;
-    const std::string table_name = "device." + plugin_;
     if (config.axes < 1 || config.axes > kMaxAxes) {
-        throw std::runtime_error(config.source + ": device.axes = " + std::to_string(config.axes) +
-                                 " is not allowed: must be 1 to " + std::to_string(kMaxAxes));
+        throw input::ConfigError(
+            config.source + ": " +
+            input::out_of_range("device.axes", config.axes, "1.." + std::to_string(kMaxAxes)));
     }
-    toml::table table = parse_plugin_table(config.plugin_table_toml, config.source);
-    TableReader reader(table, table_name + ".", config.source, "docs/transport-" + plugin_ + ".md");
+    PluginTable table(config, plugin_, "docs/transport-" + plugin_ + ".md");
+    TableReader& reader = table.reader();
     settings_ = read_protocol_settings(reader, config);
     link_ = make_link_(reader, LinkContext{config, settings_});
     reader.finish();

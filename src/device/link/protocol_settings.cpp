@@ -10,28 +10,32 @@
 namespace hapticd::device::link {
 
 ProtocolSettings read_protocol_settings(TableReader& table, const DeviceConfig& config) {
+    using input::Number;
+    using input::Range;
     ProtocolSettings s;
-    s.serial_number = table.string("serial_number", "");
-    if (const toml::node* node = table.get("serial_number"); node != nullptr) {
+    s.serial_number = table.read(input::Text{"serial_number", "", true});
+    if (table.has("serial_number")) {
         protocol::Identity probe;
         if (!probe.set_serial_number(s.serial_number)) {
-            table.fail_value("serial_number", *node,
-                             "1 to 16 printable ASCII characters (docs/protocol.md 4.2)");
+            table.fail("serial_number", "is not allowed",
+                       "1 to 16 printable ASCII characters (docs/protocol.md 4.2)");
         }
     }
     const double period_ms = 1e3 / config.rate_hz;
-    const double watchdog_ms = table.number(
-        "watchdog_ms", 20.0, Range{2.0 * period_ms, 1000.0, false, "ms, 2 periods to 1 s"});
-    s.watchdog_us = static_cast<std::uint32_t>(std::lround(watchdog_ms * 1e3));
-    const double reply_ms = table.number("reply_timeout_ms", 0.0, Range{0.0, 1000.0, false, "ms"});
-    s.reply_timeout_us = static_cast<std::uint32_t>(std::lround(reply_ms * 1e3));
-    const double handshake_ms =
-        table.number("handshake_timeout_ms", 200.0, Range{1.0, 10000.0, false, "ms"});
-    s.handshake_timeout_us = static_cast<std::uint32_t>(std::lround(handshake_ms * 1e3));
-    s.reconnect = table.boolean("reconnect", true);
-    const double interval_ms =
-        table.number("reconnect_interval_ms", 250.0, Range{10.0, 60000.0, false, "ms"});
-    s.reconnect_interval_us = static_cast<std::uint32_t>(std::lround(interval_ms * 1e3));
+    const auto us = [](double ms) { return static_cast<std::uint32_t>(std::lround(ms * 1e3)); };
+    s.watchdog_us =
+        us(table.read(Number{"watchdog_ms",
+                             {.lo = 2.0 * period_ms, .hi = 1000.0, .unit = "ms, 2 periods to 1 s"},
+                             s.watchdog_us / 1e3}));
+    s.reply_timeout_us = us(table.read(Number{
+        "reply_timeout_ms", {.lo = 0.0, .hi = 1000.0, .unit = "ms"}, s.reply_timeout_us / 1e3}));
+    s.handshake_timeout_us = us(table.read(Number{"handshake_timeout_ms",
+                                                  {.lo = 1.0, .hi = 10000.0, .unit = "ms"},
+                                                  s.handshake_timeout_us / 1e3}));
+    s.reconnect = table.read(input::Flag{"reconnect", s.reconnect});
+    s.reconnect_interval_us = us(table.read(Number{"reconnect_interval_ms",
+                                                   {.lo = 10.0, .hi = 60000.0, .unit = "ms"},
+                                                   s.reconnect_interval_us / 1e3}));
     return s;
 }
 

@@ -9,6 +9,7 @@
 #include "hapticd/device/protocol/servo_convert.hpp"
 #include "hapticd/device/protocol/status_map.hpp"
 #include "hapticd/device/protocol/transport.hpp"
+#include "hapticd/input/range.hpp"
 
 namespace hapticd::device::protocol {
 namespace {
@@ -31,10 +32,6 @@ ErrorCode error_code_for(Error error) noexcept {
     }
 }
 
-[[noreturn]] void reject(const std::string& what) {
-    throw std::invalid_argument("device emulator: " + what);
-}
-
 }  // namespace
 
 DeviceEmulator::DeviceEmulator(const EmulatorConfig& config)
@@ -46,35 +43,40 @@ DeviceEmulator::DeviceEmulator(const EmulatorConfig& config)
     sim::SimConfig sim_config = config.sim;
     sim_config.clock = sim::SimClock::lockstep;
     if (sim_config.axes < 1 || sim_config.axes > kMaxProtocolAxes) {
-        reject("sim.axes = " + std::to_string(sim_config.axes) + " must be 1..3");
+        input::reject_out_of_range("device emulator: sim.axes", sim_config.axes, "1..3");
     }
     if (!identity_.set_serial_number(config.serial_number)) {
-        reject("serial_number \"" + config.serial_number +
-               "\" must be 1..16 printable ASCII characters");
+        input::reject_out_of_range("device emulator: serial_number",
+                                   "\"" + config.serial_number + "\"",
+                                   "1 to 16 printable ASCII characters");
     }
     const double force_limit_un = std::round(sim_config.force_limit_n * 1e6);
     if (!(force_limit_un >= 1.0) ||
         force_limit_un > static_cast<double>(std::numeric_limits<std::int32_t>::max())) {
-        reject("sim.force_limit_n = " + std::to_string(sim_config.force_limit_n) +
-               " must be in [1e-6, 2147.483647] N to fit the wire's int32 micronewtons");
+        input::reject_out_of_range("device emulator: sim.force_limit_n", sim_config.force_limit_n,
+                                   "1e-6 to 2147.483647 (N, the wire's int32 micronewtons)");
     }
     const double period_us = 1e6 / sim_config.rate_hz;
     if (!std::isfinite(period_us) || std::abs(period_us - std::round(period_us)) > 1e-6 ||
         period_us < 1.0) {
-        reject("sim.rate_hz = " + std::to_string(sim_config.rate_hz) +
-               " must give a whole number of microseconds per period");
+        input::reject_out_of_range("device emulator: sim.rate_hz", sim_config.rate_hz,
+                                   "a rate of a whole number of microseconds per period");
     }
     if (min_version_ < 1 || max_version_ < min_version_) {
-        reject("versions [" + std::to_string(min_version_) + ", " + std::to_string(max_version_) +
-               "] must satisfy 1 <= min <= max");
+        input::reject_out_of_range(
+            "device emulator: versions",
+            "[" + std::to_string(min_version_) + ", " + std::to_string(max_version_) + "]",
+            "[min, max] with 1 <= min <= max");
     }
     const auto period = static_cast<std::uint32_t>(std::round(period_us));
     if (max_watchdog_timeout_us_ > kMaxWatchdogTimeoutUs || max_watchdog_timeout_us_ < 2 * period ||
         default_watchdog_timeout_us_ < 2 * period ||
         default_watchdog_timeout_us_ > max_watchdog_timeout_us_) {
-        reject("watchdog timeouts (default " + std::to_string(default_watchdog_timeout_us_) +
-               " us, max " + std::to_string(max_watchdog_timeout_us_) +
-               " us) must satisfy 2 periods <= default <= max <= 1 s");
+        input::reject_out_of_range("device emulator: watchdog timeouts",
+                                   "default " + std::to_string(default_watchdog_timeout_us_) +
+                                       " us, max " + std::to_string(max_watchdog_timeout_us_) +
+                                       " us",
+                                   "2 periods <= default <= max <= 1 s");
     }
     force_limit_un_ = static_cast<std::int32_t>(force_limit_un);
 

@@ -23,27 +23,23 @@ SerialSettings read_serial_settings(TableReader& table) {
     SerialSettings settings;
     settings.source = table.source();
 
-    settings.port = table.string("port", "");
-    if (settings.port.empty()) {
-        table.fail("port", table.has("port")
-                               ? "is empty: it must be the serial port's path"
-                               : "is required: the serial port's path, e.g. "
-                                 "\"/dev/serial/by-id/usb-...-if00\" (stable across replugging) or "
-                                 "\"/dev/ttyACM0\"");
-    }
+    settings.port = table.read(input::Text{
+        "port", std::nullopt, false,
+        "the serial port's path, e.g. \"/dev/serial/by-id/usb-...-if00\" (stable across "
+        "replugging) or \"/dev/ttyACM0\""});
 
     if (const toml::node* baud = table.get("baud")) {
         const auto* value = baud->as_integer();
         if (value == nullptr || !is_standard_baud(value->get())) {
-            table.fail_value("baud", *baud, "one of the standard rates " + baud_rates_text());
+            table.fail("baud", "is not allowed", "one of the standard rates " + baud_rates_text());
         }
         settings.baud = static_cast<std::uint32_t>(value->get());
     }
 
-    settings.reset_on_open = table.boolean("reset_on_open", settings.reset_on_open);
+    settings.reset_on_open = table.read(input::Flag{"reset_on_open", settings.reset_on_open});
     settings.reset_wait_ms = static_cast<std::uint32_t>(
-        table.integer("reset_wait_ms", settings.reset_wait_ms, 0, 10'000));
-    settings.exclusive = table.boolean("exclusive", settings.exclusive);
+        table.read(input::Integer{"reset_wait_ms", 0, 10'000, settings.reset_wait_ms, "ms"}));
+    settings.exclusive = table.read(input::Flag{"exclusive", settings.exclusive});
     return settings;
 }
 

@@ -5,53 +5,62 @@
 
 #include <cmath>
 #include <limits>
-#include <optional>
-#include <set>
-#include <sstream>
-#include <stdexcept>
 #include <string>
+#include <vector>
 
+#include "hapticd/device/plugin_table.hpp"
 #include "hapticd/device/sim/command_pipeline.hpp"
-#include "hapticd/device/table_reader.hpp"
-#include "hapticd/input/text_input.hpp"
 
 namespace hapticd::device::sim {
 namespace {
 
-using device::kInf;
-using device::Range;
-using device::TableReader;
+using input::Integer;
+using input::Number;
+using input::Range;
 
-constexpr Range kMass{0.0, 1e3, true, "kg"};
-constexpr Range kDamping{0.0, 1e6, false, "N s/m"};
-constexpr Range kStiffness{0.0, 1e9, false, "N/m"};
-constexpr Range kPosition{-10.0, 10.0, false, "m"};
-constexpr Range kDuration{0.0, 1e6, false, "s"};
+constexpr Range kMass{.lo = 0.0, .hi = 1e3, .lo_open = true, .unit = "kg"};
+constexpr Range kDamping{.lo = 0.0, .hi = 1e6, .unit = "N s/m"};
+constexpr Range kStiffness{.lo = 0.0, .hi = 1e9, .unit = "N/m"};
+constexpr Range kPosition{.lo = -10.0, .hi = 10.0, .unit = "m"};
+constexpr Range kDuration{.lo = 0.0, .hi = 1e6, .unit = "s"};
+constexpr Range kFaultTime{.lo = 0.0, .hi = 1e9, .unit = "s"};
+constexpr Range kProbability{.lo = 0.0, .hi = 1.0};
 
-std::optional<HumanFamily> family_named(std::string_view name) {
-    if (name == "hands-off") return HumanFamily::hands_off;
-    if (name == "heavy-hand") return HumanFamily::heavy_hand;
-    if (name == "stiff-grasp") return HumanFamily::stiff_grasp;
-    if (name == "two-mass-grasp") return HumanFamily::two_mass_grasp;
-    return std::nullopt;
+std::string_view to_string(HumanFamily family) noexcept {
+    switch (family) {
+        case HumanFamily::hands_off:
+            return "hands-off";
+        case HumanFamily::heavy_hand:
+            return "heavy-hand";
+        case HumanFamily::stiff_grasp:
+            return "stiff-grasp";
+        case HumanFamily::two_mass_grasp:
+            return "two-mass-grasp";
+    }
+    return "hands-off";
 }
+constexpr HumanFamily kFamilies[] = {HumanFamily::hands_off, HumanFamily::heavy_hand,
+                                     HumanFamily::stiff_grasp, HumanFamily::two_mass_grasp};
+constexpr input::Choice<HumanFamily> kModel{"model", kFamilies, &to_string, HumanFamily::hands_off};
+
+std::string_view to_string(SimClock clock) noexcept {
+    return clock == SimClock::lockstep ? "lockstep" : "realtime";
+}
+constexpr SimClock kClocks[] = {SimClock::lockstep, SimClock::realtime};
+constexpr input::Choice<SimClock> kClock{"clock", kClocks, &to_string, SimConfig{}.clock};
 
 /// A key that the chosen model does not use is an error, so a typo in the model name or a
 /// parameter meant for another model is never silently ignored.
-void require_unused(TableReader& r, std::string_view key, std::string_view model) {
+void require_unused(TableReader& r, std::string_view key, HumanFamily model) {
     if (r.has(key)) {
         r.get(key);
-        r.fail(key, "is not used by model = \"" + std::string(model) + "\"; remove it");
+        r.fail(key, "is not used by model = \"" + std::string(to_string(model)) + "\": remove it");
     }
 }
 
-HumanModel read_human(const toml::table& table, std::string prefix, const std::string& source,
-                      double initial_position_m) {
-    TableReader r(table, std::move(prefix), source, "docs/sim-device.md");
-    const std::string model = r.choice(
-        "model", "hands-off", {"hands-off", "heavy-hand", "stiff-grasp", "two-mass-grasp"});
+HumanModel read_human(TableReader& r, double initial_position_m) {
     HumanModel h;
-    h.family = *family_named(model);
+    h.family = r.read(kModel);
     const bool rigid_hand =
         h.family == HumanFamily::heavy_hand || h.family == HumanFamily::stiff_grasp;
     const bool two_mass = h.family == HumanFamily::two_mass_grasp;
@@ -59,13 +68,14 @@ HumanModel read_human(const toml::table& table, std::string prefix, const std::s
 
     auto param = [&](std::string_view key, bool used, double fallback, const Range& range) {
         if (!used) {
-            require_unused(r, key, model);
+            require_unused(r, key, h.family);
             return 0.0;
         }
-        return r.number(key, fallback, range);
+        return r.read(Number{key, range, fallback});
     };
-    h.hand_mass_kg = two_mass ? r.number("hand_mass", 0.5, kMass)
-                              : param("hand_mass", rigid_hand, 0.5, Range{0.0, 1e3, false, "kg"});
+    h.hand_mass_kg =
+        two_mass ? r.read(Number{"hand_mass", kMass, 0.5})
+                 : param("hand_mass", rigid_hand, 0.5, Range{.lo = 0.0, .hi = 1e3, .unit = "kg"});
     h.hand_damping_n_s_per_m = param("hand_damping", rigid_hand, 0.0, kDamping);
     h.hand_stiffness_n_per_m =
         param("hand_stiffness", h.family == HumanFamily::stiff_grasp, 1000.0, kStiffness);
@@ -77,16 +87,16 @@ HumanModel read_human(const toml::table& table, std::string prefix, const std::s
     h.push.from_m = initial_position_m;
     h.push.to_m = initial_position_m;
     if (!set_point) {
-        require_unused(r, "set_point", model);
-        require_unused(r, "push", model);
+        require_unused(r, "set_point", h.family);
+        require_unused(r, "push", h.family);
     } else {
-        h.push.from_m = h.push.to_m = r.number("set_point", initial_position_m, kPosition);
+        h.push.from_m = h.push.to_m = r.read(Number{"set_point", kPosition, initial_position_m});
         if (const toml::table* push = r.subtable("push")) {
-            TableReader p(*push, r.prefix() + "push.", source, "docs/sim-device.md");
-            h.push.to_m = p.number("to", h.push.from_m, kPosition);
-            h.push.start_s = p.number("start", 0.0, kDuration);
-            h.push.ramp_s = p.number("ramp", 0.0, kDuration);
-            h.push.hold_s = p.number("hold", 0.0, kDuration);
+            TableReader p = r.nested(*push, "push");
+            h.push.to_m = p.read(Number{"to", kPosition, h.push.from_m});
+            h.push.start_s = p.read(Number{"start", kDuration, 0.0});
+            h.push.ramp_s = p.read(Number{"ramp", kDuration, 0.0});
+            h.push.hold_s = p.read(Number{"hold", kDuration, 0.0});
             p.finish();
         }
     }
@@ -94,43 +104,38 @@ HumanModel read_human(const toml::table& table, std::string prefix, const std::s
     return h;
 }
 
-FaultConfig read_faults(const toml::table& table, const std::string& source, int axes) {
-    TableReader r(table, "device.sim.faults.", source, "docs/sim-device.md");
-    FaultConfig f;
-    const Range time{0.0, 1e9, false, "s"};
-    f.disconnect_at_s = r.number("disconnect_at", -1.0, time);
-    f.stale_at_s = r.number("stale_at", -1.0, time);
-    f.stale_for_s = r.number("stale_for", -1.0, Range{0.0, 1e9, true, "s"});
-    f.jump_at_s = r.number("jump_at", -1.0, time);
-    f.jump_counts = r.integer("jump_counts", 0, -(std::int64_t{1} << 40), std::int64_t{1} << 40);
-    f.jump_axis = static_cast<int>(r.integer("jump_axis", 0, 0, axes - 1));
-    f.drop_at_s = r.times("drop_at");
-    f.drop_probability = r.number("drop_probability", 0.0, Range{0.0, 1.0, false, ""});
-    f.late_at_s = r.times("late_at");
-    f.late_probability = r.number("late_probability", 0.0, Range{0.0, 1.0, false, ""});
-    f.late_by_s = r.number("late_by", 0.0, Range{0.0, 1.0, false, "s"});
-    f.seed = static_cast<std::uint64_t>(
-        r.integer("seed", 1, 0, std::numeric_limits<std::int64_t>::max()));
-    r.finish();
-    return f;
+/// A list of times, s, each >= 0 (none when absent).
+std::vector<double> read_times(TableReader& r, std::string_view key) {
+    const toml::node* node = r.get(key);
+    std::vector<double> values;
+    if (node == nullptr) return values;
+    const auto* array = node->as_array();
+    if (array == nullptr) r.fail(key, "is not an array", "an array of times >= 0 (s)");
+    for (const toml::node& element : *array) {
+        values.push_back(r.number(element, key, Range{.lo = 0.0, .unit = "s"}));
+    }
+    return values;
 }
 
-/// [device.sim] delay: finite, >= 0 and below kMaxDelayPeriods periods of the servo rate.
-double read_delay(TableReader& r, double rate_hz) {
-    const toml::node* node = r.get("delay");
-    if (node == nullptr) return 0.0;
-    std::optional<double> value;
-    if (const auto* f = node->as_floating_point()) value = f->get();
-    if (const auto* i = node->as_integer()) value = static_cast<double>(i->get());
-    const double max_s = kMaxDelayPeriods / rate_hz;
-    if (!value || !std::isfinite(*value) || *value < 0.0 ||
-        !(*value * rate_hz < kMaxDelayPeriods)) {
-        std::ostringstream allowed;
-        allowed << "a number >= 0 and < " << max_s << " (s: " << kMaxDelayPeriods
-                << " periods at servo.rate_hz = " << rate_hz << " Hz)";
-        r.fail_value("delay", *node, allowed.str());
-    }
-    return *value;
+FaultConfig read_faults(TableReader& r, int axes) {
+    FaultConfig f;
+    f.disconnect_at_s = r.read(Number{"disconnect_at", kFaultTime, -1.0});
+    f.stale_at_s = r.read(Number{"stale_at", kFaultTime, -1.0});
+    f.stale_for_s = r.read(
+        Number{"stale_for", Range{.lo = 0.0, .hi = 1e9, .lo_open = true, .unit = "s"}, -1.0});
+    f.jump_at_s = r.read(Number{"jump_at", kFaultTime, -1.0});
+    f.jump_counts =
+        r.read(Integer{"jump_counts", -(std::int64_t{1} << 40), std::int64_t{1} << 40, 0});
+    f.jump_axis = static_cast<int>(r.read(Integer{"jump_axis", 0, axes - 1, 0}));
+    f.drop_at_s = read_times(r, "drop_at");
+    f.drop_probability = r.read(Number{"drop_probability", kProbability, 0.0});
+    f.late_at_s = read_times(r, "late_at");
+    f.late_probability = r.read(Number{"late_probability", kProbability, 0.0});
+    f.late_by_s = r.read(Number{"late_by", Range{.lo = 0.0, .hi = 1.0, .unit = "s"}, 0.0});
+    f.seed = static_cast<std::uint64_t>(
+        r.read(Integer{"seed", 0, std::numeric_limits<std::int64_t>::max(), 1}));
+    r.finish();
+    return f;
 }
 
 }  // namespace
@@ -139,50 +144,39 @@ SimConfig parse_sim_config(const DeviceConfig& config) {
     const std::string& source = config.source;
     SimConfig c;
     if (config.axes < 1 || config.axes > kMaxAxes) {
-        throw std::runtime_error(source + ": device.axes = " + std::to_string(config.axes) +
-                                 " is not allowed: the sim device has 1 to " +
-                                 std::to_string(kMaxAxes) + " axes");
+        throw input::ConfigError(
+            source + ": " +
+            input::out_of_range("device.axes", config.axes,
+                                "1.." + std::to_string(kMaxAxes) + " (the sim device's axes)"));
     }
     if (!std::isfinite(config.rate_hz) || config.rate_hz <= 0.0 || config.rate_hz > 1e6) {
-        std::ostringstream s;
-        s << source << ": servo.rate_hz = " << config.rate_hz
-          << " is not allowed: the sim device needs a rate > 0 and <= 1e6 Hz";
-        throw std::runtime_error(s.str());
+        throw input::ConfigError(source + ": " +
+                                 input::out_of_range("servo.rate_hz", config.rate_hz,
+                                                     "> 0 and <= 1e+06 (Hz, the sim device)"));
     }
     c.axes = config.axes;
     c.rate_hz = config.rate_hz;
 
-    if (const std::string e = input::toml_shape_error(config.plugin_table_toml, source);
-        !e.empty()) {
-        throw std::runtime_error(e);
-    }
-    toml::table table;
-    try {
-        table = toml::parse(config.plugin_table_toml, source);
-    } catch (const toml::parse_error& e) {
-        std::ostringstream s;
-        s << source << ": [device.sim] is not valid TOML: " << e.description();
-        throw std::runtime_error(s.str());
-    }
-    TableReader r(table, "device.sim.", source, "docs/sim-device.md");
-    c.mass_kg = r.number("mass", c.mass_kg, kMass);
-    c.damping_n_s_per_m = r.number("damping", c.damping_n_s_per_m, kDamping);
-    c.counts_per_meter =
-        r.number("counts_per_meter", c.counts_per_meter, Range{0.0, 1e10, true, "counts/m"});
-    c.force_limit_n = r.number("force_limit", c.force_limit_n, Range{0.0, 1e4, true, "N"});
-    c.coulomb_n = r.number("coulomb", c.coulomb_n, Range{0.0, 1e3, false, "N"});
-    c.clock = r.choice("clock", "realtime", {"lockstep", "realtime"}) == "lockstep"
-                  ? SimClock::lockstep
-                  : SimClock::realtime;
+    PluginTable table(config, "sim", "docs/sim-device.md");
+    TableReader& r = table.reader();
+    c.mass_kg = r.read(Number{"mass", kMass, c.mass_kg});
+    c.damping_n_s_per_m = r.read(Number{"damping", kDamping, c.damping_n_s_per_m});
+    c.counts_per_meter = r.read(Number{
+        "counts_per_meter", Range{.lo = 0.0, .hi = 1e10, .lo_open = true, .unit = "counts/m"},
+        c.counts_per_meter});
+    c.force_limit_n = r.read(Number{
+        "force_limit", Range{.lo = 0.0, .hi = 1e4, .lo_open = true, .unit = "N"}, c.force_limit_n});
+    c.coulomb_n = r.read(Number{"coulomb", Range{.lo = 0.0, .hi = 1e3, .unit = "N"}, c.coulomb_n});
+    c.clock = r.read(kClock);
     if (config.lockstep) c.clock = SimClock::lockstep;
-    c.delay_s = read_delay(r, c.rate_hz);
+    c.delay_s = r.read_periods("delay", kMaxDelayPeriods, c.rate_hz);
 
     if (const toml::node* node = r.get("initial_position")) {
-        const std::string allowed = "a position or an array of " + std::to_string(c.axes) +
-                                    " positions, each " + kPosition.describe();
         if (const auto* array = node->as_array()) {
             if (static_cast<int>(array->size()) != c.axes) {
-                r.fail_value("initial_position", *node, allowed);
+                r.fail("initial_position", "has " + std::to_string(array->size()) + " components",
+                       "a position or an array of " + std::to_string(c.axes) + " positions, each " +
+                           kPosition.describe());
             }
             for (int i = 0; i < c.axes; ++i) {
                 c.initial_position_m[i] = r.number(*array->get(i), "initial_position", kPosition);
@@ -198,24 +192,26 @@ SimConfig parse_sim_config(const DeviceConfig& config) {
     if (const toml::node* node = r.get("human")) {
         if (const auto* one = node->as_table()) {
             for (int i = 0; i < c.axes; ++i) {
-                c.human[i] = read_human(*one, "device.sim.human.", source, c.initial_position_m[i]);
+                TableReader human = r.nested(*one, "human");
+                c.human[i] = read_human(human, c.initial_position_m[i]);
             }
         } else if (const auto* each = node->as_array(); each != nullptr &&
                                                         each->is_array_of_tables() &&
                                                         static_cast<int>(each->size()) == c.axes) {
             for (int i = 0; i < c.axes; ++i) {
-                c.human[i] = read_human(*each->get(i)->as_table(),
-                                        "device.sim.human[" + std::to_string(i) + "].", source,
-                                        c.initial_position_m[i]);
+                TableReader human = r.nested(*each->get(i)->as_table(), "human", i + 1);
+                c.human[i] = read_human(human, c.initial_position_m[i]);
             }
         } else {
-            r.fail_value("human", *node,
-                         "a table [device.sim.human] (every axis) or " + std::to_string(c.axes) +
-                             " tables [[device.sim.human]] (one per axis)");
+            r.fail("human", "is not allowed",
+                   "a table [" + r.path("human") + "] (every axis) or " + std::to_string(c.axes) +
+                       " tables [[" + r.path("human") + "]] (one per axis)");
         }
     }
-    if (const toml::table* faults = r.subtable("faults"))
-        c.faults = read_faults(*faults, source, c.axes);
+    if (const toml::table* faults = r.subtable("faults")) {
+        TableReader f = r.nested(*faults, "faults");
+        c.faults = read_faults(f, c.axes);
+    }
     r.finish();
     return c;
 }

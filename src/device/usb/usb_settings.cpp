@@ -34,13 +34,16 @@ std::uint16_t read_usb_id(TableReader& table, std::string_view key, std::uint16_
     if (node == nullptr) return fallback;
     const auto* value = node->as_integer();
     if (value == nullptr || value->get() < 0 || value->get() > 0xFFFF) {
-        table.fail_value(key, *node,
-                         "an integer from 0 to 0xFFFF, written in hex as lsusb shows it (" +
-                             std::string(key) + " = 0x" + vid_pid_text(fallback, 0).substr(0, 4) +
-                             ")");
+        table.fail(key, value == nullptr ? "is not an integer" : "is out of range",
+                   "0..0xFFFF, written in hex as lsusb shows it (" + std::string(key) + " = 0x" +
+                       vid_pid_text(fallback, 0).substr(0, 4) + ")");
     }
     return static_cast<std::uint16_t>(value->get());
 }
+
+std::string_view to_name(TransferKind kind) noexcept { return to_string(kind); }
+constexpr TransferKind kTransfers[] = {TransferKind::automatic, TransferKind::interrupt,
+                                       TransferKind::bulk};
 
 }  // namespace
 
@@ -51,12 +54,10 @@ UsbSettings read_usb_settings(TableReader& table, std::string serial_number) {
     settings.vendor_id = read_usb_id(table, "vid", kDefaultVendorId);
     settings.product_id = read_usb_id(table, "pid", kDefaultProductId);
     // bInterfaceNumber is a u8 (USB 2.0 table 9-12).
-    settings.interface_number = static_cast<int>(table.integer("interface", -1, 0, 255));
-    const std::string transfer =
-        table.choice("transfer", "automatic", {"automatic", "interrupt", "bulk"});
-    settings.transfer = transfer == "interrupt" ? TransferKind::interrupt
-                        : transfer == "bulk"    ? TransferKind::bulk
-                                                : TransferKind::automatic;
+    settings.interface_number = static_cast<int>(
+        table.read(input::Integer{"interface", 0, 255, settings.interface_number}));
+    settings.transfer = table.read(
+        input::Choice<TransferKind>{"transfer", kTransfers, &to_name, settings.transfer});
     return settings;
 }
 

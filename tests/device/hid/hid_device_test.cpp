@@ -281,15 +281,15 @@ TEST(HidDevice, BadConfigurationNamesTheKey) {
     DeviceConfig config = hid_config(emulated);
     config.plugin_table_toml = "vid = 0x1209\npid = 70000\n";
     EXPECT_EQ(open_error(config),
-              "cfg.toml: device.hid.pid = 70000 is not allowed: must be an integer from 0 to "
-              "65535");
+              "cfg.toml:2: [device.hid] pid = 70000 is out of range: allowed 0..65535");
     config.plugin_table_toml = "vid = 0x1209\npid = 0x4841\nport = \"/dev/hidraw0\"\n";
     const std::string unknown = open_error(config);
-    EXPECT_NE(unknown.find("cfg.toml: device.hid.port is not a known key"), std::string::npos)
+    EXPECT_NE(unknown.find("cfg.toml:3: [device.hid] port = \"/dev/hidraw0\" is not a known key"),
+              std::string::npos)
         << unknown;
     EXPECT_NE(unknown.find("docs/transport-hid.md"), std::string::npos) << unknown;
     config.plugin_table_toml = "pid = 0x4841\n";
-    EXPECT_NE(open_error(config).find("cfg.toml: device.hid.vid is required with device.hid.pid"),
+    EXPECT_NE(open_error(config).find("[device.hid] vid is missing: required with pid"),
               std::string::npos);
 }
 

@@ -16,10 +16,11 @@ namespace {
 
 /// read_hid_settings() on `toml` as ProtocolDevice would call it, then finish().
 HidSettings read(const std::string& toml, const std::string& serial_number = "") {
-    const toml::table table = parse_plugin_table(toml, "cfg.toml");
-    TableReader reader(table, "device.hid.", "cfg.toml", "docs/transport-hid.md");
     DeviceConfig config;
     config.source = "cfg.toml";
+    config.plugin_table_toml = toml;
+    PluginTable table(config, "hid", "docs/transport-hid.md");
+    TableReader& reader = table.reader();
     link::ProtocolSettings protocol;
     protocol.serial_number = serial_number;
     HidSettings settings = read_hid_settings(reader, link::LinkContext{config, protocol});
@@ -61,33 +62,31 @@ TEST(HidSettings, ReadsIdsAndPath) {
 
 TEST(HidSettings, BadValuesNameTheKeyTheValueAndTheRange) {
     EXPECT_EQ(error_of("vid = 65536\npid = 1\n"),
-              "cfg.toml: device.hid.vid = 65536 is not allowed: must be an integer from 0 to "
-              "65535");
+              "cfg.toml:1: [device.hid] vid = 65536 is out of range: allowed 0..65535");
     EXPECT_EQ(error_of("vid = 1\npid = -1\n"),
-              "cfg.toml: device.hid.pid = -1 is not allowed: must be an integer from 0 to 65535");
+              "cfg.toml:2: [device.hid] pid = -1 is out of range: allowed 0..65535");
     EXPECT_EQ(error_of("vid = \"1209\"\npid = 1\n"),
-              "cfg.toml: device.hid.vid = \"1209\" is not allowed: must be an integer from 0 to "
-              "65535");
+              "cfg.toml:1: [device.hid] vid = \"1209\" is not an integer: allowed 0..65535");
     EXPECT_EQ(error_of("path = 3\n"),
-              "cfg.toml: device.hid.path = 3 is not allowed: must be a string");
-    EXPECT_NE(error_of("path = \"\"\n").find("cfg.toml: device.hid.path is empty"),
+              "cfg.toml:1: [device.hid] path = 3 is not a string: allowed a hidraw node, e.g. "
+              "\"/dev/hidraw3\", or none to find the device by vid and pid");
+    EXPECT_NE(error_of("path = \"\"\n").find("cfg.toml:1: [device.hid] path = \"\" is empty"),
               std::string::npos);
 }
 
 TEST(HidSettings, VidAndPidGoTogether) {
     const std::string no_pid = error_of("vid = 0x1209\n");
-    EXPECT_NE(no_pid.find("cfg.toml: device.hid.pid is required with device.hid.vid"),
-              std::string::npos)
+    EXPECT_NE(no_pid.find("[device.hid] pid is missing: required with vid"), std::string::npos)
         << no_pid;
     const std::string no_vid = error_of("pid = 0x4841\n");
-    EXPECT_NE(no_vid.find("cfg.toml: device.hid.vid is required with device.hid.pid"),
-              std::string::npos)
+    EXPECT_NE(no_vid.find("[device.hid] vid is missing: required with pid"), std::string::npos)
         << no_vid;
 }
 
 TEST(HidSettings, UnknownKeysAreRejectedWithTheDocument) {
     const std::string error = error_of("vid = 1\npid = 2\nserial = \"x\"\n");
-    EXPECT_NE(error.find("cfg.toml: device.hid.serial is not a known key"), std::string::npos)
+    EXPECT_NE(error.find("cfg.toml:3: [device.hid] serial = \"x\" is not a known key"),
+              std::string::npos)
         << error;
     EXPECT_NE(error.find("docs/transport-hid.md"), std::string::npos) << error;
 }

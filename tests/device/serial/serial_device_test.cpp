@@ -270,12 +270,12 @@ TEST(SerialDeviceReconnect, HangupIsDisconnectedAndTheDeviceIsAdoptedWhenItRetur
 
 TEST(SerialDeviceConfig, BadKeysNameTheirFullKey) {
     PtyDevice device(emulator_config());
-    EXPECT_THAT(open_error(""), HasSubstr("test.toml: device.serial.port is required"));
+    EXPECT_THAT(open_error(""), HasSubstr("[device.serial] port is missing: required"));
     EXPECT_THAT(open_error(serial_table(device.port(), "baud = 1200\n")),
-                HasSubstr("test.toml: device.serial.baud = 1200 is not allowed: must be one of "
-                          "the standard rates 9600, 19200"));
+                HasSubstr("[device.serial] baud = 1200 is not allowed: allowed one of the "
+                          "standard rates 9600, 19200"));
     const std::string unknown = open_error(serial_table(device.port(), "buad = 9600\n"));
-    EXPECT_THAT(unknown, HasSubstr("test.toml: device.serial.buad is not a known key"));
+    EXPECT_THAT(unknown, HasSubstr("[device.serial] buad = 9600 is not a known key"));
     EXPECT_THAT(unknown, HasSubstr("docs/transport-serial.md"));
     EXPECT_THAT(open_error("port = \"/dev/ttyHAPTIC-missing\"\n"),
                 HasSubstr("serial port /dev/ttyHAPTIC-missing (device.serial.port in test.toml): "

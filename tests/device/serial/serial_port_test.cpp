@@ -37,8 +37,11 @@ using ::testing::HasSubstr;
 
 /// read_serial_settings() on `table` as the [device.serial] of test.toml, then finish().
 SerialSettings read_table(const std::string& table) {
-    const toml::table parsed = device::parse_plugin_table(table, "test.toml");
-    device::TableReader reader(parsed, "device.serial.", "test.toml", "docs/transport-serial.md");
+    device::DeviceConfig config;
+    config.source = "test.toml";
+    config.plugin_table_toml = table;
+    device::PluginTable parsed(config, "serial", "docs/transport-serial.md");
+    device::TableReader& reader = parsed.reader();
     SerialSettings settings = device::serial::read_serial_settings(reader);
     reader.finish();
     return settings;
@@ -87,37 +90,41 @@ TEST(SerialSettings, DefaultsAndEveryKey) {
 }
 
 TEST(SerialSettings, BadValuesNameTheKey) {
-    EXPECT_THAT(error_for(""), HasSubstr("test.toml: device.serial.port is required"));
-    EXPECT_THAT(error_for("port = \"\"\n"), HasSubstr("device.serial.port is empty"));
-    EXPECT_THAT(error_for("port = 3\n"), HasSubstr("device.serial.port = 3 is not allowed"));
+    EXPECT_THAT(error_for(""), HasSubstr("[device.serial] port is missing: required"));
+    EXPECT_THAT(error_for("port = \"\"\n"),
+                HasSubstr("test.toml:1: [device.serial] port = \"\" is empty"));
+    EXPECT_THAT(error_for("port = 3\n"), HasSubstr("[device.serial] port = 3 is not a string"));
 
     const std::string slow = error_for("port = \"p\"\nbaud = 1200\n");
-    EXPECT_THAT(slow, HasSubstr("test.toml: device.serial.baud = 1200 is not allowed"));
+    EXPECT_THAT(slow, HasSubstr("test.toml:2: [device.serial] baud = 1200 is not allowed"));
     EXPECT_THAT(slow, HasSubstr("9600, 19200, 38400, 57600, 115200"));
     EXPECT_THAT(slow, HasSubstr("3500000, 4000000"));
     EXPECT_THAT(error_for("port = \"p\"\nbaud = 2000001\n"),
-                HasSubstr("device.serial.baud = 2000001 is not allowed"));
+                HasSubstr("[device.serial] baud = 2000001 is not allowed"));
     EXPECT_THAT(error_for("port = \"p\"\nbaud = \"fast\"\n"),
-                HasSubstr("device.serial.baud = \"fast\" is not allowed"));
+                HasSubstr("[device.serial] baud = \"fast\" is not allowed"));
     EXPECT_THAT(error_for("port = \"p\"\nbaud = 115200.0\n"),
-                HasSubstr("device.serial.baud = 115200.0 is not allowed"));
-    EXPECT_THAT(error_for("port = \"p\"\nreset_on_open = 1\n"),
-                HasSubstr("device.serial.reset_on_open = 1 is not allowed: must be true or false"));
-    EXPECT_THAT(error_for("port = \"p\"\nreset_wait_ms = 20000\n"),
-                HasSubstr("device.serial.reset_wait_ms = 20000 is not allowed"));
+                HasSubstr("[device.serial] baud = 115200.0 is not allowed"));
+    EXPECT_THAT(
+        error_for("port = \"p\"\nreset_on_open = 1\n"),
+        HasSubstr("[device.serial] reset_on_open = 1 is not a boolean: allowed true or false"));
+    EXPECT_THAT(
+        error_for("port = \"p\"\nreset_wait_ms = 20000\n"),
+        HasSubstr("[device.serial] reset_wait_ms = 20000 is out of range: allowed 0..10000 (ms)"));
     EXPECT_THAT(error_for("port = \"p\"\nexclusive = \"yes\"\n"),
-                HasSubstr("device.serial.exclusive = \"yes\" is not allowed"));
+                HasSubstr("[device.serial] exclusive = \"yes\" is not a boolean"));
     const std::string unknown = error_for("port = \"p\"\nbuad = 9600\n");
-    EXPECT_THAT(unknown, HasSubstr("test.toml: device.serial.buad is not a known key"));
+    EXPECT_THAT(unknown, HasSubstr("test.toml:2: [device.serial] buad = 9600 is not a known key"));
     EXPECT_THAT(unknown, HasSubstr("docs/transport-serial.md"));
 }
 
 TEST(SerialSettings, TheLinkFactoryWaitsOnePeriodForRoomToWrite) {
-    const toml::table parsed = device::parse_plugin_table("port = \"/dev/ttyX\"\n", "cfg.toml");
-    device::TableReader reader(parsed, "device.serial.", "cfg.toml", "docs/transport-serial.md");
     device::DeviceConfig config;
     config.rate_hz = 500.0;
     config.source = "cfg.toml";
+    config.plugin_table_toml = "port = \"/dev/ttyX\"\n";
+    device::PluginTable parsed(config, "serial", "docs/transport-serial.md");
+    device::TableReader& reader = parsed.reader();
     const device::link::ProtocolSettings protocol;
     const auto link =
         device::serial::make_serial_link(reader, device::link::LinkContext{config, protocol});

@@ -318,9 +318,9 @@ TEST_F(UsbDeviceTest, ConfigurationErrorsNameTheKey) {
     // Checked before the bus is touched: no device needed.
     const std::string vid = open_error(device_, config_with("vid = 0x12345\n"));
     EXPECT_NE(vid.find("usb-device-test.toml"), std::string::npos) << vid;
-    EXPECT_NE(vid.find("device.usb.vid"), std::string::npos) << vid;
+    EXPECT_NE(vid.find("[device.usb] vid"), std::string::npos) << vid;
     const std::string unknown = open_error(device_, config_with("product = 1\n"));
-    EXPECT_NE(unknown.find("device.usb.product"), std::string::npos) << unknown;
+    EXPECT_NE(unknown.find("[device.usb] product"), std::string::npos) << unknown;
     EXPECT_NE(unknown.find("docs/transport-usb.md"), std::string::npos) << unknown;
 
     const std::string missing = open_error(device_, config_with("pid = 0x0002\n"));

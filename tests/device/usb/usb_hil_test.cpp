@@ -310,7 +310,7 @@ TEST(UsbHilConfig, BadVidIsAnInputError) {
                                             .duration_s = 0.1});
     EXPECT_EQ(run.exit_code, 2) << run.err;
     EXPECT_NE(run.err.find("cfg.toml"), std::string::npos) << run.err;
-    EXPECT_NE(run.err.find("device.usb.vid"), std::string::npos) << run.err;
+    EXPECT_NE(run.err.find("[device.usb] vid"), std::string::npos) << run.err;
     EXPECT_NE(run.err.find("0x12345"), std::string::npos) << run.err;
 }
 

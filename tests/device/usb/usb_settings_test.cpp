@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "hapticd/device/table_reader.hpp"
+#include "hapticd/device/plugin_table.hpp"
 #include "hapticd/device/usb/usb_endpoints.hpp"
 
 namespace hapticd::device::usb {
@@ -17,8 +17,11 @@ namespace {
 constexpr const char* kSource = "usb-test.toml";
 
 UsbSettings read(const std::string& toml_text, const std::string& serial = "") {
-    const toml::table table = parse_plugin_table(toml_text, kSource);
-    TableReader reader(table, "device.usb.", kSource, "docs/transport-usb.md");
+    DeviceConfig config;
+    config.source = kSource;
+    config.plugin_table_toml = toml_text;
+    PluginTable table(config, "usb", "docs/transport-usb.md");
+    TableReader& reader = table.reader();
     UsbSettings settings = read_usb_settings(reader, serial);
     reader.finish();
     return settings;
@@ -58,29 +61,29 @@ TEST(UsbSettingsTest, ReadsEveryKey) {
 TEST(UsbSettingsTest, BadVidNamesFileKeyValueAndRange) {
     const std::string message = error_of("vid = 0x12345\n");
     EXPECT_NE(message.find(kSource), std::string::npos) << message;
-    EXPECT_NE(message.find("device.usb.vid"), std::string::npos) << message;
+    EXPECT_NE(message.find("[device.usb] vid"), std::string::npos) << message;
     EXPECT_NE(message.find("0x12345"), std::string::npos) << message;
-    EXPECT_NE(message.find("0 to 0xFFFF"), std::string::npos) << message;
+    EXPECT_NE(message.find("0..0xFFFF"), std::string::npos) << message;
 
     const std::string text = error_of("pid = \"0001\"\n");
-    EXPECT_NE(text.find("device.usb.pid"), std::string::npos) << text;
+    EXPECT_NE(text.find("[device.usb] pid"), std::string::npos) << text;
     EXPECT_NE(text.find("\"0001\""), std::string::npos) << text;
-    EXPECT_NE(error_of("vid = -1\n").find("device.usb.vid"), std::string::npos);
+    EXPECT_NE(error_of("vid = -1\n").find("[device.usb] vid"), std::string::npos);
 }
 
 TEST(UsbSettingsTest, BadTransferAndInterfaceAreNamed) {
     const std::string transfer = error_of("transfer = \"isochronous\"\n");
-    EXPECT_NE(transfer.find("device.usb.transfer"), std::string::npos) << transfer;
+    EXPECT_NE(transfer.find("[device.usb] transfer"), std::string::npos) << transfer;
     EXPECT_NE(transfer.find("isochronous"), std::string::npos) << transfer;
     EXPECT_NE(transfer.find("interrupt"), std::string::npos) << transfer;
     const std::string interface = error_of("interface = 256\n");
-    EXPECT_NE(interface.find("device.usb.interface"), std::string::npos) << interface;
+    EXPECT_NE(interface.find("[device.usb] interface"), std::string::npos) << interface;
     EXPECT_NE(interface.find("255"), std::string::npos) << interface;
 }
 
 TEST(UsbSettingsTest, UnknownKeyIsRejected) {
     const std::string message = error_of("vendor = 0x1209\n");
-    EXPECT_NE(message.find("device.usb.vendor"), std::string::npos) << message;
+    EXPECT_NE(message.find("[device.usb] vendor"), std::string::npos) << message;
     EXPECT_NE(message.find("docs/transport-usb.md"), std::string::npos) << message;
 }
 

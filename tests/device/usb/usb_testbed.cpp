@@ -165,7 +165,9 @@ struct EmulatedUsbDevice::Handler {
                     const std::vector<std::byte>& reply = replies.front();
                     const int room = urb->buffer_length;
                     const int length = std::min(room, static_cast<int>(reply.size()));
-                    std::memcpy(urb->buffer, reply.data(), static_cast<std::size_t>(length));
+                    if (length > 0) {  // an empty reply has no data() to copy from
+                        std::memcpy(urb->buffer, reply.data(), static_cast<std::size_t>(length));
+                    }
                     finish(client, urb_data, static_cast<int>(reply.size()) > room ? -EOVERFLOW : 0,
                            length);
                     replies.pop_front();

@@ -16,8 +16,8 @@
 #include <string>
 
 #include "hapticd/device/link/protocol_device.hpp"
+#include "hapticd/device/plugin_table.hpp"
 #include "hapticd/device/protocol/transport.hpp"
-#include "hapticd/device/table_reader.hpp"
 
 namespace hapticd::device::hid {
 

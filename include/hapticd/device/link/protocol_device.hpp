@@ -41,9 +41,9 @@
 #include "hapticd/device/device.hpp"
 #include "hapticd/device/link/frame_link.hpp"
 #include "hapticd/device/link/protocol_settings.hpp"
+#include "hapticd/device/plugin_table.hpp"
 #include "hapticd/device/protocol/messages.hpp"
 #include "hapticd/device/protocol/reply_tracker.hpp"
-#include "hapticd/device/table_reader.hpp"
 #include "hapticd/servo/seqlock.hpp"
 
 namespace hapticd::device::link {

@@ -14,7 +14,7 @@
 #include <string>
 
 #include "hapticd/device/device.hpp"
-#include "hapticd/device/table_reader.hpp"
+#include "hapticd/device/plugin_table.hpp"
 
 namespace hapticd::device::link {
 

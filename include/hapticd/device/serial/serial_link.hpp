@@ -26,10 +26,10 @@
 
 #include "hapticd/device/link/frame_link.hpp"
 #include "hapticd/device/link/protocol_device.hpp"
+#include "hapticd/device/plugin_table.hpp"
 #include "hapticd/device/protocol/stream_framer.hpp"
 #include "hapticd/device/serial/serial_port.hpp"
 #include "hapticd/device/serial/serial_settings.hpp"
-#include "hapticd/device/table_reader.hpp"
 
 namespace hapticd::device::serial {
 

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <string>
 
-#include "hapticd/device/table_reader.hpp"
+#include "hapticd/device/plugin_table.hpp"
 
 namespace hapticd::device::serial {
 

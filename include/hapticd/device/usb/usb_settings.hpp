@@ -5,8 +5,8 @@
 #include <cstdint>
 #include <string>
 
+#include "hapticd/device/plugin_table.hpp"
 #include "hapticd/device/protocol/transport.hpp"
-#include "hapticd/device/table_reader.hpp"
 
 namespace hapticd::device::usb {
 

@@ -1,0 +1,83 @@
+// The declaration of one key of a TOML table: its name, its unit and range (or its choices)
+// and its default. Each key of the config, a scene or a plugin's table is declared once,
+// next to the code it configures, and read with TableReader (table_reader.hpp); a default
+// given here is the only one. std only: a header that declares fields needs no TOML.
+//
+//     inline constexpr input::Number kMaxForce{
+//         "max_force", {.lo = 0.0, .hi = 1e4, .lo_open = true, .unit = "N"}, 10.0};
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+
+#include "hapticd/input/range.hpp"
+
+namespace hapticd::input {
+
+/// A real number in `range`. No default: read() requires it, read_optional() may lack it.
+struct Number {
+    std::string_view key;
+    Range range;
+    std::optional<double> default_value = std::nullopt;
+};
+
+/// An integer from lo to hi. Messages print the range as "lo..hi".
+struct Integer {
+    std::string_view key;
+    std::int64_t lo = 0;
+    std::int64_t hi = 0;
+    std::optional<std::int64_t> default_value = std::nullopt;
+    std::string_view unit = "";
+
+    [[nodiscard]] bool contains(std::int64_t value) const noexcept {
+        return value >= lo && value <= hi;
+    }
+    /// "1..99", "0..10000 (ms)".
+    [[nodiscard]] std::string describe() const;
+};
+
+/// true or false.
+struct Flag {
+    std::string_view key;
+    bool default_value = false;
+};
+
+/// A string; `allowed` says what it must be in messages ("a plugin name or a path").
+struct Text {
+    std::string_view key;
+    std::optional<std::string_view> default_value = std::nullopt;
+    bool allow_empty = false;
+    std::string_view allowed = "a string";
+};
+
+/// One of a few names, read as the enum (or other small type) `E` that the code uses: a
+/// mode string never travels further than the reader. `name(value)` is the one spelling of
+/// each value (the enum's to_string), so the names live with the type, not here.
+template <typename E>
+struct Choice {
+    std::string_view key;
+    std::span<const E> values;
+    std::string_view (*name)(E) = nullptr;
+    E default_value{};
+
+    [[nodiscard]] std::optional<E> parse(std::string_view text) const {
+        for (const E& value : values) {
+            if (name(value) == text) return value;
+        }
+        return std::nullopt;
+    }
+    /// "\"enforce\", \"warn\" or \"off\"".
+    [[nodiscard]] std::string describe() const {
+        std::string text;
+        for (std::size_t i = 0; i < values.size(); ++i) {
+            text += i == 0 ? "" : i + 1 == values.size() ? " or " : ", ";
+            text += "\"" + std::string(name(values[i])) + "\"";
+        }
+        return text;
+    }
+};
+
+}  // namespace hapticd::input
