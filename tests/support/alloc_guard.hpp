@@ -30,6 +30,10 @@
 
 namespace hapticd::testing {
 
+/// True when the guard counts every allocation, a C library's malloc() included (the
+/// sanitizers' hooks); false when it counts operator new only.
+inline constexpr bool kAllocationGuardCountsMalloc = HAPTICD_ALLOC_GUARD_HOOKS != 0;
+
 /// Allocations (operator new calls) made on the calling thread since it started.
 std::uint64_t thread_allocation_count() noexcept;
 /// Deallocations (operator delete calls with a non-null pointer) on the calling thread.
