@@ -600,9 +600,10 @@ int run_identify(const RunOptions& options, std::atomic<bool>& stop, std::ostrea
     }
     RunOptions run_options = options;
     if (!run_options.duration_s) run_options.duration_s = plan.duration_s;
-    log << "hapticd: " << info.name << " device, " << info.axes << " axis"
-        << (info.axes > 1 ? "es" : "") << ", " << (info.lockstep ? "lockstep" : "real-time")
-        << " clock; identify; " << config.servo.rate_hz << " Hz\n";
+    log << "hapticd: " << info.name << " device, " << info.axes
+        << (info.axes == 1 ? " axis" : " axes") << ", "
+        << (info.lockstep ? "lockstep" : "real-time") << " clock; identify; "
+        << config.servo.rate_hz << " Hz\n";
     describe_identify(config, plan, *excitation, run_options, log);
 
     const double rate_hz = config.servo.rate_hz;
@@ -679,10 +680,10 @@ int run_daemon(const RunOptions& options, std::atomic<bool>& stop, std::ostream&
         const device::DeviceInfo info = device->info();
         context.device = info.name;
         context.lockstep = info.lockstep;
-        log << "hapticd: " << info.name << " device, " << info.axes << " axis"
-            << (info.axes > 1 ? "es" : "") << ", " << (info.lockstep ? "lockstep" : "real-time")
-            << " clock; scene " << scene.name << " (" << context.causality << "); "
-            << config.servo.rate_hz << " Hz\n";
+        log << "hapticd: " << info.name << " device, " << info.axes
+            << (info.axes == 1 ? " axis" : " axes") << ", "
+            << (info.lockstep ? "lockstep" : "real-time") << " clock; scene " << scene.name << " ("
+            << context.causality << "); " << config.servo.rate_hz << " Hz\n";
         const servo::ServoConfig servo_config = servo_config_or_exit(
             [&] { return make_servo_config(config, info, options.log_path.has_value()); });
         if (scene.causality == env::Causality::impedance) {
