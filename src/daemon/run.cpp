@@ -208,6 +208,13 @@ StartupCheck run_startup_check(const Config& config, std::ostream& log) {
     return check;
 }
 
+/// "sim device, 3 axes, lockstep clock": what the run's first line says of the device.
+std::string device_line(const device::DeviceInfo& info) {
+    return info.name + " device, " + std::to_string(info.axes) +
+           (info.axes == 1 ? " axis, " : " axes, ") + (info.lockstep ? "lockstep" : "real-time") +
+           " clock";
+}
+
 device::DeviceHandle open_device(const Config& config, bool lockstep) {
     device::DeviceHandle device;
     try {
@@ -600,10 +607,7 @@ int run_identify(const RunOptions& options, std::atomic<bool>& stop, std::ostrea
     }
     RunOptions run_options = options;
     if (!run_options.duration_s) run_options.duration_s = plan.duration_s;
-    log << "hapticd: " << info.name << " device, " << info.axes
-        << (info.axes == 1 ? " axis" : " axes") << ", "
-        << (info.lockstep ? "lockstep" : "real-time") << " clock; identify; "
-        << config.servo.rate_hz << " Hz\n";
+    log << "hapticd: " << device_line(info) << "; identify; " << config.servo.rate_hz << " Hz\n";
     describe_identify(config, plan, *excitation, run_options, log);
 
     const double rate_hz = config.servo.rate_hz;
@@ -680,9 +684,7 @@ int run_daemon(const RunOptions& options, std::atomic<bool>& stop, std::ostream&
         const device::DeviceInfo info = device->info();
         context.device = info.name;
         context.lockstep = info.lockstep;
-        log << "hapticd: " << info.name << " device, " << info.axes
-            << (info.axes == 1 ? " axis" : " axes") << ", "
-            << (info.lockstep ? "lockstep" : "real-time") << " clock; scene " << scene.name << " ("
+        log << "hapticd: " << device_line(info) << "; scene " << scene.name << " ("
             << context.causality << "); " << config.servo.rate_hz << " Hz\n";
         const servo::ServoConfig servo_config = servo_config_or_exit(
             [&] { return make_servo_config(config, info, options.log_path.has_value()); });
