@@ -139,7 +139,7 @@ AliasTerms alias_terms(const DeviceModel& device, const PiVelocityLoop& loop,
         const Complex b_k = -k_pi * shift * z_inv * s_k;
         out.a.push_back(a_k);
         out.b.push_back(b_k);
-        out.sum_abs_a += std::abs(a_k);
+        out.sum_abs_a += magnitude(a_k);
         sum_a += a_k;
         sum_b += b_k;
         sum_s += s_k;
@@ -157,8 +157,8 @@ AliasTerms alias_terms(const DeviceModel& device, const PiVelocityLoop& loop,
 
 double value_at(const AliasTerms& terms, Complex y) {
     double rho = 0.0;
-    for (std::size_t i = 0; i < terms.a.size(); ++i) rho += std::abs(terms.a[i] * y + terms.b[i]);
-    return std::abs(terms.alpha * y + terms.gamma) - rho / terms.two_b;
+    for (std::size_t i = 0; i < terms.a.size(); ++i) rho += magnitude(terms.a[i] * y + terms.b[i]);
+    return magnitude(terms.alpha * y + terms.gamma) - rho / terms.two_b;
 }
 
 /// Twice the tails' ρ at |Y| <= y (|R - c| loses one, ρ gains one).
@@ -191,10 +191,10 @@ FilteredAliasMargin filtered_alias_margin(const DeviceModel& device, const PiVel
         const Complex centre(x, y);
         const double r = h * std::numbers::sqrt2;
         const double fit =
-            std::max(0.0, std::abs(terms.alpha * centre + terms.gamma) - lipschitz_fit * r);
+            std::max(0.0, magnitude(terms.alpha * centre + terms.gamma) - lipschitz_fit * r);
         double rho = 0.0;
         for (std::size_t i = 0; i < terms.a.size(); ++i) {
-            rho += std::abs(terms.a[i] * centre + terms.b[i]);
+            rho += magnitude(terms.a[i] * centre + terms.b[i]);
         }
         rho += terms.sum_abs_a * r;
         return fit - rho / terms.two_b - tail_allowance(terms, std::abs(centre) + r);
