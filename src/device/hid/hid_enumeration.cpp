@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
-#include <mutex>
 #include <stdexcept>
 #include <system_error>
 
@@ -58,6 +57,16 @@ bool same_node(const std::string& a, const std::string& b) {
     std::error_code error;
     return std::filesystem::equivalent(a, b, error) && !error;
 }
+
+/// hidapi's library state, from the first enumeration until the plugin is unloaded: hid_exit
+/// frees hidapi's static data. Without it LeakSanitizer found 144 bytes of hidapi's lost each
+/// time the plugin was unloaded after an enumeration that found no device.
+struct HidapiLifetime {
+    HidapiLifetime() { (void)hid_init(); }
+    ~HidapiLifetime() { (void)hid_exit(); }
+    HidapiLifetime(const HidapiLifetime&) = delete;
+    HidapiLifetime& operator=(const HidapiLifetime&) = delete;
+};
 
 }  // namespace
 
@@ -112,8 +121,7 @@ std::string utf8_from_wide(const wchar_t* text) {
 }
 
 std::vector<HidDeviceEntry> enumerate_hid_devices() {
-    static std::once_flag initialised;
-    std::call_once(initialised, [] { (void)hid_init(); });
+    static const HidapiLifetime hidapi;  // thread-safe first use; destroyed at unload
 
     std::vector<HidDeviceEntry> entries;
     hid_device_info* const list = hid_enumerate(0, 0);
