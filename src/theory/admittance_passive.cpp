@@ -155,10 +155,15 @@ AliasTerms alias_terms(const DeviceModel& device, const PiVelocityLoop& loop,
     return out;
 }
 
-double value_at(const AliasTerms& terms, Complex y) {
+/// ρ(Y) without the tails: Σ_k |A_k Y + B_k|.
+double alias_sum(const AliasTerms& terms, Complex y) {
     double rho = 0.0;
     for (std::size_t i = 0; i < terms.a.size(); ++i) rho += magnitude(terms.a[i] * y + terms.b[i]);
-    return magnitude(terms.alpha * y + terms.gamma) - rho / terms.two_b;
+    return rho;
+}
+
+double value_at(const AliasTerms& terms, Complex y) {
+    return magnitude(terms.alpha * y + terms.gamma) - alias_sum(terms, y) / terms.two_b;
 }
 
 /// Twice the tails' ρ at |Y| <= y (|R - c| loses one, ρ gains one).
@@ -192,11 +197,7 @@ FilteredAliasMargin filtered_alias_margin(const DeviceModel& device, const PiVel
         const double r = h * std::numbers::sqrt2;
         const double fit =
             std::max(0.0, magnitude(terms.alpha * centre + terms.gamma) - lipschitz_fit * r);
-        double rho = 0.0;
-        for (std::size_t i = 0; i < terms.a.size(); ++i) {
-            rho += magnitude(terms.a[i] * centre + terms.b[i]);
-        }
-        rho += terms.sum_abs_a * r;
+        const double rho = alias_sum(terms, centre) + terms.sum_abs_a * r;
         return fit - rho / terms.two_b - tail_allowance(terms, std::abs(centre) + r);
     };
     const auto in_disk = [&](double x, double y) {
