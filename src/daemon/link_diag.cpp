@@ -1,8 +1,6 @@
 // Link diagnostics: the device at zero force, one exchange per period (link_diag.hpp).
 #include "hapticd/daemon/link_diag.hpp"
 
-#include <time.h>
-
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
@@ -11,7 +9,8 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "hapticd/device/plugin_loader.hpp"
+#include "hapticd/daemon/device_open.hpp"
+#include "hapticd/servo/monotonic_clock.hpp"
 #include "hapticd/tune/input_checks.hpp"
 
 namespace hapticd::daemon {
@@ -22,20 +21,6 @@ using servo::IoResult;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 /// Histogram edges, us: fine below a millisecond, where a 1 kHz loop lives.
 constexpr double kEdgesUs[] = {0, 25, 50, 100, 200, 300, 500, 750, 1000, 2000, 5000, 10000, kInf};
-
-std::int64_t now_ns() {
-    timespec t{};
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return static_cast<std::int64_t>(t.tv_sec) * 1'000'000'000 + t.tv_nsec;
-}
-
-void sleep_until_ns(std::int64_t deadline_ns) {
-    timespec t{};
-    t.tv_sec = static_cast<time_t>(deadline_ns / 1'000'000'000);
-    t.tv_nsec = static_cast<long>(deadline_ns % 1'000'000'000);
-    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &t, nullptr) == EINTR) {
-    }
-}
 
 double percentile(const std::vector<double>& sorted, double p) {
     if (sorted.empty()) return 0.0;
@@ -159,20 +144,7 @@ DiagReport run_link_diag(const Config& config, const DiagOptions& options, std::
         m << "--duration " << options.duration_s << " is not allowed: must be > 0 and <= 3600 s";
         throw std::invalid_argument(m.str());
     }
-    device::DeviceHandle device = device::load_device(config.device.plugin);
-    device::DeviceConfig device_config;
-    device_config.axes = config.device.axes;
-    device_config.rate_hz = config.servo.rate_hz;
-    device_config.lockstep = options.lockstep;
-    device_config.plugin_table_toml = config.device.plugin_table_toml;
-    device_config.plugin_table_path = config.device.plugin_table_path;
-    device_config.source = config.source;
-    try {
-        device->open(device_config);
-    } catch (...) {
-        device->close();
-        throw;
-    }
+    device::DeviceHandle device = open_device(config, options.lockstep);
     const device::DeviceInfo info = device->info();
 
     DiagReport report;
@@ -286,21 +258,21 @@ DiagReport run_link_diag(const Config& config, const DiagOptions& options, std::
 
     if (!info.samples_at_read) {
         // The first sample, before the first command (a protocol device polls for it).
-        (void)take(device->read(sample), now_ns());
+        (void)take(device->read(sample), servo::monotonic_now_ns());
         report.no_reply = 0;
         report.applied_unsupported = report.applied_none = 0;
         previous_no_reply = false;
     }
-    const std::int64_t start_ns = now_ns();
+    const std::int64_t start_ns = servo::monotonic_now_ns();
     std::int64_t deadline_ns = start_ns;
     for (std::uint64_t i = 0; i < exchanges; ++i) {
         if (!options.lockstep) {
             deadline_ns += period_ns;
-            if (now_ns() > deadline_ns) {
+            if (servo::monotonic_now_ns() > deadline_ns) {
                 ++report.overruns;
-                deadline_ns = now_ns();  // skip ahead, never burst
+                deadline_ns = servo::monotonic_now_ns();  // skip ahead, never burst
             } else {
-                sleep_until_ns(deadline_ns);
+                servo::sleep_until_monotonic_ns(deadline_ns);
             }
         }
         IoResult written = IoResult::ok;
@@ -310,21 +282,21 @@ DiagReport run_link_diag(const Config& config, const DiagOptions& options, std::
         std::int64_t answered_ns = 0;
         if (info.samples_at_read) {
             // The daemon's order: a fresh sample, then the command computed from it.
-            began_ns = now_ns();
+            began_ns = servo::monotonic_now_ns();
             read = device->read(sample);
-            answered_ns = now_ns();
+            answered_ns = servo::monotonic_now_ns();
             replied = take(read, answered_ns);
-            written = write_zero(now_ns());
+            written = write_zero(servo::monotonic_now_ns());
         } else {
             // Write, then wait for its answer: the round trip. The answer is the sample the
             // next command is computed from, as in the daemon, whose tick reads it then.
-            began_ns = now_ns();
+            began_ns = servo::monotonic_now_ns();
             written = write_zero(began_ns);
             read = device->read(sample);
-            answered_ns = now_ns();
+            answered_ns = servo::monotonic_now_ns();
             replied = take(read, answered_ns);
         }
-        const std::int64_t done_ns = now_ns();
+        const std::int64_t done_ns = servo::monotonic_now_ns();
         ++report.exchanges;
         if (written == IoResult::disconnected || read == IoResult::disconnected) {
             ++report.disconnects;
@@ -338,7 +310,7 @@ DiagReport run_link_diag(const Config& config, const DiagOptions& options, std::
         host_s.push_back(static_cast<double>(answered_ns - start_ns) * 1e-9);
         device_s.push_back(sample.device_time_s);
     }
-    report.duration_s = static_cast<double>(now_ns() - start_ns) * 1e-9;
+    report.duration_s = static_cast<double>(servo::monotonic_now_ns() - start_ns) * 1e-9;
     device->close();
 
     report.lost = report.no_reply - late_after_no_reply;
@@ -434,16 +406,51 @@ std::string delay_text(const DiagReport& r) {
 
 }  // namespace
 
+double DiagReport::percent_of_exchanges(std::uint64_t n) const noexcept {
+    return exchanges == 0 ? 0.0 : 100.0 * static_cast<double>(n) / static_cast<double>(exchanges);
+}
+
+DiagVerdict DiagReport::verdict() const {
+    using Level = DiagVerdict::Level;
+    const double period_us = 1e6 / rate_hz;
+    const std::uint64_t bad_acks = bad_ack_command + bad_ack_time + acausal;
+    std::ostringstream s;
+    if (replies == 0) return {Level::fail, "FAIL: the device never answered"};
+    if (rtt_p99_us > 0.3 * period_us) {
+        s << std::fixed << std::setprecision(0) << "WARN: p99 round trip " << rtt_p99_us
+          << " us is over 30 % of the " << period_us
+          << " us period; replies will miss the tick (serial: FTDI latency timer? "
+          << "docs/transport-serial.md)";
+        return {Level::warn, s.str()};
+    }
+    if (percent_of_exchanges(lost + late) > 0.1) {
+        return {Level::warn, "WARN: more than 0.1 % of exchanges lost or late"};
+    }
+    if (bad_acks + clock_backwards > 0) {
+        s << "WARN: the device's timestamps or acknowledgements contradict themselves ("
+          << bad_acks << (bad_acks == 1 ? " bad acknowledgement, " : " bad acknowledgements, ")
+          << clock_backwards << (clock_backwards == 1 ? " sample" : " samples")
+          << " with the device clock going backwards): its firmware clock or its command "
+             "bookkeeping is wrong";
+        return {Level::warn, s.str()};
+    }
+    if (delay_understated(*this)) {
+        s << std::setprecision(6) << "WARN: [device.model] delay = " << configured_delay_s
+          << " s is below the measured loop delay (p99 " << delay_s.p99
+          << " s): the stability check assumes less delay than the loop has; set delay = "
+          << recommended_delay_s;
+        return {Level::warn, s.str()};
+    }
+    s << std::fixed << "ok: the link keeps up with " << std::setprecision(0) << rate_hz << " Hz";
+    return {Level::ok, s.str()};
+}
+
 std::string diag_text(const DiagReport& r) {
     std::ostringstream s;
     s << std::fixed;
-    const double period_us = 1e6 / r.rate_hz;
-    const auto percent = [&](std::uint64_t n) {
-        return r.exchanges == 0 ? 0.0
-                                : 100.0 * static_cast<double>(n) / static_cast<double>(r.exchanges);
-    };
-    s << "link: " << r.plugin << (r.serial.empty() ? "" : " serial " + r.serial) << ", " << r.axes
-      << (r.axes == 1 ? " axis" : " axes") << ", " << std::setprecision(0) << r.rate_hz << " Hz, "
+    const auto percent = [&](std::uint64_t n) { return r.percent_of_exchanges(n); };
+    s << "link: " << r.plugin << (r.serial.empty() ? "" : " serial " + r.serial) << ", "
+      << servo::axes_text(r.axes) << ", " << std::setprecision(0) << r.rate_hz << " Hz, "
       << r.exchanges << " exchanges in " << std::setprecision(2) << r.duration_s << " s\n";
     s << std::setprecision(1) << "round trip (write -> reply), us: p50 " << r.rtt_p50_us << "  p90 "
       << r.rtt_p90_us << "  p99 " << r.rtt_p99_us << "  p99.9 " << r.rtt_p999_us << "  max "
@@ -472,33 +479,7 @@ std::string diag_text(const DiagReport& r) {
         s << "device clock: not enough samples for a drift estimate\n";
     }
     s << delay_text(r);
-    // Verdicts: what a 1 kHz servo needs from the link.
-    const std::uint64_t bad_acks = r.bad_ack_command + r.bad_ack_time + r.acausal;
-    s << "verdict: ";
-    if (r.replies == 0) {
-        s << "FAIL: the device never answered\n";
-    } else if (r.rtt_p99_us > 0.3 * period_us) {
-        s << std::setprecision(0) << "WARN: p99 round trip " << r.rtt_p99_us
-          << " us is over 30 % of the " << period_us
-          << " us period; replies will miss the tick (serial: FTDI latency timer? "
-          << "docs/transport-serial.md)\n";
-    } else if (percent(r.lost + r.late) > 0.1) {
-        s << "WARN: more than 0.1 % of exchanges lost or late\n";
-    } else if (bad_acks + r.clock_backwards > 0) {
-        s << "WARN: the device's timestamps or acknowledgements contradict themselves (" << bad_acks
-          << " bad acknowledgements, " << r.clock_backwards
-          << " samples with the device clock going backwards): its firmware clock or its "
-             "command bookkeeping is wrong\n";
-    } else if (delay_understated(r)) {
-        s << std::defaultfloat << std::setprecision(6)
-          << "WARN: [device.model] delay = " << r.configured_delay_s
-          << " s is below the measured loop delay (p99 " << r.delay_s.p99
-          << " s): the stability check assumes less delay than the loop has; set delay = "
-          << r.recommended_delay_s << "\n";
-    } else {
-        s << std::fixed << "ok: the link keeps up with " << std::setprecision(0) << r.rate_hz
-          << " Hz\n";
-    }
+    s << "verdict: " << r.verdict().text << "\n";
     return s.str();
 }
 
@@ -562,6 +543,8 @@ std::string diag_json(const DiagReport& r) {
     delay["acausal"] = r.acausal;
     delay["clock_backwards"] = r.clock_backwards;
     j["loop_delay"] = delay;
+    const DiagVerdict verdict = r.verdict();
+    j["verdict"] = {{"ok", verdict.ok()}, {"text", verdict.text}};
     return j.dump(2);
 }
 

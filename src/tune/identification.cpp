@@ -23,6 +23,7 @@ namespace {
 
 using detail::AxisData;
 using detail::format;
+using detail::median;
 using detail::percent;
 using detail::refuse;
 using detail::SegmentRange;
@@ -62,12 +63,6 @@ constexpr const char* kParameterNames[] = {"the mass m", "the damping b",
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-double median(std::vector<double> values) {
-    const auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-    std::nth_element(values.begin(), mid, values.end());
-    return *mid;
 }
 
 /// Simulates a segment from (global, state) with its derivatives: calls visit(j, x_j) for each

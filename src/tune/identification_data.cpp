@@ -21,13 +21,6 @@ constexpr double kSmoothingHalfWidthS = 0.01;
 // The handle must move at least this many encoder steps.
 constexpr double kMinMotionSteps = 20.0;
 
-double median(std::vector<double> values) {
-    if (values.empty()) return 0.0;
-    const auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-    std::nth_element(values.begin(), mid, values.end());
-    return *mid;
-}
-
 std::uint32_t bit_mask(const TelemetryLog& log, const std::vector<double>& column, std::size_t row,
                        std::string_view name) {
     const double value = column[row];
@@ -260,6 +253,13 @@ std::string format(double value, int digits) {
 
 std::string percent(double fraction) { return format(100.0 * fraction, 3) + " %"; }
 
+double median(std::vector<double> values) {
+    if (values.empty()) return 0.0;
+    const auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+    std::nth_element(values.begin(), mid, values.end());
+    return *mid;
+}
+
 AxisData prepare_axis(const TelemetryLog& log, int axis, const IdentificationOptions& options) {
     AxisData data;
     data.x_name = "x" + std::to_string(axis) + "_m";
@@ -273,7 +273,7 @@ AxisData prepare_axis(const TelemetryLog& log, int axis, const IdentificationOpt
         refuse(RefusalReason::missing_column,
                "no " + (data.t == nullptr ? std::string("t_s") : data.x_name + "/" + data.f_name) +
                    " for axis " + std::to_string(axis) + " (the log has " +
-                   std::to_string(log.axes) + (log.axes == 1 ? " axis" : " axes") +
+                   servo::axes_text(log.axes) +
                    "; its columns: " + columns + ")");
     }
     const std::size_t n = log.rows();

@@ -17,6 +17,8 @@ namespace hapticd::tune::detail {
 std::string format(double value, int digits = 4);
 /// "12.3 %" for 0.123.
 std::string percent(double fraction);
+/// The upper median (the middle of an odd count); 0 for none.
+double median(std::vector<double> values);
 
 /// The rows [start, start + length) of the log, simulated from their own initial state.
 struct SegmentRange {

@@ -9,7 +9,7 @@
 
 #include "hapticd/daemon/config.hpp"
 #include "hapticd/daemon/startup_check.hpp"
-#include "hapticd/device/plugin_loader.hpp"
+#include "hapticd/daemon/device_open.hpp"
 
 namespace hapticd::daemon {
 namespace {
@@ -32,17 +32,9 @@ TEST(DaemonExamples, EveryExampleIsAValidConfigWhosePluginAcceptsItsTable) {
         EXPECT_NE(config.device.plugin, "sim");
         const StartupCheck check = check_coupling_at_startup(config);
         EXPECT_TRUE(check.passed && !check.skipped) << check.describe();
-        device::DeviceHandle device = device::load_device(config.device.plugin);
-        device::DeviceConfig device_config;
-        device_config.axes = config.device.axes;
-        device_config.rate_hz = config.servo.rate_hz;
-        device_config.plugin_table_toml = config.device.plugin_table_toml;
-        device_config.plugin_table_path = config.device.plugin_table_path;
-        device_config.source = config.source;
         std::string message;
         try {
-            device->open(device_config);
-            device->close();
+            open_device(config, /*lockstep=*/false)->close();
             continue;  // a machine with the device attached
         } catch (const std::exception& e) {
             message = e.what();

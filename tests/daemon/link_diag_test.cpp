@@ -186,6 +186,57 @@ TEST(DaemonLinkDiag, MeasuresTheSimsLoopDelayOnTheRealtimeClock) {
     EXPECT_EQ(d.at("configured_s").get<double>(), 0.0005);
 }
 
+// The verdict's rules in their order, on reports built by hand: each case breaks one more
+// rule than the one before, and the verdict names the first broken rule only.
+TEST(DaemonLinkDiag, TheVerdictNamesTheFirstFigureThatFails) {
+    using Level = DiagVerdict::Level;
+    DiagReport r;
+    r.rate_hz = 1000.0;
+    r.exchanges = 10000;
+    r.replies = 10000;
+    r.rtt_p99_us = 120.0;
+    EXPECT_EQ(r.verdict().level, Level::ok);
+    EXPECT_EQ(r.verdict().text, "ok: the link keeps up with 1000 Hz");
+
+    r.delay_measured = true;  // the configured delay (0 s) is below the measured p99
+    r.delay_s.p99 = 0.0012;
+    r.recommended_delay_s = 0.0012;
+    EXPECT_EQ(r.verdict().level, Level::warn);
+    EXPECT_EQ(r.verdict().text.rfind("WARN: [device.model] delay = 0 s is below", 0), 0u)
+        << r.verdict().text;
+    r.configured_delay_s = 0.00116;  // within 0.05 period of the p99: covered
+    EXPECT_TRUE(r.verdict().ok()) << r.verdict().text;
+    r.configured_delay_s = 0.0;
+
+    r.clock_backwards = 1;
+    EXPECT_NE(r.verdict().text.find("(0 bad acknowledgements, 1 sample with the device clock"),
+              std::string::npos)
+        << r.verdict().text;
+
+    r.lost = 6;  // 0.06 % + 0.05 % > 0.1 %
+    r.late = 5;
+    EXPECT_EQ(r.verdict().text, "WARN: more than 0.1 % of exchanges lost or late");
+    r.late = 4;  // exactly 0.1 %: not more
+    EXPECT_NE(r.verdict().text.find("contradict themselves"), std::string::npos);
+    r.late = 5;
+
+    r.rtt_p99_us = 301.0;  // over 30 % of the 1000 us period
+    EXPECT_EQ(r.verdict().text.rfind("WARN: p99 round trip 301 us is over 30 % of the 1000 us", 0),
+              0u)
+        << r.verdict().text;
+
+    r.replies = 0;
+    EXPECT_EQ(r.verdict().level, Level::fail);
+    EXPECT_EQ(r.verdict().text, "FAIL: the device never answered");
+
+    // The text report's last line and the JSON carry the same verdict.
+    const std::string text = diag_text(r);
+    EXPECT_NE(text.find("\nverdict: FAIL: the device never answered\n"), std::string::npos);
+    const nlohmann::json j = nlohmann::json::parse(diag_json(r));
+    EXPECT_FALSE(j.at("verdict").at("ok").get<bool>());
+    EXPECT_EQ(j.at("verdict").at("text"), "FAIL: the device never answered");
+}
+
 TEST(DaemonLinkDiag, RefusesADurationOutOfRange) {
     try {
         (void)diagnose(sim_config(""), 0.0, true);

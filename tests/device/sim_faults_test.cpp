@@ -2,11 +2,11 @@
 // IoResult at the right sample, deterministically.
 #include <gtest/gtest.h>
 
-#include <time.h>
 
 #include <vector>
 
 #include "hapticd/device/sim/sim_device.hpp"
+#include "hapticd/servo/monotonic_clock.hpp"
 
 namespace hapticd::device::sim {
 namespace {
@@ -206,11 +206,7 @@ TEST(SimFaults, ReadingTheSameLockstepSampleTwiceGivesTheSameVerdict) {
     EXPECT_EQ(s.status, kStatusDropped | kStatusJump);
 }
 
-double monotonic_s() {
-    timespec ts{};
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
+double monotonic_s() { return 1e-9 * static_cast<double>(servo::monotonic_now_ns()); }
 
 TEST(SimFaults, LateRepliesAreReallyLateOnTheRealtimeClock) {
     FaultConfig f;

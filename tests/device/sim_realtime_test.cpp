@@ -1,7 +1,6 @@
 // The sim's real-time contract and its realtime clock: read()/write() never allocate, and on
 // the realtime clock the physics follows CLOCK_MONOTONIC exactly.
 #include <gtest/gtest.h>
-#include <time.h>
 
 #include <algorithm>
 #include <cmath>
@@ -10,6 +9,7 @@
 
 #include "alloc_guard.hpp"
 #include "hapticd/device/sim/sim_device.hpp"
+#include "hapticd/servo/monotonic_clock.hpp"
 
 namespace hapticd::device::sim {
 namespace {
@@ -91,8 +91,7 @@ TEST(SimRealtime, ReadAndWriteNeverAllocateOnTheRealtimeClock) {
 }
 
 void sleep_s(double s) {
-    timespec ts{static_cast<time_t>(s), static_cast<long>((s - std::floor(s)) * 1e9)};
-    clock_nanosleep(CLOCK_MONOTONIC, 0, &ts, nullptr);
+    servo::sleep_until_monotonic_ns(servo::monotonic_now_ns() + std::llround(s * 1e9));
 }
 
 // The force written at t_w is held from t_w; a later read() reports the state at its own

@@ -158,6 +158,19 @@ void flatten(const nlohmann::ordered_json& node, const std::string& prefix,
 
 }  // namespace
 
+std::string trimmed(const std::string& text) {
+    const auto first = text.find_first_not_of(" \t\r\n");
+    if (first == std::string::npos) return {};
+    const auto last = text.find_last_not_of(" \t\r\n");
+    return text.substr(first, last - first + 1);
+}
+
+std::string number_text(double value, int digits) {
+    std::ostringstream text;
+    text << std::setprecision(digits) << value;
+    return text.str();
+}
+
 void print_result(const nlohmann::ordered_json& fields, bool json) {
     if (json) {
         std::cout << fields.dump(2) << '\n';

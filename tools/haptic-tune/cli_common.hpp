@@ -78,6 +78,12 @@ struct DesignInput {
 /// the config (its message is the one hapticd gives).
 DesignInput resolve_design_input(const DeviceOptions& options);
 
+/// `text` without leading and trailing white space.
+std::string trimmed(const std::string& text);
+
+/// A number for messages and titles with `digits` significant digits: "0.1", "4000".
+std::string number_text(double value, int digits = 6);
+
 /// Prints `fields` as aligned "key  value" lines, or as one JSON object with --json.
 void print_result(const nlohmann::ordered_json& fields, bool json);
 

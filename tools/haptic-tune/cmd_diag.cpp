@@ -39,10 +39,9 @@ int run_diag(const DiagCommandOptions& o) {
         std::cerr << "haptic-tune: device error: " << e.what() << '\n';
         return kExitBadInput;
     }
-    const std::string text = daemon::diag_text(report);
-    std::cout << (o.json ? daemon::diag_json(report) + "\n" : text) << std::flush;
-    const bool ok = text.find("\nverdict: ok") != std::string::npos;
-    return ok ? kExitOk : kExitVerdictNo;
+    std::cout << (o.json ? daemon::diag_json(report) + "\n" : daemon::diag_text(report))
+              << std::flush;
+    return report.verdict().ok() ? kExitOk : kExitVerdictNo;
 }
 
 }  // namespace

@@ -4,7 +4,8 @@
 // conductance Re(1/Z_c) of (16), and each model's binding (worst) frequency.
 #include <memory>
 
-#include "chart_renderer.hpp"
+#include "chart_design.hpp"
+#include "chart_script.hpp"
 #include "commands.hpp"
 #include "hapticd/theory/coupling_check.hpp"
 #include "hapticd/theory/unit_circle.hpp"
@@ -67,7 +68,7 @@ int run_plot(const ChartOptions& o) {
             model_curve(input, design, model, frequencies);
     }
     const std::string delay =
-        input.delay_s > 0.0 ? ", loop delay " + format_number(input.delay_s * 1e3) + " ms" : "";
+        input.delay_s > 0.0 ? ", loop delay " + number_text(input.delay_s * 1e3, 4) + " ms" : "";
     const std::string title = "Design procedure, (21): " + describe_device(input) + delay + "\n" +
                               describe_design(design);
     nlohmann::ordered_json chart = {

@@ -10,6 +10,7 @@
 #include "hapticd/tune/admittance_sizing.hpp"
 #include "hapticd/tune/coupling_sizing.hpp"
 #include "hapticd/tune/input_checks.hpp"
+#include "hapticd/tune/result_json.hpp"
 
 namespace hapticd::tools {
 namespace {
@@ -78,12 +79,7 @@ nlohmann::ordered_json exact_cross_check(const DesignInput& input,
                   << ". Only the passive model (the default) holds for every passive "
                      "operator (docs/stability-models.md); exit 1.\n";
     }
-    return {{"stable", exact.stable},
-            {"worst_spectral_radius", exact.worst_spectral_radius},
-            {"worst_frequency_hz", exact.worst_frequency_hz},
-            {"worst_operator", exact.worst_operator.describe()},
-            {"worst_environment", exact.worst_environment.describe()},
-            {"cases_checked", exact.cases_checked}};
+    return exact;
 }
 
 int run_impedance(const SizeOptions& o, const DesignInput& input, theory::HoldModel model) {
@@ -189,16 +185,6 @@ int run_assumed(const SizeOptions& o, const DesignInput& input,
     return stable ? kExitOk : kExitVerdictNo;
 }
 
-/// The admittance design held against the exact admittance loop (exact_admittance.hpp).
-nlohmann::ordered_json exact_admittance_fields(const tune::AdmittanceExactCheck& exact) {
-    return {{"stable", exact.stable},
-            {"worst_spectral_radius", exact.worst_spectral_radius},
-            {"worst_frequency_hz", exact.worst_frequency_hz},
-            {"worst_operator", exact.worst_operator.describe()},
-            {"worst_environment", exact.worst_environment.describe()},
-            {"cases_checked", exact.cases_checked}};
-}
-
 void warn_exact_admittance_rejects(const tune::AdmittanceExactCheck& exact) {
     std::cerr << "haptic-tune: the exact admittance model finds this design unstable: "
               << exact.worst_operator.describe() << " against "
@@ -259,7 +245,7 @@ int run_admittance(const SizeOptions& o, const DesignInput& input, const std::st
             {"pi_gains", {{"kp", *o.kp}, {"ki", *o.ki}}},
             {"rate_hz", input.rate_hz},
             {"solver", report_fields(sizing.report)},
-            {"exact_check", exact_admittance_fields(sizing.exact)},
+            {"exact_check", sizing.exact},
         };
         if (!sizing.exact.stable) warn_exact_admittance_rejects(sizing.exact);
         print_result(out, o.json);
@@ -303,7 +289,7 @@ int run_admittance(const SizeOptions& o, const DesignInput& input, const std::st
             {"pi_gains", {{"kp", *o.kp}, {"ki", *o.ki}}},
             {"rate_hz", input.rate_hz},
             {"solver", report_fields(sizing.report)},
-            {"exact_check", exact_admittance_fields(sizing.check)},
+            {"exact_check", sizing.check},
         };
         if (!sizing.check.stable) warn_exact_admittance_rejects(sizing.check);
         print_result(out, o.json);
@@ -342,7 +328,7 @@ int run_admittance(const SizeOptions& o, const DesignInput& input, const std::st
         const tune::AdmittanceExactCheck exact =
             tune::check_exact_admittance({input.device, loop, sizing.coupling, input.rate_hz, 0.0});
         stable = exact.stable;
-        out["exact_check"] = exact_admittance_fields(exact);
+        out["exact_check"] = exact;
         if (!stable) warn_exact_admittance_rejects(exact);
     }
     print_result(out, o.json);

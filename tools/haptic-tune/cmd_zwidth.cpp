@@ -7,7 +7,8 @@
 #include <limits>
 #include <memory>
 
-#include "chart_renderer.hpp"
+#include "chart_design.hpp"
+#include "chart_script.hpp"
 #include "commands.hpp"
 #include "hapticd/theory/unit_circle.hpp"
 #include "hapticd/theory/zwidth.hpp"
@@ -61,7 +62,7 @@ int finish(const ZwidthOptions& o, nlohmann::ordered_json chart) {
     for (const auto& [name, curves] : chart["models"].items()) {
         const std::vector<double> zmin = curves["zmin_magnitude"];
         const std::vector<double> zmax = curves["zmax_magnitude"];
-        summary["zmax/zmin at " + format_number(f.front()) + " Hz [" + name + "]"] =
+        summary["zmax/zmin at " + number_text(f.front(), 4) + " Hz [" + name + "]"] =
             zmax.front() / zmin.front();
     }
     print_result(summary, false);
@@ -162,11 +163,11 @@ int run_admittance(const ZwidthOptions& o, const std::vector<theory::HoldModel>&
         design["sizing_model"] = "encoder";
         design["sizing_binding_frequency_hz"] = sized_binding_hz;
     }
-    std::string described = "k_p = " + format_number(loop.proportional_gain_n_s_per_m) +
-                            " N s/m, k_i = " + format_number(loop.integral_gain_n_per_m) +
-                            " N/m; m_c = " + format_number(coupling.mass_kg) + " kg, b_c = " +
+    std::string described = "k_p = " + number_text(loop.proportional_gain_n_s_per_m, 4) +
+                            " N s/m, k_i = " + number_text(loop.integral_gain_n_per_m, 4) +
+                            " N/m; m_c = " + number_text(coupling.mass_kg, 4) + " kg, b_c = " +
                             (pure_mass ? std::string("none") :
-                                         format_number(coupling.damping_n_s_per_m) + " N s/m");
+                                         number_text(coupling.damping_n_s_per_m, 4) + " N s/m");
     if (source == "sized") described += " (sized from (37) with the encoder model)";
     return finish(o, {
                          {"kind", "zwidth"},

@@ -56,6 +56,17 @@ struct DelayStats {
 /// of this many periods (a conservative value that does not change with every run's jitter).
 inline constexpr double kDelayRoundingPeriods = 0.05;
 
+/// What the diagnosis concludes: the first figure that a 1 kHz-class servo cannot live with,
+/// in the order the rules are checked (no reply; p99 round trip over 30 % of the period;
+/// over 0.1 % of exchanges lost or late; timestamps or acknowledgements that contradict
+/// themselves; a configured delay below the measured p99), or ok.
+struct DiagVerdict {
+    enum class Level { ok, warn, fail };
+    Level level = Level::ok;
+    std::string text;  ///< "ok: the link keeps up with 1000 Hz", "WARN: ...", "FAIL: ..."
+    bool ok() const noexcept { return level == Level::ok; }
+};
+
 struct DiagReport {
     std::string plugin;
     std::string serial;
@@ -101,15 +112,20 @@ struct DiagReport {
     std::uint64_t bad_ack_time = 0;         ///< the device's times contradicted themselves
     std::uint64_t clock_backwards = 0;      ///< a sample's device time before the previous one
     std::uint64_t acausal = 0;              ///< a force in effect before its sample was taken
+
+    /// The share of exchanges, %.
+    double percent_of_exchanges(std::uint64_t n) const noexcept;
+    DiagVerdict verdict() const;
 };
 
 /// Opens config's device, runs the diagnosis, closes it (zero force). Throws
 /// std::runtime_error on a device that cannot be opened. `log` gets progress messages.
 DiagReport run_link_diag(const Config& config, const DiagOptions& options, std::ostream& log);
 
-/// Human-readable report with a text histogram and a verdict on each figure.
+/// Human-readable report with a text histogram; its last line is "verdict: " and the
+/// verdict's text.
 std::string diag_text(const DiagReport& report);
-/// The same as JSON (one object).
+/// The same as JSON (one object), with the verdict as {"ok", "text"}.
 std::string diag_json(const DiagReport& report);
 
 }  // namespace hapticd::daemon

@@ -8,10 +8,16 @@
 
 #include <array>
 #include <cstdint>
+#include <string>
 
 namespace hapticd::servo {
 
 inline constexpr int kMaxAxes = 3;
+
+/// "1 axis", "3 axes": for messages.
+inline std::string axes_text(int axes) {
+    return std::to_string(axes) + (axes == 1 ? " axis" : " axes");
+}
 
 /// Status bits of a sample; the telemetry's status column carries them unchanged.
 enum StatusBit : std::uint32_t {

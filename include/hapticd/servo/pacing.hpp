@@ -11,6 +11,8 @@
 #include <concepts>
 #include <cstdint>
 
+#include "hapticd/servo/monotonic_clock.hpp"
+
 namespace hapticd::servo {
 
 template <typename C>
@@ -21,12 +23,6 @@ concept PacingClock = requires(C& clock, std::int64_t deadline_ns) {
     noexcept;
 };
 
-/// CLOCK_MONOTONIC. now_ns() goes through the vDSO (no system call); sleep_until_ns() is
-/// clock_nanosleep(TIMER_ABSTIME), retried on EINTR.
-struct MonotonicClock {
-    std::int64_t now_ns() noexcept;
-    void sleep_until_ns(std::int64_t deadline_ns) noexcept;
-};
 static_assert(PacingClock<MonotonicClock>);
 
 /// What one wait() found.

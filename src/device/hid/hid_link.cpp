@@ -9,7 +9,6 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
-#include <ctime>
 #include <stdexcept>
 
 namespace hapticd::device::hid {
@@ -28,13 +27,6 @@ constexpr int kWriteAttempts = 3;               ///< a write interrupted by a si
 bool device_gone(int error) noexcept {
     return error == ENODEV || error == EIO || error == ENXIO || error == EPIPE ||
            error == ESHUTDOWN;
-}
-
-void sleep_ns(std::int64_t duration_ns) noexcept {
-    timespec duration{};
-    duration.tv_sec = static_cast<time_t>(duration_ns / 1'000'000'000);
-    duration.tv_nsec = static_cast<long>(duration_ns % 1'000'000'000);
-    (void)clock_nanosleep(CLOCK_MONOTONIC, 0, &duration, nullptr);
 }
 
 std::string quoted(const std::string& text) { return "\"" + text + "\""; }
@@ -183,7 +175,10 @@ LinkResult HidLink::receive(std::span<std::byte> frame, std::size_t& size,
         }
         const std::int64_t left_ns = deadline_ns - link::monotonic_now_ns();
         if (left_ns <= 0) return LinkResult::timeout;
-        if (wait_ms == 0) sleep_ns(std::min(left_ns, kTailPollNs));
+        if (wait_ms == 0) {
+            servo::sleep_until_monotonic_ns(link::monotonic_now_ns() +
+                                            std::min(left_ns, kTailPollNs));
+        }
     }
 }
 

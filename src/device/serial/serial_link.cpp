@@ -10,7 +10,6 @@
 #include <cerrno>
 #include <chrono>
 #include <cmath>
-#include <ctime>
 #include <stdexcept>
 #include <thread>
 #include <utility>
@@ -25,13 +24,6 @@ using protocol::StreamDecoder;
 /// drops the rest: a device that stopped reading must not hold close() for the tty's
 /// closing_wait (30 s by default).
 constexpr auto kCloseDrainTime = std::chrono::milliseconds(100);
-
-/// CLOCK_MONOTONIC, ns: the clock of receive()'s deadline (link::monotonic_now_ns()).
-std::int64_t now_ns() noexcept {
-    timespec now{};
-    ::clock_gettime(CLOCK_MONOTONIC, &now);
-    return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
-}
 
 /// The errno values that mean the port is gone: a hung-up tty answers EIO, an unplugged
 /// USB adapter ENODEV or ENXIO.
@@ -80,7 +72,7 @@ void SerialLink::close() noexcept {
 SerialLink::Wait SerialLink::wait_for(short events, std::int64_t deadline_ns) noexcept {
     for (;;) {
         // At least one ppoll() with a zero timeout even past the deadline: it notices a hangup.
-        const std::int64_t remaining_ns = std::max<std::int64_t>(0, deadline_ns - now_ns());
+        const std::int64_t remaining_ns = std::max<std::int64_t>(0, deadline_ns - link::monotonic_now_ns());
         timespec timeout{static_cast<time_t>(remaining_ns / 1'000'000'000),
                          static_cast<long>(remaining_ns % 1'000'000'000)};
         pollfd port{fd_, events, 0};
@@ -98,7 +90,7 @@ SerialLink::Wait SerialLink::wait_for(short events, std::int64_t deadline_ns) no
 }
 
 LinkResult SerialLink::write_all(std::size_t begin, std::size_t end) noexcept {
-    const std::int64_t deadline_ns = now_ns() + settings_.write_timeout_ns;
+    const std::int64_t deadline_ns = link::monotonic_now_ns() + settings_.write_timeout_ns;
     std::size_t at = begin;
     while (at < end) {
         const ssize_t written = ::write(fd_, tx_.data() + at, end - at);

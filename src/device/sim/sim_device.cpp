@@ -1,11 +1,10 @@
 #include "hapticd/device/sim/sim_device.hpp"
 
-#include <time.h>
-
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 #include <limits>
+
+#include "hapticd/servo/monotonic_clock.hpp"
 
 namespace hapticd::device::sim {
 namespace {
@@ -14,20 +13,6 @@ constexpr double kMinusInfinity = -std::numeric_limits<double>::infinity();
 /// Realtime clock: room for this many commands in flight (a host writing more often than
 /// this within one loop delay has its newest command in flight replaced, command_pipeline.hpp).
 constexpr std::size_t kRealtimeCommandsInFlight = 1024;
-
-std::int64_t monotonic_ns() noexcept {
-    timespec ts{};
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
-}
-
-void sleep_s(double duration_s) noexcept {
-    timespec ts{};
-    ts.tv_sec = static_cast<time_t>(duration_s);
-    ts.tv_nsec = static_cast<long>((duration_s - static_cast<double>(ts.tv_sec)) * 1e9);
-    while (clock_nanosleep(CLOCK_MONOTONIC, 0, &ts, &ts) == EINTR) {
-    }
-}
 
 }  // namespace
 
@@ -57,7 +42,7 @@ void SimDevice::open(const SimConfig& config) {
     applied_tag_ = 0;
     applied_time_s_ = 0.0;
     for (int i = 0; i < config_.axes; ++i) last_fresh_counts_[i] = encoder_counts(i);
-    open_time_ns_ = monotonic_ns();
+    open_time_ns_ = servo::monotonic_now_ns();
     open_ = true;
 }
 
@@ -85,7 +70,7 @@ double SimDevice::units_to_s(std::uint64_t units) const noexcept {
 double SimDevice::time_s() const noexcept { return units_to_s(units_); }
 
 std::uint64_t SimDevice::now_units() const noexcept {
-    const double elapsed_s = static_cast<double>(monotonic_ns() - open_time_ns_) * 1e-9;
+    const double elapsed_s = static_cast<double>(servo::monotonic_now_ns() - open_time_ns_) * 1e-9;
     const double units =
         std::floor(elapsed_s * config_.rate_hz * static_cast<double>(kUnitsPerPeriod));
     return units > 0.0 ? static_cast<std::uint64_t>(units) : 0;
@@ -194,7 +179,8 @@ IoResult SimDevice::read(Sample& sample) noexcept {
         }
         sample.encoder_counts[i] = last_fresh_counts_[i];
     }
-    if (verdict.late && !lockstep) sleep_s(faults_.late_by_s());
+    if (verdict.late && !lockstep) servo::sleep_until_monotonic_ns(
+            servo::monotonic_now_ns() + std::llround(faults_.late_by_s() * 1e9));
     return verdict.dropped ? IoResult::timeout : IoResult::ok;
 }
 

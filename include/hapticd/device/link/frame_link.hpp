@@ -14,6 +14,8 @@
 #include <span>
 #include <string>
 
+#include "hapticd/servo/monotonic_clock.hpp"
+
 namespace hapticd::device::link {
 
 enum class LinkResult : std::uint8_t {
@@ -70,7 +72,7 @@ class FrameLink {
     virtual LinkCounters counters() const noexcept = 0;
 };
 
-/// CLOCK_MONOTONIC now, ns (the clock of receive()'s deadline).
-std::int64_t monotonic_now_ns() noexcept;
+/// The clock of receive()'s deadline.
+using servo::monotonic_now_ns;
 
 }  // namespace hapticd::device::link

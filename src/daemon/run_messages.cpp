@@ -1,0 +1,92 @@
+#include "run_messages.hpp"
+
+#include <array>
+#include <iomanip>
+#include <sstream>
+
+#include "hapticd/servo/faults.hpp"
+
+namespace hapticd::daemon {
+namespace {
+
+std::string format_vector_mm(const std::array<double, servo::kMaxAxes>& v, int axes, double scale) {
+    std::ostringstream out;
+    out << std::fixed << std::setprecision(2) << "[";
+    for (int i = 0; i < axes; ++i)
+        out << (i == 0 ? "" : " ") << v[static_cast<std::size_t>(i)] * scale;
+    out << "]";
+    return out.str();
+}
+
+}  // namespace
+
+std::string device_line(const device::DeviceInfo& info) {
+    return info.name + " device, " + servo::axes_text(info.axes) + ", " +
+           (info.lockstep ? "lockstep" : "real-time") + " clock";
+}
+
+std::string status_line(const servo::StatusSnapshot& s, int axes) {
+    std::ostringstream out;
+    out << std::fixed << std::setprecision(2) << "hapticd: t " << s.t_s << " s  x "
+        << format_vector_mm(s.x_m, axes, 1e3) << " mm  xe " << format_vector_mm(s.xe_m, axes, 1e3)
+        << " mm  f " << format_vector_mm(s.f_n, axes, 1.0) << " N  ";
+    if (!s.armed) {
+        out << "disarmed";
+    } else if (s.soft_start_scale < 1.0) {
+        out << "soft start " << std::setprecision(0) << 100.0 * s.soft_start_scale << "%";
+    } else {
+        out << "armed";
+    }
+    out << "  overruns " << s.overruns;
+    if (s.solver_not_converged > 0) out << "  solver failed " << s.solver_not_converged << " ticks";
+    out << "  faults ";
+    if (s.faults == 0u) out << "none";
+    bool first = true;
+    servo::for_each_fault(s.faults, [&](std::string_view name) {
+        out << (first ? "" : ",") << name;
+        first = false;
+    });
+    return out.str();
+}
+
+std::string fault_names(std::uint32_t faults) {
+    std::string names;
+    servo::for_each_fault(faults, [&](std::string_view name) {
+        names += (names.empty() ? "" : ",") + std::string(name);
+    });
+    return names;
+}
+
+std::string fault_change_line(std::uint32_t before, const servo::StatusSnapshot& now,
+                              const Config& config) {
+    std::ostringstream out;
+    out << std::fixed << std::setprecision(3) << "hapticd: t " << now.t_s
+        << " s: " << std::defaultfloat;
+    if (now.faults == 0u && !servo::only_link_faults(before)) {
+        out << "fault latch cleared, force returns through the soft start";
+        return out.str();
+    }
+    if (now.faults == 0u) {
+        out << "link recovered (the device sent good samples for "
+            << config.safety.reconnect_settle_s
+            << " s): fault latch cleared, force returns through the soft start";
+        return out.str();
+    }
+    out << "fault " << fault_names(now.faults & ~before) << ", force zeroed";
+    if (config.safety.reconnect && servo::only_link_faults(now.faults)) {
+        out << "; waiting for the device to come back";
+        if (config.safety.reconnect_timeout_s > 0.0) {
+            out << " (at most " << config.safety.reconnect_timeout_s
+                << " s, [safety] reconnect_timeout)";
+        }
+    }
+    return out.str();
+}
+
+std::string millimetres(const env::Vec3& v, int axes) {
+    std::array<double, servo::kMaxAxes> values{};
+    for (int i = 0; i < servo::kMaxAxes; ++i) values[static_cast<std::size_t>(i)] = v[i];
+    return format_vector_mm(values, axes, 1e3);
+}
+
+}  // namespace hapticd::daemon

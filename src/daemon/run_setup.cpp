@@ -1,0 +1,119 @@
+#include "run_setup.hpp"
+
+#include <cmath>
+#include <ostream>
+#include <sstream>
+
+#include "hapticd/daemon/device_open.hpp"
+
+namespace hapticd::daemon {
+
+Config load_any_config(const RunOptions& options) {
+    return options.config_path ? load_config(*options.config_path) : default_config();
+}
+
+env::Scene load_any_scene(const Config& config) {
+    if (config.scene_file.empty()) {
+        return env::parse_scene(default_scene_text(), "<embedded demo-wall scene>",
+                                config.device.axes);
+    }
+    return env::load_scene(config.scene_file, config.device.axes);
+}
+
+// A detent with a short period or a large peak force has such a stiffness between its
+// notches; the solve failed on every tick.
+void check_scene_renderable(const env::Scene& scene, const Config& config,
+                            const std::string& scene_source) {
+    if (!config.coupling.enabled || !scene.most_negative_stiffness) return;
+    const env::LinearObject& o = *scene.most_negative_stiffness;
+    const double k_c = config.coupling.stiffness_n_per_m;
+    if (k_c > -o.stiffness_n_per_m) return;
+    std::ostringstream m;
+    m << scene_source << ": " << o.source << " has a stiffness down to " << o.stiffness_n_per_m
+      << " N/m between its notches (-2π peak_force/period), out of range for this coupling: "
+      << "allowed > -k_c = " << -k_c << " N/m ([coupling] stiffness in " << config.source
+      << "); lengthen its period or lower its peak_force";
+    throw BadInput(m.str());
+}
+
+StartupCheck run_startup_check(const Config& config, std::ostream& log) {
+    StartupCheck check;
+    try {
+        check = check_coupling_at_startup(config);
+    } catch (const std::invalid_argument& e) {  // a model's own range check
+        throw BadInput(config.source + ": " + e.what());
+    }
+    if (check.skipped) {
+        log << "hapticd: WARNING: " << check.describe() << "\n";
+        return check;
+    }
+    // The verdict's own line first, as haptic-tune check gives it for this config.
+    log << "hapticd: " << (check.guarantee && check.passed ? "" : "WARNING: ") << check.describe()
+        << "\n";
+    if (!check.passed) {
+        std::ostringstream m;
+        m << config.source
+          << ": refusing to arm: [coupling] stiffness = " << config.coupling.stiffness_n_per_m
+          << " N/m, damping = " << config.coupling.damping_n_s_per_m << " N s/m";
+        if (config.coupling.velocity_filter_hz > 0.0) {
+            m << ", velocity_filter = " << config.coupling.velocity_filter_hz << " Hz";
+        }
+        m << " fail the " << check.model_name() << " model for [device.model] at "
+          << config.servo.rate_hz << " Hz: worst margin " << check.worst_margin << " at "
+          << check.worst_frequency_hz << " Hz";
+        if (!check.worst_case.empty()) m << " (" << check.worst_case << ")";
+        if (config.device.model_delay_s > 0.0) {
+            m << " with a loop delay of " << config.device.model_delay_s << " s";
+        }
+        m << "; size them with haptic-tune size --mass " << *config.device.model_mass_kg
+          << " --damping " << *config.device.model_damping_n_s_per_m << " --rate "
+          << config.servo.rate_hz;
+        if (config.device.model_delay_s > 0.0) m << " --delay " << config.device.model_delay_s;
+        if (config.coupling.velocity_filter_hz > 0.0) {
+            m << " --velocity-filter " << config.coupling.velocity_filter_hz;
+        }
+        if (config.operators) m << " --model exact --operator-class " << config.source;
+        if (config.coupling.environments == EnvironmentClass::scene) {
+            m << " --scene "
+              << (config.scene_file.empty() ? std::string("config/scenes/demo-wall.toml")
+                                            : config.scene_file);
+        }
+        m << " (the check holds for " << check.holds_for << ")";
+        throw BadInput(m.str());
+    }
+    return check;
+}
+
+// A plugin that cannot be loaded is bad input (exit 2), and so is a device the plugin
+// refuses to open.
+device::DeviceHandle open_device_or_exit(const Config& config, bool lockstep) {
+    try {
+        return open_device(config, lockstep);
+    } catch (const std::exception& e) {
+        throw BadInput(e.what());
+    }
+}
+
+void refuse_empty_paths(const RunOptions& options) {
+    const auto empty = [](const std::optional<std::string>& path) { return path && path->empty(); };
+    const char* option = empty(options.config_path)    ? "--config"
+                         : empty(options.log_path)     ? "--log"
+                         : empty(options.summary_path) ? "--summary"
+                                                       : nullptr;
+    if (option != nullptr) {
+        throw BadInput(std::string(option) + " \"\": the path is empty; give a file name");
+    }
+}
+
+void check_duration(const RunOptions& options, double rate_hz) {
+    if (!options.duration_s) return;
+    const double d = *options.duration_s;
+    const double shortest = 0.5 / rate_hz;
+    if (std::isfinite(d) && d >= shortest && d <= kMaxDurationS) return;
+    std::ostringstream m;
+    m << "--duration " << d << ": must be a number of seconds from half a period (" << shortest
+      << " s at [servo] rate_hz = " << rate_hz << ") to " << kMaxDurationS;
+    throw BadInput(m.str());
+}
+
+}  // namespace hapticd::daemon

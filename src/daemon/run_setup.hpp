@@ -1,0 +1,52 @@
+// The run's set-up steps, each before the device moves: the config, the scene and whether
+// the coupling can render it, the start-up stability check, the command line's values, and
+// the device. Each refuses bad input with a message that is final and exit 2: BadInput for
+// what the daemon finds itself, ConfigError for what the readers find (run.cpp maps both).
+#pragma once
+
+#include <iosfwd>
+#include <stdexcept>
+#include <string>
+
+#include "hapticd/daemon/config.hpp"
+#include "hapticd/daemon/run.hpp"
+#include "hapticd/daemon/startup_check.hpp"
+#include "hapticd/device/plugin_loader.hpp"
+#include "hapticd/env/scene.hpp"
+
+namespace hapticd::daemon {
+
+/// Bad input the daemon finds itself (a command-line value, a config and scene that do not
+/// go together, a device that refuses to open): exit 2 with this message.
+struct BadInput : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+/// Leaves the device at zero force and closes it, whatever path leaves the run.
+struct DeviceCloser {
+    device::Device* device;
+    ~DeviceCloser() {
+        if (device != nullptr) device->close();
+    }
+};
+
+/// --config, else the embedded default. Throws ConfigError.
+Config load_any_config(const RunOptions& options);
+/// [scene] file, else the embedded demo wall. Throws env::SceneError.
+env::Scene load_any_scene(const Config& config);
+/// A scene the coupling cannot render is refused before the device opens: an object whose
+/// stiffness is more negative than -k_c leaves the massless tool of (17) no stable balance.
+void check_scene_renderable(const env::Scene& scene, const Config& config,
+                            const std::string& scene_source);
+/// The start-up stability check (startup_check.hpp), its verdict on `log`; BadInput when
+/// the coupling fails it, saying how to size one that passes.
+StartupCheck run_startup_check(const Config& config, std::ostream& log);
+/// The device, open (device_open.hpp); BadInput naming the plugin or what open() said.
+device::DeviceHandle open_device_or_exit(const Config& config, bool lockstep);
+/// An empty path is an error, not "none".
+void refuse_empty_paths(const RunOptions& options);
+/// --duration: finite, at least half a period (it is rounded to whole ticks: anything
+/// shorter would be zero ticks, which means no limit), at most kMaxDurationS.
+void check_duration(const RunOptions& options, double rate_hz);
+
+}  // namespace hapticd::daemon

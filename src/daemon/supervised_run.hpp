@@ -1,0 +1,220 @@
+// One run of the servo loop, supervised: the loop on its own thread (real time where it may),
+// the telemetry writer on another, and on the calling thread the duration, the status line
+// and the fault lines; then the zero force, the run's exit and the summary
+// (docs/architecture.md §6). A template over the environment, as ServoLoop is, so that the
+// tick calls it directly.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstring>
+#include <memory>
+#include <ostream>
+#include <string>
+#include <thread>
+
+#include "hapticd/daemon/config.hpp"
+#include "hapticd/daemon/run.hpp"
+#include "hapticd/daemon/summary_json.hpp"
+#include "hapticd/daemon/telemetry_writer.hpp"
+#include "hapticd/device/device.hpp"
+#include "hapticd/servo/faults.hpp"
+#include "hapticd/servo/servo_loop.hpp"
+#include "run_messages.hpp"
+#include "run_outputs.hpp"
+
+namespace hapticd::daemon {
+
+// Telemetry ring: 65 s of records at 1 kHz in real time, so that a stalled disk loses
+// nothing for a minute; a lockstep run waits for the writer instead (backpressure).
+inline constexpr std::size_t kRealtimeRingRecords = std::size_t{1} << 16;
+inline constexpr std::size_t kLockstepRingRecords = std::size_t{1} << 14;
+
+/// Nothing to add after the run.
+struct NoAfterRun {
+    void operator()(int& /*code*/, RunContext& /*context*/) const {}
+};
+
+/// The servo loop for one environment, on its own thread, watched from this one.
+/// `after_run(code, context)` may amend the exit code and the context once the loop has
+/// stopped, before the summary is written.
+template <typename Environment, typename AfterRun = NoAfterRun>
+int run_loop(const RunOptions& options, const Config& config,
+             const servo::ServoConfig& servo_config, device::Device& device,
+             Environment& environment, RunContext& context, Outputs& outputs,
+             std::atomic<bool>& stop, std::ostream& out, std::ostream& log,
+             AfterRun after_run = {}) {
+    const device::DeviceInfo info = device.info();
+
+    // From here on the outputs are this run's: emptied now (an old summary must not outlive
+    // a run that is killed), kept whatever happens.
+    outputs.log.begin();  // throws OutputError
+    outputs.summary.begin();
+    std::unique_ptr<servo::TelemetryRing> ring;
+    std::unique_ptr<TelemetryWriter> writer;
+    if (options.log_path) {
+        ring = std::make_unique<servo::TelemetryRing>(info.lockstep ? kLockstepRingRecords
+                                                                    : kRealtimeRingRecords);
+        // Real time: also fdatasync() each second, bounding what a power cut loses; a lockstep
+        // run (a test, a simulation) waits for its writer, so it does not sync.
+        writer = std::make_unique<TelemetryWriter>(
+            *ring, outputs.log.release(), *options.log_path, info.axes,
+            info.lockstep ? std::chrono::milliseconds{0} : std::chrono::milliseconds{1000});
+        writer->start();
+    }
+
+    std::uint64_t max_ticks = 0;
+    if (options.duration_s && info.lockstep) {
+        max_ticks =
+            static_cast<std::uint64_t>(std::llround(*options.duration_s * config.servo.rate_hz));
+    }
+
+    servo::ServoLoop<device::Device, Environment> loop(device, environment, servo_config,
+                                                       ring.get());
+    // The servo thread reads `stop` itself, so a signal (or the parent's death) ends the run
+    // at the next tick; this thread sets it too when the duration ends.
+    std::atomic<bool>& stop_servo = stop;
+    std::atomic<bool> servo_done{false};
+    servo::RunExit run_exit = servo::RunExit::stopped;
+    std::string servo_error;
+    std::thread servo_thread([&] {
+        try {
+            run_exit = loop.run(stop_servo, max_ticks);
+        } catch (const std::exception& e) {
+            servo_error = e.what();
+        }
+        servo_done.store(true, std::memory_order_release);
+    });
+
+    // This thread: signals, the duration and the status line.
+    // --duration counts servo time: from the first tick, not from before the real-time set-up
+    // (locking and prefaulting memory can take a tenth of a second).
+    auto started = std::chrono::steady_clock::now();
+    bool ticking = false;
+    const auto status_every = std::chrono::duration<double>(options.status_interval_s);
+    auto next_status = started + std::chrono::duration_cast<std::chrono::steady_clock::duration>(status_every);
+    bool duration_ended = false;
+    std::uint32_t logged_faults = 0;
+    while (!servo_done.load(std::memory_order_acquire)) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+        const auto now = std::chrono::steady_clock::now();
+        if (!ticking && loop.status().tick >= 1) {
+            ticking = true;
+            started =
+                now - std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(
+                          static_cast<double>(loop.status().tick) / config.servo.rate_hz));
+            next_status = started + std::chrono::duration_cast<std::chrono::steady_clock::duration>(status_every);
+        }
+        if (const servo::StatusSnapshot status = loop.status(); status.faults != logged_faults) {
+            if ((status.faults & ~logged_faults) != 0u || status.faults == 0u) {
+                log << fault_change_line(logged_faults, status, config) << "\n" << std::flush;
+            }
+            logged_faults = status.faults;
+        }
+        if (options.duration_s && !info.lockstep &&
+            now - started >= std::chrono::duration<double>(*options.duration_s)) {
+            duration_ended = true;
+            stop_servo.store(true, std::memory_order_release);
+        }
+        if (options.status_interval_s > 0.0 && now >= next_status) {
+            log << status_line(loop.status(), info.axes) << "\n" << std::flush;
+            next_status += std::chrono::duration_cast<std::chrono::steady_clock::duration>(status_every);
+        }
+    }
+    servo_thread.join();
+    loop.write_zero_force();
+    // Once more, to know that it landed: the summary's final_command.
+    switch (device.write(servo::Command{})) {
+        case servo::IoResult::ok:
+            context.final_command = "zero";
+            break;
+        case servo::IoResult::timeout:
+            context.final_command = "zero, not confirmed: timeout";
+            break;
+        case servo::IoResult::disconnected:
+            context.final_command = "zero, not confirmed: disconnected";
+            break;
+        case servo::IoResult::error:
+            context.final_command = "zero, not confirmed: error";
+            break;
+    }
+
+    if (writer) {
+        try {
+            writer->finish();
+        } catch (const std::exception& e) {
+            log << "hapticd: " << e.what() << "\n";
+        }
+        context.telemetry_log = *options.log_path;
+        context.telemetry_records = writer->records_taken();
+        context.telemetry_records_written = writer->records_written();
+        context.telemetry_complete = writer->complete() && ring->dropped() == 0 &&
+                                     writer->records_written() == writer->records_taken();
+    }
+
+    const servo::Summary summary = loop.summary();
+    context.realtime = loop.realtime_report();
+    context.run_time_s = info.lockstep
+                             ? static_cast<double>(summary.ticks) / config.servo.rate_hz
+                             : std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    int code = kExitOk;
+    if (!servo_error.empty()) {
+        log << "hapticd: the servo loop could not run: " << servo_error << "\n";
+        context.exit = "error";
+        code = kExitFault;
+    } else if (run_exit == servo::RunExit::fault) {
+        context.exit = "fault";
+        code = kExitFault;
+        if (loop.link_recovery().gave_up()) {
+            log << "hapticd: the device did not come back within [safety] reconnect_timeout = "
+                << config.safety.reconnect_timeout_s << " s; stopped on the fault, force zero "
+                << "since the tick that saw it:";
+        } else {
+            log << "hapticd: stopped on a fault, force zeroed in the same tick:";
+        }
+        for (const std::string& fault : summary.faults) log << " " << fault;
+        log << "\n";
+    } else if (loop.faults() != 0u) {
+        // Stopped (duration or signal) while waiting for the device to come back.
+        context.exit = "fault";
+        code = kExitFault;
+        log << "hapticd: the run ended with the link down (" << fault_names(loop.faults())
+            << "), force zero since the tick that saw it\n";
+    } else if (run_exit == servo::RunExit::tick_limit || duration_ended) {
+        context.exit = "duration";
+    } else {
+        context.exit = "stopped";
+    }
+    if (const int cause = options.stop_cause != nullptr ? options.stop_cause->load() : 0;
+        cause != 0 && !duration_ended && run_exit != servo::RunExit::tick_limit) {
+        const char* abbrev = cause > 0 ? sigabbrev_np(cause) : nullptr;
+        context.stopped_by = cause == kStopByLifeline ? std::string("parent lifeline")
+                             : abbrev != nullptr      ? "SIG" + std::string(abbrev)
+                                                      : "signal " + std::to_string(cause);
+        log << "hapticd: stopped by " << context.stopped_by
+            << ": force zeroed, telemetry flushed, summary written\n";
+    }
+    if (!context.realtime.refused.empty() && servo_error.empty()) {
+        log << "hapticd: " << context.realtime.brief() << "\n";
+    }
+    after_run(code, context);
+    const bool summary_written = write_summary(options, outputs, summary, context, out, log);
+    // An output that is not whole is an exit status of its own, unless a fault (1) says more.
+    if (code == kExitOk && (!context.telemetry_complete || !summary_written)) {
+        if (!context.telemetry_complete) {
+            log << "hapticd: the telemetry log " << context.telemetry_log
+                << " is incomplete: " << context.telemetry_records_written << " of "
+                << context.telemetry_records << " records written"
+                << (summary.telemetry_dropped > 0
+                        ? ", " + std::to_string(summary.telemetry_dropped) + " dropped"
+                        : std::string())
+                << "; exit " << kExitOutput << "\n";
+        }
+        code = kExitOutput;
+    }
+    return code;
+}
+
+}  // namespace hapticd::daemon
