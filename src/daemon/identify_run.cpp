@@ -58,8 +58,9 @@ void describe_identify(const Config& config, const IdentifyPlan& plan,
 int run_identify(const RunOptions& options, std::atomic<bool>& stop, std::ostream& out,
                  std::ostream& log) {
     if (!options.log_path) {
-        throw BadInput("--identify needs --log FILE: the run exists to write the telemetry "
-                         "CSV that haptic-tune identify reads");
+        throw BadInput(
+            "--identify needs --log FILE: the run exists to write the telemetry "
+            "CSV that haptic-tune identify reads");
     }
     const Config config = load_any_config(options);
     RunContext context;

@@ -11,6 +11,7 @@
 
 #include "hapticd/daemon/device_open.hpp"
 #include "hapticd/servo/monotonic_clock.hpp"
+#include "hapticd/servo/tick_stats.hpp"
 #include "hapticd/tune/input_checks.hpp"
 
 namespace hapticd::daemon {
@@ -22,11 +23,10 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 /// Histogram edges, us: fine below a millisecond, where a 1 kHz loop lives.
 constexpr double kEdgesUs[] = {0, 25, 50, 100, 200, 300, 500, 750, 1000, 2000, 5000, 10000, kInf};
 
+/// The p-quantile of sorted values by the servo's rule (servo::nearest_rank); 0 for none.
 double percentile(const std::vector<double>& sorted, double p) {
     if (sorted.empty()) return 0.0;
-    const auto index =
-        static_cast<std::size_t>(std::ceil(p * static_cast<double>(sorted.size()))) - 1;
-    return sorted[std::min(index, sorted.size() - 1)];
+    return sorted[servo::nearest_rank(p, sorted.size()) - 1];
 }
 
 /// Least squares of device time against host time: slope - 1 in ppm and the RMS residual.
@@ -427,8 +427,8 @@ DiagVerdict DiagReport::verdict() const {
         return {Level::warn, "WARN: more than 0.1 % of exchanges lost or late"};
     }
     if (bad_acks + clock_backwards > 0) {
-        s << "WARN: the device's timestamps or acknowledgements contradict themselves ("
-          << bad_acks << (bad_acks == 1 ? " bad acknowledgement, " : " bad acknowledgements, ")
+        s << "WARN: the device's timestamps or acknowledgements contradict themselves (" << bad_acks
+          << (bad_acks == 1 ? " bad acknowledgement, " : " bad acknowledgements, ")
           << clock_backwards << (clock_backwards == 1 ? " sample" : " samples")
           << " with the device clock going backwards): its firmware clock or its command "
              "bookkeeping is wrong";

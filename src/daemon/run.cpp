@@ -31,9 +31,9 @@ int run_daemon(const RunOptions& options, std::atomic<bool>& stop, std::ostream&
         context.causality = env::to_string(scene.causality);
         if (!config.coupling.enabled && scene.causality == env::Causality::admittance) {
             throw BadInput(config.source + ": [coupling] enabled = false, but scene \"" +
-                                 scene.name +
-                                 "\" is an admittance (constraint) scene, which needs the "
-                                 "coupling (22) to produce any force");
+                           scene.name +
+                           "\" is an admittance (constraint) scene, which needs the "
+                           "coupling (22) to produce any force");
         }
         check_duration(options, config.servo.rate_hz);
         Outputs outputs = prepare_outputs(options, config);

@@ -6,7 +6,6 @@
 #include <cstring>
 #include <ostream>
 
-
 namespace hapticd::daemon {
 
 bool write_summary(const RunOptions& options, Outputs& outputs, const servo::Summary& summary,

@@ -94,7 +94,8 @@ int run_loop(const RunOptions& options, const Config& config,
     auto started = std::chrono::steady_clock::now();
     bool ticking = false;
     const auto status_every = std::chrono::duration<double>(options.status_interval_s);
-    auto next_status = started + std::chrono::duration_cast<std::chrono::steady_clock::duration>(status_every);
+    auto next_status =
+        started + std::chrono::duration_cast<std::chrono::steady_clock::duration>(status_every);
     bool duration_ended = false;
     std::uint32_t logged_faults = 0;
     while (!servo_done.load(std::memory_order_acquire)) {
@@ -103,9 +104,11 @@ int run_loop(const RunOptions& options, const Config& config,
         if (!ticking && loop.status().tick >= 1) {
             ticking = true;
             started =
-                now - std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(
-                          static_cast<double>(loop.status().tick) / config.servo.rate_hz));
-            next_status = started + std::chrono::duration_cast<std::chrono::steady_clock::duration>(status_every);
+                now - std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                          std::chrono::duration<double>(static_cast<double>(loop.status().tick) /
+                                                        config.servo.rate_hz));
+            next_status = started + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                        status_every);
         }
         if (const servo::StatusSnapshot status = loop.status(); status.faults != logged_faults) {
             if ((status.faults & ~logged_faults) != 0u || status.faults == 0u) {
@@ -120,7 +123,8 @@ int run_loop(const RunOptions& options, const Config& config,
         }
         if (options.status_interval_s > 0.0 && now >= next_status) {
             log << status_line(loop.status(), info.axes) << "\n" << std::flush;
-            next_status += std::chrono::duration_cast<std::chrono::steady_clock::duration>(status_every);
+            next_status +=
+                std::chrono::duration_cast<std::chrono::steady_clock::duration>(status_every);
         }
     }
     servo_thread.join();
@@ -156,9 +160,10 @@ int run_loop(const RunOptions& options, const Config& config,
 
     const servo::Summary summary = loop.summary();
     context.realtime = loop.realtime_report();
-    context.run_time_s = info.lockstep
-                             ? static_cast<double>(summary.ticks) / config.servo.rate_hz
-                             : std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    context.run_time_s =
+        info.lockstep
+            ? static_cast<double>(summary.ticks) / config.servo.rate_hz
+            : std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     int code = kExitOk;
     if (!servo_error.empty()) {
         log << "hapticd: the servo loop could not run: " << servo_error << "\n";

@@ -49,9 +49,7 @@ void DurationHistogram::clear() noexcept {
 
 double DurationHistogram::quantile_ns(double q) const noexcept {
     if (count_ == 0) return 0.0;
-    q = std::clamp(q, 0.0, 1.0);
-    const auto rank = std::max<std::uint64_t>(
-        1, static_cast<std::uint64_t>(std::ceil(q * static_cast<double>(count_))));
+    const std::uint64_t rank = nearest_rank(q, count_);
     std::uint64_t seen = 0;
     for (int bucket = 0; bucket < kBucketCount; ++bucket) {
         seen += counts_[static_cast<std::size_t>(bucket)];

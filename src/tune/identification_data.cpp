@@ -273,8 +273,7 @@ AxisData prepare_axis(const TelemetryLog& log, int axis, const IdentificationOpt
         refuse(RefusalReason::missing_column,
                "no " + (data.t == nullptr ? std::string("t_s") : data.x_name + "/" + data.f_name) +
                    " for axis " + std::to_string(axis) + " (the log has " +
-                   servo::axes_text(log.axes) +
-                   "; its columns: " + columns + ")");
+                   servo::axes_text(log.axes) + "; its columns: " + columns + ")");
     }
     const std::size_t n = log.rows();
     if (n < 3) {

@@ -1,5 +1,5 @@
 // haptic-tune autotune, end to end through the real executables: a commented lab config,
-// logs of the sim device made in-process (tests/tune/identification_sim_run.hpp) or by
+// logs of the sim device made in-process (tests/support/identification_sim_run.hpp) or by
 // `hapticd --identify --lockstep`, and the files autotune leaves: the edited config (every
 // other line and comment kept; the daemon's start-up check and the exact model pass it),
 // the backup (identical to the original), and nothing at all when it refuses.
@@ -15,13 +15,13 @@
 #include <string>
 #include <vector>
 
-#include "../hil/scratch_dir.hpp"
-#include "../tune/identification_sim_run.hpp"
 #include "hapticd/daemon/config.hpp"
 #include "hapticd/daemon/startup_check.hpp"
 #include "hapticd/tune/coupling_sizing.hpp"
 #include "hapticd/tune/exact_model.hpp"
+#include "identification_sim_run.hpp"
 #include "run_command.hpp"
+#include "scratch_dir.hpp"
 
 namespace hapticd {
 namespace {

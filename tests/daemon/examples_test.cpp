@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "hapticd/daemon/config.hpp"
-#include "hapticd/daemon/startup_check.hpp"
 #include "hapticd/daemon/device_open.hpp"
+#include "hapticd/daemon/startup_check.hpp"
 
 namespace hapticd::daemon {
 namespace {

@@ -2,7 +2,6 @@
 // IoResult at the right sample, deterministically.
 #include <gtest/gtest.h>
 
-
 #include <vector>
 
 #include "hapticd/device/sim/sim_device.hpp"

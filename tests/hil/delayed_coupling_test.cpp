@@ -81,12 +81,13 @@
 #include <string_view>
 #include <vector>
 
-#include "../cli/run_command.hpp"
 #include "hapticd/tune/exact_model.hpp"
 #include "hapticd_run.hpp"
+#include "nyquist_grasp.hpp"
 #include "operators.hpp"
 #include "oscillation.hpp"
 #include "pen_display.hpp"
+#include "run_command.hpp"
 #include "wall_contact.hpp"
 
 namespace hapticd::testing {
@@ -132,30 +133,6 @@ Prediction predict(const CouplingGains& gains, const OperatorModel& human,
         kRateHz, human, environment, delay_periods);
     return {poles.spectral_radius, std::log(poles.spectral_radius) * kRateHz,
             poles.dominant_frequency_hz};
-}
-
-/// The start-up check's line in hapticd's messages: "... worst margin M at F Hz".
-struct CheckLine {
-    std::string line;
-    double margin = 0.0;
-    double frequency_hz = -1.0;
-};
-
-/// The first line of `messages` that contains `marker`, with its margin and frequency.
-std::optional<CheckLine> find_check_line(const std::string& messages, std::string_view marker) {
-    static const std::regex margin_at(R"(worst margin (\S+) at (\S+) Hz)");
-    std::size_t begin = 0;
-    while (begin < messages.size()) {
-        std::size_t end = messages.find('\n', begin);
-        if (end == std::string::npos) end = messages.size();
-        const std::string line = messages.substr(begin, end - begin);
-        std::smatch match;
-        if (line.find(marker) != std::string::npos && std::regex_search(line, match, margin_at)) {
-            return CheckLine{line, std::stod(match[1].str()), std::stod(match[2].str())};
-        }
-        begin = end + 1;
-    }
-    return std::nullopt;
 }
 
 std::string heavy_hand_config(const CouplingGains& gains, std::string_view check,
@@ -359,17 +336,6 @@ TEST(HilDelayedCoupling, GainsSizedWithTheDelayArmAndDecay) {
 
 // ---- 4: the issue's two-mass grasp at Nyquist ----------------------------------------------
 
-constexpr double kSkinStiffnessNPerM = 7.926e6;
-constexpr double kGraspHandMassKg = 0.946;
-constexpr double kArmStiffnessNPerM = 1.0464e7;
-constexpr double kStiffestWallNPerM = 1e7;      ///< the scene's upper limit (docs/scenes.md)
-constexpr double kFinestCountsPerMeter = 1e10;  ///< 0.1 nm, the sim's upper limit
-constexpr double kFinestCountM = 1.0 / kFinestCountsPerMeter;
-constexpr double kGraspStartM = 0.001;  ///< handle and set-point, 1 mm inside the wall
-constexpr double kGraspDurationS = 40.0;
-constexpr double kNyquistFitFromS = 8.0;
-constexpr double kNyquistWindowS = 0.1;
-constexpr double kNyquistTolerance = 0.005;  ///< relative, on the rate
 constexpr CouplingGains kIssueGains{.stiffness_n_per_m = 4300.0, .damping_n_s_per_m = 0.234};
 /// 0.99 x the passive model's Nyquist bound 2(b - b_c)/T at the issue's b_c.
 constexpr CouplingGains kPassiveNyquistGains{
@@ -377,35 +343,9 @@ constexpr CouplingGains kPassiveNyquistGains{
         0.99 * 2.0 * (kPenDampingNsPerM - kIssueGains.damping_n_s_per_m) / kPeriodS,
     .damping_n_s_per_m = kIssueGains.damping_n_s_per_m};
 
-OperatorModel issue_grasp() {
-    return OperatorModel::two_mass_grasp(kSkinStiffnessNPerM, 0.0, kGraspHandMassKg,
-                                         kArmStiffnessNPerM, 0.0);
-}
-
-std::string issue_grasp_human() {
-    return "model = \"two-mass-grasp\"\nhand_mass = " + toml_number(kGraspHandMassKg) +
-           "\nskin_stiffness = " + toml_number(kSkinStiffnessNPerM) +
-           "\nskin_damping = 0.0\narm_stiffness = " + toml_number(kArmStiffnessNPerM) +
-           "\narm_damping = 0.0\n";
-}
-
-std::string grasp_config(const CouplingGains& gains, std::string_view check) {
-    DaemonConfig config;
-    config.coupling = coupling_table(gains, check);
-    config.counts_per_meter = kFinestCountsPerMeter;
-    config.initial_position = toml_number(kGraspStartM);  // the set-point too (its default)
-    config.humans = human_table(issue_grasp_human());
-    config.soft_start_ramp_s = 0.0;  // the force's step rings the grasp's modes
-    return config.toml();
-}
-
-struct NyquistGrowth {
+struct NyquistGrowth : NyquistFit {
     DaemonRun run;
     Prediction predicted;
-    double growth_per_s = 0.0;  ///< of the alternating component's RMS, over the linear phase
-    std::size_t windows = 0;
-    double first_rms_m = 0.0, last_rms_m = 0.0;  ///< of the fitted windows
-    bool alternates = true;  ///< y[n] kept its sign over the fit: x alternates every tick
 };
 
 /// Experiment 4 of the file comment on a wall of `wall_n_per_m`.
@@ -417,48 +357,7 @@ NyquistGrowth run_grasp_at_nyquist(const std::string& label, const CouplingGains
     out.run = run_hapticd(dir, {.config_toml = grasp_config(gains, check),
                                 .scene_toml = wall_contact_scene(wall_n_per_m),
                                 .duration_s = kGraspDurationS});
-    EXPECT_EQ(out.run.exit_code, 0) << label << "\n" << out.run.err;
-    EXPECT_EQ(fault_list(out.run), "") << label;
-    EXPECT_EQ(out.run.log.rows(), static_cast<std::size_t>(kGraspDurationS * kRateHz)) << label;
-    if (out.run.log.rows() == 0) return out;
-    EXPECT_EQ(out.run.summary.at("saturated_ticks").get<double>(), 0.0) << label;
-    EXPECT_EQ(out.run.summary.at("solver_not_converged").get<double>(), 0.0) << label;
-    const auto& x = out.run.log.column("x0_m");
-    const auto& xe = out.run.log.column("xe0_m");
-    // The alternating component, demodulated from z = -1 (file comment).
-    std::vector<double> y(x.size(), 0.0);
-    for (std::size_t n = 1; n < x.size(); ++n) {
-        y[n] = (n % 2 == 0 ? 0.5 : -0.5) * (x[n] - x[n - 1]);
-    }
-    // RMS per window, from kNyquistFitFromS until it falls to 100 encoder counts.
-    const auto window = static_cast<std::size_t>(std::lround(kNyquistWindowS * kRateHz));
-    std::vector<double> mid_s, log_rms;
-    const double sign = y[static_cast<std::size_t>(kNyquistFitFromS * kRateHz)] > 0.0 ? 1.0 : -1.0;
-    for (auto begin = static_cast<std::size_t>(kNyquistFitFromS * kRateHz);
-         begin + window <= y.size(); begin += window) {
-        double sum = 0.0;
-        bool same_sign = true;
-        for (std::size_t n = begin; n < begin + window; ++n) {
-            sum += y[n] * y[n];
-            same_sign = same_sign && sign * y[n] > 0.0;
-        }
-        const double rms = std::sqrt(sum / static_cast<double>(window));
-        if (rms <= 100.0 * kFinestCountM) break;
-        out.alternates = out.alternates && same_sign;
-        mid_s.push_back((static_cast<double>(begin) + 0.5 * static_cast<double>(window)) *
-                        kPeriodS);
-        log_rms.push_back(std::log(rms));
-    }
-    out.windows = mid_s.size();
-    if (out.windows < 2) return out;
-    out.growth_per_s = detail::slope(mid_s, log_rms, 0, out.windows);
-    out.first_rms_m = std::exp(log_rms.front());
-    out.last_rms_m = std::exp(log_rms.back());
-    // The linear loop needs the tool in the wall all along.
-    for (std::size_t n = 0; n < xe.size(); ++n) {
-        EXPECT_GT(xe[n], 0.0) << label << ": the tool left the wall at tick " << n;
-        if (xe[n] <= 0.0) break;
-    }
+    static_cast<NyquistFit&>(out) = fit_nyquist_growth(out.run, label);
     std::cout.precision(8);
     std::cout << "[hil] " << label << " (k_c = " << gains.stiffness_n_per_m
               << " N/m, b_c = " << gains.damping_n_s_per_m << " N s/m), wall " << wall_n_per_m
@@ -472,10 +371,8 @@ NyquistGrowth run_grasp_at_nyquist(const std::string& label, const CouplingGains
 }
 
 void expect_nyquist_rate_as_predicted(const NyquistGrowth& nyquist) {
-    EXPECT_NEAR(nyquist.predicted.frequency_hz, 0.5 * kRateHz, 1e-6);
-    EXPECT_TRUE(nyquist.alternates) << "the samples did not alternate every tick";
-    EXPECT_NEAR(nyquist.growth_per_s, nyquist.predicted.growth_per_s,
-                kNyquistTolerance * std::abs(nyquist.predicted.growth_per_s));
+    expect_nyquist_rate_as_predicted(nyquist, nyquist.predicted.frequency_hz,
+                                     nyquist.predicted.growth_per_s);
 }
 
 // 4. The issue's grasp grows at Nyquist, at the exact model's rate for the wall in series.

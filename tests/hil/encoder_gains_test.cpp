@@ -26,35 +26,26 @@
 #include "hapticd_run.hpp"
 #include "operators.hpp"
 #include "pen_display.hpp"
+#include "transport_contact.hpp"
 #include "tuned_gains.hpp"
 #include "wall_contact.hpp"
 
 namespace hapticd::testing {
 namespace {
 
-constexpr double kWallStiffnessNPerM = 1e5;
-constexpr double kStartM = -0.001;  ///< 1 mm in front of the wall
+constexpr double kWallStiffnessNPerM = kContactWallStiffnessNPerM;
+constexpr double kStartM = kContactStartM;
 constexpr double kDurationS = 8.0;
 constexpr double kSettleS = 3.0;
-constexpr double kPushStartS = 1.0;   ///< after the soft start (0.2 s still + 0.5 s ramp)
-constexpr double kPushRampS = 0.05;   // a brisk push: the handle meets the wall at ~0.1 m/s
-constexpr double kPushHoldS = 100.0;  ///< longer than the run
-
-struct OperatorCase {
-    std::string name;
-    std::string human;  ///< the [device.sim.human] keys
-};
-
-void PrintTo(const OperatorCase& operator_case, std::ostream* out) { *out << operator_case.name; }
 
 std::vector<OperatorCase> operator_cases() {
     return {
         {"hands_off", hands_off()},
         {"heavy_hand", heavy_hand()},
         // 500 N/m to a set-point 5 mm inside the wall: about 2.3 N of contact force.
-        {"stiff_grasp", stiff_grasp(push_toml(0.005, kPushStartS, kPushRampS, kPushHoldS))},
+        {"stiff_grasp", stiff_grasp(push_into_wall(0.005))},
         // 100 N/m of arm to a set-point 2 cm inside the wall: about 2 N.
-        {"two_mass_grasp", two_mass_grasp(push_toml(0.02, kPushStartS, kPushRampS, kPushHoldS))},
+        {"two_mass_grasp", two_mass_grasp(push_into_wall(0.02))},
     };
 }
 
@@ -72,34 +63,12 @@ TEST_P(HilEncoderGains, HoldAStiffWallStably) {
                                             .scene_toml = wall_contact_scene(kWallStiffnessNPerM),
                                             .duration_s = kDurationS});
 
-    ASSERT_EQ(run.exit_code, 0) << run.err;
-    EXPECT_EQ(run.summary.at("exit"), "duration");
-    EXPECT_EQ(fault_list(run), "");
-    EXPECT_EQ(run.summary.at("ticks").get<double>(), kDurationS * kRateHz);
-    ASSERT_EQ(run.log.rows(), static_cast<std::size_t>(kDurationS * kRateHz));
-
-    const ContactJudgement judged = judge_wall_contact(run.log, kSettleS);
-    const OscillationTrend& trend = judged.trend;
-    std::cout << "[hil] encoder gains, " << GetParam().name << ": " << describe(judged) << "\n";
-
-    // The contact was really excited before the judge looks: an impact, not a slow creep.
-    EXPECT_GE(judged.transient_peak_m, 10.0 * kCountM);
-
-    // Stable: the oscillation about the operating point does not grow, and what is left is
-    // the encoder's quantisation (a few counts), not a limit cycle of the wall.
-    EXPECT_LE(trend.growth_per_s, 0.1);
-    EXPECT_LE(trend.last_amplitude_m, 8.0 * kCountM);
-    EXPECT_LE(trend.peak_amplitude_m, 10.0 * kCountM);
-    // In contact all along: the tool never left the wall after settling.
-    EXPECT_TRUE(judged.contact_kept()) << "left the wall at " << judged.contact_lost_at_s << " s";
-    EXPECT_GT(judged.min_tool_depth_m, 0.0);
+    if (!expect_stable_wall_contact(run, kDurationS, kSettleS,
+                                    "[hil] encoder gains, " + GetParam().name)) {
+        return;
+    }
     // Far from saturation: the force was never clipped, so the loop stayed linear.
-    EXPECT_LT(judged.max_abs_force_n, 0.5 * kForceLimitN);
     EXPECT_EQ(run.summary.at("saturated_ticks").get<double>(), 0.0);
-}
-
-std::string case_name(const ::testing::TestParamInfo<OperatorCase>& operator_case) {
-    return operator_case.param.name;
 }
 
 INSTANTIATE_TEST_SUITE_P(, HilEncoderGains, ::testing::ValuesIn(operator_cases()), case_name);

@@ -51,6 +51,7 @@
 
 #include "hapticd/tune/exact_model.hpp"
 #include "hapticd_run.hpp"
+#include "nyquist_grasp.hpp"
 #include "operators.hpp"
 #include "oscillation.hpp"
 #include "pen_display.hpp"
@@ -71,44 +72,12 @@ const double kNyquistWeight = (1.0 - kPole) / (1.0 + kPole);
 const double kFilteredLimitNPerM =
     2.0 * (kPenDampingNsPerM - kCouplingDampingNsPerM * kNyquistWeight) / kPeriodS;
 
-constexpr double kSkinStiffnessNPerM = 7.926e6;
-constexpr double kGraspHandMassKg = 0.946;
-constexpr double kArmStiffnessNPerM = 1.0464e7;
-constexpr double kWallNPerM = 1e7;              ///< the scene's upper limit (docs/scenes.md)
-constexpr double kFinestCountsPerMeter = 1e10;  ///< 0.1 nm, the sim's upper limit
-constexpr double kFinestCountM = 1.0 / kFinestCountsPerMeter;
-constexpr double kGraspStartM = 0.001;  ///< handle and set-point, 1 mm inside the wall
-constexpr double kDurationS = 40.0;
-constexpr double kFitFromS = 8.0;
-constexpr double kWindowS = 0.1;
-constexpr double kTolerance = 0.005;  ///< relative, on the rate
+constexpr double kWallNPerM = kStiffestWallNPerM;
 
 CouplingGains filtered(double fraction_of_limit) {
     return {.stiffness_n_per_m = fraction_of_limit * kFilteredLimitNPerM,
             .damping_n_s_per_m = kCouplingDampingNsPerM,
             .velocity_filter_hz = kFilterHz};
-}
-
-OperatorModel issue_grasp() {
-    return OperatorModel::two_mass_grasp(kSkinStiffnessNPerM, 0.0, kGraspHandMassKg,
-                                         kArmStiffnessNPerM, 0.0);
-}
-
-std::string issue_grasp_human() {
-    return "model = \"two-mass-grasp\"\nhand_mass = " + toml_number(kGraspHandMassKg) +
-           "\nskin_stiffness = " + toml_number(kSkinStiffnessNPerM) +
-           "\nskin_damping = 0.0\narm_stiffness = " + toml_number(kArmStiffnessNPerM) +
-           "\narm_damping = 0.0\n";
-}
-
-std::string grasp_config(const CouplingGains& gains, std::string_view check) {
-    DaemonConfig config;
-    config.coupling = coupling_table(gains, check);
-    config.counts_per_meter = kFinestCountsPerMeter;
-    config.initial_position = toml_number(kGraspStartM);  // the set-point too (its default)
-    config.humans = human_table(issue_grasp_human());
-    config.soft_start_ramp_s = 0.0;  // the force's step rings the grasp's modes
-    return config.toml();
 }
 
 struct Prediction {
@@ -135,34 +104,9 @@ double nyquist_margin(const CouplingGains& gains) {
            1.0;
 }
 
-/// "... worst margin M at F Hz" from the first line of `messages` containing `marker`.
-struct CheckLine {
-    std::string line;
-    double margin = 0.0;
-    double frequency_hz = -1.0;
-};
-std::optional<CheckLine> find_check_line(const std::string& messages, std::string_view marker) {
-    static const std::regex margin_at(R"(worst margin (\S+) at (\S+) Hz)");
-    std::size_t begin = 0;
-    while (begin < messages.size()) {
-        std::size_t end = messages.find('\n', begin);
-        if (end == std::string::npos) end = messages.size();
-        const std::string line = messages.substr(begin, end - begin);
-        std::smatch match;
-        if (line.find(marker) != std::string::npos && std::regex_search(line, match, margin_at)) {
-            return CheckLine{line, std::stod(match[1].str()), std::stod(match[2].str())};
-        }
-        begin = end + 1;
-    }
-    return std::nullopt;
-}
-
-struct NyquistRun {
+struct NyquistRun : NyquistFit {
     DaemonRun run;
     Prediction predicted;
-    double growth_per_s = 0.0;  ///< of the alternating component's RMS
-    std::size_t windows = 0;
-    bool alternates = true;  ///< y[n] kept its sign over the fit: x alternates every tick
 };
 
 /// The grasp on the wall with `gains` (file comment), fitted like HilDelayedCoupling 4.
@@ -172,43 +116,8 @@ NyquistRun run_grasp(const std::string& label, const CouplingGains& gains, std::
     const ScratchDir dir;
     out.run = run_hapticd(dir, {.config_toml = grasp_config(gains, check),
                                 .scene_toml = wall_contact_scene(kWallNPerM),
-                                .duration_s = kDurationS});
-    EXPECT_EQ(out.run.exit_code, 0) << label << "\n" << out.run.err;
-    EXPECT_EQ(fault_list(out.run), "") << label;
-    EXPECT_EQ(out.run.log.rows(), static_cast<std::size_t>(kDurationS * kRateHz)) << label;
-    if (out.run.log.rows() == 0) return out;
-    EXPECT_EQ(out.run.summary.at("saturated_ticks").get<double>(), 0.0) << label;
-    EXPECT_EQ(out.run.summary.at("solver_not_converged").get<double>(), 0.0) << label;
-    const auto& x = out.run.log.column("x0_m");
-    const auto& xe = out.run.log.column("xe0_m");
-    std::vector<double> y(x.size(), 0.0);
-    for (std::size_t n = 1; n < x.size(); ++n) {
-        y[n] = (n % 2 == 0 ? 0.5 : -0.5) * (x[n] - x[n - 1]);
-    }
-    const auto window = static_cast<std::size_t>(std::lround(kWindowS * kRateHz));
-    const auto first = static_cast<std::size_t>(kFitFromS * kRateHz);
-    const double sign = y[first] > 0.0 ? 1.0 : -1.0;
-    std::vector<double> mid_s, log_rms;
-    for (std::size_t begin = first; begin + window <= y.size(); begin += window) {
-        double sum = 0.0;
-        bool same_sign = true;
-        for (std::size_t n = begin; n < begin + window; ++n) {
-            sum += y[n] * y[n];
-            same_sign = same_sign && sign * y[n] > 0.0;
-        }
-        const double rms = std::sqrt(sum / static_cast<double>(window));
-        if (rms <= 100.0 * kFinestCountM) break;
-        out.alternates = out.alternates && same_sign;
-        mid_s.push_back((static_cast<double>(begin) + 0.5 * static_cast<double>(window)) *
-                        kPeriodS);
-        log_rms.push_back(std::log(rms));
-    }
-    out.windows = mid_s.size();
-    if (out.windows >= 2) out.growth_per_s = detail::slope(mid_s, log_rms, 0, out.windows);
-    for (std::size_t n = 0; n < xe.size(); ++n) {
-        EXPECT_GT(xe[n], 0.0) << label << ": the tool left the wall at tick " << n;
-        if (xe[n] <= 0.0) break;
-    }
+                                .duration_s = kGraspDurationS});
+    static_cast<NyquistFit&>(out) = fit_nyquist_growth(out.run, label);
     std::cout.precision(8);
     std::cout << "[hil] " << label << " (k_c = " << gains.stiffness_n_per_m
               << " N/m = " << gains.stiffness_n_per_m / kFilteredLimitNPerM
@@ -222,11 +131,9 @@ NyquistRun run_grasp(const std::string& label, const CouplingGains& gains, std::
 }
 
 void expect_rate_as_predicted(const NyquistRun& nyquist) {
-    EXPECT_NEAR(nyquist.predicted.frequency_hz, 0.5 * kRateHz, 1e-6);
-    EXPECT_TRUE(nyquist.alternates) << "the samples did not alternate every tick";
     EXPECT_GE(nyquist.windows, 100u);  // 10 s of the fit at least
-    EXPECT_NEAR(nyquist.growth_per_s, nyquist.predicted.growth_per_s,
-                kTolerance * std::abs(nyquist.predicted.growth_per_s));
+    expect_nyquist_rate_as_predicted(nyquist, nyquist.predicted.frequency_hz,
+                                     nyquist.predicted.growth_per_s);
 }
 
 /// hapticd refuses `gains` with the passive check, at Nyquist, with the margin of the

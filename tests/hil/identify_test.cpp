@@ -16,15 +16,13 @@
 #include <sstream>
 #include <string>
 
-#include "../cli/run_command.hpp"
 #include "alloc_guard.hpp"
 #include "hapticd/daemon/config.hpp"
 #include "hapticd/daemon/servo_settings.hpp"
 #include "hapticd/device/plugin_loader.hpp"
 #include "hapticd/env/excitation.hpp"
 #include "hapticd/servo/servo_loop.hpp"
-#include "scratch_dir.hpp"
-#include "telemetry_csv.hpp"
+#include "hapticd_run.hpp"
 
 namespace hapticd::testing {
 namespace {
@@ -47,38 +45,15 @@ std::string pen_config(const std::string& identify = "", int axes = 1) {
     return out.str();
 }
 
-struct IdentifyRun {
-    int exit_code = -1;
-    std::string err;
-    nlohmann::json summary;
-    TelemetryLog log;
-    std::string header;
-};
-
 /// hapticd --identify --lockstep on `config_toml`; `with_log` false leaves out --log.
-IdentifyRun run_identify(const ScratchDir& dir, const std::string& config_toml,
-                         bool with_log = true) {
-    const std::string config = dir.write("cfg.toml", config_toml);
-    const std::string csv = dir.file("identify.csv");
-    const std::string summary = dir.file("summary.json");
-    std::ostringstream command;
-    command << "'" << HAPTICD_BIN << "' --identify --lockstep --no-status --config '" << config
-            << "' --summary '" << summary << "'";
-    if (with_log) command << " --log '" << csv << "'";
-    const CommandResult result = run_command(command.str());
-    IdentifyRun run;
-    run.exit_code = result.exit_code;
-    run.err = result.err;
-    if (std::filesystem::exists(summary)) {
-        std::ifstream in(summary);
-        run.summary = nlohmann::json::parse(in);
-    }
-    if (std::filesystem::exists(csv)) {
-        std::ifstream in(csv);
-        std::getline(in, run.header);
-        run.log = read_telemetry(csv);
-    }
-    return run;
+DaemonRun run_identify(const ScratchDir& dir, const std::string& config_toml,
+                       bool with_log = true) {
+    return run_hapticd(dir, {.config_toml = config_toml,
+                             .scene_toml = "",
+                             .duration_s = 0.0,  // the excitation's own length
+                             .lockstep = true,
+                             .identify = true,
+                             .with_log = with_log});
 }
 
 /// The excitation the daemon builds for `config_toml` on the sim device (20 N, lockstep).
@@ -107,7 +82,7 @@ constexpr std::int64_t kStartTick = 200;
 TEST(HilIdentify, PenDisplayLogsTheSignalItCommandedAndStaysInTheWorkspace) {
     const ScratchDir dir;
     const std::string config = pen_config();
-    const IdentifyRun run = run_identify(dir, config);
+    const DaemonRun run = run_identify(dir, config);
     ASSERT_EQ(run.exit_code, 0) << run.err;
     const env::ExcitationEnvironment e = planned_excitation(config);
 
@@ -123,7 +98,7 @@ TEST(HilIdentify, PenDisplayLogsTheSignalItCommandedAndStaysInTheWorkspace) {
 
     // Complete: the columns of docs/architecture.md §4.5, one row per tick of the whole
     // excitation and its tail.
-    EXPECT_EQ(run.header,
+    EXPECT_EQ(run.log_header,
               "tick,t_s,x0_m,v0_mps,xe0_m,f0_n,status,flags,faults,wake_latency_us,compute_us,"
               "energy_j");
     const std::size_t expected_rows = static_cast<std::size_t>(kStartTick + e.samples() + 500);
@@ -172,7 +147,7 @@ TEST(HilIdentify, LeavingTheWorkspaceZeroesTheForceThatTickAndForTheRestOfTheRun
     const ScratchDir dir;
     // 2 N on a 0.1 kg pen: the model predicts a swing of about +-40 mm; the box is +-10 mm.
     const std::string config = pen_config("force_amplitude = 2.0\nworkspace = 0.01\n");
-    const IdentifyRun run = run_identify(dir, config);
+    const DaemonRun run = run_identify(dir, config);
     EXPECT_EQ(run.exit_code, 1) << run.err;
     EXPECT_EQ(run.summary.at("exit"), "workspace");
     EXPECT_TRUE(run.summary.at("faults").empty());
@@ -209,7 +184,7 @@ TEST(HilIdentify, LeavingTheWorkspaceZeroesTheForceThatTickAndForTheRestOfTheRun
 TEST(HilIdentify, TwoAxesEachGetTheirOwnLinesAndStayInTheWorkspace) {
     const ScratchDir dir;
     const std::string config = pen_config("", 2);
-    const IdentifyRun run = run_identify(dir, config);
+    const DaemonRun run = run_identify(dir, config);
     ASSERT_EQ(run.exit_code, 0) << run.err;
     const env::ExcitationEnvironment e = planned_excitation(config, 2);
     ASSERT_EQ(run.log.rows(), static_cast<std::size_t>(kStartTick + e.samples() + 500));
@@ -260,24 +235,24 @@ TEST(HilIdentify, TwoAxesEachGetTheirOwnLinesAndStayInTheWorkspace) {
 
 TEST(HilIdentify, NeedsALogFile) {
     const ScratchDir dir;
-    const IdentifyRun run = run_identify(dir, pen_config(), /*with_log=*/false);
+    const DaemonRun run = run_identify(dir, pen_config(), /*with_log=*/false);
     EXPECT_EQ(run.exit_code, 2);
     EXPECT_NE(run.err.find("--identify needs --log FILE"), std::string::npos) << run.err;
 }
 
 TEST(HilIdentify, BadIdentifyKeysAreRejectedByName) {
     const ScratchDir dir;
-    const IdentifyRun typo = run_identify(dir, pen_config("forse_amplitude = 1.0\n"));
+    const DaemonRun typo = run_identify(dir, pen_config("forse_amplitude = 1.0\n"));
     EXPECT_EQ(typo.exit_code, 2);
     EXPECT_NE(typo.err.find("[identify] forse_amplitude = 1.0 is not a known key"),
               std::string::npos)
         << typo.err;
     EXPECT_EQ(typo.log.rows(), 0u);
-    const IdentifyRun range = run_identify(dir, pen_config("workspace = -0.01\n"));
+    const DaemonRun range = run_identify(dir, pen_config("workspace = -0.01\n"));
     EXPECT_EQ(range.exit_code, 2);
     EXPECT_NE(range.err.find("[identify] workspace = -0.01 is out of range"), std::string::npos)
         << range.err;
-    const IdentifyRun too_strong = run_identify(dir, pen_config("force_amplitude = 25\n"));
+    const DaemonRun too_strong = run_identify(dir, pen_config("force_amplitude = 25\n"));
     EXPECT_EQ(too_strong.exit_code, 2);
     EXPECT_NE(too_strong.err.find("[identify] force_amplitude = 25 is out of range: allowed <= "
                                   "[safety] max_force = 20"),

@@ -26,12 +26,12 @@
 #include <string>
 #include <vector>
 
-#include "../cli/run_command.hpp"
 #include "hapticd/tune/class_check.hpp"
 #include "hapticd_run.hpp"
 #include "operators.hpp"
 #include "oscillation.hpp"
 #include "pen_display.hpp"
+#include "run_command.hpp"
 #include "wall_contact.hpp"
 
 namespace hapticd::testing {

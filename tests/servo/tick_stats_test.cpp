@@ -11,6 +11,20 @@
 namespace hapticd::servo {
 namespace {
 
+// The one rank rule of the histogram and the link diagnosis: ceil(q n), within [1, n].
+TEST(ServoTickStats, NearestRankIsTheCeilingOfQTimesNWithinOneToN) {
+    EXPECT_EQ(nearest_rank(0.5, 4), 2u);
+    EXPECT_EQ(nearest_rank(0.5, 5), 3u);
+    EXPECT_EQ(nearest_rank(0.99, 100), 99u);
+    EXPECT_EQ(nearest_rank(0.99, 101), 100u);
+    EXPECT_EQ(nearest_rank(0.999, 1000), 999u);
+    EXPECT_EQ(nearest_rank(0.0, 5), 1u);  // the smallest, not the largest
+    EXPECT_EQ(nearest_rank(1.0, 5), 5u);
+    EXPECT_EQ(nearest_rank(1.5, 3), 3u);
+    EXPECT_EQ(nearest_rank(-1.0, 3), 1u);
+    EXPECT_EQ(nearest_rank(0.5, 0), 0u);
+}
+
 TEST(ServoTickStats, BucketsTileTheLineWithBoundedRelativeWidth) {
     for (int bucket = 1; bucket < DurationHistogram::kBucketCount; ++bucket) {
         ASSERT_EQ(DurationHistogram::bucket_lower_ns(bucket),

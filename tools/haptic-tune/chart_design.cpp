@@ -68,7 +68,8 @@ nlohmann::ordered_json design_json(const ImpedanceDesign& design) {
 
 std::string describe_design(const ImpedanceDesign& design) {
     std::string text = "k_c = " + number_text(design.coupling.stiffness_n_per_m, 4) +
-                       " N/m, b_c = " + number_text(design.coupling.damping_n_s_per_m, 4) + " N s/m";
+                       " N/m, b_c = " + number_text(design.coupling.damping_n_s_per_m, 4) +
+                       " N s/m";
     if (design.coupling.velocity_filter_hz > 0.0) {
         text +=
             " on a " + number_text(design.coupling.velocity_filter_hz, 4) + " Hz velocity filter";

@@ -71,8 +71,7 @@ void render_chart(nlohmann::ordered_json chart, const std::string& out_path,
     }
     if (!run.succeeded()) {
         throw ChartError("chart script " + script + " (run with " + python + ") " +
-                         run.describe_exit() +
-                         (said.empty() ? std::string() : ":\n" + said));
+                         run.describe_exit() + (said.empty() ? std::string() : ":\n" + said));
     }
     std::error_code error;
     if (!std::filesystem::is_regular_file(out_path, error) ||

@@ -176,8 +176,7 @@ std::string ChildRun::describe_exit() const {
 ChildRun run_child(const std::vector<std::string>& argv_strings, const ChildOptions& options) {
     ChildRun run;
     Fd child_in, to_child, from_child, child_out;
-    if (options.capture &&
-        (!make_pipe(child_in, to_child) || !make_pipe(from_child, child_out))) {
+    if (options.capture && (!make_pipe(child_in, to_child) || !make_pipe(from_child, child_out))) {
         run.spawn_error = errno;
         return run;
     }

@@ -110,8 +110,9 @@ int run_admittance(const ZwidthOptions& o, const std::vector<theory::HoldModel>&
         throw UsageError("--display admittance needs the PI velocity-loop gains --kp and --ki");
     }
     if (o.chart.stiffness) {
-        throw UsageError("--stiffness is the impedance display's coupling; the admittance "
-                         "display's coupling is --coupling-mass and --coupling-damping");
+        throw UsageError(
+            "--stiffness is the impedance display's coupling; the admittance "
+            "display's coupling is --coupling-mass and --coupling-damping");
     }
     tune::check_device(input.device);
     tune::check_rate(input.rate_hz);
@@ -156,18 +157,19 @@ int run_admittance(const ZwidthOptions& o, const std::vector<theory::HoldModel>&
         // null: no series damper (b_c = inf), the coupling is a pure mass.
         {"damping", pure_mass ? nlohmann::ordered_json(nullptr)
                               : nlohmann::ordered_json(coupling.damping_n_s_per_m)},
-        {"pi_gains", {{"kp", loop.proportional_gain_n_s_per_m}, {"ki", loop.integral_gain_n_per_m}}},
+        {"pi_gains",
+         {{"kp", loop.proportional_gain_n_s_per_m}, {"ki", loop.integral_gain_n_per_m}}},
         {"source", source},
     };
     if (source == "sized") {
         design["sizing_model"] = "encoder";
         design["sizing_binding_frequency_hz"] = sized_binding_hz;
     }
-    std::string described = "k_p = " + number_text(loop.proportional_gain_n_s_per_m, 4) +
-                            " N s/m, k_i = " + number_text(loop.integral_gain_n_per_m, 4) +
-                            " N/m; m_c = " + number_text(coupling.mass_kg, 4) + " kg, b_c = " +
-                            (pure_mass ? std::string("none") :
-                                         number_text(coupling.damping_n_s_per_m, 4) + " N s/m");
+    std::string described =
+        "k_p = " + number_text(loop.proportional_gain_n_s_per_m, 4) +
+        " N s/m, k_i = " + number_text(loop.integral_gain_n_per_m, 4) +
+        " N/m; m_c = " + number_text(coupling.mass_kg, 4) + " kg, b_c = " +
+        (pure_mass ? std::string("none") : number_text(coupling.damping_n_s_per_m, 4) + " N s/m");
     if (source == "sized") described += " (sized from (37) with the encoder model)";
     return finish(o, {
                          {"kind", "zwidth"},
@@ -202,22 +204,23 @@ void add_zwidth_command(CLI::App& app, Invocation& invocation) {
         "(24)-(25) for the impedance display, (42)-(43) for the admittance display");
     add_chart_options(*command, options->chart);
     command->get_option("--coupling-damping")
-        ->description("coupling damping b_c (N s/m); impedance display: default [coupling] "
-                      "damping from --config, else 0; admittance display: the series damper "
-                      "of (32), default none (a pure mass)");
+        ->description(
+            "coupling damping b_c (N s/m); impedance display: default [coupling] "
+            "damping from --config, else 0; admittance display: the series damper "
+            "of (32), default none (a pure mass)");
     command->add_option("--display", options->display, "display causality (default impedance)")
         ->check(CLI::IsMember({"impedance", "admittance"}));
     command->add_option("--kp", options->kp, "admittance display: PI proportional gain (N s/m)")
         ->check(non_negative_finite("N s/m"));
     command->add_option("--ki", options->ki, "admittance display: PI integral gain (N/m)")
         ->check(non_negative_finite("N/m"));
-    command->add_option("--coupling-mass", options->coupling_mass,
-                        "admittance display: coupling mass m_c (kg); default sized from (37) "
-                        "with the encoder model")
+    command
+        ->add_option("--coupling-mass", options->coupling_mass,
+                     "admittance display: coupling mass m_c (kg); default sized from (37) "
+                     "with the encoder model")
         ->check(positive_finite("kg"));
-    command->callback([options, &invocation] {
-        invocation.run = [options] { return run_zwidth(*options); };
-    });
+    command->callback(
+        [options, &invocation] { invocation.run = [options] { return run_zwidth(*options); }; });
 }
 
 }  // namespace hapticd::tools

@@ -85,8 +85,8 @@ void run_identification(const std::string& hapticd, const std::string& config_pa
 
     if (!run.started()) {
         throw AutotuneError(
-            "cannot run " + hapticd + " for the identification run: " +
-            std::strerror(run.spawn_error) +
+            "cannot run " + hapticd +
+            " for the identification run: " + std::strerror(run.spawn_error) +
             (hapticd.find('/') == std::string::npos
                  ? " (it is neither next to haptic-tune nor on PATH; give --hapticd PATH, or "
                    "record a run yourself and give --log)"

@@ -123,5 +123,4 @@ LoopDelay find_loop_delay(std::optional<double> delay_option, bool from_log,
                         "written");
 }
 
-
 }  // namespace hapticd::tools

@@ -72,7 +72,8 @@ void SerialLink::close() noexcept {
 SerialLink::Wait SerialLink::wait_for(short events, std::int64_t deadline_ns) noexcept {
     for (;;) {
         // At least one ppoll() with a zero timeout even past the deadline: it notices a hangup.
-        const std::int64_t remaining_ns = std::max<std::int64_t>(0, deadline_ns - link::monotonic_now_ns());
+        const std::int64_t remaining_ns =
+            std::max<std::int64_t>(0, deadline_ns - link::monotonic_now_ns());
         timespec timeout{static_cast<time_t>(remaining_ns / 1'000'000'000),
                          static_cast<long>(remaining_ns % 1'000'000'000)};
         pollfd port{fd_, events, 0};

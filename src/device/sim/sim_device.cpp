@@ -179,8 +179,9 @@ IoResult SimDevice::read(Sample& sample) noexcept {
         }
         sample.encoder_counts[i] = last_fresh_counts_[i];
     }
-    if (verdict.late && !lockstep) servo::sleep_until_monotonic_ns(
-            servo::monotonic_now_ns() + std::llround(faults_.late_by_s() * 1e9));
+    if (verdict.late && !lockstep)
+        servo::sleep_until_monotonic_ns(servo::monotonic_now_ns() +
+                                        std::llround(faults_.late_by_s() * 1e9));
     return verdict.dropped ? IoResult::timeout : IoResult::ok;
 }
 

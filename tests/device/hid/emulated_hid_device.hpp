@@ -21,7 +21,7 @@
 
 namespace hapticd::testing {
 
-/// The HIL tests' pen display (tests/hil/pen_display.hpp: m = 0.1 kg, b = 2 N s/m, 1 kHz,
+/// The HIL tests' pen display (tests/support/pen_display.hpp: m = 0.1 kg, b = 2 N s/m, 1 kHz,
 /// 1e5 counts/m, 20 N) as a 1-axis protocol device, serial "EMU-0001", lockstep.
 device::protocol::EmulatorConfig pen_display_emulator();
 

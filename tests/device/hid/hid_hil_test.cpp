@@ -1,7 +1,7 @@
 // HidClosedLoop: the real hapticd executable with `[device] plugin = "hid"`, its servo loop
 // closed through hidapi's hidraw backend and an emulated hidraw node to the reference device
 // playing the pen display's physics in lockstep (emulated_hid_device.hpp), against the HIL
-// tests' stiff wall (tests/hil/wall_contact.hpp) with the coupling the `encoder` model sizes.
+// tests' stiff wall (tests/support/wall_contact.hpp) with the coupling the `encoder` model sizes.
 // The contact must be as stable as it is on the sim plugin (HilEncoderGains). Also: a user
 // who may not open the hidraw node is told about the udev rule.
 #include <gtest/gtest.h>
@@ -18,6 +18,7 @@
 #include "hapticd/servo/telemetry.hpp"
 #include "hapticd_run.hpp"
 #include "pen_display.hpp"
+#include "transport_contact.hpp"
 #include "tuned_gains.hpp"
 #include "wall_contact.hpp"
 
@@ -59,22 +60,15 @@ TEST(HidClosedLoop, TheDaemonHoldsAStiffWallStablyThroughHid) {
                                             .scene_toml = wall_contact_scene(kWallStiffnessNPerM),
                                             .duration_s = kDurationS});
 
-    ASSERT_EQ(run.exit_code, 0) << run.err;
-    EXPECT_EQ(run.summary.at("exit"), "duration");
-    EXPECT_EQ(fault_list(run), "");
-    EXPECT_EQ(run.summary.at("ticks").get<double>(), kDurationS * kRateHz);
-    ASSERT_EQ(run.log.rows(), static_cast<std::size_t>(kDurationS * kRateHz));
+    // Hands-off: the preload brings the handle to the wall gently, so the transient is a few
+    // counts, not ten.
+    if (!expect_stable_wall_contact(run, kDurationS, kSettleS, "[hid] closed loop through hidapi",
+                                    {.min_transient_m = 2.0 * kCountM})) {
+        return;
+    }
     // Every tick went through the node: one command report per tick (and the handshake's).
     EXPECT_GE(device.server().output_reports(), static_cast<std::uint64_t>(kDurationS * kRateHz));
 
-    const ContactJudgement judged = judge_wall_contact(run.log, kSettleS);
-    std::cout << "[hid] closed loop through hidapi: " << describe(judged) << "\n";
-    EXPECT_GE(judged.transient_peak_m, 2.0 * kCountM) << "the contact was never excited";
-    EXPECT_LE(judged.trend.growth_per_s, 0.1);
-    EXPECT_LE(judged.trend.last_amplitude_m, 8.0 * kCountM);
-    EXPECT_TRUE(judged.contact_kept()) << "left the wall at " << judged.contact_lost_at_s << " s";
-    EXPECT_GT(judged.min_tool_depth_m, 0.0);
-    EXPECT_LT(judged.max_abs_force_n, 0.5 * kForceLimitN);
     // The handle rests where the preload and the wall balance: 0.5 N / K inside the wall.
     const auto& x = run.log.column("x0_m");
     EXPECT_NEAR(x.back(), 0.5 / kWallStiffnessNPerM, 3.0 * kCountM);

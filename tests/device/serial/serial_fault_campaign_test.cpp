@@ -1,9 +1,10 @@
 // SerialFaultCampaign (docs/reliability.md): the seeded fault campaign of
 // tests/hil/fault_campaign_test.cpp with the faults on the wire. The servo loop runs as the daemon
 // runs a lockstep device (ServoLoop::run on the serial plugin loaded by name, the scene's penalty
-// environment, a stiff grasp into a wall, link recovery on or off: tests/hil/fault_campaign.hpp),
-// and the reference device (DeviceEmulator, the same physics) answers behind a pseudo-terminal
-// (pty_device.hpp). Between the two a line tap injects, at random seeded requests:
+// environment, a stiff grasp into a wall, link recovery on or off:
+// tests/support/fault_campaign.hpp), and the reference device (DeviceEmulator, the same physics)
+// answers behind a pseudo-terminal (pty_device.hpp). Between the two a line tap injects, at random
+// seeded requests:
 //   replies:  1-5 bit flips in a frame (which the CRC must catch: HD >= 6), 1-3 bit flips in
 //             the line's bytes (COBS code bytes and delimiters too), CRC-preserving changes
 //             of a sample's session, sequence numbers, counts, time, status or fault bits

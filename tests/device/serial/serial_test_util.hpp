@@ -2,13 +2,13 @@
 // plugin table and link settings for a port, byte helpers.
 #pragma once
 
-#include <ctime>
 #include <string>
 
-#include "../protocol/protocol_test_util.hpp"
 #include "hapticd/device/protocol/device_emulator.hpp"
 #include "hapticd/device/protocol/stream_framer.hpp"
 #include "hapticd/device/serial/serial_settings.hpp"
+#include "hapticd/servo/monotonic_clock.hpp"
+#include "protocol_test_util.hpp"
 
 namespace hapticd::testing {
 
@@ -50,10 +50,6 @@ inline Bytes stream_encoded(const Bytes& frame) {
     return out;
 }
 
-inline std::int64_t now_ns() {
-    timespec now{};
-    clock_gettime(CLOCK_MONOTONIC, &now);
-    return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
-}
+inline std::int64_t now_ns() { return servo::monotonic_now_ns(); }
 
 }  // namespace hapticd::testing

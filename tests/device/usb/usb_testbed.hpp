@@ -166,7 +166,7 @@ class UsbTestbed {
 };
 
 /// The EmulatorConfig for the paper's pen display (m = 0.1 kg, b = 2 N s/m, 1e5 counts/m,
-/// 20 N, 1 kHz; tests/hil/pen_display.hpp) with this serial number.
+/// 20 N, 1 kHz; tests/support/pen_display.hpp) with this serial number.
 device::protocol::EmulatorConfig pen_display_emulator(const std::string& serial = "EMU-0001");
 
 }  // namespace hapticd::testing

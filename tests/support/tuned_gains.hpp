@@ -9,9 +9,9 @@
 #include <string>
 #include <string_view>
 
-#include "../cli/run_command.hpp"
 #include "hapticd_run.hpp"
 #include "pen_display.hpp"
+#include "run_command.hpp"
 
 namespace hapticd::testing {
 

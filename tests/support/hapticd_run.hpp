@@ -9,7 +9,7 @@
 #include <sstream>
 #include <string>
 
-#include "../cli/run_command.hpp"
+#include "run_command.hpp"
 #include "scratch_dir.hpp"
 #include "telemetry_csv.hpp"
 
@@ -27,8 +27,10 @@ struct DaemonRun {
 struct RunRequest {
     std::string config_toml;  ///< written to cfg.toml
     std::string scene_toml;   ///< written to scene.toml (the config names it); empty: none
-    double duration_s = 1.0;  ///< --duration: virtual seconds in lockstep
+    double duration_s = 1.0;  ///< --duration: virtual seconds in lockstep; <= 0: none
     bool lockstep = true;     ///< --lockstep
+    bool identify = false;    ///< --identify: the excitation run (it ends by itself)
+    bool with_log = true;     ///< --log run.csv
 };
 
 inline std::string shell_quote(const std::string& word) {
@@ -44,10 +46,11 @@ inline DaemonRun run_hapticd(const ScratchDir& dir, const RunRequest& request) {
     const std::string summary = dir.file("summary.json");
     std::ostringstream command;
     command.precision(17);
-    command << shell_quote(HAPTICD_BIN) << (request.lockstep ? " --lockstep" : "")
-            << " --no-status --duration " << request.duration_s << " --config "
-            << shell_quote(config) << " --log " << shell_quote(log) << " --summary "
-            << shell_quote(summary);
+    command << shell_quote(HAPTICD_BIN) << (request.identify ? " --identify" : "")
+            << (request.lockstep ? " --lockstep" : "") << " --no-status";
+    if (request.duration_s > 0.0) command << " --duration " << request.duration_s;
+    command << " --config " << shell_quote(config) << " --summary " << shell_quote(summary);
+    if (request.with_log) command << " --log " << shell_quote(log);
     const CommandResult result = run_command(command.str());
     DaemonRun run;
     run.exit_code = result.exit_code;
