@@ -122,7 +122,8 @@ std::vector<std::string> plugin_search_path() {
 }
 
 std::vector<std::string> plugin_file_names(std::string_view name) {
-    const std::string base = std::string(kFilePrefix) + std::string(name) + std::string(kFileSuffix);
+    const std::string base =
+        std::string(kFilePrefix) + std::string(name) + std::string(kFileSuffix);
     return {"lib" + base, base};
 }
 
@@ -187,8 +188,8 @@ std::vector<PluginListing> list_plugins() {
                 error = "dlopen failed: " + error;
             }
             listing.error = error;
-            listing.shadowed = std::find(seen_names.begin(), seen_names.end(), listing.name) !=
-                               seen_names.end();
+            listing.shadowed =
+                std::find(seen_names.begin(), seen_names.end(), listing.name) != seen_names.end();
             seen_names.push_back(listing.name);
             listings.push_back(std::move(listing));
         }

@@ -10,8 +10,8 @@ Complex pi_gain(const PiVelocityLoop& loop, double theta, double sample_period_s
     return loop.proportional_gain_n_s_per_m + loop.integral_gain_n_per_m / s;
 }
 
-Complex velocity_tracking(const DeviceModel& device, const PiVelocityLoop& loop,
-                          HoldModel model, double theta, double sample_period_s) {
+Complex velocity_tracking(const DeviceModel& device, const PiVelocityLoop& loop, HoldModel model,
+                          double theta, double sample_period_s) {
     const Complex forward = hold_term(model, theta) * pi_gain(loop, theta, sample_period_s);
     return forward / (device_impedance(device, model, theta, sample_period_s) + forward);  // (29)
 }
@@ -22,8 +22,8 @@ Complex admittance_display_impedance(const DeviceModel& device, const PiVelocity
            pi_gain(loop, theta, sample_period_s) * hold_term(model, theta);  // (30)
 }
 
-TwoPort admittance_display(const DeviceModel& device, const PiVelocityLoop& loop,
-                           HoldModel model, double theta, double sample_period_s) {
+TwoPort admittance_display(const DeviceModel& device, const PiVelocityLoop& loop, HoldModel model,
+                           double theta, double sample_period_s) {
     // (28): [v_h, F_meas*] = [[1/Z_dA, -T], [1, 0]] [F_h, -v_com*].
     return {ImmittanceForm::alternate_hybrid,
             1.0 / admittance_display_impedance(device, loop, model, theta, sample_period_s),
@@ -47,8 +47,7 @@ TwoPort admittance_interface(const DeviceModel& device, const PiVelocityLoop& lo
 
 double admittance_display_conductance(const DeviceModel& device, const PiVelocityLoop& loop,
                                       HoldModel model, double theta, double sample_period_s) {
-    return (1.0 / admittance_display_impedance(device, loop, model, theta, sample_period_s))
-        .real();
+    return (1.0 / admittance_display_impedance(device, loop, model, theta, sample_period_s)).real();
 }
 
 double admittance_coupling_bound(const DeviceModel& device, const PiVelocityLoop& loop,

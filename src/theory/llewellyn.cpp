@@ -29,8 +29,8 @@ LlewellynResult llewellyn(const TwoPort& network) {
     r.re_p11 = network.p11.real();
     r.re_p22 = network.p22.real();
     const Complex loop = network.p12 * network.p21;
-    const double lhs = 2.0 * r.re_p11 * r.re_p22;       // (8), left side
-    const double rhs = std::abs(loop) + loop.real();     // (8), right side, >= 0
+    const double lhs = 2.0 * r.re_p11 * r.re_p22;     // (8), left side
+    const double rhs = std::abs(loop) + loop.real();  // (8), right side, >= 0
     r.stability_factor = std::abs(loop) > 0.0 ? (lhs - loop.real()) / std::abs(loop) : kInf;
     r.margin = rhs > 0.0 ? lhs / rhs - 1.0 : (lhs >= 0.0 ? kInf : -kInf);
     r.unconditionally_stable = r.re_p11 >= 0.0 && r.re_p22 >= 0.0 && lhs >= rhs;
@@ -40,8 +40,8 @@ LlewellynResult llewellyn(const TwoPort& network) {
 LlewellynSweep llewellyn_over_frequency(const std::function<TwoPort(double)>& network_at,
                                         double rate_hz, int grid_points) {
     const std::vector<double> grid = frequency_grid(grid_points);
-    const GridMinimum worst = minimize_on_grid(
-        [&](double theta) { return llewellyn(network_at(theta)).margin; }, grid);
+    const GridMinimum worst =
+        minimize_on_grid([&](double theta) { return llewellyn(network_at(theta)).margin; }, grid);
     LlewellynSweep sweep;
     sweep.worst_margin = worst.value;
     sweep.worst_frequency_hz = frequency_hz(worst.theta, 1.0 / rate_hz);

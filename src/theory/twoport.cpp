@@ -38,10 +38,14 @@ std::optional<Matrix> pivot(const Matrix& m, int k) {
 
 std::string_view to_string(ImmittanceForm form) {
     switch (form) {
-        case ImmittanceForm::impedance: return "impedance";
-        case ImmittanceForm::admittance: return "admittance";
-        case ImmittanceForm::hybrid: return "hybrid";
-        case ImmittanceForm::alternate_hybrid: return "alternate_hybrid";
+        case ImmittanceForm::impedance:
+            return "impedance";
+        case ImmittanceForm::admittance:
+            return "admittance";
+        case ImmittanceForm::hybrid:
+            return "hybrid";
+        case ImmittanceForm::alternate_hybrid:
+            return "alternate_hybrid";
     }
     return "unknown";
 }

@@ -23,17 +23,16 @@ Complex impedance_display_zmax(const DeviceModel& device, const SpringDamperCoup
 
 Complex perceived_admittance(const DeviceModel& device, const PiVelocityLoop& loop,
                              const MassDamperCoupling& coupling, HoldModel model,
-                             Complex environment_admittance, double theta,
-                             double sample_period_s) {
+                             Complex environment_admittance, double theta, double sample_period_s) {
     const Complex zca = 1.0 / coupling_admittance(coupling, theta, sample_period_s);
     return 1.0 / admittance_display_impedance(device, loop, model, theta, sample_period_s) +
-           velocity_tracking(device, loop, model, theta, sample_period_s) *
-               environment_admittance / (1.0 + zca * environment_admittance);
+           velocity_tracking(device, loop, model, theta, sample_period_s) * environment_admittance /
+               (1.0 + zca * environment_admittance);
 }
 
 Complex admittance_display_zmin(const DeviceModel& device, const PiVelocityLoop& loop,
-                                const MassDamperCoupling& coupling, HoldModel model,
-                                double theta, double sample_period_s) {
+                                const MassDamperCoupling& coupling, HoldModel model, double theta,
+                                double sample_period_s) {
     const Complex zca = 1.0 / coupling_admittance(coupling, theta, sample_period_s);
     const Complex zda = admittance_display_impedance(device, loop, model, theta, sample_period_s);
     return zca / (velocity_tracking(device, loop, model, theta, sample_period_s) + zca / zda);

@@ -1,5 +1,7 @@
 // The device plugin loader: the sim plugin by name and by path, and every refusal with the
 // message that says why (wrong ABI, missing entry, null create, dlopen error, not found).
+#include "hapticd/device/plugin_loader.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -8,14 +10,13 @@
 #include <string>
 
 #include "hapticd/device/plugin_abi.hpp"
-#include "hapticd/device/plugin_loader.hpp"
 
 namespace hapticd::device {
 namespace {
 
 /// Sets HAPTICD_PLUGIN_PATH for one test and restores it afterwards.
 class PluginPath {
-public:
+  public:
     explicit PluginPath(const char* value) {
         if (const char* old = std::getenv("HAPTICD_PLUGIN_PATH")) saved_ = old, had_ = true;
         if (value != nullptr) {
@@ -32,7 +33,7 @@ public:
         }
     }
 
-private:
+  private:
     std::string saved_;
     bool had_ = false;
 };

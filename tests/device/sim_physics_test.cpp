@@ -148,7 +148,8 @@ struct Rk4Reference {
         const double h_s = T / substeps, vs = (xs1 - xs0) / T;
         for (int i = 0; i < substeps; ++i) {
             const double t0 = i * h_s;
-            auto add = [](const std::array<double, 4>& a, const std::array<double, 4>& d, double k) {
+            auto add = [](const std::array<double, 4>& a, const std::array<double, 4>& d,
+                          double k) {
                 return std::array<double, 4>{a[0] + k * d[0], a[1] + k * d[1], a[2] + k * d[2],
                                              a[3] + k * d[3]};
             };
@@ -167,7 +168,9 @@ void expect_matches_rk4(const HumanModel& human) {
     c.human[0] = human;
     SimDevice dev;
     dev.open(c);
-    Rk4Reference ref{c.mass_kg, c.damping_n_s_per_m, human,
+    Rk4Reference ref{c.mass_kg,
+                     c.damping_n_s_per_m,
+                     human,
                      {0.003, 0.0, human.family == HumanFamily::two_mass_grasp ? 0.003 : 0.0, 0.0}};
     double scale = 1e-3;
     for (int n = 0; n < 400; ++n) {
@@ -237,9 +240,12 @@ tune::OperatorModel as_tune(const HumanModel& h) {
 }
 
 TEST(SimPhysics, OperatorFamiliesMatchTheExactModel) {
-    const std::vector<HumanModel> humans{HumanModel{},           heavy_hand(1.0, 0.0),
-                                         heavy_hand(0.2, 3.0),   stiff_grasp(0.5, 1000.0, 1.0),
-                                         stiff_grasp(0.0, 4e5, 0.0), two_mass(1e4, 1.0, 0.5, 1e3, 10.0)};
+    const std::vector<HumanModel> humans{HumanModel{},
+                                         heavy_hand(1.0, 0.0),
+                                         heavy_hand(0.2, 3.0),
+                                         stiff_grasp(0.5, 1000.0, 1.0),
+                                         stiff_grasp(0.0, 4e5, 0.0),
+                                         two_mass(1e4, 1.0, 0.5, 1e3, 10.0)};
     for (const auto& human : humans) {
         for (const auto& [kc, bc] : {std::pair{1000.0, 0.0}, {3600.0, 0.5}, {9000.0, 0.0}}) {
             const auto poles = tune::closed_loop_poles({0.1, 2.0}, {kc, bc}, 1000.0, as_tune(human),
@@ -320,7 +326,8 @@ TEST(SimPhysics, EncoderCountsAreFloorOfPositionTimesResolution) {
 
 TEST(SimPhysics, LockstepRunsAreBitIdentical) {
     SimConfig c = lockstep_config(3);
-    c.human = {stiff_grasp(0.3, 500.0, 1.0), two_mass(5e3, 1.0, 0.3, 200.0, 5.0), heavy_hand(1.0, 1.0)};
+    c.human = {stiff_grasp(0.3, 500.0, 1.0), two_mass(5e3, 1.0, 0.3, 200.0, 5.0),
+               heavy_hand(1.0, 1.0)};
     c.coulomb_n = 0.05;
     c.faults.drop_probability = 0.05;
     c.faults.late_probability = 0.05;
@@ -333,7 +340,8 @@ TEST(SimPhysics, LockstepRunsAreBitIdentical) {
         for (int n = 0; n < 2000; ++n) {
             dev.read(s);
             samples.push_back(s);
-            dev.write(force(3.0 * std::sin(0.01 * n), std::cos(0.03 * n), n % 50 < 25 ? 2.0 : -2.0));
+            dev.write(
+                force(3.0 * std::sin(0.01 * n), std::cos(0.03 * n), n % 50 < 25 ? 2.0 : -2.0));
         }
         return samples;
     };
@@ -405,8 +413,7 @@ TEST(SimPhysics, CoulombSlidingIsTheMassDamperUnderTheReducedForce) {
     for (int n = 1; n <= 500; ++n) {
         dev.write(force(3.0));
         const double t = n * 1e-3, decay = -std::expm1(-t / tau);
-        ASSERT_NEAR(dev.plant(0).state().position_m, F / b * (t - tau * decay),
-                    1e-11 * F / b * t);
+        ASSERT_NEAR(dev.plant(0).state().position_m, F / b * (t - tau * decay), 1e-11 * F / b * t);
     }
 }
 

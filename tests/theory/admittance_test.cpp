@@ -12,8 +12,8 @@ namespace hapticd::theory {
 namespace {
 
 constexpr double kT = 1e-3;
-const DeviceModel kDevice{2.0, 5.0};             // a heavy, admittance-type manipulator
-const PiVelocityLoop kLoop{40.0, 2000.0};         // K_PI = 40 + 2000 T z/(z - 1)
+const DeviceModel kDevice{2.0, 5.0};       // a heavy, admittance-type manipulator
+const PiVelocityLoop kLoop{40.0, 2000.0};  // K_PI = 40 + 2000 T z/(z - 1)
 const MassDamperCoupling kCoupling{0.5, 30.0};
 
 void expect_same(Complex a, Complex b) {
@@ -53,8 +53,7 @@ TEST_P(AdmittanceFrequency, TableIMapsTheImpedanceInterfaceOntoTheAdmittanceInte
     expect_same(mapped.p21, admittance.p21);
     expect_same(mapped.p22, admittance.p22);
     // And (21) under the same substitution is (37).
-    const double bound21 =
-        (1.0 - std::cos(std::arg(t))) * std::abs(t) / (2.0 * (1.0 / zda).real());
+    const double bound21 = (1.0 - std::cos(std::arg(t))) * std::abs(t) / (2.0 * (1.0 / zda).real());
     EXPECT_NEAR(admittance_coupling_bound(kDevice, kLoop, model, theta, kT), bound21,
                 1e-9 * bound21 + 1e-15);
     // The verdicts agree: (36) is (20) for the dual network.
@@ -98,7 +97,8 @@ TEST(Admittance, TooHighLoopGainMakesTheBoundInfinite) {
     for (double theta = 0.01; theta < 3.14; theta += 0.01) {
         if (admittance_display_conductance(kDevice, hot, HoldModel::encoder, theta, kT) < 0.0) {
             found_negative = true;
-            EXPECT_TRUE(std::isinf(admittance_coupling_bound(kDevice, hot, HoldModel::encoder, theta, kT)));
+            EXPECT_TRUE(
+                std::isinf(admittance_coupling_bound(kDevice, hot, HoldModel::encoder, theta, kT)));
         }
     }
     EXPECT_TRUE(found_negative);

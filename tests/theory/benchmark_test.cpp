@@ -102,8 +102,10 @@ TEST(CouplingCheck, EncoderModelReproducesColgateAndSchenkelsWallBound) {
     // b_c = 0: (21) with e^{-jθ} sinc²(θ/2) reads 2b/(k_c T) >= sinc²(θ/2), tightest as
     // θ -> 0, so k_c <= 2b/T: Colgate and Schenkel's bound for a wall without damping.
     const double bound = 2.0 * kDevice.damping_n_s_per_m / kT;
-    const CouplingCheck below = check_coupling(kDevice, {bound * (1 - 1e-6), 0}, HoldModel::encoder, 1000);
-    const CouplingCheck above = check_coupling(kDevice, {bound * (1 + 1e-6), 0}, HoldModel::encoder, 1000);
+    const CouplingCheck below =
+        check_coupling(kDevice, {bound * (1 - 1e-6), 0}, HoldModel::encoder, 1000);
+    const CouplingCheck above =
+        check_coupling(kDevice, {bound * (1 + 1e-6), 0}, HoldModel::encoder, 1000);
     EXPECT_TRUE(below.unconditionally_stable);
     EXPECT_FALSE(above.unconditionally_stable);
     EXPECT_NEAR(below.worst_margin, 1e-6, 1e-8);

@@ -38,7 +38,8 @@ std::string design_name(const ::testing::TestParamInfo<Design>& info) {
     return "m" + std::to_string(int(d.device.mass_kg * 1000)) + "g_b" +
            std::to_string(int(d.device.damping_n_s_per_m * 10)) + "dNspm_" +
            std::to_string(int(d.rate_hz)) + "Hz_" +
-           (d.coupling_damping ? "bc" + std::to_string(int(*d.coupling_damping * 100)) : "optimised");
+           (d.coupling_damping ? "bc" + std::to_string(int(*d.coupling_damping * 100))
+                               : "optimised");
 }
 
 class PaperGains : public ::testing::TestWithParam<Design> {};
@@ -70,8 +71,8 @@ TEST_P(EncoderGains, AtZeroCouplingDampingAreStableInTheExactModel) {
     const ExactCheck exact = check_exact(d.device, encoder.coupling, d.rate_hz);
     EXPECT_TRUE(exact.stable) << "k_c = " << encoder.coupling.stiffness_n_per_m
                               << ", worst: " << exact.worst_operator.describe() << " against "
-                              << exact.worst_environment.describe() << ", |z| = "
-                              << exact.worst_spectral_radius;
+                              << exact.worst_environment.describe()
+                              << ", |z| = " << exact.worst_spectral_radius;
     EXPECT_GT(exact.cases_checked, 1000);
     // It is also tight: 2% more stiffness goes unstable for some operator.
     theory::SpringDamperCoupling stiffer = encoder.coupling;

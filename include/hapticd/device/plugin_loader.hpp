@@ -26,13 +26,13 @@ namespace hapticd::device {
 /// Destroys a plugin's device with the plugin's own destroy(), then (when the last device of
 /// that plugin goes) dlclose()s the library: the code outlives every object it made.
 class PluginDeleter {
-public:
+  public:
     PluginDeleter() = default;
     PluginDeleter(void (*destroy)(Device*), std::shared_ptr<void> library)
         : destroy_(destroy), library_(std::move(library)) {}
     void operator()(Device* device) const noexcept;
 
-private:
+  private:
     void (*destroy_)(Device*) = nullptr;
     std::shared_ptr<void> library_;  ///< the dlopen handle; dlclose when the last owner goes
 };
@@ -58,8 +58,8 @@ struct PluginListing {
     std::string description;  ///< from the descriptor
     std::string path;         ///< the shared object
     std::uint32_t abi_version = 0;
-    std::string error;        ///< empty when loadable; else why load_device would refuse it
-    bool shadowed = false;    ///< an earlier directory has a plugin of the same name
+    std::string error;      ///< empty when loadable; else why load_device would refuse it
+    bool shadowed = false;  ///< an earlier directory has a plugin of the same name
 };
 
 /// Every `(lib)hapticd-device-*.so` on the search path, in search order. Never throws for a

@@ -13,7 +13,7 @@ using servo::PenaltyForce;
 using servo::Vec3;
 
 class ImpedanceEnvironment {
-public:
+  public:
     virtual ~ImpedanceEnvironment() = default;
     /// f_env at a trial tool state; the solver may call it several times per tick.
     virtual PenaltyForce evaluate(const Vec3& tool_position_m,
@@ -26,7 +26,7 @@ public:
 static_assert(servo::ImpedancePort<ImpedanceEnvironment>);
 
 class AdmittanceEnvironment {
-public:
+  public:
     virtual ~AdmittanceEnvironment() = default;
     /// One tick: the tool position x_e for the device at x_d moving at v_d (backward
     /// difference), with the coupling gains and the period T.

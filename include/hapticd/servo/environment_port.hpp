@@ -53,15 +53,15 @@ struct PenaltyForce {
 template <typename E>
 concept ImpedancePort = requires(E& e, const E& ce, const Vec3& x, const Vec3& v) {
     { ce.evaluate(x, v) } -> std::same_as<PenaltyForce>;
-    { e.commit(x, v) };
-    { e.reset(x) };
+    {e.commit(x, v)};
+    {e.reset(x)};
 };
 
 template <typename E>
 concept AdmittancePort = requires(E& e, const Vec3& x, const Vec3& v, const CouplingGains& g,
                                   double period_s) {
     { e.step(x, v, g, period_s) } -> std::same_as<Vec3>;
-    { e.reset(x) };
+    {e.reset(x)};
 };
 
 }  // namespace hapticd::servo

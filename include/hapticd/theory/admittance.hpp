@@ -23,16 +23,16 @@ Complex pi_gain(const PiVelocityLoop& loop, double theta, double sample_period_s
 
 /// (29): T(z) = H K_PI / (Z_dI + H K_PI), the velocity loop's complementary sensitivity,
 /// with the hold term H of `model` in place of ZOH(z).
-Complex velocity_tracking(const DeviceModel& device, const PiVelocityLoop& loop,
-                          HoldModel model, double theta, double sample_period_s);
+Complex velocity_tracking(const DeviceModel& device, const PiVelocityLoop& loop, HoldModel model,
+                          double theta, double sample_period_s);
 
 /// (30): Z_dA = Z_dI + K_PI H, the display's driving-point impedance at the human port.
 Complex admittance_display_impedance(const DeviceModel& device, const PiVelocityLoop& loop,
                                      HoldModel model, double theta, double sample_period_s);
 
 /// (28): alternate hybrid matrix of the admittance display without a coupling.
-TwoPort admittance_display(const DeviceModel& device, const PiVelocityLoop& loop,
-                           HoldModel model, double theta, double sample_period_s);
+TwoPort admittance_display(const DeviceModel& device, const PiVelocityLoop& loop, HoldModel model,
+                           double theta, double sample_period_s);
 
 /// (32): Y_cA(z) = 1/b_c + T z/((z - 1) m_c); Z_cA = 1/Y_cA.
 Complex coupling_admittance(const MassDamperCoupling& coupling, double theta,

@@ -23,13 +23,12 @@ Complex impedance_display_zmax(const DeviceModel& device, const SpringDamperCoup
 /// (39): Y_P = 1/Z_dA + T Y_e / (1 + Z_cA Y_e), the admittance felt for environment Y_e.
 Complex perceived_admittance(const DeviceModel& device, const PiVelocityLoop& loop,
                              const MassDamperCoupling& coupling, HoldModel model,
-                             Complex environment_admittance, double theta,
-                             double sample_period_s);
+                             Complex environment_admittance, double theta, double sample_period_s);
 
 /// (42): Z_min = Z_cA / (T + Z_cA/Z_dA) = 1/Y_max (Y_e -> ∞, free motion).
 Complex admittance_display_zmin(const DeviceModel& device, const PiVelocityLoop& loop,
-                                const MassDamperCoupling& coupling, HoldModel model,
-                                double theta, double sample_period_s);
+                                const MassDamperCoupling& coupling, HoldModel model, double theta,
+                                double sample_period_s);
 
 /// (43): Z_max = Z_dA (Y_e -> 0, rigid constraint).
 Complex admittance_display_zmax(const DeviceModel& device, const PiVelocityLoop& loop,

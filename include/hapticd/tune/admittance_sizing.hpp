@@ -45,7 +45,8 @@ struct ExactAdmittanceSizingRequest {
     double delay_periods = 0.0;
     double coupling_damping_n_s_per_m = std::numeric_limits<double>::infinity();  ///< b_c
     double safety_factor = 1.1;  ///< the sized m_c is this times the exact limit (>= 1)
-    std::optional<theory::ForceSensorFilter> force_filter = std::nullopt;  ///< none: the unfiltered sensor
+    std::optional<theory::ForceSensorFilter> force_filter =
+        std::nullopt;  ///< none: the unfiltered sensor
 };
 
 struct ExactAdmittanceSizing {

@@ -20,9 +20,8 @@ constexpr std::uint64_t kLateStream = 2;
 }  // namespace
 
 bool FaultConfig::any() const {
-    return disconnect_at_s >= 0.0 || stale_at_s >= 0.0 || jump_at_s >= 0.0 ||
-           !drop_at_s.empty() || drop_probability > 0.0 || !late_at_s.empty() ||
-           late_probability > 0.0;
+    return disconnect_at_s >= 0.0 || stale_at_s >= 0.0 || jump_at_s >= 0.0 || !drop_at_s.empty() ||
+           drop_probability > 0.0 || !late_at_s.empty() || late_probability > 0.0;
 }
 
 void FaultInjector::configure(const FaultConfig& faults, double period_s) {
@@ -44,8 +43,8 @@ bool FaultInjector::hit(double at_s, double previous_time_s, double time_s) cons
 bool FaultInjector::any_hit(const std::vector<double>& sorted_s, double previous_time_s,
                             double time_s) const noexcept {
     // The first event after the previous sample; it hits if it is not after this one.
-    const auto next = std::upper_bound(sorted_s.begin(), sorted_s.end(),
-                                       previous_time_s + tolerance_s_);
+    const auto next =
+        std::upper_bound(sorted_s.begin(), sorted_s.end(), previous_time_s + tolerance_s_);
     return next != sorted_s.end() && reached(*next, time_s);
 }
 

@@ -15,16 +15,16 @@ namespace hapticd::device::sim {
 
 /// What happens to one sample.
 struct FaultVerdict {
-    std::uint32_t status = 0;     ///< servo::StatusBit flags
-    bool disconnected = false;    ///< read/write return IoResult::disconnected
-    bool dropped = false;         ///< read returns IoResult::timeout
-    bool late = false;            ///< the reply is late (realtime: really late by late_by_s)
-    bool stale = false;           ///< the counts are frozen at the last fresh sample
+    std::uint32_t status = 0;   ///< servo::StatusBit flags
+    bool disconnected = false;  ///< read/write return IoResult::disconnected
+    bool dropped = false;       ///< read returns IoResult::timeout
+    bool late = false;          ///< the reply is late (realtime: really late by late_by_s)
+    bool stale = false;         ///< the counts are frozen at the last fresh sample
     std::int64_t jump_offset_counts = 0;  ///< added to jump_axis's counts
 };
 
 class FaultInjector {
-public:
+  public:
     /// Outside the tick; copies and sorts the schedules.
     void configure(const FaultConfig& faults, double period_s);
 
@@ -39,7 +39,7 @@ public:
     int jump_axis() const noexcept { return faults_.jump_axis; }
     double late_by_s() const noexcept { return late_by_s_; }
 
-private:
+  private:
     bool reached(double at_s, double time_s) const noexcept;
     bool hit(double at_s, double previous_time_s, double time_s) const noexcept;
     bool any_hit(const std::vector<double>& sorted_s, double previous_time_s,
