@@ -48,8 +48,10 @@ std::string describe(const NamedPath& p, const Identity& id) {
 void refuse_overlapping_paths(const std::vector<NamedPath>& inputs,
                               const std::vector<NamedPath>& outputs) {
     std::vector<Identity> in_ids;
+    in_ids.reserve(inputs.size());
     for (const NamedPath& p : inputs) in_ids.push_back(identify(p.path));
     std::vector<Identity> out_ids;
+    out_ids.reserve(outputs.size());
     for (const NamedPath& p : outputs) out_ids.push_back(identify(p.path));
     for (std::size_t o = 0; o < outputs.size(); ++o) {
         for (std::size_t i = 0; i < inputs.size(); ++i) {
@@ -73,7 +75,7 @@ std::string plugin_file(const std::string& plugin) {
     if (plugin.find('/') != std::string::npos) return plugin;
     for (const std::string& dir : device::plugin_search_path()) {
         for (const std::string& file : device::plugin_file_names(plugin)) {
-            const std::string path = dir + "/" + file;
+            std::string path = dir + "/" + file;
             std::error_code ec;
             if (fs::is_regular_file(path, ec)) return path;
         }

@@ -186,10 +186,10 @@ Vec3 GodObject::step(const Vec3& device_position_m, const Vec3& /*device_velocit
 void GodObject::reset(const Vec3& position_m) noexcept {
     if (!finite(position_m)) return;
     Vec3 start = mask(position_m);
-    if (constraints_.project_to_free(start)) {
+    // Projected into the free space; or, when the scene has no free point near here and the
+    // proxy is not free either, the position itself: the best there is.
+    if (constraints_.project_to_free(start) || !constraints_.is_free(proxy_m_)) {
         proxy_m_ = mask(start);
-    } else if (!constraints_.is_free(proxy_m_)) {
-        proxy_m_ = mask(start);  // the best there is; the scene has no free point near here
     }
 }
 

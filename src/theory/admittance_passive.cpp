@@ -302,6 +302,7 @@ FilteredPassiveCheck check_filtered_admittance_passive(const DeviceModel& device
     }
     constexpr int kUniform = 4096, kLow = 256, kRefine = 64;
     std::vector<double> thetas;
+    thetas.reserve(kLow + kUniform);
     const double first = std::numbers::pi / kUniform;
     for (int i = 0; i < kLow; ++i)
         thetas.push_back(kDcTheta * std::pow(first / kDcTheta, double(i) / kLow));

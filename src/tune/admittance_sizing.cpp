@@ -146,7 +146,9 @@ ExactAdmittanceSizing size_admittance_coupling_exact(const ExactAdmittanceSizing
     const AdmittanceExactCheck at_device = full(request.device.mass_kg);
     if (at_device.stable) {
         hi = request.device.mass_kg;
-        for (double mass = hi / 4.0; mass >= lightest; mass /= 4.0) {
+        // The k-th step is the device mass times 4^-k (exact in binary).
+        for (int k = 1; std::ldexp(request.device.mass_kg, -2 * k) >= lightest; ++k) {
+            const double mass = std::ldexp(request.device.mass_kg, -2 * k);
             const AdmittanceExactCheck c = full(mass);
             if (!c.stable) {
                 lo = mass;
@@ -159,7 +161,8 @@ ExactAdmittanceSizing size_admittance_coupling_exact(const ExactAdmittanceSizing
     } else {
         lo = request.device.mass_kg;
         active.push_back({at_device.worst_operator, at_device.worst_environment});
-        for (double mass = 4.0 * lo; mass < heaviest; mass *= 4.0) {
+        for (int k = 1; std::ldexp(request.device.mass_kg, 2 * k) < heaviest; ++k) {
+            const double mass = std::ldexp(request.device.mass_kg, 2 * k);
             const AdmittanceExactCheck c = full(mass);
             if (c.stable) {
                 hi = mass;

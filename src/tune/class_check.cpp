@@ -18,6 +18,7 @@ using theory::SpringDamperCoupling;
 
 std::vector<EnvironmentModel> models_of(const std::vector<SceneEnvironment>& scene) {
     std::vector<EnvironmentModel> out;
+    out.reserve(scene.size());
     for (const SceneEnvironment& e : scene) out.push_back(e.model);
     return out;
 }
@@ -280,7 +281,9 @@ class ClassSearch {
     template <typename Value>
     static double compass_climb(std::initializer_list<double*> coordinates, double first_step,
                                 double best, Value value) {
-        for (double step = first_step; step >= kLastStep; step /= 2.0) {
+        // The k-th step is first_step / 2^k (exact in binary).
+        for (int k = 0; std::ldexp(first_step, -k) >= kLastStep; ++k) {
+            const double step = std::ldexp(first_step, -k);
             bool improved = true;
             while (improved) {
                 improved = false;
@@ -373,7 +376,7 @@ StiffnessLimit exact_stiffness_limit(const DeviceModel& device, const SpringDamp
         SpringDamperCoupling coupling = shape;
         coupling.stiffness_n_per_m = stiffness;
         for (const auto& [human, environment] : witnesses) {
-            const ExactCheck quick =
+            ExactCheck quick =
                 check_exact(device, coupling, rate_hz, {human}, {environment}, delay_periods);
             if (!quick.stable) return quick;
         }

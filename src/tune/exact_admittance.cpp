@@ -326,12 +326,6 @@ void check_environment(const AdmittanceEnvironment& env) {
     check_non_negative("environment damping b_e", env.damping_n_s_per_m, "N s/m");
 }
 
-std::vector<double> log_grid(double lo, double hi, int n) {
-    std::vector<double> grid;
-    for (int i = 0; i < n; ++i) grid.push_back(lo * std::pow(hi / lo, double(i) / (n - 1)));
-    return grid;
-}
-
 }  // namespace
 
 AdmittanceEnvironment AdmittanceEnvironment::free_space() { return {}; }
@@ -407,12 +401,12 @@ std::vector<AdmittanceEnvironment> default_admittance_environment_sweep(
     check_device(device);
     std::vector<AdmittanceEnvironment> sweep{AdmittanceEnvironment::free_space(),
                                              AdmittanceEnvironment::rigid_wall()};
-    for (double mass_ratio : log_grid(0.01, 100.0, 5)) {
+    for (double mass_ratio : detail::log_grid(0.01, 100.0, 5)) {
         for (double be : {0.0, 1.0, 30.0}) {
             sweep.push_back(
                 AdmittanceEnvironment::mass_spring(mass_ratio * device.mass_kg, 0.0, be));
         }
-        for (double ke : log_grid(1.0, 1e6, 7)) {
+        for (double ke : detail::log_grid(1.0, 1e6, 7)) {
             for (double be : {0.0, 30.0}) {
                 sweep.push_back(
                     AdmittanceEnvironment::mass_spring(mass_ratio * device.mass_kg, ke, be));

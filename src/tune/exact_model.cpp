@@ -15,6 +15,8 @@
 namespace hapticd::tune {
 namespace {
 
+using detail::log_grid;
+
 using Eigen::MatrixXd;
 using Eigen::RowVectorXd;
 using Eigen::VectorXd;
@@ -382,13 +384,6 @@ void check_loop(const DeviceModel& device, const SpringDamperCoupling& coupling,
 
 constexpr double kTunedGripFractionsOfNyquist[] = {0.125, 0.25, 0.5, 0.75, 0.9, 1.0};
 
-/// n points from lo to hi, equally spaced in log(value).
-std::vector<double> log_grid(double lo, double hi, int n) {
-    std::vector<double> grid;
-    for (int i = 0; i < n; ++i) grid.push_back(lo * std::pow(hi / lo, double(i) / (n - 1)));
-    return grid;
-}
-
 }  // namespace
 
 std::string_view to_string(OperatorFamily family) {
@@ -645,5 +640,12 @@ std::pair<Eigen::MatrixXd, Eigen::VectorXd> zoh_sample(const Eigen::MatrixXd& a,
 void validate_operator(const OperatorModel& human) { check_operator(human); }
 
 void balance_loop(Eigen::MatrixXd& loop) { balance(loop); }
+
+std::vector<double> log_grid(double lo, double hi, int n) {
+    std::vector<double> grid;
+    grid.reserve(static_cast<std::size_t>(n));
+    for (int i = 0; i < n; ++i) grid.push_back(lo * std::pow(hi / lo, double(i) / (n - 1)));
+    return grid;
+}
 
 }  // namespace hapticd::tune::detail

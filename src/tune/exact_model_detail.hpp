@@ -5,6 +5,7 @@
 
 #include <Eigen/Dense>
 #include <utility>
+#include <vector>
 
 #include "hapticd/theory/benchmark.hpp"
 #include "hapticd/tune/exact_model.hpp"
@@ -23,6 +24,9 @@ std::pair<Eigen::MatrixXd, Eigen::VectorXd> zoh_sample(const Eigen::MatrixXd& a,
 
 /// Throws std::invalid_argument naming a non-physical or unused operator field.
 void validate_operator(const OperatorModel& human);
+
+/// n points from lo to hi, equally spaced in log(value): the sweeps' grids.
+std::vector<double> log_grid(double lo, double hi, int n);
 
 /// Parlett-Reinsch balancing by powers of two (exact: it changes no eigenvalue).
 void balance_loop(Eigen::MatrixXd& loop);

@@ -671,6 +671,7 @@ IdentifiedAxis identify_axis(const TelemetryLog& log, int axis,
 std::vector<IdentifiedAxis> identify_all_axes(const TelemetryLog& log,
                                               const IdentificationOptions& options) {
     std::vector<IdentifiedAxis> axes;
+    axes.reserve(static_cast<std::size_t>(log.axes));
     for (int axis = 0; axis < log.axes; ++axis) axes.push_back(identify_axis(log, axis, options));
     return axes;
 }

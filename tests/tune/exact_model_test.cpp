@@ -134,6 +134,38 @@ TEST(exactClosedForm, CouplingDampingGivesHandDerivedCubic) {
 
 // ---- An independent simulation of the servo tick ---------------------------------------
 
+/// One hold period `t` of a 4-state plant under a constant force: `substeps` classical RK4
+/// steps of ds/dt = derivative(s, force). The independent simulations' continuous half.
+template <typename Derivative>
+void hold_with_rk4(std::array<double, 4>& s, double force, double t, int substeps,
+                   const Derivative& derivative) {
+    using State = std::array<double, 4>;
+    const auto add = [](const State& x, const State& dx, double w) {
+        return State{x[0] + w * dx[0], x[1] + w * dx[1], x[2] + w * dx[2], x[3] + w * dx[3]};
+    };
+    const double h = t / substeps;
+    for (int k = 0; k < substeps; ++k) {
+        const State k1 = derivative(s, force);
+        const State k2 = derivative(add(s, k1, h / 2), force);
+        const State k3 = derivative(add(s, k2, h / 2), force);
+        const State k4 = derivative(add(s, k3, h), force);
+        for (std::size_t i = 0; i < 4; ++i)
+            s[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+    }
+}
+
+/// The force's growth per tick from the RMS over ticks [2000, 3000) to [3000, 4000): the
+/// dominant mode has taken over by then.
+double late_growth_per_tick(const std::vector<double>& force_history) {
+    const auto rms = [&](int from, int to) {
+        double sum = 0.0;
+        for (int n = from; n < to; ++n)
+            sum += force_history[std::size_t(n)] * force_history[std::size_t(n)];
+        return std::sqrt(sum / (to - from));
+    };
+    return std::pow(rms(3000, 4000) / rms(2000, 3000), 1.0 / 1000.0);
+}
+
 // Device (10) with a two-mass grasp, integrated by RK4 with 100 substeps under the held
 // force; the tick computes v_d by backward difference, the mass-spring environment by the
 // implicit update documented in the header, and the coupling force (16). The growth of the
@@ -174,30 +206,9 @@ TEST(exactSimulation, GrowthPerTickEqualsSpectralRadius) {
                     1e-9 * (1.0 + std::abs(force)));
         force_history.push_back(force);
         x_prev = xd;
-        const double hstep = t / kSub;
-        for (int k = 0; k < kSub; ++k) {
-            auto add = [](const State& a, const State& da, double w) {
-                return State{a[0] + w * da[0], a[1] + w * da[1], a[2] + w * da[2],
-                             a[3] + w * da[3]};
-            };
-            const State k1 = derivative(s, force);
-            const State k2 = derivative(add(s, k1, hstep / 2), force);
-            const State k3 = derivative(add(s, k2, hstep / 2), force);
-            const State k4 = derivative(add(s, k3, hstep), force);
-            for (std::size_t i = 0; i < 4; ++i) {
-                s[i] += hstep / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
-            }
-        }
+        hold_with_rk4(s, force, t, kSub, derivative);
     }
-    // RMS of the force over two late windows; the dominant mode has taken over by then.
-    auto rms = [&](int from, int to) {
-        double sum = 0.0;
-        for (int n = from; n < to; ++n)
-            sum += force_history[std::size_t(n)] * force_history[std::size_t(n)];
-        return std::sqrt(sum / (to - from));
-    };
-    const double growth = std::pow(rms(3000, 4000) / rms(2000, 3000), 1.0 / 1000.0);
-    EXPECT_NEAR(growth, poles.spectral_radius, 2e-5);
+    EXPECT_NEAR(late_growth_per_tick(force_history), poles.spectral_radius, 2e-5);
 }
 
 // ---- The damper on a filtered velocity (theory/velocity_filter.hpp) ----------------------
@@ -285,29 +296,9 @@ TEST(exactVelocityFilter, TheServosUpdateGrowsAtTheSpectralRadius) {
                     1e-9 * (1.0 + std::abs(force)));
         force_history.push_back(force);
         x_prev = xd;
-        const double hstep = t / kSub;
-        for (int k = 0; k < kSub; ++k) {
-            auto add = [](const State& x, const State& dx, double w) {
-                return State{x[0] + w * dx[0], x[1] + w * dx[1], x[2] + w * dx[2],
-                             x[3] + w * dx[3]};
-            };
-            const State k1 = derivative(s, force);
-            const State k2 = derivative(add(s, k1, hstep / 2), force);
-            const State k3 = derivative(add(s, k2, hstep / 2), force);
-            const State k4 = derivative(add(s, k3, hstep), force);
-            for (std::size_t i = 0; i < 4; ++i) {
-                s[i] += hstep / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
-            }
-        }
+        hold_with_rk4(s, force, t, kSub, derivative);
     }
-    auto rms = [&](int from, int to) {
-        double sum = 0.0;
-        for (int n = from; n < to; ++n)
-            sum += force_history[std::size_t(n)] * force_history[std::size_t(n)];
-        return std::sqrt(sum / (to - from));
-    };
-    const double growth = std::pow(rms(3000, 4000) / rms(2000, 3000), 1.0 / 1000.0);
-    EXPECT_NEAR(growth, poles.spectral_radius, 2e-5);
+    EXPECT_NEAR(late_growth_per_tick(force_history), poles.spectral_radius, 2e-5);
 }
 
 // ---- The low-frequency bound: Colgate & Schenkel, and the paper's 8b/T -----------------

@@ -11,27 +11,15 @@
 namespace hapticd::tools {
 namespace {
 
+/// The axis as haptic-tune identify prints it (tune::to_json), with its bound and check.
 nlohmann::ordered_json axis_json(const tune::AutotuneAxis& a) {
-    const tune::IdentifiedAxis& id = a.identified;
-    return {{"axis", id.axis},
-            {"mass", id.estimate.mass_kg},
-            {"mass_std_error", id.std_error.mass_kg},
-            {"damping", id.estimate.damping_n_s_per_m},
-            {"damping_std_error", id.std_error.damping_n_s_per_m},
-            {"coulomb", id.estimate.coulomb_n},
-            {"coulomb_std_error", id.std_error.coulomb_n},
-            {"offset", id.estimate.offset_n},
-            {"offset_std_error", id.std_error.offset_n},
-            {"residual_rms_m", id.residual_rms_m},
-            {"log_rate_hz", id.rate_hz},
-            {"duration_s", id.duration_s},
-            {"converged", id.report.converged},
-            {"bound",
-             {{"stiffness", a.bound.coupling.stiffness_n_per_m},
-              {"stiffness_std_error", a.bound_stiffness_std_error_n_per_m},
-              {"damping", a.bound.coupling.damping_n_s_per_m},
-              {"binding_frequency_hz", a.bound.binding_frequency_hz}}},
-            {"exact_check", a.exact}};
+    nlohmann::ordered_json json = a.identified;
+    json["bound"] = {{"stiffness", a.bound.coupling.stiffness_n_per_m},
+                     {"stiffness_std_error", a.bound_stiffness_std_error_n_per_m},
+                     {"damping", a.bound.coupling.damping_n_s_per_m},
+                     {"binding_frequency_hz", a.bound.binding_frequency_hz}};
+    json["exact_check"] = a.exact;
+    return json;
 }
 
 }  // namespace

@@ -34,7 +34,7 @@ bool is_regular_file(const std::string& path) {
 }
 
 std::string find_chart_script() {
-    if (const std::string from_env = env_or_empty("HAPTICD_CHART_SCRIPT"); !from_env.empty()) {
+    if (std::string from_env = env_or_empty("HAPTICD_CHART_SCRIPT"); !from_env.empty()) {
         if (!is_regular_file(from_env)) {
             throw ChartError("HAPTICD_CHART_SCRIPT=" + from_env + " is not a file");
         }

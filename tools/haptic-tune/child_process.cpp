@@ -200,6 +200,7 @@ ChildRun run_child(const std::vector<std::string>& argv_strings, const ChildOpti
     }
     std::vector<std::string> args = argv_strings;
     std::vector<char*> argv;
+    argv.reserve(args.size() + 1);
     for (std::string& arg : args) argv.push_back(arg.data());
     argv.push_back(nullptr);
     pid_t pid = 0;

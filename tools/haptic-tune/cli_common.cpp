@@ -10,8 +10,8 @@
 namespace hapticd::tools {
 namespace {
 
-CLI::Validator numeric_range(std::string allowed, std::function<bool(double)> ok,
-                             std::string unit) {
+CLI::Validator numeric_range(const std::string& allowed, const std::function<bool(double)>& ok,
+                             const std::string& unit) {
     return CLI::Validator(
         [allowed, ok, unit](std::string& text) -> std::string {
             double value = 0.0;
@@ -31,14 +31,14 @@ CLI::Validator numeric_range(std::string allowed, std::function<bool(double)> ok
 
 }  // namespace
 
-CLI::Validator positive_finite(std::string unit) {
+CLI::Validator positive_finite(const std::string& unit) {
     return numeric_range(
-        "finite and > 0", [](double v) { return std::isfinite(v) && v > 0.0; }, std::move(unit));
+        "finite and > 0", [](double v) { return std::isfinite(v) && v > 0.0; }, unit);
 }
 
-CLI::Validator non_negative_finite(std::string unit) {
+CLI::Validator non_negative_finite(const std::string& unit) {
     return numeric_range(
-        "finite and >= 0", [](double v) { return std::isfinite(v) && v >= 0.0; }, std::move(unit));
+        "finite and >= 0", [](double v) { return std::isfinite(v) && v >= 0.0; }, unit);
 }
 
 void add_device_options(CLI::App& command, DeviceOptions& options) {

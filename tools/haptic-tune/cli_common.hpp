@@ -34,8 +34,8 @@ class UsageError : public std::runtime_error {
 };
 
 /// CLI11 validators that name the allowed range and reject NaN and infinities.
-CLI::Validator positive_finite(std::string unit);
-CLI::Validator non_negative_finite(std::string unit);
+CLI::Validator positive_finite(const std::string& unit);
+CLI::Validator non_negative_finite(const std::string& unit);
 
 /// The device and servo rate a design is for: from flags, or from a hapticd config file read
 /// exactly as hapticd reads it (daemon::load_config: [device.model] mass, damping, delay;

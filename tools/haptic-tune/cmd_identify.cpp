@@ -9,6 +9,7 @@
 
 #include "commands.hpp"
 #include "hapticd/tune/identification.hpp"
+#include "hapticd/tune/result_json.hpp"
 
 namespace hapticd::tools {
 namespace {
@@ -23,40 +24,6 @@ struct IdentifyOptions {
     double max_stuck_fraction = tune::IdentificationOptions{}.max_stuck_fraction;
     bool json = false;
 };
-
-/// JSON null for a number that is not finite (nlohmann writes null for NaN anyway; this
-/// makes it explicit for the text output too).
-nlohmann::ordered_json number(double value) {
-    return std::isfinite(value) ? nlohmann::ordered_json(value) : nlohmann::ordered_json(nullptr);
-}
-
-nlohmann::ordered_json axis_json(const tune::IdentifiedAxis& a) {
-    return {
-        {"axis", a.axis},
-        {"mass", a.estimate.mass_kg},
-        {"mass_std_error", a.std_error.mass_kg},
-        {"damping", a.estimate.damping_n_s_per_m},
-        {"damping_std_error", a.std_error.damping_n_s_per_m},
-        {"coulomb", a.estimate.coulomb_n},
-        {"coulomb_std_error", a.std_error.coulomb_n},
-        {"offset", a.estimate.offset_n},
-        {"offset_std_error", a.std_error.offset_n},
-        {"residual_rms_m", a.residual_rms_m},
-        {"residual_rms_counts", number(a.residual_rms_counts)},
-        {"stuck_fraction", a.stuck_fraction},
-        {"resolution_m", a.resolution_m},
-        {"resolution_source", a.resolution_estimated ? "log" : "option"},
-        {"rate_hz", a.rate_hz},
-        {"duration_s", a.duration_s},
-        {"samples", a.samples},
-        {"masked_samples", a.masked_samples},
-        {"gaps", a.gaps},
-        {"segments", a.segments},
-        {"iterations", a.report.iterations},
-        {"converged", a.report.converged},
-        {"solve_time_s", a.report.solve_time_s},
-    };
-}
 
 int run_identify(const IdentifyOptions& o) {
     tune::TelemetryLog log;
@@ -92,20 +59,20 @@ int run_identify(const IdentifyOptions& o) {
         }
     }
     if (axes.size() == 1) {
-        nlohmann::ordered_json out = axis_json(axes.front());
+        nlohmann::ordered_json out = nlohmann::ordered_json(axes.front());
         out["log"] = o.log_path;
         print_result(out, o.json);
         return kExitOk;
     }
     if (o.json) {
         nlohmann::ordered_json list = nlohmann::ordered_json::array();
-        for (const tune::IdentifiedAxis& a : axes) list.push_back(axis_json(a));
+        for (const tune::IdentifiedAxis& a : axes) list.push_back(a);
         print_result({{"log", o.log_path}, {"axes", list}}, true);
         return kExitOk;
     }
     for (std::size_t i = 0; i < axes.size(); ++i) {
         if (i > 0) std::cout << '\n';
-        print_result(axis_json(axes[i]), false);
+        print_result(axes[i], false);
     }
     return kExitOk;
 }

@@ -5,7 +5,9 @@
 #include "commands.hpp"
 #include "hapticd/tune/coupling_sizing.hpp"
 
-int main(int argc, char** argv) {
+namespace {
+
+int run_main(int argc, char** argv) {
     using namespace hapticd::tools;
     CLI::App app{
         "haptic-tune: size and check the virtual coupling of an impedance haptic display "
@@ -45,4 +47,18 @@ int main(int argc, char** argv) {
         std::cerr << "haptic-tune: error: " << error.what() << '\n';
     }
     return kExitBadInput;
+}
+
+}  // namespace
+
+/// Nothing escapes, not even from setting up the command line: a message and exit 2.
+int main(int argc, char** argv) {
+    try {
+        return run_main(argc, argv);
+    } catch (const std::exception& error) {
+        std::cerr << "haptic-tune: error: " << error.what() << '\n';
+    } catch (...) {
+        std::cerr << "haptic-tune: error: an unknown exception\n";
+    }
+    return hapticd::tools::kExitBadInput;
 }

@@ -122,9 +122,7 @@ int list_plugins() {
     return 0;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run_main(int argc, char** argv) {
     CLI::App app{
         "hapticd: the haptic servo daemon. Reads the device's encoders at a fixed rate, renders "
         "the scene through the virtual coupling (16) of Adams & Hannaford and writes "
@@ -198,4 +196,19 @@ int main(int argc, char** argv) {
     }
     options.stop_cause = &signals.cause();
     return hapticd::daemon::run_daemon(options, signals.stop(), std::cout, std::cerr);
+}
+
+}  // namespace
+
+/// Nothing escapes: an exception the run did not turn into an exit code (it never opened the
+/// device, or has already left it at zero force) is a message and exit 1.
+int main(int argc, char** argv) {
+    try {
+        return run_main(argc, argv);
+    } catch (const std::exception& e) {
+        std::cerr << "hapticd: " << e.what() << "\n";
+    } catch (...) {
+        std::cerr << "hapticd: an unknown exception ended the run\n";
+    }
+    return 1;
 }

@@ -7,6 +7,7 @@
 
 #include "hapticd/tune/exact_admittance.hpp"
 #include "hapticd/tune/exact_model.hpp"
+#include "hapticd/tune/identification.hpp"
 
 namespace hapticd::tune {
 
@@ -15,5 +16,9 @@ namespace hapticd::tune {
 void to_json(nlohmann::ordered_json& json, const ExactCheck& check);
 /// The same fields for the exact admittance loop.
 void to_json(nlohmann::ordered_json& json, const AdmittanceExactCheck& check);
+/// One identified axis (haptic-tune identify, and each of autotune's axes): the estimates
+/// with their standard errors, the residual, the log's rate (`rate_hz`) and the solve
+/// (docs/identification.md, "Output").
+void to_json(nlohmann::ordered_json& json, const IdentifiedAxis& axis);
 
 }  // namespace hapticd::tune

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <stdexcept>
 #include <system_error>
+#include <type_traits>
 
 namespace hapticd::device::hid {
 namespace {
@@ -98,7 +99,9 @@ std::string utf8_from_wide(const wchar_t* text) {
     std::string out;
     if (text == nullptr) return out;
     for (; *text != L'\0'; ++text) {
-        const auto c = static_cast<std::uint32_t>(*text);
+        // A code point (wchar_t is UTF-32 on Linux), as unsigned before it widens.
+        const auto c =
+            static_cast<std::uint32_t>(static_cast<std::make_unsigned_t<wchar_t>>(*text));
         if (c < 0x80) {
             out += static_cast<char>(c);
         } else if (c < 0x800) {

@@ -388,7 +388,6 @@ IoResult ProtocolDevice::write(const Command& command) noexcept {
 }
 
 void ProtocolDevice::reconnect_loop() {
-    const auto interval = std::chrono::microseconds(settings_.reconnect_interval_us);
     const auto slice = std::chrono::milliseconds(5);
     std::string last_message;
     while (!stop_.load()) {
@@ -418,6 +417,7 @@ void ProtocolDevice::reconnect_loop() {
                 last_message = message;
             }
         }
+        const auto interval = std::chrono::microseconds(settings_.reconnect_interval_us);
         for (auto waited = std::chrono::microseconds(0); waited < interval && !stop_.load();
              waited += slice) {
             std::this_thread::sleep_for(slice);
