@@ -1,6 +1,8 @@
 #include "hapticd/daemon/device_open.hpp"
 
 #include <exception>
+#include <stdexcept>
+#include <string>
 
 namespace hapticd::daemon {
 
@@ -23,13 +25,22 @@ device::DeviceHandle open_device(const Config& config, bool lockstep) {
         throw ConfigError(config.source + ": [device] plugin = \"" + config.device.plugin +
                           "\": " + e.what());
     }
+    // What open() throws is the plugin's: its type and vtable live in the plugin's code, which
+    // is unloaded with the handle. Its message is copied here, while the plugin is loaded, and
+    // goes on in an exception of ours (rethrowing it would hand the caller an object whose
+    // vtable is gone: UBSan's vptr check caught exactly that).
+    std::string message;
     try {
         device->open(device_config(config, lockstep));
+        return device;
+    } catch (const std::exception& e) {
+        message = e.what();
     } catch (...) {
-        device->close();
-        throw;
+        message = config.source + ": [device] plugin = \"" + config.device.plugin +
+                  "\": open() threw something that is not a std::exception";
     }
-    return device;
+    device->close();
+    throw std::runtime_error(message);
 }
 
 }  // namespace hapticd::daemon

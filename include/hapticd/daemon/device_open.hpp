@@ -14,8 +14,9 @@ namespace hapticd::daemon {
 device::DeviceConfig device_config(const Config& config, bool lockstep);
 
 /// Loads [device] plugin and opens it. Throws ConfigError naming the config file and the
-/// plugin when the plugin cannot be loaded; rethrows what open() threw (a bad table, or why
-/// the device could not be opened) after closing the device, so that it is left at zero force.
+/// plugin when the plugin cannot be loaded; std::runtime_error with open()'s message (a bad
+/// table, or why the device could not be opened) after closing the device, so that it is left
+/// at zero force. Nothing the plugin threw outlives the plugin.
 device::DeviceHandle open_device(const Config& config, bool lockstep);
 
 }  // namespace hapticd::daemon
