@@ -49,6 +49,20 @@ std::string status_line(const servo::StatusSnapshot& s, int axes) {
     return out.str();
 }
 
+std::string service_status(const servo::StatusSnapshot& s, double rate_hz) {
+    std::ostringstream out;
+    if (!s.armed) {
+        out << "disarmed";
+    } else if (s.soft_start_scale < 1.0) {
+        out << "soft start";
+    } else {
+        out << "armed";
+    }
+    out << ", " << rate_hz << " Hz, tick " << s.tick << ", overruns " << s.overruns << ", faults "
+        << (s.faults == 0u ? std::string("none") : fault_names(s.faults));
+    return out.str();
+}
+
 std::string fault_names(std::uint32_t faults) {
     std::string names;
     servo::for_each_fault(faults, [&](std::string_view name) {

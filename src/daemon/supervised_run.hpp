@@ -17,6 +17,7 @@
 
 #include "hapticd/daemon/config.hpp"
 #include "hapticd/daemon/run.hpp"
+#include "hapticd/daemon/service_notifier.hpp"
 #include "hapticd/daemon/summary_json.hpp"
 #include "hapticd/daemon/telemetry_writer.hpp"
 #include "hapticd/device/device.hpp"
@@ -98,9 +99,22 @@ int run_loop(const RunOptions& options, const Config& config,
         started + std::chrono::duration_cast<std::chrono::steady_clock::duration>(status_every);
     bool duration_ended = false;
     std::uint32_t logged_faults = 0;
+    // systemd (service_notifier.hpp): READY=1 after the first good tick, STATUS= once a second
+    // and on a change of faults, WATCHDOG=1 while the tick counter advances.
+    ServiceNotifier notifier;
+    const auto service_status_every = std::chrono::seconds(1);
+    auto next_service_status = started;
     while (!servo_done.load(std::memory_order_acquire)) {
         std::this_thread::sleep_for(std::chrono::milliseconds(10));
         const auto now = std::chrono::steady_clock::now();
+        if (const servo::StatusSnapshot status = loop.status(); status.tick >= 1) {
+            if (status.faults == 0u) notifier.ready(service_status(status, config.servo.rate_hz));
+            notifier.watch(status.tick, now);
+            if (now >= next_service_status || status.faults != logged_faults) {
+                notifier.status(service_status(status, config.servo.rate_hz));
+                next_service_status = now + service_status_every;
+            }
+        }
         if (!ticking && loop.status().tick >= 1) {
             ticking = true;
             started =
@@ -205,6 +219,8 @@ int run_loop(const RunOptions& options, const Config& config,
         log << "hapticd: " << context.realtime.brief() << "\n";
     }
     after_run(code, context);
+    notifier.stopping("stopping: " + context.exit +
+                      (context.stopped_by.empty() ? "" : " (" + context.stopped_by + ")"));
     const bool summary_written = write_summary(options, outputs, summary, context, out, log);
     // An output that is not whole is an exit status of its own, unless a fault (1) says more.
     if (code == kExitOk && (!context.telemetry_complete || !summary_written)) {

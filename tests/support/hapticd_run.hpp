@@ -8,6 +8,8 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
@@ -31,6 +33,8 @@ struct RunRequest {
     bool lockstep = true;     ///< --lockstep
     bool identify = false;    ///< --identify: the excitation run (it ends by itself)
     bool with_log = true;     ///< --log run.csv
+    /// NAME=value pairs in hapticd's environment (NOTIFY_SOCKET, WATCHDOG_USEC, ...).
+    std::vector<std::pair<std::string, std::string>> environment;
 };
 
 inline std::string shell_quote(const std::string& word) {
@@ -46,6 +50,9 @@ inline DaemonRun run_hapticd(const ScratchDir& dir, const RunRequest& request) {
     const std::string summary = dir.file("summary.json");
     std::ostringstream command;
     command.precision(17);
+    for (const auto& [name, value] : request.environment) {
+        command << name << "=" << shell_quote(value) << " ";
+    }
     command << shell_quote(HAPTICD_BIN) << (request.identify ? " --identify" : "")
             << (request.lockstep ? " --lockstep" : "") << " --no-status";
     if (request.duration_s > 0.0) command << " --duration " << request.duration_s;

@@ -1,0 +1,236 @@
+// HilServiceNotify: hapticd under a service manager, which this test plays: it binds the
+// NOTIFY_SOCKET (a datagram socket, as systemd's), runs the real hapticd with NOTIFY_SOCKET and
+// WATCHDOG_USEC in its environment, and reads what arrived, each message with its kernel
+// receive time (SO_TIMESTAMP). READY=1 comes after the first good tick and STOPPING=1 last;
+// STATUS= lines say the state and do not flood; WATCHDOG=1 comes every half timeout while the
+// servo ticks, and stops while the servo thread is held (the sim's read() returning a second
+// late on the realtime clock) although the watching thread goes on.
+#include <gtest/gtest.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+#include <iostream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "hapticd_run.hpp"
+#include "pen_display.hpp"
+
+namespace hapticd::testing {
+namespace {
+
+struct Notification {
+    std::string text;
+    double t_s = 0.0;  ///< kernel receive time, CLOCK_REALTIME
+};
+
+/// The service manager's end: an AF_UNIX datagram socket bound at `path`.
+class NotifySocket {
+  public:
+    explicit NotifySocket(const std::string& path) : path_(path) {
+        fd_ = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
+        if (fd_ < 0) throw std::runtime_error(std::string("socket: ") + std::strerror(errno));
+        const int on = 1;
+        ::setsockopt(fd_, SOL_SOCKET, SO_TIMESTAMP, &on, sizeof on);
+        const int buffer = 1 << 20;  // every message of a run, read after it ends
+        ::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &buffer, sizeof buffer);
+        sockaddr_un address{};
+        address.sun_family = AF_UNIX;
+        if (path.size() >= sizeof address.sun_path) throw std::runtime_error("path too long");
+        std::memcpy(address.sun_path, path.c_str(), path.size() + 1);
+        if (::bind(fd_, reinterpret_cast<const sockaddr*>(&address), sizeof address) != 0) {
+            throw std::runtime_error("bind " + path + ": " + std::strerror(errno));
+        }
+    }
+    NotifySocket(const NotifySocket&) = delete;
+    NotifySocket& operator=(const NotifySocket&) = delete;
+    ~NotifySocket() {
+        ::close(fd_);
+        ::unlink(path_.c_str());
+    }
+
+    /// Everything that has arrived, in order.
+    std::vector<Notification> drain() const {
+        std::vector<Notification> out;
+        for (;;) {
+            std::array<char, 4096> text{};
+            std::array<char, CMSG_SPACE(sizeof(timeval))> control{};
+            iovec io{text.data(), text.size()};
+            msghdr message{};
+            message.msg_iov = &io;
+            message.msg_iovlen = 1;
+            message.msg_control = control.data();
+            message.msg_controllen = control.size();
+            const ssize_t n = ::recvmsg(fd_, &message, 0);
+            if (n < 0) break;  // EAGAIN: all read
+            Notification note{std::string(text.data(), static_cast<std::size_t>(n))};
+            for (cmsghdr* c = CMSG_FIRSTHDR(&message); c != nullptr; c = CMSG_NXTHDR(&message, c)) {
+                if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMP) {
+                    timeval tv{};
+                    std::memcpy(&tv, CMSG_DATA(c), sizeof tv);
+                    note.t_s =
+                        static_cast<double>(tv.tv_sec) + 1e-6 * static_cast<double>(tv.tv_usec);
+                }
+            }
+            out.push_back(note);
+        }
+        return out;
+    }
+
+  private:
+    std::string path_;
+    int fd_ = -1;
+};
+
+/// Half of Colgate and Schenkel's 2b/T: the passive check arms it.
+constexpr CouplingGains kHalfColgateGains{.stiffness_n_per_m = 0.5 * kColgateStiffnessNPerM,
+                                          .damping_n_s_per_m = 0.0};
+
+/// Runs `run` while a thread reads the socket as a service manager does (an AF_UNIX datagram
+/// socket queues at most net.unix.max_dgram_qlen = 10 messages; hapticd drops what finds it
+/// full rather than wait); returns every message, with its kernel receive time.
+template <typename Run>
+std::vector<Notification> collect_while(const NotifySocket& socket, Run run) {
+    std::atomic<bool> done{false};
+    std::vector<Notification> notes;
+    std::thread reader([&] {
+        while (!done.load()) {
+            for (Notification& n : socket.drain()) notes.push_back(std::move(n));
+            std::this_thread::sleep_for(std::chrono::milliseconds(2));
+        }
+        for (Notification& n : socket.drain()) notes.push_back(std::move(n));
+    });
+    run();
+    done.store(true);
+    reader.join();
+    return notes;
+}
+
+bool has(const Notification& n, const std::string& line) {
+    return ("\n" + n.text + "\n").find("\n" + line + "\n") != std::string::npos;
+}
+
+std::string status_of(const Notification& n) {
+    const std::size_t at = ("\n" + n.text).find("\nSTATUS=");
+    if (at == std::string::npos) return "";
+    const std::size_t begin = at + std::string("STATUS=").size();
+    return n.text.substr(begin, n.text.find('\n', begin) - begin);
+}
+
+TEST(HilServiceNotify, ReadyAfterTheFirstTickThenStatusThenStopping) {
+    const ScratchDir dir;
+    const NotifySocket socket(dir.file("notify.sock"));
+    DaemonConfig config;
+    config.coupling = coupling_table(kHalfColgateGains, "passive");
+    DaemonRun run;
+    const std::vector<Notification> notes = collect_while(socket, [&] {
+        run = run_hapticd(dir, {.config_toml = config.toml(),
+                                .scene_toml = "[scene]\nname = \"free\"\naxes = 1\n",
+                                .duration_s = 1.0,
+                                .lockstep = true,
+                                .identify = false,
+                                .with_log = true,
+                                .environment = {{"NOTIFY_SOCKET", dir.file("notify.sock")}}});
+    });
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    ASSERT_GE(notes.size(), 2u);
+    EXPECT_TRUE(has(notes.front(), "READY=1")) << notes.front().text;
+    EXPECT_NE(status_of(notes.front()).find(", 1000 Hz, tick "), std::string::npos)
+        << notes.front().text;
+    EXPECT_TRUE(has(notes.back(), "STOPPING=1")) << notes.back().text;
+    EXPECT_EQ(status_of(notes.back()), "stopping: duration");
+    std::size_t ready = 0, watchdog = 0;
+    for (const Notification& n : notes) {
+        ready += has(n, "READY=1");
+        watchdog += has(n, "WATCHDOG=1");
+    }
+    EXPECT_EQ(ready, 1u);
+    EXPECT_EQ(watchdog, 0u);  // no WATCHDOG_USEC: no watchdog
+    // No flood: a STATUS= a second at the most, and on a change of faults (none here).
+    EXPECT_LE(notes.size(),
+              2u + static_cast<std::size_t>(run.summary.at("run_time_s").get<double>()) + 1u);
+}
+
+TEST(HilServiceNotify, TheWatchdogStopsWhileTheServoThreadIsHeld) {
+    const ScratchDir dir;
+    const NotifySocket socket(dir.file("notify.sock"));
+    DaemonConfig config;
+    config.coupling = coupling_table(kHalfColgateGains, "passive");
+    config.sim_clock = "realtime";
+    config.faults = "late_at = [1.0]\nlate_by = 1.0\n";  // read() at 1 s returns 1 s late
+    config.safety_keys = "max_missed_periods = 5000\nmax_consecutive_overruns = 5000\n";
+    constexpr double kTimeoutS = 0.2;
+    DaemonRun run;
+    const std::vector<Notification> notes = collect_while(socket, [&] {
+        run = run_hapticd(
+            dir,
+            {.config_toml = config.toml(),
+             .scene_toml = "[scene]\nname = \"free\"\naxes = 1\n",
+             .duration_s = 3.0,
+             .lockstep = false,
+             .identify = false,
+             .with_log = true,
+             .environment = {{"NOTIFY_SOCKET", dir.file("notify.sock")},
+                             {"WATCHDOG_USEC", std::to_string(std::llround(kTimeoutS * 1e6))}}});
+    });
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    std::vector<double> pings;
+    for (const Notification& n : notes) {
+        if (has(n, "WATCHDOG=1")) pings.push_back(n.t_s);
+    }
+    ASSERT_GE(pings.size(), 10u);
+    double longest_gap_s = 0.0;
+    std::size_t short_gaps = 0;
+    for (std::size_t i = 1; i < pings.size(); ++i) {
+        const double gap = pings[i] - pings[i - 1];
+        longest_gap_s = std::max(longest_gap_s, gap);
+        short_gaps += gap < 0.75 * kTimeoutS;
+    }
+    std::cout << "[hil] watchdog: " << pings.size() << " pings, longest gap " << longest_gap_s
+              << " s\n";
+    // The held second: no ping, the watchdog would fire (timeout 0.2 s).
+    EXPECT_GE(longest_gap_s, 0.9);
+    EXPECT_LE(longest_gap_s, 1.5);
+    // Otherwise every half timeout (the watcher polls every 10 ms).
+    EXPECT_GE(short_gaps, pings.size() - 2);
+}
+
+// A service manager that stops reading (its queue of 10 datagrams full) never holds the run:
+// the messages it has no room for are dropped, and the run ends on its duration.
+TEST(HilServiceNotify, AManagerThatStopsReadingDoesNotHoldTheRun) {
+    const ScratchDir dir;
+    const NotifySocket socket(dir.file("notify.sock"));  // never read during the run
+    DaemonConfig config;
+    config.coupling = coupling_table(kHalfColgateGains, "passive");
+    config.sim_clock = "realtime";
+    const auto started = std::chrono::steady_clock::now();
+    const DaemonRun run = run_hapticd(
+        dir,
+        {.config_toml = config.toml(),
+         .scene_toml = "[scene]\nname = \"free\"\naxes = 1\n",
+         .duration_s = 2.0,
+         .lockstep = false,
+         .identify = false,
+         .with_log = true,
+         .environment = {{"NOTIFY_SOCKET", dir.file("notify.sock")}, {"WATCHDOG_USEC", "100000"}}});
+    const double took_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    EXPECT_EQ(run.summary.at("exit"), "duration");
+    EXPECT_LT(took_s, 5.0);
+    // The queue's worth (the kernel queues max_dgram_qlen + 1); the rest were dropped.
+    const std::size_t queued = socket.drain().size();
+    EXPECT_GE(queued, 10u);
+    EXPECT_LE(queued, 11u);
+}
+
+}  // namespace
+}  // namespace hapticd::testing
