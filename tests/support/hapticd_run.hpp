@@ -34,7 +34,7 @@ struct RunRequest {
     bool identify = false;    ///< --identify: the excitation run (it ends by itself)
     bool with_log = true;     ///< --log run.csv
     /// NAME=value pairs in hapticd's environment (NOTIFY_SOCKET, WATCHDOG_USEC, ...).
-    std::vector<std::pair<std::string, std::string>> environment;
+    std::vector<std::pair<std::string, std::string>> environment{};
 };
 
 inline std::string shell_quote(const std::string& word) {
