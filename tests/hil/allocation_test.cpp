@@ -20,6 +20,7 @@
 
 #include "alloc_guard.hpp"
 #include "hapticd/daemon/config.hpp"
+#include "hapticd/daemon/device_open.hpp"
 #include "hapticd/daemon/servo_settings.hpp"
 #include "hapticd/daemon/telemetry_writer.hpp"
 #include "hapticd/device/plugin_loader.hpp"
@@ -125,14 +126,7 @@ GuardedRun run_scene(const SceneCase& scene_case, const std::string& passivity,
         daemon::parse_config(text.toml(), "hil-allocation.toml", dir.path().string());
 
     device::DeviceHandle device = device::load_device("sim");
-    device::DeviceConfig device_config;
-    device_config.axes = config.device.axes;
-    device_config.rate_hz = config.servo.rate_hz;
-    device_config.lockstep = true;
-    device_config.plugin_table_toml = config.device.plugin_table_toml;
-    device_config.plugin_table_path = config.device.plugin_table_path;
-    device_config.source = config.source;
-    device->open(device_config);
+    device->open(daemon::device_config(config, /*lockstep=*/true));
     const device::DeviceInfo info = device->info();
     EXPECT_TRUE(info.lockstep);
     const servo::ServoConfig servo_config = daemon::make_servo_config(config, info, true);
