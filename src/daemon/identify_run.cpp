@@ -4,6 +4,7 @@
 #include <memory>
 #include <ostream>
 
+#include "hapticd/daemon/journal.hpp"
 #include "hapticd/daemon/servo_settings.hpp"
 #include "hapticd/env/excitation.hpp"
 #include "run_messages.hpp"
@@ -45,7 +46,8 @@ void describe_identify(const Config& config, const IdentifyPlan& plan,
     for (const std::string& chosen : plan.chosen)
         log << "hapticd: identify: chose " << chosen << "\n";
     if (plan.predicted_excursion_m && *plan.predicted_excursion_m > s.workspace_half_width_m) {
-        log << "hapticd: identify: WARNING: [device.model] predicts a swing of +-"
+        log << priority::warning
+            << "hapticd: identify: WARNING: [device.model] predicts a swing of +-"
             << 1e3 * *plan.predicted_excursion_m
             << " mm, beyond [identify] workspace = " << s.workspace_half_width_m
             << " m: the excitation will likely stop at its edge (lower force_amplitude or "
@@ -55,17 +57,15 @@ void describe_identify(const Config& config, const IdentifyPlan& plan,
 
 }  // namespace
 
-int run_identify(const RunOptions& options, std::atomic<bool>& stop, std::ostream& out,
-                 std::ostream& log) {
+int run_identify(const RunOptions& options, const RunStamp& stamp, std::atomic<bool>& stop,
+                 std::ostream& out, std::ostream& log) {
     if (!options.log_path) {
         throw BadInput(
             "--identify needs --log FILE: the run exists to write the telemetry "
             "CSV that haptic-tune identify reads");
     }
     const Config config = load_any_config(options);
-    RunContext context;
-    context.config_source = config.source;
-    context.lockstep = options.lockstep;
+    RunContext context = begin_context(options, config, stamp);
     context.check.skipped = true;
     context.check.skipped_model = "none (identify: open loop, nothing coupled)";
     context.scene = "identify-multisine";
@@ -98,7 +98,11 @@ int run_identify(const RunOptions& options, std::atomic<bool>& stop, std::ostrea
         const double start_s = static_cast<double>(e.start_tick()) / rate_hz;
         const double played_s = static_cast<double>(e.samples_played()) / rate_hz;
         const double whole_s = static_cast<double>(e.samples()) / rate_hz;
-        log << std::defaultfloat << "hapticd: identify: ";
+        using Phase = env::ExcitationEnvironment::Phase;
+        log << (e.phase() == Phase::finished         ? priority::info
+                : e.phase() == Phase::left_workspace ? priority::err
+                                                     : priority::warning)
+            << std::defaultfloat << "hapticd: identify: ";
         switch (e.phase()) {
             case env::ExcitationEnvironment::Phase::finished:
                 log << "the excitation ran to its end: " << whole_s << " s from tick "

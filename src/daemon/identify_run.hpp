@@ -6,13 +6,14 @@
 #include <iosfwd>
 
 #include "hapticd/daemon/run.hpp"
+#include "hapticd/daemon/run_stamp.hpp"
 
 namespace hapticd::daemon {
 
 /// The identification run, as run_daemon runs a scene: set up, supervised, summarised.
 /// Throws BadInput, ConfigError or OutputError before the device moves (run_daemon maps
 /// them to exit 2); returns the exit code once it ran.
-int run_identify(const RunOptions& options, std::atomic<bool>& stop, std::ostream& out,
-                 std::ostream& log);
+int run_identify(const RunOptions& options, const RunStamp& stamp, std::atomic<bool>& stop,
+                 std::ostream& out, std::ostream& log);
 
 }  // namespace hapticd::daemon

@@ -1,8 +1,10 @@
 #include "hapticd/daemon/run.hpp"
 
+#include <chrono>
 #include <ostream>
 
 #include "hapticd/daemon/config.hpp"
+#include "hapticd/daemon/journal.hpp"
 #include "hapticd/daemon/servo_settings.hpp"
 #include "hapticd/env/scene.hpp"
 #include "identify_run.hpp"
@@ -13,15 +15,15 @@
 
 namespace hapticd::daemon {
 
-int run_daemon(const RunOptions& options, std::atomic<bool>& stop, std::ostream& out,
+int run_daemon(const RunOptions& given, std::atomic<bool>& stop, std::ostream& out,
                std::ostream& log) {
     try {
-        refuse_empty_paths(options);
-        if (options.identify) return run_identify(options, stop, out, log);
+        refuse_empty_paths(given);
+        const RunStamp stamp = stamp_run(std::chrono::system_clock::now());
+        const RunOptions options = with_start(given, stamp);
+        if (options.identify) return run_identify(options, stamp, stop, out, log);
         const Config config = load_any_config(options);
-        RunContext context;
-        context.config_source = config.source;
-        context.lockstep = options.lockstep;
+        RunContext context = begin_context(options, config, stamp);
         context.check = run_startup_check(config, log);
         env::Scene scene = load_any_scene(config);
         check_scene_renderable(scene, config,
@@ -53,16 +55,16 @@ int run_daemon(const RunOptions& options, std::atomic<bool>& stop, std::ostream&
         return run_loop(options, config, servo_config, *device, *scene.admittance, context, outputs,
                         stop, out, log);
     } catch (const BadInput& e) {
-        log << "hapticd: " << e.what() << "\n";
+        log << priority::err << "hapticd: " << e.what() << "\n";
         return kExitBadInput;
     } catch (const ConfigError& e) {  // the config, the scene, the servo settings
-        log << "hapticd: " << e.what() << "\n";
+        log << priority::err << "hapticd: " << e.what() << "\n";
         return kExitBadInput;
     } catch (const OutputError& e) {  // --log or --summary refused or not created
-        log << "hapticd: " << e.what() << "\n";
+        log << priority::err << "hapticd: " << e.what() << "\n";
         return kExitBadInput;
     } catch (const std::exception& e) {
-        log << "hapticd: " << e.what() << "\n";
+        log << priority::err << "hapticd: " << e.what() << "\n";
         return kExitFault;
     }
 }

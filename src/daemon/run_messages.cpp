@@ -2,8 +2,11 @@
 
 #include <array>
 #include <iomanip>
+#include <ostream>
 #include <sstream>
 
+#include "hapticd/daemon/journal.hpp"
+#include "hapticd/daemon/realtime_advice.hpp"
 #include "hapticd/servo/faults.hpp"
 
 namespace hapticd::daemon {
@@ -49,7 +52,8 @@ std::string status_line(const servo::StatusSnapshot& s, int axes) {
     return out.str();
 }
 
-std::string service_status(const servo::StatusSnapshot& s, double rate_hz) {
+std::string service_status(const servo::StatusSnapshot& s, double rate_hz,
+                           const std::string& note) {
     std::ostringstream out;
     if (!s.armed) {
         out << "disarmed";
@@ -60,6 +64,7 @@ std::string service_status(const servo::StatusSnapshot& s, double rate_hz) {
     }
     out << ", " << rate_hz << " Hz, tick " << s.tick << ", overruns " << s.overruns << ", faults "
         << (s.faults == 0u ? std::string("none") : fault_names(s.faults));
+    if (!note.empty()) out << ", " << note;
     return out.str();
 }
 
@@ -95,6 +100,36 @@ std::string fault_change_line(std::uint32_t before, const servo::StatusSnapshot&
         }
     }
     return out.str();
+}
+
+std::string figures_line(const servo::StatusSnapshot& now, const servo::StatusSnapshot& before,
+                         double seconds) {
+    std::ostringstream out;
+    out << std::fixed << std::setprecision(1) << "hapticd: t " << now.t_s << " s: "
+        << (!now.armed                   ? "disarmed"
+            : now.soft_start_scale < 1.0 ? "soft start"
+                                         : "armed")
+        << ", tick " << now.tick << ", "
+        << (seconds > 0.0 ? static_cast<double>(now.tick - before.tick) / seconds : 0.0)
+        << " Hz over the last " << seconds << " s, overruns " << now.overruns << " (+"
+        << now.overruns - before.overruns << ")";
+    if (now.solver_not_converged > before.solver_not_converged) {
+        out << ", solver failed on " << now.solver_not_converged - before.solver_not_converged
+            << " ticks";
+    }
+    out << ", faults " << (now.faults == 0u ? std::string("none") : fault_names(now.faults));
+    return out.str();
+}
+
+std::string report_realtime(const servo::RealtimeRequest& request,
+                            const servo::RealtimeReport& report, std::ostream& log) {
+    std::string note = realtime_refused_note(request, report);
+    if (!note.empty()) {
+        log << priority::warning << "hapticd: " << report.brief() << ". "
+            << realtime_advice(request, report) << "\n"
+            << std::flush;
+    }
+    return note;
 }
 
 std::string millimetres(const env::Vec3& v, int axes) {

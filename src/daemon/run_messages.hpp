@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <iosfwd>
 #include <string>
 
 #include "hapticd/daemon/config.hpp"
@@ -23,8 +24,18 @@ std::string fault_names(std::uint32_t faults);
 std::string fault_change_line(std::uint32_t before, const servo::StatusSnapshot& now,
                               const Config& config);
 /// The STATUS= line systemd shows for the run (systemctl status): "armed, 1000 Hz, tick
-/// 12000, overruns 0, faults none".
-std::string service_status(const servo::StatusSnapshot& s, double rate_hz);
+/// 12000, overruns 0, faults none", then `note` (what real time refused) when not empty.
+std::string service_status(const servo::StatusSnapshot& s, double rate_hz,
+                           const std::string& note = {});
+/// "hapticd: t 60.0 s: armed, tick 60000, 1000.0 Hz over the last 60.0 s, overruns 0 (+0),
+/// faults none": the run's figures since `before`, `seconds` earlier.
+std::string figures_line(const servo::StatusSnapshot& now, const servo::StatusSnapshot& before,
+                         double seconds);
+/// What real time refused, once the servo thread has asked: a warning on `log` with the
+/// brief report and how to grant each refusal (realtime_advice.hpp); returns the note for
+/// STATUS= ("realtime refused: SCHED_FIFO"), empty when everything was granted.
+std::string report_realtime(const servo::RealtimeRequest& request,
+                            const servo::RealtimeReport& report, std::ostream& log);
 /// "[1.00 -2.50]": the first `axes` components, in millimetres.
 std::string millimetres(const env::Vec3& v, int axes);
 

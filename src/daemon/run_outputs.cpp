@@ -6,6 +6,8 @@
 #include <cstring>
 #include <ostream>
 
+#include "hapticd/daemon/journal.hpp"
+
 namespace hapticd::daemon {
 
 bool write_summary(const RunOptions& options, Outputs& outputs, const servo::Summary& summary,
@@ -23,7 +25,7 @@ bool write_summary(const RunOptions& options, Outputs& outputs, const servo::Sum
     const int error = errno;
     if (outputs.summary && ::close(outputs.summary.release()) != 0 && written) written = false;
     if (!written) {
-        log << "hapticd: --summary " << *options.summary_path
+        log << priority::err << "hapticd: --summary " << *options.summary_path
             << ": cannot write the summary: " << std::strerror(error) << "\n";
         log << json;
     }

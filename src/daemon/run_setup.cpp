@@ -1,10 +1,12 @@
 #include "run_setup.hpp"
 
 #include <cmath>
+#include <filesystem>
 #include <ostream>
 #include <sstream>
 
 #include "hapticd/daemon/device_open.hpp"
+#include "hapticd/daemon/journal.hpp"
 
 namespace hapticd::daemon {
 
@@ -44,12 +46,13 @@ StartupCheck run_startup_check(const Config& config, std::ostream& log) {
         throw BadInput(config.source + ": " + e.what());
     }
     if (check.skipped) {
-        log << "hapticd: WARNING: " << check.describe() << "\n";
+        log << priority::warning << "hapticd: WARNING: " << check.describe() << "\n";
         return check;
     }
     // The verdict's own line first, as haptic-tune check gives it for this config.
-    log << "hapticd: " << (check.guarantee && check.passed ? "" : "WARNING: ") << check.describe()
-        << "\n";
+    const bool holds = check.guarantee && check.passed;
+    log << (holds ? priority::info : priority::warning) << "hapticd: " << (holds ? "" : "WARNING: ")
+        << check.describe() << "\n";
     if (!check.passed) {
         std::ostringstream m;
         m << config.source
@@ -103,6 +106,26 @@ void refuse_empty_paths(const RunOptions& options) {
     if (option != nullptr) {
         throw BadInput(std::string(option) + " \"\": the path is empty; give a file name");
     }
+}
+
+RunOptions with_start(RunOptions options, const RunStamp& stamp) {
+    if (options.log_path) options.log_path = with_start(*options.log_path, stamp);
+    if (options.summary_path) options.summary_path = with_start(*options.summary_path, stamp);
+    return options;
+}
+
+RunContext begin_context(const RunOptions& options, const Config& config, const RunStamp& stamp) {
+    RunContext context;
+    context.stamp = stamp;
+    context.config_source = config.source;
+    if (options.config_path) {
+        std::error_code error;
+        const std::filesystem::path absolute =
+            std::filesystem::absolute(*options.config_path, error);
+        context.config_path = error ? *options.config_path : absolute.lexically_normal().string();
+    }
+    context.lockstep = options.lockstep;
+    return context;
 }
 
 void check_duration(const RunOptions& options, double rate_hz) {

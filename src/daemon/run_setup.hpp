@@ -10,7 +10,9 @@
 
 #include "hapticd/daemon/config.hpp"
 #include "hapticd/daemon/run.hpp"
+#include "hapticd/daemon/run_stamp.hpp"
 #include "hapticd/daemon/startup_check.hpp"
+#include "hapticd/daemon/summary_json.hpp"
 #include "hapticd/device/plugin_loader.hpp"
 #include "hapticd/env/scene.hpp"
 
@@ -45,6 +47,10 @@ StartupCheck run_startup_check(const Config& config, std::ostream& log);
 device::DeviceHandle open_device_or_exit(const Config& config, bool lockstep);
 /// An empty path is an error, not "none".
 void refuse_empty_paths(const RunOptions& options);
+/// The options with `{start}` in --log and --summary replaced by the stamp's start time.
+RunOptions with_start(RunOptions options, const RunStamp& stamp);
+/// What the summary says of every run from the start: the stamp, the config, the clock.
+RunContext begin_context(const RunOptions& options, const Config& config, const RunStamp& stamp);
 /// --duration: finite, at least half a period (it is rounded to whole ticks: anything
 /// shorter would be zero ticks, which means no limit), at most kMaxDurationS.
 void check_duration(const RunOptions& options, double rate_hz);

@@ -8,6 +8,9 @@ namespace hapticd::daemon {
 
 std::string summary_json(const servo::Summary& s, const RunContext& c) {
     nlohmann::ordered_json j;
+    j["version"] = c.stamp.version;
+    j["started_at"] = c.stamp.started_at;
+    j["host"] = c.stamp.host;
     j["ticks"] = s.ticks;
     j["overruns"] = s.overruns;
     j["missed_periods"] = s.missed_periods;
@@ -47,6 +50,8 @@ std::string summary_json(const servo::Summary& s, const RunContext& c) {
     j["run_time_s"] = c.run_time_s;
     j["lockstep"] = c.lockstep;
     j["config"] = c.config_source;
+    j["config_path"] = nullptr;  // the embedded default
+    if (!c.config_path.empty()) j["config_path"] = c.config_path;
     j["device"] = c.device;
     j["scene"] = {{"name", c.scene}, {"causality", c.causality}};
     nlohmann::ordered_json check;

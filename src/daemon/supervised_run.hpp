@@ -11,11 +11,14 @@
 #include <csignal>
 #include <cstring>
 #include <memory>
+#include <optional>
 #include <ostream>
 #include <string>
 #include <thread>
 
 #include "hapticd/daemon/config.hpp"
+#include "hapticd/daemon/journal.hpp"
+#include "hapticd/daemon/realtime_advice.hpp"
 #include "hapticd/daemon/run.hpp"
 #include "hapticd/daemon/service_notifier.hpp"
 #include "hapticd/daemon/summary_json.hpp"
@@ -104,14 +107,27 @@ int run_loop(const RunOptions& options, const Config& config,
     ServiceNotifier notifier;
     const auto service_status_every = std::chrono::seconds(1);
     auto next_service_status = started;
+    // What real time refused, reported once the servo thread has asked (before its first
+    // tick, whose status this thread then sees): a warning with the remedy, and in STATUS=.
+    std::optional<std::string> realtime_note;
+    // The run's figures once a minute, for the journal (the status line is per second).
+    const auto figures_every = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+        std::chrono::duration<double>(options.figures_interval_s));
+    auto next_figures = started + figures_every;
+    servo::StatusSnapshot figures_before;
     while (!servo_done.load(std::memory_order_acquire)) {
         std::this_thread::sleep_for(std::chrono::milliseconds(10));
         const auto now = std::chrono::steady_clock::now();
         if (const servo::StatusSnapshot status = loop.status(); status.tick >= 1) {
-            if (status.faults == 0u) notifier.ready(service_status(status, config.servo.rate_hz));
+            if (!realtime_note) {
+                realtime_note = report_realtime(servo_config.realtime, loop.realtime_report(), log);
+            }
+            const std::string service_line =
+                service_status(status, config.servo.rate_hz, *realtime_note);
+            if (status.faults == 0u) notifier.ready(service_line);
             notifier.watch(status.tick, now);
             if (now >= next_service_status || status.faults != logged_faults) {
-                notifier.status(service_status(status, config.servo.rate_hz));
+                notifier.status(service_line);
                 next_service_status = now + service_status_every;
             }
         }
@@ -123,10 +139,14 @@ int run_loop(const RunOptions& options, const Config& config,
                                                         config.servo.rate_hz));
             next_status = started + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                         status_every);
+            next_figures = started + figures_every;
         }
         if (const servo::StatusSnapshot status = loop.status(); status.faults != logged_faults) {
             if ((status.faults & ~logged_faults) != 0u || status.faults == 0u) {
-                log << fault_change_line(logged_faults, status, config) << "\n" << std::flush;
+                log << ((status.faults & ~logged_faults) != 0u ? priority::warning
+                                                               : priority::notice)
+                    << fault_change_line(logged_faults, status, config) << "\n"
+                    << std::flush;
             }
             logged_faults = status.faults;
         }
@@ -134,6 +154,16 @@ int run_loop(const RunOptions& options, const Config& config,
             now - started >= std::chrono::duration<double>(*options.duration_s)) {
             duration_ended = true;
             stop_servo.store(true, std::memory_order_release);
+        }
+        if (options.figures_interval_s > 0.0 && now >= next_figures) {
+            const servo::StatusSnapshot status = loop.status();
+            log << priority::info
+                << figures_line(status, figures_before,
+                                std::chrono::duration<double>(figures_every).count())
+                << "\n"
+                << std::flush;
+            figures_before = status;
+            next_figures += figures_every;
         }
         if (options.status_interval_s > 0.0 && now >= next_status) {
             log << status_line(loop.status(), info.axes) << "\n" << std::flush;
@@ -163,7 +193,7 @@ int run_loop(const RunOptions& options, const Config& config,
         try {
             writer->finish();
         } catch (const std::exception& e) {
-            log << "hapticd: " << e.what() << "\n";
+            log << priority::err << "hapticd: " << e.what() << "\n";
         }
         context.telemetry_log = *options.log_path;
         context.telemetry_records = writer->records_taken();
@@ -180,18 +210,19 @@ int run_loop(const RunOptions& options, const Config& config,
             : std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     int code = kExitOk;
     if (!servo_error.empty()) {
-        log << "hapticd: the servo loop could not run: " << servo_error << "\n";
+        log << priority::err << "hapticd: the servo loop could not run: " << servo_error << "\n";
         context.exit = "error";
         code = kExitFault;
     } else if (run_exit == servo::RunExit::fault) {
         context.exit = "fault";
         code = kExitFault;
         if (loop.link_recovery().gave_up()) {
-            log << "hapticd: the device did not come back within [safety] reconnect_timeout = "
+            log << priority::err
+                << "hapticd: the device did not come back within [safety] reconnect_timeout = "
                 << config.safety.reconnect_timeout_s << " s; stopped on the fault, force zero "
                 << "since the tick that saw it:";
         } else {
-            log << "hapticd: stopped on a fault, force zeroed in the same tick:";
+            log << priority::err << "hapticd: stopped on a fault, force zeroed in the same tick:";
         }
         for (const std::string& fault : summary.faults) log << " " << fault;
         log << "\n";
@@ -199,8 +230,8 @@ int run_loop(const RunOptions& options, const Config& config,
         // Stopped (duration or signal) while waiting for the device to come back.
         context.exit = "fault";
         code = kExitFault;
-        log << "hapticd: the run ended with the link down (" << fault_names(loop.faults())
-            << "), force zero since the tick that saw it\n";
+        log << priority::err << "hapticd: the run ended with the link down ("
+            << fault_names(loop.faults()) << "), force zero since the tick that saw it\n";
     } else if (run_exit == servo::RunExit::tick_limit || duration_ended) {
         context.exit = "duration";
     } else {
@@ -212,11 +243,14 @@ int run_loop(const RunOptions& options, const Config& config,
         context.stopped_by = cause == kStopByLifeline ? std::string("parent lifeline")
                              : abbrev != nullptr      ? "SIG" + std::string(abbrev)
                                                       : "signal " + std::to_string(cause);
-        log << "hapticd: stopped by " << context.stopped_by
+        log << priority::notice << "hapticd: stopped by " << context.stopped_by
             << ": force zeroed, telemetry flushed, summary written\n";
     }
-    if (!context.realtime.refused.empty() && servo_error.empty()) {
-        log << "hapticd: " << context.realtime.brief() << "\n";
+    if (!realtime_note && servo_error.empty()) {  // it never ticked
+        report_realtime(servo_config.realtime, context.realtime, log);
+    } else if (!servo_error.empty() && !context.realtime.all_granted()) {  // enforce refused
+        log << priority::err
+            << "hapticd: " << realtime_advice(servo_config.realtime, context.realtime) << "\n";
     }
     after_run(code, context);
     notifier.stopping("stopping: " + context.exit +
@@ -225,7 +259,7 @@ int run_loop(const RunOptions& options, const Config& config,
     // An output that is not whole is an exit status of its own, unless a fault (1) says more.
     if (code == kExitOk && (!context.telemetry_complete || !summary_written)) {
         if (!context.telemetry_complete) {
-            log << "hapticd: the telemetry log " << context.telemetry_log
+            log << priority::err << "hapticd: the telemetry log " << context.telemetry_log
                 << " is incomplete: " << context.telemetry_records_written << " of "
                 << context.telemetry_records << " records written"
                 << (summary.telemetry_dropped > 0

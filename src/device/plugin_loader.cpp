@@ -10,13 +10,7 @@
 #include <system_error>
 
 #include "hapticd/device/plugin_abi.hpp"
-
-#ifndef HAPTICD_BUILD_PLUGIN_DIR
-#error "HAPTICD_BUILD_PLUGIN_DIR must be defined by the build (src/device/CMakeLists.txt)"
-#endif
-#ifndef HAPTICD_INSTALL_PLUGIN_DIR
-#error "HAPTICD_INSTALL_PLUGIN_DIR must be defined by the build (src/device/CMakeLists.txt)"
-#endif
+#include "hapticd/install/layout.hpp"
 
 namespace hapticd::device {
 namespace {
@@ -116,8 +110,7 @@ std::vector<std::string> plugin_search_path() {
             rest.remove_prefix(colon + 1);
         }
     }
-    dirs.emplace_back(HAPTICD_BUILD_PLUGIN_DIR);
-    dirs.emplace_back(HAPTICD_INSTALL_PLUGIN_DIR);
+    dirs.push_back(install::layout().plugin_dir);
     return dirs;
 }
 

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "run_command.hpp"
+#include "text_file.hpp"
 
 namespace hapticd {
 namespace {
@@ -66,10 +67,7 @@ class TempDir {
     std::filesystem::path path_;
 };
 
-std::string read_file(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
+using hapticd::testing::read_file;
 
 double theta_at(double frequency_hz) { return 2.0 * kPi * frequency_hz * kPeriod; }
 

@@ -8,15 +8,12 @@
 #include <fstream>
 #include <sstream>
 
+#include "text_file.hpp"
+
 namespace hapticd::daemon {
 namespace {
 
-std::string read_file(const std::string& path) {
-    std::ifstream in(path);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
+using testing::read_file;
 
 const char* kConfig = R"(# lab config
 [servo]

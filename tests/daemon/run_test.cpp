@@ -5,12 +5,18 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <array>
 #include <atomic>
+#include <chrono>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <thread>
+#include <vector>
 
 namespace hapticd::daemon {
 namespace {
@@ -294,6 +300,97 @@ TEST_F(DaemonRun, SummaryGoesToAFile) {
     ASSERT_EQ(run(options).exit_code, kExitOk);
     std::ifstream in(*options.summary_path);
     EXPECT_EQ(nlohmann::json::parse(in)["ticks"], 200);
+}
+
+TEST_F(DaemonRun, TheSummarySaysWhatRanWhenWhereAndFromWhichFile) {
+    RunOptions options;
+    options.config_path = config(kEncoderGains);
+    options.lockstep = true;
+    options.duration_s = 0.1;
+    options.summary_path = "-";
+    const auto before = std::chrono::system_clock::now();
+    const Outcome outcome = run(options);
+    ASSERT_EQ(outcome.exit_code, kExitOk) << outcome.log;
+    const nlohmann::json s = outcome.summary();
+    EXPECT_EQ(s["version"], HAPTICD_TEST_VERSION);
+    EXPECT_EQ(s["config_path"], fs::absolute(*options.config_path).lexically_normal().string());
+    std::array<char, 256> host{};
+    ASSERT_EQ(::gethostname(host.data(), host.size() - 1), 0);
+    EXPECT_EQ(s["host"], host.data());
+    // ISO 8601 in UTC, to the millisecond, within the run.
+    const std::string started_at = s["started_at"];
+    ASSERT_EQ(started_at.size(), 24u) << started_at;
+    std::tm utc{};
+    ASSERT_NE(::strptime(started_at.c_str(), "%Y-%m-%dT%H:%M:%S", &utc), nullptr) << started_at;
+    EXPECT_EQ(started_at.substr(19), started_at.substr(19, 4) + "Z");
+    const auto started = std::chrono::system_clock::from_time_t(::timegm(&utc));
+    EXPECT_LE(started, std::chrono::system_clock::now());
+    EXPECT_GE(started, std::chrono::floor<std::chrono::seconds>(before));
+
+    RunOptions embedded;
+    embedded.lockstep = true;
+    embedded.duration_s = 0.01;
+    embedded.summary_path = "-";
+    const Outcome default_run = run(embedded);
+    ASSERT_EQ(default_run.exit_code, kExitOk) << default_run.log;
+    EXPECT_TRUE(default_run.summary()["config_path"].is_null());
+}
+
+TEST_F(DaemonRun, EachStartWritesFilesOfItsOwnWhereThePathsSayStart) {
+    RunOptions options;
+    options.config_path = config(kEncoderGains);
+    options.lockstep = true;
+    options.duration_s = 0.05;
+    options.summary_path = (dir_ / "summary-{start}.json").string();
+    options.log_path = (dir_ / "telemetry-{start}.csv").string();
+    ASSERT_EQ(run(options).exit_code, kExitOk);
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    ASSERT_EQ(run(options).exit_code, kExitOk);
+    std::vector<std::string> summaries, logs;
+    for (const auto& entry : fs::directory_iterator(dir_)) {
+        const std::string name = entry.path().filename().string();
+        if (name.starts_with("summary-")) summaries.push_back(name);
+        if (name.starts_with("telemetry-")) logs.push_back(name);
+    }
+    ASSERT_EQ(summaries.size(), 2u);
+    ASSERT_EQ(logs.size(), 2u);
+    for (const std::string& name : summaries) {
+        std::ifstream in(dir_ / name);
+        const nlohmann::json s = nlohmann::json::parse(in);
+        EXPECT_EQ(s["ticks"], 50);
+        // summary-20261203T124100.123Z.json of a run that started at 2026-12-03T12:41:00.123Z
+        std::string stamp = s["started_at"];
+        std::erase(stamp, '-');
+        std::erase(stamp, ':');
+        EXPECT_EQ(name, "summary-" + stamp + ".json");
+        EXPECT_NE(std::find(logs.begin(), logs.end(), "telemetry-" + stamp + ".csv"), logs.end())
+            << name;
+    }
+}
+
+TEST_F(DaemonRun, TheRunsFiguresGoToTheLogAtTheirInterval) {
+    RunOptions options;  // the embedded default: the sim on the wall clock
+    options.duration_s = 0.45;
+    options.figures_interval_s = 0.1;
+    const Outcome outcome = run(options);
+    ASSERT_EQ(outcome.exit_code, kExitOk) << outcome.log;
+    std::istringstream lines(outcome.log);
+    std::vector<std::string> figures;
+    for (std::string line; std::getline(lines, line);) {
+        if (line.find(" Hz over the last 0.1 s") != std::string::npos) figures.push_back(line);
+    }
+    ASSERT_GE(figures.size(), 3u) << outcome.log;
+    ASSERT_LE(figures.size(), 5u) << outcome.log;
+    for (const std::string& line : figures) {
+        EXPECT_TRUE(line.starts_with("<6>hapticd: t ")) << line;  // info, for the journal
+        EXPECT_NE(line.find(", faults none"), std::string::npos) << line;
+        // About 100 ticks in each 0.1 s at 1 kHz (a shared machine stalls now and then).
+        const std::size_t hz = line.find(" Hz over");
+        const std::size_t from = line.rfind(", ", hz) + 2;
+        const double rate_hz = std::stod(line.substr(from, hz - from));
+        EXPECT_GT(rate_hz, 500.0) << line;
+        EXPECT_LT(rate_hz, 1500.0) << line;
+    }
 }
 
 struct BadStart {

@@ -14,16 +14,12 @@
 #include <vector>
 
 #include "hapticd/servo/telemetry_csv.hpp"
+#include "text_file.hpp"
 
 namespace hapticd::daemon {
 namespace {
 
-std::vector<std::string> lines_of(const std::string& path) {
-    std::ifstream in(path);
-    std::vector<std::string> lines;
-    for (std::string line; std::getline(in, line);) lines.push_back(line);
-    return lines;
-}
+std::vector<std::string> lines_of(const std::string& path) { return testing::lines_of_file(path); }
 
 std::string temp_path(const std::string& name) {
     return (std::filesystem::temp_directory_path() /

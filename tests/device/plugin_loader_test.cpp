@@ -145,14 +145,16 @@ TEST(DevicePluginLoader, NotFoundListsEveryPlaceSearched) {
     EXPECT_NE(e.find("/nonexistent/b/hapticd-device-nosuch.so"), std::string::npos) << e;
     EXPECT_NE(e.find(HAPTICD_TEST_BUILD_PLUGIN_DIR "/hapticd-device-nosuch.so"), std::string::npos)
         << e;
-    EXPECT_NE(e.find("hapticd/plugins/libhapticd-device-nosuch.so"), std::string::npos) << e;
+    // A build tree's executable looks in its own build tree only, not in an installation.
+    const std::string_view any_plugin_dir = "hapticd/plugins/libhapticd-device-nosuch.so";
+    EXPECT_EQ(e.find(any_plugin_dir), e.rfind(any_plugin_dir)) << e;
     EXPECT_NE(e.find("HAPTICD_PLUGIN_PATH"), std::string::npos) << e;
 }
 
 TEST(DevicePluginLoader, SearchPathPutsTheEnvironmentFirst) {
     PluginPath path("/x:/y");
     const auto dirs = plugin_search_path();
-    ASSERT_EQ(dirs.size(), 4u);
+    ASSERT_EQ(dirs.size(), 3u);
     EXPECT_EQ(dirs[0], "/x");
     EXPECT_EQ(dirs[1], "/y");
     EXPECT_EQ(dirs[2], HAPTICD_TEST_BUILD_PLUGIN_DIR);

@@ -33,6 +33,7 @@
 #include "hapticd_run.hpp"
 #include "operators.hpp"
 #include "pen_display.hpp"
+#include "text_file.hpp"
 #include "tuned_gains.hpp"
 #include "wall_contact.hpp"
 
@@ -51,13 +52,6 @@ std::string binary(const char* variable, const char* built) {
 }
 std::string hapticd_bin() { return binary("HAPTICD_EXIT_TEST_HAPTICD", HAPTICD_BIN); }
 std::string haptic_tune_bin() { return binary("HAPTICD_EXIT_TEST_HAPTIC_TUNE", HAPTIC_TUNE_BIN); }
-
-std::string slurp(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream text;
-    text << in.rdbuf();
-    return text.str();
-}
 
 /// A child process with its standard output and error in files.
 class Child {
@@ -102,8 +96,8 @@ class Child {
     int status() const { return status_; }
     /// The exit status, or -signal when it was killed.
     int exit_code() const { return WIFEXITED(status_) ? WEXITSTATUS(status_) : -WTERMSIG(status_); }
-    std::string err() const { return slurp(err_); }
-    std::string out() const { return slurp(out_); }
+    std::string err() const { return read_file(err_); }
+    std::string out() const { return read_file(out_); }
 
   private:
     std::string out_, err_;
@@ -130,7 +124,7 @@ struct LogFile {
     std::size_t bytes = 0;
 };
 LogFile read_log(const std::string& path) {
-    const std::string text = slurp(path);
+    const std::string text = read_file(path);
     LogFile log;
     log.bytes = text.size();
     log.ends_whole = text.empty() || text.back() == '\n';
@@ -197,12 +191,12 @@ struct Bench {
         return child;
     }
     nlohmann::json summary_json() const {
-        const std::string text = slurp(summary);
+        const std::string text = read_file(summary);
         return text.empty() ? nlohmann::json() : nlohmann::json::parse(text);
     }
     /// Data rows in the log now (the header not counted).
     std::size_t rows_now() const {
-        const std::string text = slurp(log);
+        const std::string text = read_file(log);
         const auto n = static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n'));
         return n == 0 ? 0 : n - 1;
     }
@@ -269,7 +263,7 @@ TEST(HilExit, EveryStopSignalEndsALockstepRunAsSigtermDoes) {
 
 /// t_s of the last whole row in the log now, if there is one.
 std::optional<double> last_row_t(const std::string& path) {
-    const std::string text = slurp(path);
+    const std::string text = read_file(path);
     const std::size_t end = text.rfind('\n');
     if (end == std::string::npos || end == 0) return std::nullopt;
     const std::size_t begin = text.rfind('\n', end - 1);
@@ -381,8 +375,8 @@ TEST(HilExit, AFullFilesystemKeepsWholeLinesAndSaysHowManyAreThere) {
 /// A run that must be refused before the device opens: exit 2, the message has `needle`,
 /// no row logged and `untouched` (the config by default) unchanged.
 void expect_refused(const Bench& bench, std::vector<std::string> args, const std::string& needle) {
-    const std::string config_before = slurp(bench.config);
-    const std::string scene_before = slurp(bench.dir.file("scene.toml"));
+    const std::string config_before = read_file(bench.config);
+    const std::string scene_before = read_file(bench.dir.file("scene.toml"));
     Child child(std::move(args), bench.dir.file("out.txt"), bench.dir.file("err.txt"));
     ASSERT_TRUE(child.wait(30s));
     EXPECT_EQ(child.exit_code(), 2) << child.err();
@@ -390,8 +384,8 @@ void expect_refused(const Bench& bench, std::vector<std::string> args, const std
     EXPECT_EQ(child.err().find("sim device, 1 axis"), std::string::npos)
         << "the device was opened:\n"
         << child.err();
-    EXPECT_EQ(slurp(bench.config), config_before);
-    EXPECT_EQ(slurp(bench.dir.file("scene.toml")), scene_before);
+    EXPECT_EQ(read_file(bench.config), config_before);
+    EXPECT_EQ(read_file(bench.dir.file("scene.toml")), scene_before);
 }
 
 TEST(HilExit, AnOutputThatIsAnInputIsRefused) {
@@ -421,16 +415,16 @@ TEST(HilExit, AnOutputThatIsAnInputIsRefused) {
     const std::string plugin =
         bench.dir.write("hapticd-device-fake.so", "not really a shared object\n");
     const std::string with_plugin = bench.dir.write("plugin.toml", [&] {
-        std::string text = slurp(bench.config);
+        std::string text = read_file(bench.config);
         const std::string from = "plugin = \"sim\"";
         text.replace(text.find(from), from.size(), "plugin = \"" + plugin + "\"");
         return text.substr(0, text.find("[device.sim"));  // no table for that plugin
     }());
-    const std::string plugin_before = slurp(plugin);
+    const std::string plugin_before = read_file(plugin);
     expect_refused(bench,
                    {h, "--lockstep", "--duration", "1", "--config", with_plugin, "--log", plugin},
                    "--log " + plugin + " is the same file as the device plugin");
-    EXPECT_EQ(slurp(plugin), plugin_before);
+    EXPECT_EQ(read_file(plugin), plugin_before);
 }
 
 TEST(HilExit, TwoOutputsOnOneFileAreRefused) {
@@ -483,7 +477,7 @@ TEST(HilExit, ARunRefusedAfterTheOutputsWereCheckedLeavesNoneBehind) {
     // The device cannot be loaded: the outputs, already checked and created, are removed
     // again (the ones it created) or left as they were (the ones that existed).
     const Bench bench("lockstep");
-    std::string text = slurp(bench.config);
+    std::string text = read_file(bench.config);
     text.replace(text.find("plugin = \"sim\""), std::string("plugin = \"sim\"").size(),
                  "plugin = \"" + bench.dir.file("hapticd-device-none.so") + "\"");
     const std::string config =
@@ -496,7 +490,7 @@ TEST(HilExit, ARunRefusedAfterTheOutputsWereCheckedLeavesNoneBehind) {
     EXPECT_EQ(child.exit_code(), 2) << child.err();
     EXPECT_NE(child.err().find("hapticd-device-none.so"), std::string::npos) << child.err();
     EXPECT_FALSE(fs::exists(bench.log));
-    EXPECT_EQ(slurp(old_summary), "{\"old\": true}\n");
+    EXPECT_EQ(read_file(old_summary), "{\"old\": true}\n");
 }
 
 TEST(HilExit, EmptyPathsAreErrors) {
@@ -566,7 +560,7 @@ struct AutotuneBench {
                                      record},
             dir.file("out.txt"), dir.file("err.txt"));
         const auto logged = [&] {
-            const std::string text = slurp(record);
+            const std::string text = read_file(record);
             return static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n'));
         };
         EXPECT_TRUE(eventually(
@@ -608,7 +602,7 @@ TEST(HilExit, AutotunePassesItsStopSignalsOnToTheIdentificationRun) {
                   std::string::npos)
             << err;
         EXPECT_LT(took_s, 2.0);
-        EXPECT_EQ(slurp(bench.config), bench.original);
+        EXPECT_EQ(read_file(bench.config), bench.original);
         expect_whole_rows(read_log(bench.record));
         EXPECT_EQ(::kill(hapticd, 0), -1);  // reaped by autotune
     }
@@ -653,7 +647,7 @@ TEST(HilExit, TheIdentificationRunStopsOnItsOwnWhenAutotuneIsKilled) {
               << log.lines.size() - rows_at_kill_before << " rows after the kill\n";
     EXPECT_LT(took_s, 1.0);
     EXPECT_LT(extra_s, 0.5);
-    EXPECT_EQ(slurp(bench.config), bench.original);
+    EXPECT_EQ(read_file(bench.config), bench.original);
 }
 
 TEST(HilExit, AutotuneRefusesARecordThatIsItsConfig) {
@@ -668,7 +662,7 @@ TEST(HilExit, AutotuneRefusesARecordThatIsItsConfig) {
               std::string::npos)
         << autotune.err();
     EXPECT_EQ(autotune.err().find("running"), std::string::npos) << autotune.err();
-    EXPECT_EQ(slurp(bench.config), bench.original);
+    EXPECT_EQ(read_file(bench.config), bench.original);
     EXPECT_FALSE(fs::exists(bench.config + ".bak"));
 }
 

@@ -134,7 +134,9 @@ TEST(HilServiceNotify, ReadyAfterTheFirstTickThenStatusThenStopping) {
     const std::vector<Notification> notes = collect_while(socket, [&] {
         run = run_hapticd(dir, {.config_toml = config.toml(),
                                 .scene_toml = "[scene]\nname = \"free\"\naxes = 1\n",
-                                .duration_s = 1.0,
+                                // Lockstep runs about a million ticks a second: 1 s of
+                                // it could end before the watcher's first look (10 ms).
+                                .duration_s = 60.0,
                                 .lockstep = true,
                                 .identify = false,
                                 .with_log = true,

@@ -5,13 +5,7 @@
 #include <filesystem>
 
 #include "child_process.hpp"
-
-#ifndef HAPTICD_CHART_SCRIPT_BUILD
-#error "HAPTICD_CHART_SCRIPT_BUILD must be defined (tools/haptic-tune/CMakeLists.txt)"
-#endif
-#ifndef HAPTICD_CHART_SCRIPT_INSTALLED
-#error "HAPTICD_CHART_SCRIPT_INSTALLED must be defined (tools/haptic-tune/CMakeLists.txt)"
-#endif
+#include "hapticd/install/layout.hpp"
 
 namespace hapticd::tools {
 namespace {
@@ -40,12 +34,10 @@ std::string find_chart_script() {
         }
         return from_env;
     }
-    for (const char* candidate : {HAPTICD_CHART_SCRIPT_BUILD, HAPTICD_CHART_SCRIPT_INSTALLED}) {
-        if (is_regular_file(candidate)) return candidate;
-    }
-    throw ChartError(std::string("chart script hapticd_chart.py not found (looked for ") +
-                     HAPTICD_CHART_SCRIPT_BUILD + " and " + HAPTICD_CHART_SCRIPT_INSTALLED +
-                     "); set HAPTICD_CHART_SCRIPT to its path");
+    const std::string& script = install::layout().chart_script;
+    if (is_regular_file(script)) return script;
+    throw ChartError("chart script hapticd_chart.py not found at " + script +
+                     " (this haptic-tune's own copy); set HAPTICD_CHART_SCRIPT to its path");
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "commands.hpp"
+#include "hapticd/install/version.hpp"
 #include "hapticd/tune/coupling_sizing.hpp"
 
 namespace {
@@ -13,6 +14,7 @@ int run_main(int argc, char** argv) {
         "haptic-tune: size and check the virtual coupling of an impedance haptic display "
         "(Adams & Hannaford 1999, inequality (21))",
         "haptic-tune"};
+    app.set_version_flag("--version", std::string("haptic-tune ") + hapticd::install::kVersion);
     app.require_subcommand(1);
     Invocation invocation;
     add_size_command(app, invocation);
@@ -28,6 +30,8 @@ int run_main(int argc, char** argv) {
         return app.exit(help);
     } catch (const CLI::CallForAllHelp& help) {
         return app.exit(help);
+    } catch (const CLI::CallForVersion& version) {
+        return app.exit(version);
     } catch (const CLI::ParseError& error) {
         app.exit(error);  // prints the message and the usage hint
         return kExitBadInput;

@@ -15,8 +15,10 @@
 #include <string>
 #include <thread>
 
+#include "hapticd/daemon/journal.hpp"
 #include "hapticd/daemon/run.hpp"
 #include "hapticd/device/plugin_loader.hpp"
+#include "hapticd/install/version.hpp"
 
 namespace {
 
@@ -153,9 +155,13 @@ int run_main(int argc, char** argv) {
     app.add_option("--duration", duration_s,
                    "stop after S seconds (device time: virtual time with --lockstep); from half a "
                    "period to 1e7 s");
+    app.set_version_flag("--version", std::string("hapticd ") + hapticd::install::kVersion);
     app.add_option("--summary", summary_path,
-                   "write the JSON summary to FILE at the end, or to standard output with -");
-    app.add_option("--log", log_path, "write telemetry, one CSV line per tick, to FILE");
+                   "write the JSON summary to FILE at the end, or to standard output with -; "
+                   "{start} in FILE becomes the start time (UTC, 20261203T124100.123Z), so "
+                   "that each start writes a file of its own");
+    app.add_option("--log", log_path,
+                   "write telemetry, one CSV line per tick, to FILE ({start} as in --summary)");
     app.add_flag("--identify", options.identify,
                  "the excitation run: drive the device open loop with the [identify] multisine "
                  "(no scene, no coupling) and log it; needs --log; without --duration it runs "
@@ -172,6 +178,8 @@ int run_main(int argc, char** argv) {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& help) {
         return app.exit(help);
+    } catch (const CLI::CallForVersion& version) {
+        return app.exit(version);
     } catch (const CLI::ParseError& error) {
         app.exit(error);
         return hapticd::daemon::kExitBadInput;
@@ -195,7 +203,11 @@ int run_main(int argc, char** argv) {
         signals.watch_lifeline(lifeline_fd);
     }
     options.stop_cause = &signals.cause();
-    return hapticd::daemon::run_daemon(options, signals.stop(), std::cout, std::cerr);
+    // Each message line carries its priority for the journal, stripped anywhere else.
+    hapticd::daemon::PriorityLineFilter priorities(
+        std::cerr.rdbuf(), hapticd::daemon::is_journal_stream(STDERR_FILENO));
+    std::ostream log(&priorities);
+    return hapticd::daemon::run_daemon(options, signals.stop(), std::cout, log);
 }
 
 }  // namespace

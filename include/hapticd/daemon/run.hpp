@@ -18,16 +18,21 @@ namespace hapticd::daemon {
 inline constexpr double kMaxDurationS = 1e7;
 
 struct RunOptions {
-    std::optional<std::string> config_path;   ///< --config; none: the embedded default; "": error
-    std::optional<double> duration_s;         ///< --duration; none: until SIGINT/SIGTERM
-    std::optional<std::string> summary_path;  ///< --summary FILE, or "-" for standard output
-    std::optional<std::string> log_path;      ///< --log FILE: telemetry CSV
-    bool lockstep = false;                    ///< --lockstep: virtual time, as fast as it goes
+    std::optional<std::string> config_path;  ///< --config; none: the embedded default; "": error
+    std::optional<double> duration_s;        ///< --duration; none: until SIGINT/SIGTERM
+    /// --summary FILE, or "-" for standard output; `{start}` in FILE becomes the start time
+    /// (run_stamp.hpp), as in log_path.
+    std::optional<std::string> summary_path;
+    std::optional<std::string> log_path;  ///< --log FILE: telemetry CSV
+    bool lockstep = false;                ///< --lockstep: virtual time, as fast as it goes
     /// --identify: the excitation run (docs/daemon.md): the [identify] multisine on the
     /// handle, open loop, instead of the scene; needs log_path. Without duration_s it runs
     /// for the excitation (IdentifyPlan::duration_s).
     bool identify = false;
     double status_interval_s = 1.0;  ///< the live status line; 0: none
+    /// The run's figures (state, ticks, rate, overruns, faults) on the log, for the journal
+    /// of a service that prints no status line; 0: none.
+    double figures_interval_s = 60.0;
     /// What set `stop`, for the summary's `stopped_by`: > 0 a signal number, kStopByLifeline
     /// the parent's lifeline (--parent-lifeline); null or 0: not known.
     const std::atomic<int>* stop_cause = nullptr;

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <string>
 
+#include "hapticd/daemon/run_stamp.hpp"
 #include "hapticd/daemon/startup_check.hpp"
 #include "hapticd/servo/realtime.hpp"
 #include "hapticd/servo/summary.hpp"
@@ -15,7 +16,9 @@
 namespace hapticd::daemon {
 
 struct RunContext {
+    RunStamp stamp;             ///< version, start time, host
     std::string config_source;  ///< file name or "<embedded default>"
+    std::string config_path;    ///< the config's absolute path; empty: the embedded default
     std::string device;         ///< the plugin's name
     std::string scene;          ///< the scene's name
     std::string causality;      ///< "impedance" | "admittance"

@@ -3,8 +3,9 @@
 // A name ("sim") is looked up as `libhapticd-device-<name>.so`, then `hapticd-device-<name>.so`,
 // in each directory of plugin_search_path() in order, first match wins:
 //   1. $HAPTICD_PLUGIN_PATH, a colon-separated list (empty entries are skipped);
-//   2. the build tree's plugin directory (<build>/lib/hapticd/plugins);
-//   3. the install directory (<prefix>/<libdir>/hapticd/plugins).
+//   2. the executable's own plugin directory (install/layout.hpp): the build tree's
+//      (<build>/lib/hapticd/plugins) for a build tree's executable, else its installation's
+//      (<prefix>/<libdir>/hapticd/plugins), never both.
 // A string containing '/' is a path and is opened as given. The built-in plugins (sim) are
 // shared objects found the same way, so a lab's own device needs no rebuild of the daemon.
 //

@@ -6,10 +6,6 @@
 #include <stdexcept>
 #include <vector>
 
-#ifndef HAPTICD_UDEV_RULE_INSTALLED
-#define HAPTICD_UDEV_RULE_INSTALLED "/usr/local/share/hapticd/udev/70-hapticd.rules"
-#endif
-
 namespace hapticd::device::usb {
 namespace {
 
@@ -117,13 +113,14 @@ FoundDevice find_device(libusb_context* context, const UsbSettings& settings) {
     if (!denied.empty()) {
         throw std::runtime_error(
             "usb: permission denied opening " + joined(denied) +
-            ": this user may not write to the device node. Install the udev rule that grants "
-            "access (config/udev/70-hapticd.rules in the source tree, installed as " +
-            HAPTICD_UDEV_RULE_INSTALLED +
-            "): sudo cp 70-hapticd.rules /etc/udev/rules.d/ && sudo udevadm control "
-            "--reload-rules && sudo udevadm trigger, replug the device, and add the user to "
-            "group plugdev (sudo usermod -aG plugdev $USER, then log in again). A device with "
-            "its own VID:PID needs its own line in the rule (docs/transport-usb.md)");
+            ": this user may not write to the device node. The udev rule that grants access "
+            "is config/udev/70-hapticd.rules in the source tree, installed where udev reads it "
+            "(/usr/lib/udev/rules.d by the .deb, /usr/local/lib/udev/rules.d by cmake "
+            "--install); from a source tree, sudo cp config/udev/70-hapticd.rules "
+            "/etc/udev/rules.d/. Then sudo udevadm control --reload-rules && sudo udevadm "
+            "trigger, replug the device, and add the user to group plugdev (sudo usermod -aG "
+            "plugdev $USER, then log in again). A device with its own VID:PID needs its own line "
+            "in the rule (docs/transport-usb.md)");
     }
     if (!failed.empty()) {
         throw std::runtime_error("usb: cannot open " + joined(failed));

@@ -1,0 +1,31 @@
+# What `cmake --install` places besides the executables and plugins (which their own
+# CMakeLists.txt install); docs/install.md lists the whole tree.
+#
+# Everything is placed relative to the prefix of the install, not of the configure, so that
+# one build installs to /usr/local (`cmake --install`) and packages for /usr (CPack, with
+# CPACK_SET_DESTDIR) alike: the files that name installed paths (the unit, the default
+# config) are written at install time by HapticdInstallTime.cmake. systemd and udev read
+# lib/systemd/system and lib/udev/rules.d below /usr and below /usr/local.
+
+install(FILES ${PROJECT_SOURCE_DIR}/config/udev/70-hapticd.rules
+        DESTINATION ${HAPTICD_UDEV_RULES_INSTALL_DIR})
+
+# Scenes, device models, operator classes and example configs, with their relative paths
+# (examples/ name ../scenes/) as in the source tree.
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/config/scenes ${PROJECT_SOURCE_DIR}/config/devices
+                  ${PROJECT_SOURCE_DIR}/config/operators ${PROJECT_SOURCE_DIR}/config/examples
+        DESTINATION ${HAPTICD_DATA_INSTALL_DIR} FILES_MATCHING PATTERN "*.toml")
+
+install(FILES ${PROJECT_SOURCE_DIR}/man/hapticd.8 DESTINATION ${CMAKE_INSTALL_MANDIR}/man8)
+install(FILES ${PROJECT_SOURCE_DIR}/man/haptic-tune.1 DESTINATION ${CMAKE_INSTALL_MANDIR}/man1)
+install(FILES ${PROJECT_SOURCE_DIR}/man/hapticd.toml.5 DESTINATION ${CMAKE_INSTALL_MANDIR}/man5)
+
+# The template unit and the default config (instance `sim`), for the install's own prefix.
+install(CODE "
+  set(HAPTICD_SOURCE_DIR \"${PROJECT_SOURCE_DIR}\")
+  set(HAPTICD_STAGING_DIR \"${PROJECT_BINARY_DIR}/install-time\")
+  set(HAPTICD_BINDIR \"${CMAKE_INSTALL_BINDIR}\")
+  set(HAPTICD_DATA_INSTALL_DIR \"${HAPTICD_DATA_INSTALL_DIR}\")
+  set(HAPTICD_UNIT_INSTALL_DIR \"${HAPTICD_UNIT_INSTALL_DIR}\")
+  include(\"${PROJECT_SOURCE_DIR}/cmake/HapticdInstallTime.cmake\")
+")

@@ -1,0 +1,137 @@
+// The installed tree: `cmake --install` of this build into a scratch prefix, then the
+// installed executables run from there while the build tree exists beside them. They must
+// use the installation's plugins, scripts and data only (install/layout.hpp), and every
+// file a service needs must be in place (docs/install.md).
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "run_command.hpp"
+#include "scratch_dir.hpp"
+#include "text_file.hpp"
+
+namespace hapticd::testing {
+namespace {
+
+namespace fs = std::filesystem;
+
+class InstalledTree : public ::testing::Test {
+  protected:
+    static void SetUpTestSuite() {
+        scratch_ = std::make_unique<ScratchDir>();
+        prefix_ = scratch_->file("prefix");
+        const CommandResult install = run_command(std::string(HAPTICD_TEST_CMAKE) +
+                                                  " --install " HAPTICD_TEST_BUILD_DIR
+                                                  " --prefix " +
+                                                  prefix_);
+        install_exit_ = install.exit_code;
+        install_output_ = install.out + install.err;
+    }
+    static void TearDownTestSuite() { scratch_.reset(); }
+
+    void SetUp() override { ASSERT_EQ(install_exit_, 0) << install_output_; }
+
+    /// An installed executable, run with no plugin path of the caller's.
+    static CommandResult run_installed(const std::string& command) {
+        return run_command("env -u HAPTICD_PLUGIN_PATH -u HAPTICD_CHART_SCRIPT " + prefix_ +
+                           "/bin/" + command);
+    }
+    static std::string installed(const std::string& relative) { return prefix_ + "/" + relative; }
+
+    static inline std::unique_ptr<ScratchDir> scratch_;
+    static inline std::string prefix_;
+    static inline int install_exit_ = -1;
+    static inline std::string install_output_;
+};
+
+TEST_F(InstalledTree, HapticdUsesTheInstalledPluginsOnlyWithTheBuildTreePresent) {
+    ASSERT_TRUE(fs::is_directory(HAPTICD_TEST_BUILD_PLUGIN_DIR));
+    const CommandResult listing = run_installed("hapticd --list-plugins");
+    ASSERT_EQ(listing.exit_code, 0) << listing.err;
+    const std::string plugin_dir = installed(HAPTICD_TEST_PLUGIN_INSTALL_DIR);
+    int plugins = 0;
+    std::istringstream lines(listing.out);
+    for (std::string line; std::getline(lines, line); ++plugins) {
+        EXPECT_NE(line.find("\t" + plugin_dir + "/hapticd-device-"), std::string::npos) << line;
+        EXPECT_EQ(line.find(HAPTICD_TEST_BUILD_PLUGIN_DIR), std::string::npos) << line;
+        EXPECT_EQ(line.find("unusable"), std::string::npos) << line;
+    }
+    EXPECT_EQ(plugins, 4) << listing.out;  // sim, usb, hid, serial
+    for (const char* kind : {"sim", "usb", "hid", "serial"}) {
+        EXPECT_NE(listing.out.find(std::string(kind) + "\t" + plugin_dir), std::string::npos)
+            << kind << "\n"
+            << listing.out;
+    }
+}
+
+TEST_F(InstalledTree, TheInstalledHapticdRunsItsEmbeddedDefault) {
+    const CommandResult run = run_installed("hapticd --lockstep --duration 1 --summary -");
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    const nlohmann::json summary = nlohmann::json::parse(run.out);
+    EXPECT_EQ(summary["ticks"], 1000);
+    EXPECT_EQ(summary["version"], HAPTICD_TEST_VERSION);
+    EXPECT_TRUE(summary["config_path"].is_null());
+    EXPECT_TRUE(summary["faults"].empty()) << run.out;
+}
+
+TEST_F(InstalledTree, TheInstalledDefaultConfigFindsItsSceneFromEtc) {
+    const std::string config = installed("etc/hapticd/sim.toml");
+    ASSERT_TRUE(fs::is_regular_file(config));
+    EXPECT_NE(read_file(config).find("file = \"" + installed("share/hapticd/scenes/demo-wall.toml")),
+              std::string::npos);
+    const CommandResult run =
+        run_installed("hapticd --config " + config + " --lockstep --duration 1 --summary -");
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    const nlohmann::json summary = nlohmann::json::parse(run.out);
+    EXPECT_EQ(summary["config_path"], config);
+    EXPECT_EQ(summary["scene"]["name"], "demo-wall");
+    EXPECT_EQ(summary["ticks"], 1000);
+    const CommandResult check = run_installed("haptic-tune check --config " + config);
+    EXPECT_EQ(check.exit_code, 0) << check.out << check.err;
+}
+
+TEST_F(InstalledTree, EveryExecutableSaysItsVersion) {
+    for (const char* program : {"hapticd", "haptic-tune"}) {
+        const CommandResult version = run_installed(std::string(program) + " --version");
+        EXPECT_EQ(version.exit_code, 0) << program << ": " << version.err;
+        EXPECT_EQ(version.out, std::string(program) + " " HAPTICD_TEST_VERSION "\n");
+    }
+}
+
+TEST_F(InstalledTree, TheTemplateUnitRunsTheInstalledHapticdOnTheInstancesConfig) {
+    const std::string unit = read_file(installed("lib/systemd/system/hapticd@.service"));
+    ASSERT_FALSE(unit.empty());
+    EXPECT_NE(unit.find("\nExecStart=" + installed("bin/hapticd") + " --config " +
+                        installed("etc/hapticd") + "/%i.toml "),
+              std::string::npos)
+        << unit;
+    for (const char* line : {"\nType=notify\n", "\nWatchdogSec=", "\nRestartPreventExitStatus=2\n",
+                             "\nDynamicUser=yes\n", "\nSupplementaryGroups=plugdev\n",
+                             "\nLimitRTPRIO=", "\nLimitMEMLOCK=infinity\n",
+                             "\nLogsDirectory=hapticd/%i\n", "\nRuntimeDirectory=hapticd/%i\n",
+                             "\nDevicePolicy=closed\n", "summary-{start}.json"}) {
+        EXPECT_NE(unit.find(line), std::string::npos) << line;
+    }
+    EXPECT_EQ(unit.find('@' + std::string("HAPTICD_")), std::string::npos) << unit;
+}
+
+TEST_F(InstalledTree, TheServiceFilesManPagesAndDataAreInstalled) {
+    for (const char* file :
+         {"lib/udev/rules.d/70-hapticd.rules", "share/man/man8/hapticd.8",
+          "share/man/man1/haptic-tune.1", "share/man/man5/hapticd.toml.5",
+          "share/hapticd/hapticd_chart.py", "share/hapticd/scenes/demo-wall.toml",
+          "share/hapticd/devices/pen-display.toml", "share/hapticd/operators/pen-grip.toml",
+          "share/hapticd/examples/pantograph-usb.toml"}) {
+        EXPECT_TRUE(fs::is_regular_file(installed(file))) << file;
+    }
+    // The examples name their scenes relative to themselves, as in the source tree.
+    EXPECT_TRUE(fs::is_regular_file(installed("share/hapticd/examples/../scenes/god-object-sphere.toml")));
+}
+
+}  // namespace
+}  // namespace hapticd::testing
