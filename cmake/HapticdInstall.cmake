@@ -16,8 +16,12 @@ install(DIRECTORY ${PROJECT_SOURCE_DIR}/config/scenes ${PROJECT_SOURCE_DIR}/conf
                   ${PROJECT_SOURCE_DIR}/config/operators ${PROJECT_SOURCE_DIR}/config/examples
         DESTINATION ${HAPTICD_DATA_INSTALL_DIR} FILES_MATCHING PATTERN "*.toml")
 
+# The group of the control sockets (config/sysusers/hapticd.conf).
+install(FILES ${PROJECT_SOURCE_DIR}/config/sysusers/hapticd.conf DESTINATION lib/sysusers.d)
+
 install(FILES ${PROJECT_SOURCE_DIR}/man/hapticd.8 DESTINATION ${CMAKE_INSTALL_MANDIR}/man8)
-install(FILES ${PROJECT_SOURCE_DIR}/man/haptic-tune.1 DESTINATION ${CMAKE_INSTALL_MANDIR}/man1)
+install(FILES ${PROJECT_SOURCE_DIR}/man/haptic-tune.1 ${PROJECT_SOURCE_DIR}/man/hapticctl.1
+        DESTINATION ${CMAKE_INSTALL_MANDIR}/man1)
 install(FILES ${PROJECT_SOURCE_DIR}/man/hapticd.toml.5 DESTINATION ${CMAKE_INSTALL_MANDIR}/man5)
 
 # The template unit and the default config (instance `sim`), for the install's own prefix.

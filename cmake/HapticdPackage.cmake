@@ -22,5 +22,17 @@ set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "python3-matplotlib")
 # The default config is the administrator's to edit: dpkg keeps the edits on upgrade.
 file(WRITE ${PROJECT_BINARY_DIR}/debian/conffiles "/etc/hapticd/sim.toml\n")
-set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA ${PROJECT_BINARY_DIR}/debian/conffiles)
+# The group of the control sockets (config/sysusers/hapticd.conf), made on install as
+# debhelper's dh_installsysusers would.
+file(WRITE ${PROJECT_BINARY_DIR}/debian/postinst [=[#!/bin/sh
+set -e
+if [ "$1" = configure ] && command -v systemd-sysusers >/dev/null; then
+    systemd-sysusers hapticd.conf
+fi
+]=])
+file(CHMOD ${PROJECT_BINARY_DIR}/debian/postinst
+     PERMISSIONS OWNER_READ OWNER_WRITE OWNER_EXECUTE GROUP_READ GROUP_EXECUTE WORLD_READ
+                 WORLD_EXECUTE)
+set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA ${PROJECT_BINARY_DIR}/debian/conffiles
+                                       ${PROJECT_BINARY_DIR}/debian/postinst)
 include(CPack)

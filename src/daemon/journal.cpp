@@ -13,8 +13,7 @@ bool is_journal_stream(int fd) {
     if (stream == nullptr) return false;
     struct stat st {};
     if (::fstat(fd, &st) != 0) return false;
-    return std::string(stream) ==
-           std::to_string(st.st_dev) + ":" + std::to_string(st.st_ino);
+    return std::string(stream) == std::to_string(st.st_dev) + ":" + std::to_string(st.st_ino);
 }
 
 PriorityLineFilter::~PriorityLineFilter() {

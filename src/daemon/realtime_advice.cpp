@@ -30,14 +30,16 @@ std::string fifo_advice(const servo::RealtimeRequest& request, const RealtimeSur
         where.rtprio_limit ? std::to_string(*where.rtprio_limit) : std::string("unlimited");
     std::string text = fifo + " was refused although RLIMIT_RTPRIO (" + limit + ") allows it: ";
     if (where.rt_group_scheduling) {
-        text += "this kernel has RT group scheduling (CONFIG_RT_GROUP_SCHED), which refuses "
-                "SCHED_FIFO in a cgroup without a real-time budget: give the service's cgroup "
-                "one (cpu.rt_runtime_us), or use a kernel without RT group scheduling, such "
-                "as Debian's own";
+        text +=
+            "this kernel has RT group scheduling (CONFIG_RT_GROUP_SCHED), which refuses "
+            "SCHED_FIFO in a cgroup without a real-time budget: give the service's cgroup "
+            "one (cpu.rt_runtime_us), or use a kernel without RT group scheduling, such "
+            "as Debian's own";
     } else {
-        text += "the kernel refused it (a container or cgroup without a real-time budget, "
-                "/proc/sys/kernel/sched_rt_runtime_us, or a security policy); run on the host, "
-                "with CAP_SYS_NICE";
+        text +=
+            "the kernel refused it (a container or cgroup without a real-time budget, "
+            "/proc/sys/kernel/sched_rt_runtime_us, or a security policy); run on the host, "
+            "with CAP_SYS_NICE";
     }
     return text + ".";
 }
@@ -47,7 +49,8 @@ std::string fifo_advice(const servo::RealtimeRequest& request, const RealtimeSur
 RealtimeSurroundings RealtimeSurroundings::of_this_process() {
     RealtimeSurroundings where;
     where.in_a_service = std::getenv("INVOCATION_ID") != nullptr;
-    if (rlimit rtprio{}; ::getrlimit(RLIMIT_RTPRIO, &rtprio) == 0 && rtprio.rlim_cur != RLIM_INFINITY) {
+    if (rlimit rtprio{};
+        ::getrlimit(RLIMIT_RTPRIO, &rtprio) == 0 && rtprio.rlim_cur != RLIM_INFINITY) {
         where.rtprio_limit = rtprio.rlim_cur;
     }
     std::error_code error;
@@ -61,7 +64,9 @@ std::string realtime_refused_note(const servo::RealtimeRequest& request,
                                   const servo::RealtimeReport& report) {
     if (report.all_granted() || request.mode == servo::RealtimeMode::off) return {};
     std::string names;
-    const auto add = [&](const char* name) { names += (names.empty() ? "" : ", ") + std::string(name); };
+    const auto add = [&](const char* name) {
+        names += (names.empty() ? "" : ", ") + std::string(name);
+    };
     if (!report.scheduler_fifo) add("SCHED_FIFO");
     if (request.lock_memory && !report.memory_locked) add("mlockall");
     if (request.cpu >= 0 && !report.affinity_set) add("affinity");
@@ -81,9 +86,9 @@ std::string realtime_advice(const servo::RealtimeRequest& request,
     if (!report.scheduler_fifo) add(fifo_advice(request, where));
     if (request.lock_memory && !report.memory_locked) {
         add(where.in_a_service ? "mlockall needs LimitMEMLOCK=infinity in the unit (or "
-                             "CAP_IPC_LOCK)."
-                           : "mlockall needs an unlimited RLIMIT_MEMLOCK (ulimit -l unlimited, "
-                             "or a memlock line in /etc/security/limits.d/) or CAP_IPC_LOCK.");
+                                 "CAP_IPC_LOCK)."
+                               : "mlockall needs an unlimited RLIMIT_MEMLOCK (ulimit -l unlimited, "
+                                 "or a memlock line in /etc/security/limits.d/) or CAP_IPC_LOCK.");
     }
     if (request.cpu >= 0 && !report.affinity_set) {
         add("cpu " + std::to_string(request.cpu) +
@@ -93,10 +98,10 @@ std::string realtime_advice(const servo::RealtimeRequest& request,
     if (request.hold_cpu_dma_latency && !report.cpu_dma_latency_held) {
         add(std::string("/dev/cpu_dma_latency must be writable by this user: ") +
             (where.in_a_service ? "the unit allows the node (DeviceAllow=/dev/cpu_dma_latency rw); "
-                              "give group plugdev write access with the commented "
-                              "cpu_dma_latency line of 70-hapticd.rules."
-                            : "give the user's group write access (the commented "
-                              "cpu_dma_latency line of 70-hapticd.rules), or run as root."));
+                                  "give group plugdev write access with the commented "
+                                  "cpu_dma_latency line of 70-hapticd.rules."
+                                : "give the user's group write access (the commented "
+                                  "cpu_dma_latency line of 70-hapticd.rules), or run as root."));
     }
     return advice;
 }

@@ -46,8 +46,12 @@ int run_daemon(const RunOptions& given, std::atomic<bool>& stop, std::ostream& o
         context.lockstep = info.lockstep;
         log << "hapticd: " << device_line(info) << "; scene " << scene.name << " ("
             << context.causality << "); " << config.servo.rate_hz << " Hz\n";
-        const servo::ServoConfig servo_config =
+        servo::ServoConfig servo_config =
             make_servo_config(config, info, options.log_path.has_value());
+        // An operator on the control socket can reset a fault: it latches at zero force
+        // and waits (docs/control.md, "Faults and reset"). Without one nobody can, so
+        // the run ends on it.
+        if (options.socket_path) servo_config.stop_on_fault = false;
         if (scene.causality == env::Causality::impedance) {
             return run_loop(options, config, servo_config, *device, *scene.impedance, context,
                             outputs, stop, out, log);
@@ -59,6 +63,9 @@ int run_daemon(const RunOptions& given, std::atomic<bool>& stop, std::ostream& o
         return kExitBadInput;
     } catch (const ConfigError& e) {  // the config, the scene, the servo settings
         log << priority::err << "hapticd: " << e.what() << "\n";
+        return kExitBadInput;
+    } catch (const control::ControlSocketError& e) {  // --socket not made
+        log << priority::err << "hapticd: --socket: " << e.what() << "\n";
         return kExitBadInput;
     } catch (const OutputError& e) {  // --log or --summary refused or not created
         log << priority::err << "hapticd: " << e.what() << "\n";

@@ -33,12 +33,9 @@ std::string status_line(const servo::StatusSnapshot& s, int axes) {
     out << std::fixed << std::setprecision(2) << "hapticd: t " << s.t_s << " s  x "
         << format_vector_mm(s.x_m, axes, 1e3) << " mm  xe " << format_vector_mm(s.xe_m, axes, 1e3)
         << " mm  f " << format_vector_mm(s.f_n, axes, 1.0) << " N  ";
-    if (!s.armed) {
-        out << "disarmed";
-    } else if (s.soft_start_scale < 1.0) {
-        out << "soft start " << std::setprecision(0) << 100.0 * s.soft_start_scale << "%";
-    } else {
-        out << "armed";
+    out << servo::servo_state_name(s.state);
+    if (s.state == servo::ServoState::arming) {
+        out << " " << std::setprecision(0) << 100.0 * s.soft_start_scale << "%";
     }
     out << "  overruns " << s.overruns;
     if (s.solver_not_converged > 0) out << "  solver failed " << s.solver_not_converged << " ticks";
@@ -55,14 +52,8 @@ std::string status_line(const servo::StatusSnapshot& s, int axes) {
 std::string service_status(const servo::StatusSnapshot& s, double rate_hz,
                            const std::string& note) {
     std::ostringstream out;
-    if (!s.armed) {
-        out << "disarmed";
-    } else if (s.soft_start_scale < 1.0) {
-        out << "soft start";
-    } else {
-        out << "armed";
-    }
-    out << ", " << rate_hz << " Hz, tick " << s.tick << ", overruns " << s.overruns << ", faults "
+    out << servo::servo_state_name(s.state) << ", " << rate_hz << " Hz, tick " << s.tick
+        << ", overruns " << s.overruns << ", faults "
         << (s.faults == 0u ? std::string("none") : fault_names(s.faults));
     if (!note.empty()) out << ", " << note;
     return out.str();
@@ -105,11 +96,8 @@ std::string fault_change_line(std::uint32_t before, const servo::StatusSnapshot&
 std::string figures_line(const servo::StatusSnapshot& now, const servo::StatusSnapshot& before,
                          double seconds) {
     std::ostringstream out;
-    out << std::fixed << std::setprecision(1) << "hapticd: t " << now.t_s << " s: "
-        << (!now.armed                   ? "disarmed"
-            : now.soft_start_scale < 1.0 ? "soft start"
-                                         : "armed")
-        << ", tick " << now.tick << ", "
+    out << std::fixed << std::setprecision(1) << "hapticd: t " << now.t_s
+        << " s: " << servo::servo_state_name(now.state) << ", tick " << now.tick << ", "
         << (seconds > 0.0 ? static_cast<double>(now.tick - before.tick) / seconds : 0.0)
         << " Hz over the last " << seconds << " s, overruns " << now.overruns << " (+"
         << now.overruns - before.overruns << ")";

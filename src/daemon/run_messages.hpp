@@ -15,7 +15,8 @@ namespace hapticd::daemon {
 
 /// "sim device, 3 axes, lockstep clock": what the run's first line says of the device.
 std::string device_line(const device::DeviceInfo& info);
-/// "hapticd: t 1.00 s  x [..] mm  xe [..] mm  f [..] N  armed  overruns 0  faults none".
+/// "hapticd: t 1.00 s  x [..] mm  xe [..] mm  f [..] N  running  overruns 0  faults none"
+/// (the state, servo_state.hpp; "arming 40%" during the soft start).
 std::string status_line(const servo::StatusSnapshot& s, int axes);
 /// "device_lost,overspeed": the latched faults' names.
 std::string fault_names(std::uint32_t faults);
@@ -23,11 +24,11 @@ std::string fault_names(std::uint32_t faults);
 /// its poll may go unlogged; the summary counts every one).
 std::string fault_change_line(std::uint32_t before, const servo::StatusSnapshot& now,
                               const Config& config);
-/// The STATUS= line systemd shows for the run (systemctl status): "armed, 1000 Hz, tick
+/// The STATUS= line systemd shows for the run (systemctl status): "running, 1000 Hz, tick
 /// 12000, overruns 0, faults none", then `note` (what real time refused) when not empty.
 std::string service_status(const servo::StatusSnapshot& s, double rate_hz,
                            const std::string& note = {});
-/// "hapticd: t 60.0 s: armed, tick 60000, 1000.0 Hz over the last 60.0 s, overruns 0 (+0),
+/// "hapticd: t 60.0 s: running, tick 60000, 1000.0 Hz over the last 60.0 s, overruns 0 (+0),
 /// faults none": the run's figures since `before`, `seconds` earlier.
 std::string figures_line(const servo::StatusSnapshot& now, const servo::StatusSnapshot& before,
                          double seconds);

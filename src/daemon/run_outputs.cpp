@@ -52,6 +52,9 @@ Outputs prepare_outputs(const RunOptions& options, const Config& config) {
     if (options.summary_path && *options.summary_path != "-") {
         opened.summary = open_output("--summary", *options.summary_path);
     }
+    if (options.socket_path) {
+        opened.control = std::make_unique<control::ControlServer>(*options.socket_path);
+    }
     return opened;
 }
 

@@ -3,8 +3,10 @@
 #pragma once
 
 #include <iosfwd>
+#include <memory>
 
 #include "hapticd/daemon/config.hpp"
+#include "hapticd/daemon/control_server.hpp"
 #include "hapticd/daemon/output_files.hpp"
 #include "hapticd/daemon/run.hpp"
 #include "hapticd/daemon/summary_json.hpp"
@@ -16,11 +18,14 @@ namespace hapticd::daemon {
 struct Outputs {
     OutputFile log;      ///< --log, locked; emptied when the run starts
     OutputFile summary;  ///< --summary FILE; emptied when the run starts
+    /// --socket: bound and listening, served once the loop exists (docs/control.md).
+    std::unique_ptr<control::ControlServer> control;
 };
 
 /// Refuses outputs that are inputs (or each other), then creates them: all before the device
-/// is opened, so that a run that could not keep its results never starts. Throws
-/// OutputError naming the option and the file.
+/// is opened, so that a run that could not keep its results never starts; and binds the
+/// control socket. Throws OutputError naming the option and the file, or
+/// control::ControlSocketError.
 Outputs prepare_outputs(const RunOptions& options, const Config& config);
 
 /// Writes the summary: JSON to --summary FILE or "-" (`out`), else text to `log`. False when

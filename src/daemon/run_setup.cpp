@@ -102,6 +102,7 @@ void refuse_empty_paths(const RunOptions& options) {
     const char* option = empty(options.config_path)    ? "--config"
                          : empty(options.log_path)     ? "--log"
                          : empty(options.summary_path) ? "--summary"
+                         : empty(options.socket_path)  ? "--socket"
                                                        : nullptr;
     if (option != nullptr) {
         throw BadInput(std::string(option) + " \"\": the path is empty; give a file name");

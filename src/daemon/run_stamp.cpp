@@ -16,7 +16,8 @@ namespace {
 std::string utc_text(std::chrono::system_clock::time_point start, const char* format) {
     const auto since_epoch = start.time_since_epoch();
     const auto seconds = std::chrono::floor<std::chrono::seconds>(since_epoch);
-    const auto millis = std::chrono::duration_cast<std::chrono::milliseconds>(since_epoch - seconds);
+    const auto millis =
+        std::chrono::duration_cast<std::chrono::milliseconds>(since_epoch - seconds);
     const std::time_t whole = static_cast<std::time_t>(seconds.count());
     std::tm utc{};
     ::gmtime_r(&whole, &utc);

@@ -16,7 +16,9 @@
 #include <string>
 #include <thread>
 
+#include "control_requests.hpp"
 #include "hapticd/daemon/config.hpp"
+#include "hapticd/daemon/control_server.hpp"
 #include "hapticd/daemon/journal.hpp"
 #include "hapticd/daemon/realtime_advice.hpp"
 #include "hapticd/daemon/run.hpp"
@@ -35,6 +37,29 @@ namespace hapticd::daemon {
 // nothing for a minute; a lockstep run waits for the writer instead (backpressure).
 inline constexpr std::size_t kRealtimeRingRecords = std::size_t{1} << 16;
 inline constexpr std::size_t kLockstepRingRecords = std::size_t{1} << 14;
+
+/// The servo loop as the control socket sees it: lock-free calls only (servo_loop.hpp).
+template <typename Loop>
+class LoopControl final : public control::ServoControl {
+  public:
+    explicit LoopControl(Loop& loop) : loop_(loop) {}
+    servo::StatusSnapshot status() const noexcept override { return loop_.status(); }
+    void arm() noexcept override { loop_.arm(); }
+    void disarm() noexcept override { loop_.disarm(); }
+    void reset() noexcept override { loop_.request_fault_reset(); }
+
+  private:
+    Loop& loop_;
+};
+
+/// Stops the control socket's thread when it goes out of scope: before the loop that its
+/// handler reaches is destroyed, on every path.
+struct ControlStopper {
+    control::ControlServer* server;
+    ~ControlStopper() {
+        if (server != nullptr) server->stop();
+    }
+};
 
 /// Nothing to add after the run.
 struct NoAfterRun {
@@ -77,6 +102,33 @@ int run_loop(const RunOptions& options, const Config& config,
 
     servo::ServoLoop<device::Device, Environment> loop(device, environment, servo_config,
                                                        ring.get());
+    // The control socket (docs/control.md), on its own thread from here to the servo
+    // thread's end; the rate it reports is the watcher's, over the last second.
+    std::atomic<double> measured_rate_hz{0.0};
+    LoopControl control_port(loop);
+    const control::RunFacts facts{.axes = info.axes,
+                                  .rate_hz = config.servo.rate_hz,
+                                  .device = device_line(info),
+                                  .config_path = context.config_path.empty()
+                                                     ? std::string("(embedded default)")
+                                                     : context.config_path,
+                                  .measured_rate_hz = &measured_rate_hz};
+    const ControlStopper control_stopper{outputs.control.get()};
+    if (outputs.control) {
+        outputs.control->start([&](const control::Request& request, const control::Peer& peer) {
+            return control::answer(request, peer, control_port, facts);
+        });
+        log << priority::info << "hapticd: control socket " << outputs.control->path() << "\n";
+    }
+    const auto drain_control_messages = [&] {
+        if (!outputs.control) return;
+        for (const std::string& line : outputs.control->take_messages()) {
+            log << priority::info << "hapticd: " << line << "\n" << std::flush;
+        }
+    };
+    auto rate_since = std::chrono::steady_clock::now();
+    std::uint64_t rate_ticks_before = 0;
+
     // The servo thread reads `stop` itself, so a signal (or the parent's death) ends the run
     // at the next tick; this thread sets it too when the duration ends.
     std::atomic<bool>& stop_servo = stop;
@@ -131,6 +183,14 @@ int run_loop(const RunOptions& options, const Config& config,
                 next_service_status = now + service_status_every;
             }
         }
+        drain_control_messages();
+        if (now - rate_since >= std::chrono::seconds(1)) {
+            const std::uint64_t ticks = loop.status().tick;
+            measured_rate_hz.store(static_cast<double>(ticks - rate_ticks_before) /
+                                   std::chrono::duration<double>(now - rate_since).count());
+            rate_ticks_before = ticks;
+            rate_since = now;
+        }
         if (!ticking && loop.status().tick >= 1) {
             ticking = true;
             started =
@@ -172,6 +232,8 @@ int run_loop(const RunOptions& options, const Config& config,
         }
     }
     servo_thread.join();
+    if (outputs.control) outputs.control->stop();
+    drain_control_messages();
     loop.write_zero_force();
     // Once more, to know that it landed: the summary's final_command.
     switch (device.write(servo::Command{})) {
@@ -227,10 +289,12 @@ int run_loop(const RunOptions& options, const Config& config,
         for (const std::string& fault : summary.faults) log << " " << fault;
         log << "\n";
     } else if (loop.faults() != 0u) {
-        // Stopped (duration or signal) while waiting for the device to come back.
+        // Stopped (duration or signal) while waiting for the device to come back, or, with
+        // a control socket, for a reset.
         context.exit = "fault";
         code = kExitFault;
-        log << priority::err << "hapticd: the run ended with the link down ("
+        log << priority::err << "hapticd: the run ended with "
+            << (servo::only_link_faults(loop.faults()) ? "the link down (" : "faults latched (")
             << fault_names(loop.faults()) << "), force zero since the tick that saw it\n";
     } else if (run_exit == servo::RunExit::tick_limit || duration_ended) {
         context.exit = "duration";

@@ -30,8 +30,7 @@ Layout layout_for(const std::string& executable) {
         layout.chart_script = HAPTICD_BUILD_CHART_SCRIPT;
     } else {
         layout.plugin_dir = (bin_dir / HAPTICD_PLUGIN_DIR_FROM_BIN).lexically_normal().string();
-        layout.chart_script =
-            (bin_dir / HAPTICD_CHART_SCRIPT_FROM_BIN).lexically_normal().string();
+        layout.chart_script = (bin_dir / HAPTICD_CHART_SCRIPT_FROM_BIN).lexically_normal().string();
     }
     return layout;
 }

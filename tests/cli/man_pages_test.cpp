@@ -26,15 +26,16 @@ namespace hapticd {
 namespace {
 
 using hapticd::testing::CommandResult;
-using hapticd::testing::run_command;
-using hapticd::testing::ScratchDir;
 using hapticd::testing::lines_of_text;
 using hapticd::testing::read_file;
+using hapticd::testing::run_command;
+using hapticd::testing::ScratchDir;
 
 const std::string kSource = HAPTICD_SOURCE_DIR;
 const std::string kHapticdPage = kSource + "/man/hapticd.8";
 const std::string kHapticTunePage = kSource + "/man/haptic-tune.1";
 const std::string kConfigPage = kSource + "/man/hapticd.toml.5";
+const std::string kHapticctlPage = kSource + "/man/hapticctl.1";
 
 std::string quoted(const std::string& path) { return "'" + path + "'"; }
 
@@ -200,7 +201,7 @@ class ManPage {
 // --- a. The pages format cleanly ---------------------------------------------------------
 
 TEST(ManPages, FormatWithoutAWarning) {
-    for (const std::string& page : {kHapticdPage, kHapticTunePage, kConfigPage}) {
+    for (const std::string& page : {kHapticdPage, kHapticTunePage, kConfigPage, kHapticctlPage}) {
         SCOPED_TRACE(page);
         const CommandResult r = run_command("groff -man -ww -z " + quoted(page));
         EXPECT_EQ(r.exit_code, 0) << r.err;
@@ -248,6 +249,30 @@ TEST(ManPages, HapticTunePageHasASectionPerCommandWithAnEntryPerOption) {
         ASSERT_GE(its.size(), 4u) << "the options of haptic-tune " << command << " --help";
         for (const std::string& option : its) {
             // --help is every command's; the page gives it once, under OPTIONS.
+            EXPECT_TRUE(names_option(option == "--help" ? common : entries, option))
+                << "no entry for " << option << " in .SS " << command;
+        }
+    }
+}
+
+TEST(ManPages, HapticctlPageHasASectionPerCommandWithAnEntryPerOption) {
+    const ManPage page(kHapticctlPage);
+    const std::string help = help_of(HAPTICCTL_BIN, "");
+    const std::string common = option_tags(page, "OPTIONS");
+    const std::vector<std::string> options = long_options_in_help(help);
+    // --help, --version, --instance, --socket.
+    ASSERT_GE(options.size(), 4u) << "the options of hapticctl --help were not found";
+    for (const std::string& option : options) {
+        EXPECT_TRUE(names_option(common, option)) << "no entry for " << option << " in OPTIONS";
+    }
+    const std::vector<std::string> commands = subcommands_in_help(help);
+    // status, watch, arm, disarm, reset.
+    ASSERT_GE(commands.size(), 5u) << "the commands of hapticctl --help were not found";
+    for (const std::string& command : commands) {
+        SCOPED_TRACE("hapticctl " + command);
+        ASSERT_NE(page.section(command), nullptr) << "no .SS " << command;
+        const std::string entries = page.section(command)->tags();
+        for (const std::string& option : long_options_in_help(help_of(HAPTICCTL_BIN, command))) {
             EXPECT_TRUE(names_option(option == "--help" ? common : entries, option))
                 << "no entry for " << option << " in .SS " << command;
         }

@@ -42,8 +42,8 @@ TEST(PriorityLineFilter, KeepsThemForTheJournal) {
 
 TEST(PriorityLineFilter, LeavesEverythingThatIsNotALeadingPriorityAlone) {
     for (const std::string text :
-         {"hapticd: [4] <4> in the middle\n", "<12>two digits\n", "<x>not a digit\n", "<4\n",
-          "<\n", "<", "\n\n<4 >\n", "plain", "x<4>y\n"}) {
+         {"hapticd: [4] <4> in the middle\n", "<12>two digits\n", "<x>not a digit\n", "<4\n", "<\n",
+          "<", "\n\n<4 >\n", "plain", "x<4>y\n"}) {
         EXPECT_EQ(filtered(text, false), text) << text;
     }
     EXPECT_EQ(filtered("\n<5>after an empty line\n", false), "\nafter an empty line\n");

@@ -58,9 +58,9 @@ TEST(RealtimeAdvice, InAShellItNamesUlimitAndLimitsD) {
 }
 
 TEST(RealtimeAdvice, ALimitThatAllowsThePriorityMeansTheKernelRefused) {
-    for (const std::optional<std::uint64_t> limit : {std::optional<std::uint64_t>(99),
-                                                     std::optional<std::uint64_t>(80),
-                                                     std::optional<std::uint64_t>()}) {
+    for (const std::optional<std::uint64_t> limit :
+         {std::optional<std::uint64_t>(99), std::optional<std::uint64_t>(80),
+          std::optional<std::uint64_t>()}) {
         const std::string advice =
             realtime_advice(pinned_request(), everything_refused(), service(limit));
         const std::string shown = limit ? std::to_string(*limit) : "unlimited";

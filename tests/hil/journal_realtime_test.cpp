@@ -40,10 +40,11 @@ ServiceRun run_as_service(const ScratchDir& dir, bool journal, const std::string
     const std::string err = dir.file(journal ? "journal.txt" : "terminal.txt");
     std::string command = "exec 2>" + shell_quote(err) + "; ";
     if (journal) command += "JOURNAL_STREAM=$(stat -c %d:%i " + shell_quote(err) + ") ";
-    command += "INVOCATION_ID=0123456789abcdef setpriv --reuid=65534 --regid=65534 "
-               "--clear-groups " +
-               shell_quote(HAPTICD_BIN) + " --no-status --duration 0.3" +
-               (config.empty() ? std::string() : " --config " + shell_quote(config));
+    command +=
+        "INVOCATION_ID=0123456789abcdef setpriv --reuid=65534 --regid=65534 "
+        "--clear-groups " +
+        shell_quote(HAPTICD_BIN) + " --no-status --duration 0.3" +
+        (config.empty() ? std::string() : " --config " + shell_quote(config));
     ServiceRun run;
     run.exit_code = run_command("sh -c " + shell_quote(command)).exit_code;
     run.stderr_lines = lines_of_file(err);
@@ -75,8 +76,8 @@ TEST_F(HilJournalRealtime, ARefusalIsAWarningAtTheStartWithTheUnitsRemedy) {
     const std::size_t summary = first_line_with(lines, "hapticd summary:");
     ASSERT_LT(summary, lines.size());
     EXPECT_LT(refusal, summary);
-    EXPECT_EQ(first_line_with(std::vector<std::string>(lines.begin() + static_cast<long>(refusal) + 1,
-                                                       lines.end()),
+    EXPECT_EQ(first_line_with(std::vector<std::string>(
+                                  lines.begin() + static_cast<long>(refusal) + 1, lines.end()),
                               "refused: SCHED_FIFO"),
               lines.size() - refusal - 1);
 }
@@ -95,7 +96,8 @@ TEST_F(HilJournalRealtime, EveryPriorityIsOneJournaldKnowsAndOnlyTheJournalGetsT
     const ServiceRun terminal = run_as_service(dir_, /*journal=*/false);
     ASSERT_EQ(terminal.exit_code, 0);
     ASSERT_GE(terminal.stderr_lines.size(), 3u);
-    for (const std::string& line : terminal.stderr_lines) EXPECT_FALSE(line.starts_with("<")) << line;
+    for (const std::string& line : terminal.stderr_lines)
+        EXPECT_FALSE(line.starts_with("<")) << line;
     EXPECT_LT(first_line_with(terminal.stderr_lines, "hapticd: realtime warn: "),
               terminal.stderr_lines.size());
 }

@@ -25,10 +25,9 @@ class InstalledTree : public ::testing::Test {
     static void SetUpTestSuite() {
         scratch_ = std::make_unique<ScratchDir>();
         prefix_ = scratch_->file("prefix");
-        const CommandResult install = run_command(std::string(HAPTICD_TEST_CMAKE) +
-                                                  " --install " HAPTICD_TEST_BUILD_DIR
-                                                  " --prefix " +
-                                                  prefix_);
+        const CommandResult install =
+            run_command(std::string(HAPTICD_TEST_CMAKE) +
+                        " --install " HAPTICD_TEST_BUILD_DIR " --prefix " + prefix_);
         install_exit_ = install.exit_code;
         install_output_ = install.out + install.err;
     }
@@ -82,8 +81,9 @@ TEST_F(InstalledTree, TheInstalledHapticdRunsItsEmbeddedDefault) {
 TEST_F(InstalledTree, TheInstalledDefaultConfigFindsItsSceneFromEtc) {
     const std::string config = installed("etc/hapticd/sim.toml");
     ASSERT_TRUE(fs::is_regular_file(config));
-    EXPECT_NE(read_file(config).find("file = \"" + installed("share/hapticd/scenes/demo-wall.toml")),
-              std::string::npos);
+    EXPECT_NE(
+        read_file(config).find("file = \"" + installed("share/hapticd/scenes/demo-wall.toml")),
+        std::string::npos);
     const CommandResult run =
         run_installed("hapticd --config " + config + " --lockstep --duration 1 --summary -");
     ASSERT_EQ(run.exit_code, 0) << run.err;
@@ -96,7 +96,7 @@ TEST_F(InstalledTree, TheInstalledDefaultConfigFindsItsSceneFromEtc) {
 }
 
 TEST_F(InstalledTree, EveryExecutableSaysItsVersion) {
-    for (const char* program : {"hapticd", "haptic-tune"}) {
+    for (const char* program : {"hapticd", "haptic-tune", "hapticctl"}) {
         const CommandResult version = run_installed(std::string(program) + " --version");
         EXPECT_EQ(version.exit_code, 0) << program << ": " << version.err;
         EXPECT_EQ(version.out, std::string(program) + " " HAPTICD_TEST_VERSION "\n");
@@ -110,11 +110,12 @@ TEST_F(InstalledTree, TheTemplateUnitRunsTheInstalledHapticdOnTheInstancesConfig
                         installed("etc/hapticd") + "/%i.toml "),
               std::string::npos)
         << unit;
-    for (const char* line : {"\nType=notify\n", "\nWatchdogSec=", "\nRestartPreventExitStatus=2\n",
-                             "\nDynamicUser=yes\n", "\nSupplementaryGroups=plugdev\n",
-                             "\nLimitRTPRIO=", "\nLimitMEMLOCK=infinity\n",
-                             "\nLogsDirectory=hapticd/%i\n", "\nRuntimeDirectory=hapticd/%i\n",
-                             "\nDevicePolicy=closed\n", "summary-{start}.json"}) {
+    for (const char* line :
+         {"\nType=notify\n", "\nWatchdogSec=", "\nRestartPreventExitStatus=2\n",
+          "\nDynamicUser=yes\n", "\nSupplementaryGroups=plugdev hapticd\n",
+          "\nLimitRTPRIO=", "\nLimitMEMLOCK=infinity\n", "\nLogsDirectory=hapticd/%i\n",
+          "\nRuntimeDirectory=hapticd/%i\n", "\nDevicePolicy=closed\n", "summary-{start}.json",
+          " --socket ${RUNTIME_DIRECTORY}/control.sock\n"}) {
         EXPECT_NE(unit.find(line), std::string::npos) << line;
     }
     EXPECT_EQ(unit.find('@' + std::string("HAPTICD_")), std::string::npos) << unit;
@@ -123,14 +124,16 @@ TEST_F(InstalledTree, TheTemplateUnitRunsTheInstalledHapticdOnTheInstancesConfig
 TEST_F(InstalledTree, TheServiceFilesManPagesAndDataAreInstalled) {
     for (const char* file :
          {"lib/udev/rules.d/70-hapticd.rules", "share/man/man8/hapticd.8",
-          "share/man/man1/haptic-tune.1", "share/man/man5/hapticd.toml.5",
+          "share/man/man1/haptic-tune.1", "share/man/man1/hapticctl.1",
+          "share/man/man5/hapticd.toml.5", "lib/sysusers.d/hapticd.conf",
           "share/hapticd/hapticd_chart.py", "share/hapticd/scenes/demo-wall.toml",
           "share/hapticd/devices/pen-display.toml", "share/hapticd/operators/pen-grip.toml",
           "share/hapticd/examples/pantograph-usb.toml"}) {
         EXPECT_TRUE(fs::is_regular_file(installed(file))) << file;
     }
     // The examples name their scenes relative to themselves, as in the source tree.
-    EXPECT_TRUE(fs::is_regular_file(installed("share/hapticd/examples/../scenes/god-object-sphere.toml")));
+    EXPECT_TRUE(
+        fs::is_regular_file(installed("share/hapticd/examples/../scenes/god-object-sphere.toml")));
 }
 
 }  // namespace

@@ -146,7 +146,7 @@ int run_main(int argc, char** argv) {
         "dropped: the summary says telemetry_complete: false).",
         "hapticd"};
     hapticd::daemon::RunOptions options;
-    std::string config_path, summary_path, log_path;
+    std::string config_path, summary_path, log_path, socket_path;
     double duration_s = 0.0;
     bool no_status = false;
     bool show_plugins = false;
@@ -162,6 +162,10 @@ int run_main(int argc, char** argv) {
                    "that each start writes a file of its own");
     app.add_option("--log", log_path,
                    "write telemetry, one CSV line per tick, to FILE ({start} as in --summary)");
+    app.add_option("--socket", socket_path,
+                   "serve the control socket (docs/control.md, hapticctl) on PATH, mode 0660, "
+                   "group hapticd; with it a fault latches at zero force until hapticctl reset "
+                   "instead of ending the run");
     app.add_flag("--identify", options.identify,
                  "the excitation run: drive the device open loop with the [identify] multisine "
                  "(no scene, no coupling) and log it; needs --log; without --duration it runs "
@@ -189,6 +193,7 @@ int run_main(int argc, char** argv) {
     if (app.count("--config") != 0) options.config_path = config_path;
     if (app.count("--summary") != 0) options.summary_path = summary_path;
     if (app.count("--log") != 0) options.log_path = log_path;
+    if (app.count("--socket") != 0) options.socket_path = socket_path;
     if (app.count("--parent-lifeline") != 0 && ::fcntl(lifeline_fd, F_GETFD) < 0) {
         std::cerr << "hapticd: --parent-lifeline " << lifeline_fd
                   << ": not an open file descriptor (give the read end of a pipe)\n";

@@ -25,10 +25,9 @@ struct RealtimeSurroundings {
 /// One sentence per refusal of `report` (empty when all was granted), each saying how to
 /// grant it. For SCHED_FIFO it also tells a refusal by the resource limit from one by the
 /// kernel (RT group scheduling, or a cgroup without a real-time budget), which no limit fixes.
-std::string realtime_advice(const servo::RealtimeRequest& request,
-                            const servo::RealtimeReport& report,
-                            const RealtimeSurroundings& surroundings =
-                                RealtimeSurroundings::of_this_process());
+std::string realtime_advice(
+    const servo::RealtimeRequest& request, const servo::RealtimeReport& report,
+    const RealtimeSurroundings& surroundings = RealtimeSurroundings::of_this_process());
 
 /// What was refused, in a few words for STATUS= ("realtime refused: SCHED_FIFO, mlockall");
 /// empty when all was granted.

@@ -24,7 +24,10 @@ struct RunOptions {
     /// (run_stamp.hpp), as in log_path.
     std::optional<std::string> summary_path;
     std::optional<std::string> log_path;  ///< --log FILE: telemetry CSV
-    bool lockstep = false;                ///< --lockstep: virtual time, as fast as it goes
+    /// --socket PATH: the control socket (docs/control.md); none: no socket. With one, a
+    /// fault latches at zero force until `reset` instead of ending the run.
+    std::optional<std::string> socket_path;
+    bool lockstep = false;  ///< --lockstep: virtual time, as fast as it goes
     /// --identify: the excitation run (docs/daemon.md): the [identify] multisine on the
     /// handle, open loop, instead of the scene; needs log_path. Without duration_s it runs
     /// for the excitation (IdentifyPlan::duration_s).

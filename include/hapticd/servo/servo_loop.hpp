@@ -91,7 +91,10 @@ class ServoLoop {
           pacer_(clock_, config.period_ns()),
           rigid_(!config.coupling_enabled),
           armed_(config.start_armed),
-          was_armed_(config.start_armed) {}
+          was_armed_(config.start_armed) {
+        // Before the first tick, status() says what the first will start from.
+        publish_status(0.0, config.start_armed);
+    }
 
     ~ServoLoop() { write_zero_force(); }
 
@@ -600,6 +603,9 @@ class ServoLoop {
         snapshot.energy_j = record_.energy_j;
         snapshot.soft_start_scale = soft_start_scale;
         snapshot.armed = armed;
+        // The soft start's own scale: a tick without a sample filters nothing, and must not
+        // make a running loop look as if it were arming again.
+        snapshot.state = servo_state(armed, record_.faults, safety_.soft_start().scale());
         status_.store(snapshot);
     }
 

@@ -6,6 +6,7 @@
 #include <cstdint>
 
 #include "hapticd/servo/io.hpp"
+#include "hapticd/servo/servo_state.hpp"
 
 namespace hapticd::servo {
 
@@ -22,6 +23,7 @@ struct StatusSnapshot {
     double energy_j = 0.0;                   ///< passivity observer
     double soft_start_scale = 0.0;
     bool armed = false;
+    ServoState state = ServoState::disabled;  ///< from armed, faults and the soft start
 };
 
 }  // namespace hapticd::servo

@@ -2,6 +2,7 @@
 // docs/transport-hid.md, docs/protocol.md 6.2).
 #include "hapticd/device/hid/hid_link.hpp"
 
+#include <fcntl.h>
 #include <hidapi.h>
 #include <unistd.h>
 
@@ -63,6 +64,7 @@ void HidLink::open() {
         path = settings_.path;
     }
 
+    lock_node(path);
     errno = 0;
     device_ = hid_open_path(path.c_str());
     if (device_ == nullptr) fail_open(path, errno, utf8_from_wide(hid_error(nullptr)));
@@ -106,9 +108,33 @@ void HidLink::fail_open(const std::string& path, int error, const std::string& h
         " (docs/transport-hid.md)");
 }
 
+void HidLink::lock_node(const std::string& path) {
+    const int fd = ::open(path.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) fail_open(path, errno, "");
+    struct flock lock {};
+    lock.l_type = F_WRLCK;
+    lock.l_whence = SEEK_SET;  // l_start = l_len = 0: the whole node
+    if (::fcntl(fd, F_OFD_SETLK, &lock) != 0) {
+        const int error = errno;
+        ::close(fd);
+        const std::string what = entry_ ? entry_->describe() : path;
+        if (error == EAGAIN || error == EACCES) {
+            throw std::runtime_error(
+                "hid: " + what +
+                " is in use: another hapticd has it open (one instance per device: give "
+                "each its own [device.hid] serial or path, docs/transport-hid.md)");
+        }
+        throw std::runtime_error("hid: cannot lock " + path + " for " + what + ": " +
+                                 std::strerror(error));
+    }
+    node_lock_fd_ = fd;
+}
+
 void HidLink::close() noexcept {
     if (device_ != nullptr) hid_close(device_);
     device_ = nullptr;
+    if (node_lock_fd_ >= 0) ::close(node_lock_fd_);
+    node_lock_fd_ = -1;
 }
 
 LinkResult HidLink::send(std::span<const std::byte> frame) noexcept {

@@ -284,5 +284,35 @@ TEST(HidLinkFrames, AConfiguredPathOverridesEnumeration) {
     }
 }
 
+// hidraw lets any number of processes open a node: without a lock of its own, a second
+// hapticd on the same device would interleave its frames with the first one's.
+TEST(HidLinkFrames, ASecondLinkOnTheSameNodeIsRefusedUntilTheFirstCloses) {
+    EmulatedHidDevice device;
+    HidLink first(ids());
+    first.open();
+    HidLink second(ids());
+    try {
+        second.open();
+        ADD_FAILURE() << "two links opened the same hidraw node";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("hid: /dev/hidraw0 1209:4841"), std::string::npos)
+            << e.what();
+        EXPECT_NE(std::string(e.what()).find("is in use: another hapticd has it open"),
+                  std::string::npos)
+            << e.what();
+    }
+    EXPECT_FALSE(second.is_open());
+    // The first link works on, untouched by the refused one.
+    send_hello(first);
+    EXPECT_EQ(receive(first, monotonic_now_ns() + kGenerousNs).result, LinkResult::ok)
+        << device_side(device);
+    first.close();
+    second.open();  // the lock went with the first link's close
+    EXPECT_TRUE(second.is_open());
+    send_hello(second);
+    EXPECT_EQ(receive(second, monotonic_now_ns() + kGenerousNs).result, LinkResult::ok)
+        << device_side(device);
+}
+
 }  // namespace
 }  // namespace hapticd::testing

@@ -72,6 +72,12 @@ class HidLink final : public link::FrameLink {
     bool accept_report(int bytes, std::span<std::byte> frame, std::size_t& size) noexcept;
     [[noreturn]] void fail_open(const std::string& path, int error,
                                 const std::string& hidapi_error) const;
+    /// Takes the node for this link alone: an open file description locked for writing
+    /// (an OFD lock, which flock() and other processes' POSIX locks do not disturb), so that
+    /// a second hapticd on the same device is refused; hidraw itself lets any number open it.
+    void lock_node(const std::string& path);
+
+    int node_lock_fd_ = -1;  ///< holds the lock while the link is open
 
     HidSettings settings_;
     hid_device_* device_ = nullptr;

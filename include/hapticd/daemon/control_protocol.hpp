@@ -1,0 +1,49 @@
+// The control protocol (docs/control.md): one JSON object per line each way on hapticd's
+// control socket. This file is the protocol's one statement in code: its version, its
+// limits, its requests and how a line becomes a request or an error. The daemon's server
+// (control_server.hpp) and hapticctl both use it.
+#pragma once
+
+#include <cstddef>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace hapticd::daemon::control {
+
+/// The `v` of every request and reply; a request of another version is refused.
+inline constexpr int kProtocolVersion = 1;
+/// The longest request line, its newline included.
+inline constexpr std::size_t kMaxRequestBytes = 4096;
+
+enum class RequestKind { status, arm, disarm, reset };
+
+/// The name on the wire ("status", ...).
+std::string_view request_name(RequestKind kind) noexcept;
+
+struct Request {
+    RequestKind kind = RequestKind::status;
+    nlohmann::json id;  ///< echoed in the reply; null when the request had none
+};
+
+/// A line, parsed: the request, or the error to reply with (the id is kept where the line
+/// had one, so that the client can match the error to its request).
+struct ParsedRequest {
+    std::optional<Request> request;
+    nlohmann::json id;
+    std::string error;  ///< names the field, the value and what is allowed
+};
+
+/// Parses one request line (without its newline).
+ParsedRequest parse_request(std::string_view line);
+
+/// A request line, its newline included: {"v":1,"id":id,"request":name}.
+std::string request_line(RequestKind kind, const nlohmann::json& id = nullptr);
+
+/// A reply line, its newline included: `body` with "v", "id" and "ok": true added.
+std::string ok_reply(const nlohmann::json& id, nlohmann::json body = nlohmann::json::object());
+/// A reply line, its newline included: {"v":1,"id":id,"ok":false,"error":message}.
+std::string error_reply(const nlohmann::json& id, std::string_view message);
+
+}  // namespace hapticd::daemon::control

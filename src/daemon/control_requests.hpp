@@ -1,0 +1,42 @@
+// What each control request does to a running servo loop (docs/control.md, "Requests").
+// The server (control_server.hpp) parses; this answers. It runs on the server's thread, and
+// everything it asks of the loop is lock-free: status() reads a seqlock, arm(), disarm() and
+// reset() set atomics that the servo thread takes at the start of its next tick.
+#pragma once
+
+#include <atomic>
+#include <string>
+
+#include "hapticd/daemon/control_server.hpp"
+#include "hapticd/servo/status.hpp"
+
+namespace hapticd::daemon::control {
+
+/// The servo loop as the control socket sees it (supervised_run.hpp adapts ServoLoop; tests
+/// use their own).
+class ServoControl {
+  public:
+    virtual ~ServoControl() = default;
+    virtual servo::StatusSnapshot status() const noexcept = 0;
+    virtual void arm() noexcept = 0;
+    virtual void disarm() noexcept = 0;
+    virtual void reset() noexcept = 0;
+};
+
+/// What does not change during a run, for `status`.
+struct RunFacts {
+    int axes = 1;
+    double rate_hz = 1000.0;  ///< [servo] rate_hz
+    std::string device;       ///< the device line ("sim device, 3 axes, lockstep clock")
+    std::string config_path;  ///< absolute; "(embedded default)" without --config
+    /// The ticks per second over the last second, kept by the supervising thread.
+    const std::atomic<double>* measured_rate_hz = nullptr;
+};
+
+/// The status reply's body: state, tick, rates, forces, positions and faults.
+nlohmann::json status_body(const servo::StatusSnapshot& s, const RunFacts& facts);
+
+/// Answers one request.
+Answer answer(const Request& request, const Peer& peer, ServoControl& loop, const RunFacts& facts);
+
+}  // namespace hapticd::daemon::control

@@ -1,0 +1,93 @@
+// The control protocol's lines (docs/control.md, "Lines"): what parses, and that every
+// refusal names the field and the value.
+#include "hapticd/daemon/control_protocol.hpp"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+namespace hapticd::daemon::control {
+namespace {
+
+TEST(DaemonControlProtocol, EachRequestParsesWithItsId) {
+    for (const RequestKind kind :
+         {RequestKind::status, RequestKind::arm, RequestKind::disarm, RequestKind::reset}) {
+        const std::string line = request_line(kind, 42);
+        ASSERT_EQ(line.back(), '\n');
+        const ParsedRequest parsed = parse_request(line.substr(0, line.size() - 1));
+        ASSERT_TRUE(parsed.request.has_value()) << parsed.error;
+        EXPECT_EQ(parsed.request->kind, kind);
+        EXPECT_EQ(parsed.request->id, 42);
+    }
+    const ParsedRequest text_id = parse_request(R"({"v":1,"id":"a7","request":"status"})");
+    ASSERT_TRUE(text_id.request.has_value());
+    EXPECT_EQ(text_id.request->id, "a7");
+    const ParsedRequest no_id = parse_request(R"({"v":1,"request":"arm"})");
+    ASSERT_TRUE(no_id.request.has_value());
+    EXPECT_TRUE(no_id.request->id.is_null());
+}
+
+struct Refusal {
+    std::string line;
+    std::string says;  // a part of the error
+};
+
+TEST(DaemonControlProtocol, EveryBadLineIsRefusedNamingWhatIsWrong) {
+    const Refusal refusals[] = {
+        {"status", "is not JSON"},
+        {"{\"v\":1,", "is not JSON"},
+        {"[1,2]", "[1,2] is not a JSON object"},
+        {R"({"request":"status"})", "\"v\" is missing"},
+        {R"({"v":2,"request":"status"})",
+         "\"v\" = 2: this hapticd speaks control protocol version 1"},
+        {R"({"v":"1","request":"status"})", "\"v\" = \"1\""},
+        {R"({"v":1.5,"request":"status"})", "\"v\" = 1.5"},
+        {R"({"v":1})", "\"request\" is missing: one of status, arm, disarm, reset"},
+        {R"({"v":1,"request":3})", "\"request\" = 3 is not a string"},
+        {R"({"v":1,"request":"launch"})", "unknown request \"launch\": one of status, arm"},
+        {R"({"v":1,"request":"status","rate":5})", "unknown field \"rate\" in a \"status\""},
+        {R"({"v":1,"id":[1],"request":"status"})", "\"id\" = [1]: must be an integer, a string"},
+        {R"({"v":1,"id":1.5,"request":"status"})", "\"id\" = 1.5"},
+    };
+    for (const Refusal& r : refusals) {
+        SCOPED_TRACE(r.line);
+        const ParsedRequest parsed = parse_request(r.line);
+        EXPECT_FALSE(parsed.request.has_value());
+        EXPECT_NE(parsed.error.find(r.says), std::string::npos) << parsed.error;
+    }
+}
+
+TEST(DaemonControlProtocol, ARefusalKeepsTheRequestsId) {
+    const ParsedRequest parsed = parse_request(R"({"v":1,"id":9,"request":"launch"})");
+    EXPECT_FALSE(parsed.request.has_value());
+    EXPECT_EQ(parsed.id, 9);
+    const nlohmann::json reply = nlohmann::json::parse(error_reply(parsed.id, parsed.error));
+    EXPECT_EQ(reply["id"], 9);
+    EXPECT_EQ(reply["ok"], false);
+    EXPECT_EQ(reply["v"], kProtocolVersion);
+    EXPECT_EQ(reply["error"], parsed.error);
+}
+
+TEST(DaemonControlProtocol, ALongBadValueIsCutShortInTheMessage) {
+    const std::string name(5000, 'x');
+    const ParsedRequest parsed = parse_request(R"({"v":1,"request":")" + name + "\"}");
+    ASSERT_FALSE(parsed.request.has_value());
+    EXPECT_LT(parsed.error.size(), 200u) << parsed.error;
+    EXPECT_NE(parsed.error.find("xxx..."), std::string::npos) << parsed.error;
+}
+
+TEST(DaemonControlProtocol, RepliesAreOneLineWithVersionIdAndOk) {
+    const std::string ok = ok_reply("q", {{"state_before", "disabled"}});
+    EXPECT_EQ(ok.find('\n'), ok.size() - 1);
+    const nlohmann::json j = nlohmann::json::parse(ok);
+    EXPECT_EQ(j["v"], 1);
+    EXPECT_EQ(j["id"], "q");
+    EXPECT_EQ(j["ok"], true);
+    EXPECT_EQ(j["state_before"], "disabled");
+    // An error's text with a newline in it still makes one line.
+    const std::string error = error_reply(nullptr, "two\nlines");
+    EXPECT_EQ(error.find('\n'), error.size() - 1);
+}
+
+}  // namespace
+}  // namespace hapticd::daemon::control

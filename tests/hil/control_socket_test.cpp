@@ -1,0 +1,301 @@
+// The control socket and hapticctl end to end (docs/control.md, hapticctl(1)): real hapticd
+// processes on the simulated device in real time, driven by the real hapticctl, and by raw
+// clients that send what hapticctl never would. The servo loop must not notice any of it.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "background_daemon.hpp"
+#include "default_config.hpp"
+#include "hapticd_run.hpp"
+#include "run_command.hpp"
+#include "scratch_dir.hpp"
+#include "text_file.hpp"
+#include "unix_client.hpp"
+
+namespace hapticd::testing {
+namespace {
+
+using namespace std::chrono_literals;
+
+// The default config with an overrun budget that a shared VM's stalls (tens of ms) do not
+// exhaust: what these tests judge is the socket, not the host's scheduling.
+std::string config_with_room(const std::string& extra_toml) {
+    std::string config = default_config() + extra_toml;
+    const std::string safety = "[safety]\n";
+    config.replace(config.find(safety), safety.size(),
+                   safety + "max_missed_periods = 1000\nmax_consecutive_overruns = 1000\n");
+    return config;
+}
+
+// A hapticd on the default config with a control socket, until stop().
+struct Daemon {
+    Daemon(const ScratchDir& dir, const std::string& name, const std::string& extra_toml = "")
+        : socket(dir.file(name + ".sock")),
+          summary(dir.file(name + "-summary.json")),
+          process(
+              HAPTICD_BIN,
+              {"--no-status", "--config", dir.write(name + ".toml", config_with_room(extra_toml)),
+               "--socket", socket, "--summary", summary},
+              dir.file(name + ".err")) {}
+    std::string socket;
+    std::string summary;
+    BackgroundDaemon process;
+};
+
+CommandResult hapticctl(const std::string& socket, const std::string& arguments) {
+    return run_command(shell_quote(HAPTICCTL_BIN) + " --socket " + shell_quote(socket) + " " +
+                       arguments);
+}
+
+nlohmann::json status_of(const std::string& socket) {
+    const CommandResult r = hapticctl(socket, "status --json");
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return r.exit_code == 0 ? nlohmann::json::parse(r.out) : nlohmann::json();
+}
+
+// Polls status until `done(status)` or `timeout`; returns the last status.
+template <typename Done>
+nlohmann::json status_when(const std::string& socket, Done done,
+                           std::chrono::milliseconds timeout = 10s) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    nlohmann::json s = status_of(socket);
+    while (!s.is_null() && !done(s) && std::chrono::steady_clock::now() < deadline) {
+        std::this_thread::sleep_for(20ms);
+        s = status_of(socket);
+    }
+    return s;
+}
+
+bool armed_state(const nlohmann::json& s) {
+    return s["state"] == "arming" || s["state"] == "running";
+}
+
+TEST(HilControlSocket, StatusDisarmArmAFaultItsRefusalAndResetThroughHapticctl) {
+    const ScratchDir dir;
+    // An encoder jump (0.2 m) at 2.5 s: a fault that needs an operator.
+    Daemon d(dir, "lab", "[device.sim.faults]\njump_at = 2.5\njump_counts = 20000\n");
+    ASSERT_TRUE(d.process.wait_for_socket(d.socket)) << d.process.messages();
+
+    const nlohmann::json first = status_of(d.socket);
+    ASSERT_FALSE(first.is_null());
+    EXPECT_TRUE(armed_state(first)) << first.dump();  // the daemon starts armed
+    EXPECT_EQ(first["rate_hz"], 1000.0);
+    EXPECT_EQ(first["axes"], 1);
+    EXPECT_EQ(first["x_m"].size(), 1u);
+    EXPECT_NE(first["device"].get<std::string>().find("sim"), std::string::npos);
+    EXPECT_TRUE(first["config_path"].get<std::string>().ends_with("/lab.toml"));
+
+    // The watcher's rate over a whole second, once the servo has run one.
+    const nlohmann::json ticking =
+        status_when(d.socket, [](const nlohmann::json& s) { return s["t_s"] >= 1.2; });
+    EXPECT_NEAR(ticking["measured_rate_hz"].get<double>(), 1000.0, 60.0) << ticking.dump();
+
+    const CommandResult disarm = hapticctl(d.socket, "disarm");
+    EXPECT_EQ(disarm.exit_code, 0) << disarm.err;
+    EXPECT_TRUE(disarm.out.starts_with("state disabled (was ")) << disarm.out;
+    const nlohmann::json disabled = status_of(d.socket);
+    EXPECT_EQ(disabled["state"], "disabled");
+    EXPECT_EQ(disabled["armed"], false);
+    EXPECT_EQ(disabled["f_n"][0], 0.0);
+
+    const CommandResult arm = hapticctl(d.socket, "arm");
+    EXPECT_EQ(arm.exit_code, 0) << arm.err;
+    EXPECT_TRUE(arm.out.starts_with("state arming") || arm.out.starts_with("state running"))
+        << arm.out;
+
+    // The jump latches a fault; with a socket the run waits, at zero force, for a reset.
+    const nlohmann::json faulted =
+        status_when(d.socket, [](const nlohmann::json& s) { return s["state"] == "fault"; });
+    ASSERT_EQ(faulted["state"], "fault") << faulted.dump();
+    EXPECT_EQ(faulted["faults"], nlohmann::json::array({"encoder_jump"}));
+    EXPECT_EQ(faulted["f_n"][0], 0.0);
+    const nlohmann::json later = status_when(d.socket, [&](const nlohmann::json& s) {
+        return s["tick"] > faulted["tick"].get<int>() + 200;
+    });
+    EXPECT_EQ(later["state"], "fault") << "the fault did not stay latched";
+
+    const CommandResult refused = hapticctl(d.socket, "arm");
+    EXPECT_EQ(refused.exit_code, 1);
+    EXPECT_NE(refused.err.find("arm refused: a fault is latched ([\"encoder_jump\"])"),
+              std::string::npos)
+        << refused.err;
+
+    const CommandResult reset = hapticctl(d.socket, "reset");
+    EXPECT_EQ(reset.exit_code, 0) << reset.err;
+    EXPECT_TRUE(reset.out.starts_with("state arming") || reset.out.starts_with("state running"))
+        << reset.out;
+    EXPECT_EQ(status_of(d.socket)["faults"], nlohmann::json::array());
+
+    const CommandResult watch = hapticctl(d.socket, "watch --count 3");
+    EXPECT_EQ(watch.exit_code, 0) << watch.err;
+    const std::vector<std::string> lines = lines_of_text(watch.out);
+    ASSERT_EQ(lines.size(), 3u) << watch.out;
+    for (const std::string& line : lines) {
+        EXPECT_TRUE(line.starts_with("t ")) << line;
+        EXPECT_NE(line.find(" Hz  x ["), std::string::npos) << line;
+    }
+
+    EXPECT_EQ(d.process.stop(), 0) << d.process.messages();
+    const nlohmann::json summary = nlohmann::json::parse(read_file(d.summary));
+    EXPECT_EQ(summary["exit"], "stopped");
+    EXPECT_EQ(summary["faults"], nlohmann::json::array({"encoder_jump"}));  // seen, reset
+    const std::string messages = d.process.messages();
+    EXPECT_NE(messages.find("hapticd: control socket " + d.socket), std::string::npos);
+    EXPECT_NE(messages.find("control: disarm from pid "), std::string::npos) << messages;
+    EXPECT_NE(messages.find("control: arm from pid "), std::string::npos);
+    EXPECT_NE(messages.find("refused: a fault is latched"), std::string::npos);
+    EXPECT_NE(messages.find("control: reset from pid "), std::string::npos);
+    EXPECT_FALSE(std::filesystem::exists(d.socket)) << "the socket outlived the daemon";
+}
+
+TEST(HilControlSocket, HostileClientsGetErrorsOrDisconnectsAndTheServoNeverNotices) {
+    const ScratchDir dir;
+    Daemon d(dir, "lab");
+    ASSERT_TRUE(d.process.wait_for_socket(d.socket)) << d.process.messages();
+    const auto started = std::chrono::steady_clock::now();
+
+    {  // Malformed, unknown and oversized requests.
+        UnixClient client(d.socket);
+        client.send(
+            "{]\n{\"v\":1,\"request\":\"self-destruct\"}\n{\"v\":7,\"request\":\"status\"}\n");
+        for (const char* says : {"is not JSON", "unknown request", "version 1"}) {
+            const auto line = client.line();
+            ASSERT_TRUE(line.has_value());
+            EXPECT_NE(line->find(says), std::string::npos) << *line;
+        }
+        client.send(std::string(100000, 'x') + "\n");
+        const auto refusal = client.line();
+        ASSERT_TRUE(refusal.has_value());
+        EXPECT_NE(refusal->find("at most 4096"), std::string::npos) << *refusal;
+        EXPECT_TRUE(client.closed_by_peer());
+    }
+    // Clients that connect and never send, up to the limit and past it.
+    std::vector<std::unique_ptr<UnixClient>> idle;
+    for (int i = 0; i < 16; ++i) idle.push_back(std::make_unique<UnixClient>(d.socket));
+    {
+        UnixClient one_too_many(d.socket);
+        const auto refusal = one_too_many.line();
+        ASSERT_TRUE(refusal.has_value());
+        EXPECT_NE(refusal->find("too many clients"), std::string::npos) << *refusal;
+    }
+    idle.clear();
+    {  // A flood from a client that reads nothing, until the daemon hangs up on it.
+        std::this_thread::sleep_for(50ms);  // the idle ones' places come free
+        UnixClient flooder(d.socket);
+        std::string burst;
+        for (int i = 0; i < 1000; ++i) burst += "{\"v\":1,\"request\":\"status\"}\n";
+        bool gone = false;
+        for (int round = 0; round < 20000 && !gone; ++round) gone = !flooder.send(burst);
+        EXPECT_TRUE(gone) << "the daemon never disconnected a client that reads nothing";
+    }
+    {  // Half-closed: the request is answered, then the daemon closes.
+        UnixClient half(d.socket);
+        half.send("{\"v\":1,\"id\":3,\"request\":\"status\"}\n");
+        half.shutdown_sending();
+        const auto reply = half.line();
+        ASSERT_TRUE(reply.has_value());
+        EXPECT_EQ(nlohmann::json::parse(*reply)["id"], 3);
+        EXPECT_TRUE(half.closed_by_peer());
+    }
+
+    // Through all of it: no fault, the rate kept, and hapticctl still served.
+    std::this_thread::sleep_until(started + 1500ms);
+    const nlohmann::json s = status_of(d.socket);
+    EXPECT_EQ(s["faults"], nlohmann::json::array()) << s.dump();
+    EXPECT_NEAR(s["measured_rate_hz"].get<double>(), 1000.0, 60.0) << s.dump();
+    EXPECT_EQ(d.process.stop(), 0) << d.process.messages();
+    const nlohmann::json summary = nlohmann::json::parse(read_file(d.summary));
+    EXPECT_EQ(summary["faults"], nlohmann::json::array());
+    const std::string messages = d.process.messages();
+    EXPECT_NE(messages.find("bytes of replies unread"), std::string::npos) << messages;
+    EXPECT_NE(messages.find("clients already connected"), std::string::npos) << messages;
+}
+
+TEST(HilControlSocket, TwoInstancesAreEachControlledOnTheirOwnSocket) {
+    const ScratchDir dir;
+    Daemon a(dir, "lab0", "");
+    Daemon b(dir, "lab1", "");
+    ASSERT_TRUE(a.process.wait_for_socket(a.socket)) << a.process.messages();
+    ASSERT_TRUE(b.process.wait_for_socket(b.socket)) << b.process.messages();
+    EXPECT_EQ(hapticctl(a.socket, "disarm").exit_code, 0);
+    EXPECT_EQ(status_of(a.socket)["state"], "disabled");
+    EXPECT_TRUE(armed_state(status_of(b.socket)));
+    EXPECT_TRUE(status_of(a.socket)["config_path"].get<std::string>().ends_with("/lab0.toml"));
+    EXPECT_TRUE(status_of(b.socket)["config_path"].get<std::string>().ends_with("/lab1.toml"));
+    // A third on a socket that one of them serves is refused, and harms neither.
+    const CommandResult third = run_command(
+        shell_quote(HAPTICD_BIN) + " --no-status --duration 1 --socket " + shell_quote(a.socket));
+    EXPECT_EQ(third.exit_code, 2);
+    EXPECT_NE(third.err.find("is in use: another hapticd answers on it"), std::string::npos)
+        << third.err;
+    EXPECT_EQ(status_of(a.socket)["state"], "disabled");
+    EXPECT_EQ(a.process.stop(), 0) << a.process.messages();
+    EXPECT_EQ(b.process.stop(), 0) << b.process.messages();
+}
+
+struct BadUsage {
+    std::string arguments;
+    int exit_code;
+    std::string says;
+};
+
+TEST(HilControlSocket, HapticctlRefusesBadUsageWith2AndAnUnreachableDaemonWith1) {
+    const ScratchDir dir;
+    const std::string nowhere = dir.file("nobody.sock");
+    const BadUsage cases[] = {
+        {"status", 2, "give -i NAME (hapticd@NAME) or --socket PATH"},
+        {"-i 'a/b' status", 2, "-i \"a/b\": an instance name may hold only"},
+        {"-i '' status", 2, "-i \"\": an instance name must be 1 to 64 characters"},
+        {"-i lab --socket " + nowhere + " status", 2, "excludes"},
+        {"--socket " + nowhere, 2, "no command: one of status, watch, arm, disarm, reset"},
+        {"--socket " + nowhere + " launch", 2, "\"launch\" is not a command: one of status"},
+        {"--socket " + nowhere + " watch --count -1", 2, "--count"},
+        {"--socket " + nowhere + " status --rate 5", 2, "--rate"},
+        {"--socket " + nowhere + " status", 1, "cannot connect to " + nowhere + ": no hapticd"},
+        {"-i no-such-instance-here arm", 1,
+         "cannot connect to /run/hapticd/no-such-instance-here/control.sock"},
+    };
+    for (const BadUsage& c : cases) {
+        SCOPED_TRACE(c.arguments);
+        const CommandResult r = run_command(shell_quote(HAPTICCTL_BIN) + " " + c.arguments);
+        EXPECT_EQ(r.exit_code, c.exit_code) << r.err;
+        EXPECT_NE(r.err.find(c.says), std::string::npos) << r.err;
+    }
+    for (const char* command : {"status", "watch", "arm", "disarm", "reset"}) {
+        const CommandResult help =
+            run_command(shell_quote(HAPTICCTL_BIN) + " " + command + " --help");
+        EXPECT_EQ(help.exit_code, 0) << command;
+        EXPECT_NE(help.out.find("Usage"), std::string::npos) << command;
+    }
+}
+
+TEST(HilControlSocket, HapticdRefusesASocketPathItCannotServe) {
+    const ScratchDir dir;
+    const std::string file = dir.write("plain.txt", "keep me\n");
+    const struct {
+        std::string path;
+        std::string says;
+    } cases[] = {
+        {"''", "--socket \"\": the path is empty"},
+        {shell_quote(file), "exists and is not a socket"},
+        {shell_quote(dir.file("no/such/dir/c.sock")), "bind(): No such file or directory"},
+        {shell_quote(dir.file(std::string(120, 's'))), "a path of 1 to 107 bytes"},
+    };
+    for (const auto& c : cases) {
+        SCOPED_TRACE(c.path);
+        const CommandResult r = run_command(
+            shell_quote(HAPTICD_BIN) + " --no-status --lockstep --duration 1 --socket " + c.path);
+        EXPECT_EQ(r.exit_code, 2) << r.err;
+        EXPECT_NE(r.err.find(c.says), std::string::npos) << r.err;
+    }
+    EXPECT_EQ(read_file(file), "keep me\n");
+}
+
+}  // namespace
+}  // namespace hapticd::testing

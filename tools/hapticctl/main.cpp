@@ -1,0 +1,192 @@
+// hapticctl: the operator's command line for a running hapticd (docs/control.md).
+//
+//   hapticctl [-i NAME | --socket PATH] status [--json] | watch [--count N] | arm | disarm |
+//             reset
+//
+// Exit status: 0 done; 1 the daemon refused, or could not be reached; 2 bad usage.
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <csignal>
+#include <iostream>
+#include <optional>
+#include <string>
+#include <thread>
+
+#include "control_connection.hpp"
+#include "hapticd/daemon/exit_code.hpp"
+#include "hapticd/install/version.hpp"
+#include "status_text.hpp"
+
+namespace {
+
+using hapticd::ctl::ConnectionError;
+using hapticd::ctl::ControlConnection;
+using hapticd::daemon::control::RequestKind;
+
+volatile std::sig_atomic_t interrupted = 0;
+
+extern "C" void on_interrupt(int /*signal*/) { interrupted = 1; }
+
+// An instance name as systemd's template units take it: no path, no spaces.
+std::optional<std::string> bad_instance_name(const std::string& name) {
+    if (name.empty() || name.size() > 64) return "must be 1 to 64 characters";
+    for (const char c : name) {
+        const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') ||
+                        (c >= '0' && c <= '9') || c == '-' || c == '_' || c == '.' || c == '@' ||
+                        c == ':';
+        if (!ok) return "may hold only letters, digits and - _ . @ :";
+    }
+    if (name == "." || name == "..") return "is not an instance name";
+    return std::nullopt;
+}
+
+// The reply's status object; a refusal or a reply without one is an error.
+nlohmann::json status_of(ControlConnection& daemon) {
+    const nlohmann::json reply = daemon.request(RequestKind::status);
+    if (!reply.at("ok").get<bool>()) throw ConnectionError(reply.value("error", "refused"));
+    if (!reply.contains("status") || !reply["status"].is_object()) {
+        throw ConnectionError("the status reply has no status object");
+    }
+    return reply["status"];
+}
+
+// arm, disarm, reset: the request, then the state it led to (the servo takes a request at
+// its next tick: a status shortly after shows it).
+int change_state(ControlConnection& daemon, RequestKind kind) {
+    const nlohmann::json reply = daemon.request(kind);
+    if (!reply.at("ok").get<bool>()) {
+        std::cerr << "hapticctl: " << reply.value("error", std::string("refused")) << "\n";
+        return hapticd::daemon::kExitFault;
+    }
+    const std::string before = reply.value("state_before", std::string());
+    std::string state = before;
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(1);
+    const auto settled = [&] {
+        switch (kind) {
+            case RequestKind::arm:
+                return state == "arming" || state == "running";
+            case RequestKind::disarm:
+                return state == "disabled";
+            case RequestKind::reset:
+                return state != "fault";
+            case RequestKind::status:
+                break;
+        }
+        return true;
+    };
+    do {
+        state = status_of(daemon).at("state").get<std::string>();
+        if (settled()) break;
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    } while (std::chrono::steady_clock::now() < deadline);
+    std::cout << "state " << state << " (was " << before << ")\n";
+    if (!settled()) {
+        std::cerr << "hapticctl: the servo is still " << state << " a second after "
+                  << hapticd::daemon::control::request_name(kind)
+                  << " (a latched fault that returns at once, or a stalled servo thread)\n";
+        return hapticd::daemon::kExitFault;
+    }
+    return hapticd::daemon::kExitOk;
+}
+
+int watch(ControlConnection& daemon, int count) {
+    std::signal(SIGINT, on_interrupt);
+    std::signal(SIGTERM, on_interrupt);
+    auto next = std::chrono::steady_clock::now();
+    for (int printed = 0; interrupted == 0 && (count == 0 || printed < count); ++printed) {
+        std::cout << hapticd::ctl::watch_line(status_of(daemon)) << "\n" << std::flush;
+        next += std::chrono::milliseconds(100);
+        std::this_thread::sleep_until(next);
+    }
+    return hapticd::daemon::kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    CLI::App app{
+        "hapticctl: the operator's command line for a running hapticd, through its control "
+        "socket (docs/control.md; hapticctl(1)).\n\n"
+        "Exit status: 0 done; 1 the daemon refused the request, or could not be reached; 2 "
+        "bad usage.",
+        "hapticctl"};
+    app.set_version_flag("--version", std::string("hapticctl ") + hapticd::install::kVersion);
+    std::string instance;
+    std::string socket_path;
+    auto* instance_option = app.add_option("-i,--instance", instance,
+                                           "the instance NAME of hapticd@NAME: its socket is "
+                                           "/run/hapticd/NAME/control.sock");
+    auto* socket_option =
+        app.add_option("--socket", socket_path, "the control socket's PATH (hapticd --socket)");
+    instance_option->excludes(socket_option);
+    app.require_subcommand(0, 1);
+
+    bool as_json = false;
+    auto* status = app.add_subcommand("status",
+                                      "print the servo's state, rate, positions, "
+                                      "forces and faults");
+    status->add_flag("--json", as_json, "print the daemon's status object as one JSON line");
+    int count = 0;
+    auto* watch_command =
+        app.add_subcommand("watch", "print a status line every 100 ms until interrupted");
+    watch_command->add_option("--count", count, "stop after N lines (0: until interrupted)")
+        ->check(CLI::Range(0, 100000000));
+    auto* arm = app.add_subcommand(
+        "arm", "let forces flow: once the handle is still, the soft start ramps them up");
+    auto* disarm = app.add_subcommand("disarm", "zero force from the next tick on");
+    auto* reset = app.add_subcommand(
+        "reset", "clear a latched fault; an armed servo then starts again through the soft start");
+
+    // A word that is not a command is said below, by name; the commands themselves (made
+    // above, before this) still refuse what they do not take.
+    app.allow_extras();
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::CallForHelp& help) {
+        return app.exit(help);
+    } catch (const CLI::CallForVersion& version) {
+        return app.exit(version);
+    } catch (const CLI::ParseError& error) {
+        app.exit(error);
+        return hapticd::daemon::kExitBadInput;
+    }
+    if (!app.remaining().empty() || app.get_subcommands().empty()) {
+        std::cerr << "hapticctl: "
+                  << (app.remaining().empty()
+                          ? std::string("no command")
+                          : "\"" + app.remaining().front() + "\" is not a command")
+                  << ": one of status, watch, arm, disarm, reset (hapticctl --help)\n";
+        return hapticd::daemon::kExitBadInput;
+    }
+    if (instance_option->count() == 0 && socket_option->count() == 0) {
+        std::cerr << "hapticctl: which daemon? give -i NAME (hapticd@NAME) or --socket PATH\n";
+        return hapticd::daemon::kExitBadInput;
+    }
+    if (instance_option->count() != 0) {
+        if (const auto bad = bad_instance_name(instance)) {
+            std::cerr << "hapticctl: -i \"" << instance << "\": an instance name " << *bad << "\n";
+            return hapticd::daemon::kExitBadInput;
+        }
+        socket_path = hapticd::ctl::instance_socket(instance);
+    }
+    try {
+        ControlConnection daemon(socket_path);
+        if (status->parsed()) {
+            const nlohmann::json s = status_of(daemon);
+            std::cout << (as_json ? s.dump() + "\n" : hapticd::ctl::status_text(s));
+            return hapticd::daemon::kExitOk;
+        }
+        if (watch_command->parsed()) return watch(daemon, count);
+        if (arm->parsed()) return change_state(daemon, RequestKind::arm);
+        if (disarm->parsed()) return change_state(daemon, RequestKind::disarm);
+        if (reset->parsed()) return change_state(daemon, RequestKind::reset);
+    } catch (const ConnectionError& e) {
+        std::cerr << "hapticctl: " << e.what() << "\n";
+        return hapticd::daemon::kExitFault;
+    } catch (const nlohmann::json::exception& e) {
+        std::cerr << "hapticctl: the daemon's reply is not as docs/control.md says: " << e.what()
+                  << "\n";
+        return hapticd::daemon::kExitFault;
+    }
+    return hapticd::daemon::kExitBadInput;
+}

@@ -1,0 +1,61 @@
+#include "status_text.hpp"
+
+#include <iomanip>
+#include <sstream>
+
+namespace hapticd::ctl {
+namespace {
+
+std::string vector_text(const nlohmann::json& v, double scale) {
+    std::ostringstream out;
+    out << std::fixed << std::setprecision(2) << "[";
+    for (std::size_t i = 0; i < v.size(); ++i) {
+        out << (i == 0 ? "" : " ") << v[i].get<double>() * scale;
+    }
+    out << "]";
+    return out.str();
+}
+
+std::string faults_text(const nlohmann::json& faults) {
+    if (faults.empty()) return "none";
+    std::string text;
+    for (const auto& fault : faults) text += (text.empty() ? "" : ",") + fault.get<std::string>();
+    return text;
+}
+
+}  // namespace
+
+std::string status_text(const nlohmann::json& s) {
+    std::ostringstream out;
+    out << std::fixed << std::setprecision(1);
+    out << "state     " << s.at("state").get<std::string>();
+    if (s.at("state") == "arming") {
+        out << " (soft start " << std::setprecision(0)
+            << 100.0 * s.at("soft_start_scale").get<double>() << "%)" << std::setprecision(1);
+    }
+    out << "\n"
+        << "tick      " << s.at("tick").get<std::uint64_t>() << " (t " << std::setprecision(2)
+        << s.at("t_s").get<double>() << " s)\n"
+        << std::setprecision(1) << "rate      " << s.at("measured_rate_hz").get<double>()
+        << " Hz over the last second (" << s.at("rate_hz").get<double>() << " Hz set)\n"
+        << "x         " << vector_text(s.at("x_m"), 1e3) << " mm\n"
+        << "xe        " << vector_text(s.at("xe_m"), 1e3) << " mm\n"
+        << "f         " << vector_text(s.at("f_n"), 1.0) << " N\n"
+        << "faults    " << faults_text(s.at("faults")) << "\n"
+        << "overruns  " << s.at("overruns").get<std::uint64_t>() << "\n"
+        << "device    " << s.at("device").get<std::string>() << "\n"
+        << "config    " << s.at("config_path").get<std::string>() << "\n";
+    return out.str();
+}
+
+std::string watch_line(const nlohmann::json& s) {
+    std::ostringstream out;
+    out << std::fixed << std::setprecision(2) << "t " << s.at("t_s").get<double>() << " s  "
+        << s.at("state").get<std::string>() << "  " << std::setprecision(1)
+        << s.at("measured_rate_hz").get<double>() << " Hz  x " << vector_text(s.at("x_m"), 1e3)
+        << " mm  f " << vector_text(s.at("f_n"), 1.0) << " N  faults "
+        << faults_text(s.at("faults"));
+    return out.str();
+}
+
+}  // namespace hapticd::ctl
