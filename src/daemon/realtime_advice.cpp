@@ -84,11 +84,13 @@ std::string realtime_advice(const servo::RealtimeRequest& request,
         advice += (advice.empty() ? "" : " ") + sentence;
     };
     if (!report.scheduler_fifo) add(fifo_advice(request, where));
-    if (request.lock_memory && !report.memory_locked) {
-        add(where.in_a_service ? "mlockall needs LimitMEMLOCK=infinity in the unit (or "
-                                 "CAP_IPC_LOCK)."
-                               : "mlockall needs an unlimited RLIMIT_MEMLOCK (ulimit -l unlimited, "
-                                 "or a memlock line in /etc/security/limits.d/) or CAP_IPC_LOCK.");
+    // A heap prefault that failed after mlockall is the same limit: the locked pages ran out.
+    if (request.lock_memory && (!report.memory_locked || !report.heap_prefaulted)) {
+        add(where.in_a_service ? "mlockall and its heap prefault need LimitMEMLOCK=infinity in "
+                                 "the unit (or CAP_IPC_LOCK)."
+                               : "mlockall and its heap prefault need an unlimited RLIMIT_MEMLOCK "
+                                 "(ulimit -l unlimited, or a memlock line in "
+                                 "/etc/security/limits.d/) or CAP_IPC_LOCK.");
     }
     if (request.cpu >= 0 && !report.affinity_set) {
         add("cpu " + std::to_string(request.cpu) +

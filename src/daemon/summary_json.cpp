@@ -44,7 +44,9 @@ std::string summary_json(const servo::Summary& s, const RunContext& c) {
     j["solver_not_converged"] = s.solver_not_converged;
     j["saturated_ticks"] = s.saturated_ticks;
     j["passivity_energy_j"] = s.passivity_energy_j;
+    j["flight_records"] = c.flight_records;
     j["exit"] = c.exit;
+    j["state"] = c.final_state;
     if (!c.stopped_by.empty()) j["stopped_by"] = c.stopped_by;
     if (!c.final_command.empty()) j["final_command"] = c.final_command;
     j["run_time_s"] = c.run_time_s;

@@ -5,18 +5,23 @@
 // tick calls it directly.
 #pragma once
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstring>
+#include <iomanip>
 #include <memory>
 #include <optional>
 #include <ostream>
+#include <sstream>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "control_requests.hpp"
+#include "flight_file.hpp"
 #include "hapticd/daemon/config.hpp"
 #include "hapticd/daemon/control_server.hpp"
 #include "hapticd/daemon/journal.hpp"
@@ -27,6 +32,7 @@
 #include "hapticd/daemon/telemetry_writer.hpp"
 #include "hapticd/device/device.hpp"
 #include "hapticd/servo/faults.hpp"
+#include "hapticd/servo/flight_recorder.hpp"
 #include "hapticd/servo/servo_loop.hpp"
 #include "run_messages.hpp"
 #include "run_outputs.hpp"
@@ -102,6 +108,36 @@ int run_loop(const RunOptions& options, const Config& config,
 
     servo::ServoLoop<device::Device, Environment> loop(device, environment, servo_config,
                                                        ring.get());
+    // The flight recorder: the last kFlightRecordS of ticks, written beside the run's files
+    // on every new fault (flight_file.hpp), log or no log.
+    servo::FlightRecorder recorder(static_cast<std::size_t>(
+        std::clamp(std::ceil(kFlightRecordS * config.servo.rate_hz), 1.0, 1e6)));
+    loop.attach_flight_recorder(&recorder);
+    const std::optional<std::string> flight_dir = flight_directory(options);
+    const auto write_flight_record = [&] {
+        if (!recorder.frozen()) return;
+        const std::vector<servo::TelemetryRecord> records = recorder.frozen_records();
+        recorder.thaw();
+        if (records.empty()) return;
+        const servo::TelemetryRecord& last = records.back();
+        std::ostringstream what;
+        what << std::fixed << std::setprecision(3) << "hapticd: flight recorder: the last "
+             << records.size() << " ticks to fault " << fault_names(last.faults) << " at t "
+             << last.t_s << " s";
+        if (!flight_dir) {
+            log << priority::notice << what.str()
+                << " not written: no --log, --summary FILE or LOGS_DIRECTORY to put them beside\n";
+            return;
+        }
+        const FlightFile file =
+            write_flight_file(*flight_dir, context.stamp.start_name, records, info.axes);
+        if (file.error.empty()) {
+            context.flight_records.push_back(file.path);
+            log << priority::notice << what.str() << ": " << file.path << "\n" << std::flush;
+        } else {
+            log << priority::err << what.str() << " not written: " << file.error << "\n";
+        }
+    };
     // The control socket (docs/control.md), on its own thread from here to the servo
     // thread's end; the rate it reports is the watcher's, over the last second.
     std::atomic<double> measured_rate_hz{0.0};
@@ -184,7 +220,8 @@ int run_loop(const RunOptions& options, const Config& config,
             }
         }
         drain_control_messages();
-        if (now - rate_since >= std::chrono::seconds(1)) {
+        write_flight_record();
+        if (ticking && now - rate_since >= std::chrono::seconds(1)) {
             const std::uint64_t ticks = loop.status().tick;
             measured_rate_hz.store(static_cast<double>(ticks - rate_ticks_before) /
                                    std::chrono::duration<double>(now - rate_since).count());
@@ -200,6 +237,9 @@ int run_loop(const RunOptions& options, const Config& config,
             next_status = started + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                         status_every);
             next_figures = started + figures_every;
+            // The rate's first second starts here, not before the real-time set-up.
+            rate_since = now;
+            rate_ticks_before = loop.status().tick;
         }
         if (const servo::StatusSnapshot status = loop.status(); status.faults != logged_faults) {
             if ((status.faults & ~logged_faults) != 0u || status.faults == 0u) {
@@ -234,6 +274,7 @@ int run_loop(const RunOptions& options, const Config& config,
     servo_thread.join();
     if (outputs.control) outputs.control->stop();
     drain_control_messages();
+    write_flight_record();  // the fault that ended the run
     loop.write_zero_force();
     // Once more, to know that it landed: the summary's final_command.
     switch (device.write(servo::Command{})) {
@@ -265,6 +306,7 @@ int run_loop(const RunOptions& options, const Config& config,
     }
 
     const servo::Summary summary = loop.summary();
+    context.final_state = std::string(servo::servo_state_name(loop.status().state));
     context.realtime = loop.realtime_report();
     context.run_time_s =
         info.lockstep

@@ -146,7 +146,8 @@ RealtimeReport RealtimeSession::apply(const RealtimeRequest& request) {
         } else {
             report.refused.push_back("mlockall: " + errno_text(errno));
         }
-        if (!prefault_heap(request.prefault_heap_bytes)) {
+        report.heap_prefaulted = prefault_heap(request.prefault_heap_bytes);
+        if (!report.heap_prefaulted) {
             report.refused.push_back("heap prefault of " +
                                      std::to_string(request.prefault_heap_bytes) + " bytes failed");
         }

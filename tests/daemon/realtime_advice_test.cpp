@@ -95,5 +95,20 @@ TEST(RealtimeAdvice, NothingRefusedOrNothingAskedIsNothingToSay) {
     EXPECT_NE(advice.find("mlockall"), std::string::npos) << advice;
 }
 
+// mlockall granted, but its heap prefault failed (the locked pages ran out under the limit,
+// or an allocator that is not glibc's, as under ASan): the remedy is the memlock limit.
+TEST(RealtimeAdvice, AFailedHeapPrefaultIsTheMemlockLimitsToo) {
+    RealtimeReport report;
+    report.mode = RealtimeMode::warn;
+    report.scheduler_fifo = report.memory_locked = report.cpu_dma_latency_held = true;
+    report.heap_prefaulted = false;
+    report.refused = {"heap prefault of 8388608 bytes failed"};
+    const std::string advice = realtime_advice(RealtimeRequest{}, report, service(0));
+    EXPECT_NE(advice.find("mlockall and its heap prefault need LimitMEMLOCK=infinity"),
+              std::string::npos)
+        << advice;
+    EXPECT_EQ(realtime_refused_note(RealtimeRequest{}, report), "realtime refused: heap prefault");
+}
+
 }  // namespace
 }  // namespace hapticd::daemon

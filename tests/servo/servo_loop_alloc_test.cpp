@@ -115,12 +115,17 @@ TEST(ServoAllocation, FaultPathDoesNotAllocate) {
     fakes::NanAfter environment{.after_evaluations = 100};
     ServoLoop<SweepingDevice, fakes::NanAfter, FakeClock> loop(device, environment, alloc_config(),
                                                                nullptr, FakeClock{&time});
+    FlightRecorder recorder(256);  // the flight recorder records and freezes without allocating
+    loop.attach_flight_recorder(&recorder);
     hapticd::testing::AllocationGuard guard;
     for (int n = 0; n < 1000; ++n) loop.tick();
+    const bool frozen_by_the_fault = recorder.frozen();
+    recorder.thaw();
     loop.request_fault_reset();
     for (int n = 0; n < 10; ++n) loop.tick();
     EXPECT_EQ(guard.allocations(), 0u);
     EXPECT_NE(loop.faults_seen(), 0u);
+    EXPECT_TRUE(frozen_by_the_fault);
 }
 
 // The interval-unknown and stale-sample paths (docs/architecture.md §7.6, §7.1): a device

@@ -27,12 +27,12 @@ struct DaemonRun {
 };
 
 struct RunRequest {
-    std::string config_toml;  ///< written to cfg.toml
-    std::string scene_toml;   ///< written to scene.toml (the config names it); empty: none
-    double duration_s = 1.0;  ///< --duration: virtual seconds in lockstep; <= 0: none
-    bool lockstep = true;     ///< --lockstep
-    bool identify = false;    ///< --identify: the excitation run (it ends by itself)
-    bool with_log = true;     ///< --log run.csv
+    std::string config_toml{};  ///< written to cfg.toml
+    std::string scene_toml{};   ///< written to scene.toml (the config names it); empty: none
+    double duration_s = 1.0;    ///< --duration: virtual seconds in lockstep; <= 0: none
+    bool lockstep = true;       ///< --lockstep
+    bool identify = false;      ///< --identify: the excitation run (it ends by itself)
+    bool with_log = true;       ///< --log run.csv
     /// NAME=value pairs in hapticd's environment (NOTIFY_SOCKET, WATCHDOG_USEC, ...).
     std::vector<std::pair<std::string, std::string>> environment{};
 };

@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "hapticd/daemon/run_stamp.hpp"
 #include "hapticd/daemon/startup_check.hpp"
@@ -24,6 +25,9 @@ struct RunContext {
     std::string causality;      ///< "impedance" | "admittance"
     bool lockstep = false;
     std::string exit;  ///< "stopped" | "duration" | "fault" | "error"
+    /// The servo's safety state at its last tick (servo_state.hpp): "disabled", "arming",
+    /// "running" or "fault".
+    std::string final_state;
     /// The last command written after the loop stopped: "zero" when the device accepted the
     /// disabled zero-force command, else "zero, not confirmed: REASON".
     std::string final_command;
@@ -33,6 +37,8 @@ struct RunContext {
     std::uint64_t telemetry_records = 0;  ///< records the run gave the writer; 0 without --log
     std::uint64_t telemetry_records_written = 0;  ///< of them, whole lines in the --log file
     bool telemetry_complete = true;  ///< every record is in the file (none failed, none dropped)
+    /// The flight recorder's files, one per fault (docs/daemon.md, "The flight recorder").
+    std::vector<std::string> flight_records{};
     StartupCheck check;
     servo::RealtimeReport realtime;
 };

@@ -51,6 +51,7 @@ struct RealtimeReport {
     bool scheduler_fifo = false;
     int priority = 0;
     bool memory_locked = false;
+    bool heap_prefaulted = false;  ///< prefault_heap_bytes touched and kept (lock_memory)
     bool affinity_set = false;
     int cpu = -1;
     bool cpu_dma_latency_held = false;

@@ -42,6 +42,7 @@
 #include "hapticd/servo/coupling.hpp"
 #include "hapticd/servo/environment_port.hpp"
 #include "hapticd/servo/faults.hpp"
+#include "hapticd/servo/flight_recorder.hpp"
 #include "hapticd/servo/io.hpp"
 #include "hapticd/servo/link_recovery.hpp"
 #include "hapticd/servo/pacing.hpp"
@@ -170,6 +171,10 @@ class ServoLoop {
     void request_fault_reset() noexcept { reset_requested_.store(true, std::memory_order_release); }
     /// The latest tick's state, lock-free.
     StatusSnapshot status() const noexcept { return status_.load(); }
+
+    /// Every tick's record also goes to `recorder` (may be null; it must outlive the loop),
+    /// which the tick that latches a new fault freezes (flight_recorder.hpp). Before run().
+    void attach_flight_recorder(FlightRecorder* recorder) noexcept { recorder_ = recorder; }
 
     // --- servo thread, or after run() returned ----------------------------------------
     const TickStats& stats() const noexcept { return stats_; }
@@ -454,9 +459,9 @@ class ServoLoop {
     }
 
     // Record: link recovery counts the tick, then the statistics, the telemetry record
-    // (never blocks) and the status snapshot. A link-fault latch that this tick's settle
-    // completes clears after its record, which still carries the faults that held the force
-    // at zero.
+    // (never blocks), the flight recorder (frozen by a new fault) and the status snapshot. A
+    // link-fault latch that this tick's settle completes clears after its record, which still
+    // carries the faults that held the force at zero.
     [[gnu::always_inline]] void record(const Wake& wake, bool paced, const Sample& sample,
                                        const Sensed& sensed, const Coupled& coupled,
                                        const SafeForce& safe, std::uint32_t flags) noexcept {
@@ -469,6 +474,11 @@ class ServoLoop {
         count_tick(wake, paced, compute_ns);
         fill_record(wake, paced, sample, sensed, coupled, flags, compute_ns);
         if (telemetry_ != nullptr) telemetry_->try_push(record_);
+        if (recorder_ != nullptr) {
+            recorder_->record(record_);
+            if ((record_.faults & ~recorded_faults_) != 0u) recorder_->freeze();  // a new fault
+            recorded_faults_ = record_.faults;
+        }
         ++stats_.ticks;
         if (link_action == LinkAction::recover) {
             clear_fault_latch();
@@ -618,6 +628,8 @@ class ServoLoop {
     SafetySupervisor safety_;
     LinkRecovery link_recovery_;
     TelemetryRing* telemetry_;
+    FlightRecorder* recorder_ = nullptr;
+    std::uint32_t recorded_faults_ = 0;  ///< the faults of the last record the recorder kept
     Clock clock_;
     LoopPacer<Clock> pacer_;
     bool rigid_;  ///< no virtual coupling (ServoConfig::coupling_enabled = false)

@@ -1,0 +1,79 @@
+#!/usr/bin/env bash
+# The servo loop while clients hammer the control socket (docs/benchmarks.md, "The servo
+# under socket abuse"): wake-up latency and tick compute, side by side in the same run, for
+#   quiet   hapticd --socket with no client
+#   cpu     the same with one core kept busy (stress-ng --cpu 1): what CPU load alone does
+#   hammer  the same with socket_hammer: floods, garbage, oversized lines, connect churn,
+#           half-closes, idle clients and a polite client polling status as fast as it can
+# each SECONDS long, real time, the embedded default (sim device, demo wall), as root
+# (SCHED_FIFO 80, mlockall); ROUNDS rounds of the three, interleaved, so that the machine's
+# drift falls on all three alike. Prints each run, then the medians over the rounds.
+#
+# Usage: bench/socket_abuse.sh [SECONDS] [ROUNDS] [BIN]
+#   SECONDS  length of each run (default 10)
+#   ROUNDS   rounds of quiet, cpu, hammer (default 3)
+#   BIN      the directory of hapticd and socket_hammer (default build/bench/bin)
+set -euo pipefail
+
+seconds=${1:-10}
+rounds=${2:-3}
+bin=${3:-build/bench/bin}
+python=/usr/bin/python3
+for tool in "$bin/hapticd" "$bin/socket_hammer" stress-ng "$python"; do
+    command -v "$tool" >/dev/null || {
+        echo "socket_abuse.sh: $tool not found" >&2
+        exit 2
+    }
+done
+
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+echo "socket_abuse.sh: $(date -u +%Y-%m-%dT%H:%M:%SZ), $(nproc) cpus, kernel $(uname -r)," \
+    "load $(cut -d' ' -f1-3 /proc/loadavg); $rounds rounds of $seconds s"
+
+for round in $(seq "$rounds"); do
+    for arm in quiet cpu hammer; do
+        socket="$work/$arm-$round.sock"
+        summary="$work/$arm-$round.json"
+        "$bin/hapticd" --duration "$seconds" --no-status --socket "$socket" \
+            --summary "$summary" 2>"$work/$arm-$round.log" &
+        daemon=$!
+        for _ in $(seq 100); do [ -S "$socket" ] && break; sleep 0.05; done
+        case $arm in
+            cpu) stress-ng --cpu 1 --timeout "${seconds}s" --quiet ;;
+            hammer) "$bin/socket_hammer" "$socket" "$seconds" ;;
+        esac
+        wait "$daemon" || {
+            echo "socket_abuse.sh: hapticd ($arm, round $round) failed:" >&2
+            cat "$work/$arm-$round.log" >&2
+            exit 1
+        }
+    done
+done
+
+"$python" - "$work" "$rounds" <<'PY'
+import json, statistics, sys
+work, rounds = sys.argv[1], int(sys.argv[2])
+fields = [("wake p50", "wake_latency_us", "p50"), ("wake p99", "wake_latency_us", "p99"),
+          ("compute p50", "tick_compute_us", "p50"), ("compute p99", "tick_compute_us", "p99")]
+arms = ["quiet", "cpu", "hammer"]
+runs = {arm: [json.load(open(f"{work}/{arm}-{r}.json")) for r in range(1, rounds + 1)]
+        for arm in arms}
+print("run                 " + "".join(f"{name:>13}" for name, _, _ in fields)
+      + "     ticks  overruns  faults")
+for r in range(rounds):
+    for arm in arms:
+        s = runs[arm][r]
+        print(f"{arm + ' ' + str(r + 1):<20}"
+              + "".join(f"{s[k][q]:>10.2f} us" for _, k, q in fields)
+              + f"{s['ticks']:>10}{s['overruns']:>10}  {','.join(s['faults']) or 'none'}")
+print("median over rounds")
+for arm in arms:
+    print(f"{arm:<20}" + "".join(
+        f"{statistics.median(s[k][q] for s in runs[arm]):>10.2f} us" for _, k, q in fields))
+quiet = {f: statistics.median(s[k][q] for s in runs["quiet"]) for f, k, q in fields}
+for arm in ["cpu", "hammer"]:
+    print(f"{arm + ' / quiet':<20}" + "".join(
+        f"{statistics.median(s[k][q] for s in runs[arm]) / quiet[f]:>13.2f}"
+        for f, k, q in fields))
+PY
