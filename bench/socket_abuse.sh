@@ -3,15 +3,18 @@
 # under socket abuse"): wake-up latency and tick compute, side by side in the same run, for
 #   quiet   hapticd --socket with no client
 #   cpu     the same with one core kept busy (stress-ng --cpu 1): what CPU load alone does
+#   cpu2    both cores kept busy (stress-ng --cpu 2), as the hammer's threads keep them
 #   hammer  the same with socket_hammer: floods, garbage, oversized lines, connect churn,
 #           half-closes, idle clients and a polite client polling status as fast as it can
+#   other   socket_hammer on a second hapticd's socket, not this one's: the same load on the
+#           machine, none of it on this process (what is the machine's, what is hapticd's)
 # each SECONDS long, real time, the embedded default (sim device, demo wall), as root
-# (SCHED_FIFO 80, mlockall); ROUNDS rounds of the three, interleaved, so that the machine's
-# drift falls on all three alike. Prints each run, then the medians over the rounds.
+# (SCHED_FIFO 80, mlockall); ROUNDS rounds of the five, interleaved, so that the machine's
+# drift falls on all of them alike. Prints each run, then the medians over the rounds.
 #
 # Usage: bench/socket_abuse.sh [SECONDS] [ROUNDS] [BIN]
 #   SECONDS  length of each run (default 10)
-#   ROUNDS   rounds of quiet, cpu, hammer (default 3)
+#   ROUNDS   rounds of quiet, cpu, cpu2, hammer, other (default 3)
 #   BIN      the directory of hapticd and socket_hammer (default build/bench/bin)
 set -euo pipefail
 
@@ -32,7 +35,7 @@ echo "socket_abuse.sh: $(date -u +%Y-%m-%dT%H:%M:%SZ), $(nproc) cpus, kernel $(u
     "load $(cut -d' ' -f1-3 /proc/loadavg); $rounds rounds of $seconds s"
 
 for round in $(seq "$rounds"); do
-    for arm in quiet cpu hammer; do
+    for arm in quiet cpu cpu2 hammer other; do
         socket="$work/$arm-$round.sock"
         summary="$work/$arm-$round.json"
         "$bin/hapticd" --duration "$seconds" --no-status --socket "$socket" \
@@ -41,9 +44,21 @@ for round in $(seq "$rounds"); do
         for _ in $(seq 100); do [ -S "$socket" ] && break; sleep 0.05; done
         case $arm in
             cpu) stress-ng --cpu 1 --timeout "${seconds}s" --quiet ;;
+            cpu2) stress-ng --cpu 2 --timeout "${seconds}s" --quiet ;;
             hammer) "$bin/socket_hammer" "$socket" "$seconds" ;;
+            other)
+                "$bin/hapticd" --duration "$((seconds + 2))" --no-status \
+                    --socket "$work/other.sock" 2>/dev/null &
+                other=$!
+                for _ in $(seq 100); do [ -S "$work/other.sock" ] && break; sleep 0.05; done
+                "$bin/socket_hammer" "$work/other.sock" "$seconds"
+                kill "$other" 2>/dev/null || true
+                wait "$other" 2>/dev/null || true
+                ;;
         esac
-        wait "$daemon" || {
+        # A host stall may exhaust the overrun budget (exit 1, the fault in the summary, which
+        # the table shows); no summary at all is a failure.
+        wait "$daemon" || [ -s "$summary" ] || {
             echo "socket_abuse.sh: hapticd ($arm, round $round) failed:" >&2
             cat "$work/$arm-$round.log" >&2
             exit 1
@@ -56,7 +71,7 @@ import json, statistics, sys
 work, rounds = sys.argv[1], int(sys.argv[2])
 fields = [("wake p50", "wake_latency_us", "p50"), ("wake p99", "wake_latency_us", "p99"),
           ("compute p50", "tick_compute_us", "p50"), ("compute p99", "tick_compute_us", "p99")]
-arms = ["quiet", "cpu", "hammer"]
+arms = ["quiet", "cpu", "cpu2", "hammer", "other"]
 runs = {arm: [json.load(open(f"{work}/{arm}-{r}.json")) for r in range(1, rounds + 1)]
         for arm in arms}
 print("run                 " + "".join(f"{name:>13}" for name, _, _ in fields)
@@ -72,7 +87,7 @@ for arm in arms:
     print(f"{arm:<20}" + "".join(
         f"{statistics.median(s[k][q] for s in runs[arm]):>10.2f} us" for _, k, q in fields))
 quiet = {f: statistics.median(s[k][q] for s in runs["quiet"]) for f, k, q in fields}
-for arm in ["cpu", "hammer"]:
+for arm in ["cpu", "cpu2", "hammer", "other"]:
     print(f"{arm + ' / quiet':<20}" + "".join(
         f"{statistics.median(s[k][q] for s in runs[arm]) / quiet[f]:>13.2f}"
         for f, k, q in fields))
