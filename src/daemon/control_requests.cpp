@@ -43,6 +43,10 @@ nlohmann::json status_body(const servo::StatusSnapshot& s, const RunFacts& facts
     j["overruns"] = s.overruns;
     j["solver_not_converged"] = s.solver_not_converged;
     j["energy_j"] = s.energy_j;
+    j["wake_latency_us"] = {{"p50", s.wake_p50_us}, {"p99", s.wake_p99_us}, {"max", s.wake_max_us}};
+    j["tick_compute_us"] = {
+        {"p50", s.compute_p50_us}, {"p99", s.compute_p99_us}, {"max", s.compute_max_us}};
+    j["link"] = {{"read_timeouts", s.read_timeouts}, {"link_recoveries", s.link_recoveries}};
     j["axes"] = facts.axes;
     j["x_m"] = first_axes(s.x_m, facts.axes);
     j["xe_m"] = first_axes(s.xe_m, facts.axes);

@@ -95,6 +95,21 @@ TEST(HilControlSocket, StatusDisarmArmAFaultItsRefusalAndResetThroughHapticctl) 
     const nlohmann::json ticking =
         status_when(d.socket, [](const nlohmann::json& s) { return s["t_s"] >= 1.2; });
     EXPECT_NEAR(ticking["measured_rate_hz"].get<double>(), 1000.0, 60.0) << ticking.dump();
+    // The percentiles of the first second: a real wake-up takes microseconds, a tick less
+    // than a period.
+    EXPECT_GT(ticking["wake_latency_us"]["p50"].get<double>(), 0.0) << ticking.dump();
+    EXPECT_GE(ticking["wake_latency_us"]["max"], ticking["wake_latency_us"]["p99"]);
+    EXPECT_GT(ticking["tick_compute_us"]["p50"].get<double>(), 0.0);
+    EXPECT_LT(ticking["tick_compute_us"]["p50"].get<double>(), 1000.0);
+    EXPECT_EQ(ticking["link"]["read_timeouts"], 0);
+    const CommandResult text = hapticctl(d.socket, "status");
+    EXPECT_EQ(text.exit_code, 0) << text.err;
+    for (const char* line : {"state     ", "rate      ", "wake      p50 ", "compute   p50 ",
+                             "link      0 reads without a sample", "device    sim device"}) {
+        EXPECT_NE(("\n" + text.out).find(std::string("\n") + line), std::string::npos)
+            << line << "\n"
+            << text.out;
+    }
 
     const CommandResult disarm = hapticctl(d.socket, "disarm");
     EXPECT_EQ(disarm.exit_code, 0) << disarm.err;

@@ -43,6 +43,15 @@ std::string status_text(const nlohmann::json& s) {
         << "f         " << vector_text(s.at("f_n"), 1.0) << " N\n"
         << "faults    " << faults_text(s.at("faults")) << "\n"
         << "overruns  " << s.at("overruns").get<std::uint64_t>() << "\n"
+        << "wake      p50 " << s.at("wake_latency_us").at("p50").get<double>() << " us, p99 "
+        << s.at("wake_latency_us").at("p99").get<double>() << " us, max "
+        << s.at("wake_latency_us").at("max").get<double>() << " us\n"
+        << "compute   p50 " << s.at("tick_compute_us").at("p50").get<double>() << " us, p99 "
+        << s.at("tick_compute_us").at("p99").get<double>() << " us, max "
+        << s.at("tick_compute_us").at("max").get<double>() << " us\n"
+        << "link      " << s.at("link").at("read_timeouts").get<std::uint64_t>()
+        << " reads without a sample, " << s.at("link").at("link_recoveries").get<std::uint64_t>()
+        << " recoveries\n"
         << "device    " << s.at("device").get<std::string>() << "\n"
         << "config    " << s.at("config_path").get<std::string>() << "\n";
     return out.str();

@@ -93,6 +93,7 @@ class ServoLoop {
           rigid_(!config.coupling_enabled),
           armed_(config.start_armed),
           was_armed_(config.start_armed) {
+        percentiles_every_ = static_cast<std::uint64_t>(std::max(1.0, std::round(config_.rate_hz)));
         // Before the first tick, status() says what the first will start from.
         publish_status(0.0, config.start_armed);
     }
@@ -484,6 +485,7 @@ class ServoLoop {
             clear_fault_latch();
             ++stats_.link_recoveries;
         }
+        if (stats_.ticks % percentiles_every_ == 0) refresh_percentiles();
         publish_status(safe.soft_start_scale, sensed.armed);
     }
 
@@ -599,8 +601,19 @@ class ServoLoop {
         return false;
     }
 
+    // The percentiles for status(), from the run's histograms (a walk of their low buckets:
+    // well under a microsecond, once a second).
+    void refresh_percentiles() noexcept {
+        percentiles_.wake_p50_us = stats_.wake_latency.quantile_us(0.5);
+        percentiles_.wake_p99_us = stats_.wake_latency.quantile_us(0.99);
+        percentiles_.wake_max_us = stats_.wake_latency.max_us();
+        percentiles_.compute_p50_us = stats_.compute.quantile_us(0.5);
+        percentiles_.compute_p99_us = stats_.compute.quantile_us(0.99);
+        percentiles_.compute_max_us = stats_.compute.max_us();
+    }
+
     void publish_status(double soft_start_scale, bool armed) noexcept {
-        StatusSnapshot snapshot;
+        StatusSnapshot snapshot = percentiles_;
         snapshot.tick = record_.tick;
         snapshot.t_s = record_.t_s;
         snapshot.x_m = record_.x_m;
@@ -613,6 +626,8 @@ class ServoLoop {
         snapshot.energy_j = record_.energy_j;
         snapshot.soft_start_scale = soft_start_scale;
         snapshot.armed = armed;
+        snapshot.read_timeouts = stats_.read_timeouts;
+        snapshot.link_recoveries = stats_.link_recoveries;
         // The soft start's own scale: a tick without a sample filters nothing, and must not
         // make a running loop look as if it were arming again.
         snapshot.state = servo_state(armed, record_.faults, safety_.soft_start().scale());
@@ -629,7 +644,9 @@ class ServoLoop {
     LinkRecovery link_recovery_;
     TelemetryRing* telemetry_;
     FlightRecorder* recorder_ = nullptr;
-    std::uint32_t recorded_faults_ = 0;  ///< the faults of the last record the recorder kept
+    std::uint32_t recorded_faults_ = 0;    ///< the faults of the last record the recorder kept
+    StatusSnapshot percentiles_{};         ///< only its percentile fields: refresh_percentiles()
+    std::uint64_t percentiles_every_ = 1;  ///< ticks between refreshes: one second's
     Clock clock_;
     LoopPacer<Clock> pacer_;
     bool rigid_;  ///< no virtual coupling (ServoConfig::coupling_enabled = false)

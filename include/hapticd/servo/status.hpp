@@ -24,6 +24,16 @@ struct StatusSnapshot {
     double soft_start_scale = 0.0;
     bool armed = false;
     ServoState state = ServoState::disabled;  ///< from armed, faults and the soft start
+    std::uint64_t read_timeouts = 0;          ///< reads that gave no sample, so far
+    std::uint64_t link_recoveries = 0;        ///< link-fault latches cleared, so far
+    /// Wake-up latency and tick compute since the start, us: refreshed once a second (the
+    /// histograms' walk is off the tick's compute time, after its write).
+    double wake_p50_us = 0.0;
+    double wake_p99_us = 0.0;
+    double wake_max_us = 0.0;
+    double compute_p50_us = 0.0;
+    double compute_p99_us = 0.0;
+    double compute_max_us = 0.0;
 };
 
 }  // namespace hapticd::servo
