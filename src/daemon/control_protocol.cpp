@@ -1,13 +1,23 @@
 #include "hapticd/daemon/control_protocol.hpp"
 
+#include <algorithm>
 #include <array>
+#include <cmath>
+#include <optional>
 #include <utility>
+#include <vector>
 
 namespace hapticd::daemon::control {
 namespace {
 
 constexpr std::array kRequests{RequestKind::status, RequestKind::arm, RequestKind::disarm,
-                               RequestKind::reset};
+                               RequestKind::reset, RequestKind::coupling};
+
+// The fields each request takes besides v, id and request.
+std::vector<std::string_view> own_fields(RequestKind kind) {
+    if (kind == RequestKind::coupling) return {"stiffness", "damping"};
+    return {};
+}
 
 std::string request_names() {
     std::string names;
@@ -26,6 +36,16 @@ std::string shown(const nlohmann::json& value) {
     return text;
 }
 
+// A finite number, or the error that says what it is instead.
+std::optional<double> finite_number(const nlohmann::json& j, std::string_view field,
+                                    std::string& error) {
+    if (!j.is_number() || !std::isfinite(j.get<double>())) {
+        error = "\"" + std::string(field) + "\" = " + shown(j) + ": must be a finite number";
+        return std::nullopt;
+    }
+    return j.get<double>();
+}
+
 }  // namespace
 
 std::string_view request_name(RequestKind kind) noexcept {
@@ -38,6 +58,8 @@ std::string_view request_name(RequestKind kind) noexcept {
             return "disarm";
         case RequestKind::reset:
             return "reset";
+        case RequestKind::coupling:
+            return "coupling";
     }
     return "unknown";
 }
@@ -78,27 +100,50 @@ ParsedRequest parse_request(std::string_view line) {
                        ": one of " + request_names();
         return parsed;
     }
+    const auto kind = std::find_if(kRequests.begin(), kRequests.end(),
+                                   [&](RequestKind k) { return *name == request_name(k); });
+    if (kind == kRequests.end()) {
+        parsed.error = "unknown request " + shown(*name) + ": one of " + request_names();
+        return parsed;
+    }
+    const std::vector<std::string_view> own = own_fields(*kind);
     for (auto it = j.begin(); it != j.end(); ++it) {
-        if (it.key() != "v" && it.key() != "id" && it.key() != "request") {
-            parsed.error = "unknown field \"" + it.key() + "\" in a \"" + name->get<std::string>() +
-                           "\" request: it takes only v, id, request";
+        if (it.key() == "v" || it.key() == "id" || it.key() == "request") continue;
+        if (std::find(own.begin(), own.end(), it.key()) != own.end()) continue;
+        std::string allowed = "v, id, request";
+        for (const std::string_view field : own) allowed += ", " + std::string(field);
+        parsed.error = "unknown field \"" + it.key() + "\" in a \"" + name->get<std::string>() +
+                       "\" request: it takes only " + allowed;
+        return parsed;
+    }
+    Request request{.kind = *kind, .id = parsed.id};
+    if (*kind == RequestKind::coupling) {
+        const auto stiffness = j.find("stiffness");
+        if (stiffness == j.end()) {
+            parsed.error = "\"stiffness\" is missing: a coupling request sets k_c, N/m";
             return parsed;
         }
-    }
-    for (const RequestKind kind : kRequests) {
-        if (*name == request_name(kind)) {
-            parsed.request = Request{.kind = kind, .id = parsed.id};
-            return parsed;
+        request.stiffness_n_per_m = finite_number(*stiffness, "stiffness", parsed.error);
+        if (!request.stiffness_n_per_m) return parsed;
+        if (const auto damping = j.find("damping"); damping != j.end()) {
+            request.damping_n_s_per_m = finite_number(*damping, "damping", parsed.error);
+            if (!request.damping_n_s_per_m) return parsed;
         }
     }
-    parsed.error = "unknown request " + shown(*name) + ": one of " + request_names();
+    parsed.request = request;
     return parsed;
 }
 
-std::string request_line(RequestKind kind, const nlohmann::json& id) {
-    nlohmann::json j{{"v", kProtocolVersion}, {"request", request_name(kind)}};
-    if (!id.is_null()) j["id"] = id;
+std::string request_line(const Request& request) {
+    nlohmann::json j{{"v", kProtocolVersion}, {"request", request_name(request.kind)}};
+    if (!request.id.is_null()) j["id"] = request.id;
+    if (request.stiffness_n_per_m) j["stiffness"] = *request.stiffness_n_per_m;
+    if (request.damping_n_s_per_m) j["damping"] = *request.damping_n_s_per_m;
     return j.dump() + "\n";
+}
+
+std::string request_line(RequestKind kind, const nlohmann::json& id) {
+    return request_line(Request{.kind = kind, .id = id});
 }
 
 std::string ok_reply(const nlohmann::json& id, nlohmann::json body) {

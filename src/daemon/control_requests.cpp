@@ -1,8 +1,11 @@
 #include "control_requests.hpp"
 
+#include <sstream>
 #include <string_view>
 #include <vector>
 
+#include "hapticd/daemon/config_schema.hpp"
+#include "hapticd/input/range.hpp"
 #include "hapticd/servo/faults.hpp"
 #include "hapticd/servo/servo_state.hpp"
 
@@ -27,6 +30,44 @@ std::string state_of(const servo::StatusSnapshot& s) {
     return std::string(servo::servo_state_name(s.state));
 }
 
+// coupling: the range of [coupling] stiffness and damping, then the start-up stability check
+// on the config with the new gains; only gains that pass reach the loop.
+Answer set_coupling(const Request& request, const Peer& peer, ServoControl& loop,
+                    const RunFacts& facts, const servo::StatusSnapshot& now) {
+    const auto refuse = [&](const std::string& why) {
+        return Answer{.reply = error_reply(request.id, "coupling refused: " + why),
+                      .journal = "control: coupling from " + who(peer) + " refused: " + why};
+    };
+    if (!facts.coupling_enabled) {
+        return refuse("the config runs without the coupling ([coupling] enabled = false)");
+    }
+    const servo::CouplingGains gains{
+        .stiffness_n_per_m = request.stiffness_n_per_m.value_or(0.0),
+        .damping_n_s_per_m = request.damping_n_s_per_m.value_or(now.damping_n_s_per_m),
+        .velocity_filter_hz = facts.velocity_filter_hz};
+    const input::Range& k_range = schema::kCouplingStiffness.range;
+    const input::Range& b_range = schema::kCouplingDamping.range;
+    if (!k_range.contains(gains.stiffness_n_per_m)) {
+        return refuse(input::out_of_range("stiffness", gains.stiffness_n_per_m, k_range));
+    }
+    if (!b_range.contains(gains.damping_n_s_per_m)) {
+        return refuse(input::out_of_range("damping", gains.damping_n_s_per_m, b_range));
+    }
+    if (!facts.check_coupling) return refuse("this run has no stability check to pass");
+    const CouplingVerdict verdict = facts.check_coupling(gains);
+    if (!verdict.accepted) return refuse(verdict.verdict);
+    loop.set_coupling(gains);
+    std::ostringstream set;
+    set << "k_c " << input::format_number(gains.stiffness_n_per_m) << " N/m, b_c "
+        << input::format_number(gains.damping_n_s_per_m) << " N s/m";
+    return {.reply = ok_reply(request.id, {{"state_before", state_of(now)},
+                                           {"stiffness", gains.stiffness_n_per_m},
+                                           {"damping", gains.damping_n_s_per_m},
+                                           {"verdict", verdict.verdict}}),
+            .journal = "control: coupling from " + who(peer) + ": " + set.str() +
+                       " from the next tick, through the soft start; " + verdict.verdict};
+}
+
 }  // namespace
 
 nlohmann::json status_body(const servo::StatusSnapshot& s, const RunFacts& facts) {
@@ -43,6 +84,7 @@ nlohmann::json status_body(const servo::StatusSnapshot& s, const RunFacts& facts
     j["overruns"] = s.overruns;
     j["solver_not_converged"] = s.solver_not_converged;
     j["energy_j"] = s.energy_j;
+    j["coupling"] = {{"stiffness", s.stiffness_n_per_m}, {"damping", s.damping_n_s_per_m}};
     j["wake_latency_us"] = {{"p50", s.wake_p50_us}, {"p99", s.wake_p99_us}, {"max", s.wake_max_us}};
     j["tick_compute_us"] = {
         {"p50", s.compute_p50_us}, {"p99", s.compute_p99_us}, {"max", s.compute_max_us}};
@@ -78,6 +120,8 @@ Answer answer(const Request& request, const Peer& peer, ServoControl& loop, cons
         case RequestKind::reset:
             loop.reset();
             break;
+        case RequestKind::coupling:
+            return set_coupling(request, peer, loop, facts, now);
     }
     // The servo thread takes the request at the start of its next tick; the reply says the
     // state it was asked in, and `status` shows what came of it.

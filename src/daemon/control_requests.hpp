@@ -5,9 +5,11 @@
 #pragma once
 
 #include <atomic>
+#include <functional>
 #include <string>
 
 #include "hapticd/daemon/control_server.hpp"
+#include "hapticd/servo/environment_port.hpp"
 #include "hapticd/servo/status.hpp"
 
 namespace hapticd::daemon::control {
@@ -21,6 +23,13 @@ class ServoControl {
     virtual void arm() noexcept = 0;
     virtual void disarm() noexcept = 0;
     virtual void reset() noexcept = 0;
+    virtual void set_coupling(const servo::CouplingGains& gains) noexcept = 0;
+};
+
+/// What the stability check made of new coupling gains.
+struct CouplingVerdict {
+    bool accepted = false;
+    std::string verdict;  ///< the check's one line (StartupCheck::describe()), or why not
 };
 
 /// What does not change during a run, for `status`.
@@ -31,6 +40,10 @@ struct RunFacts {
     std::string config_path;  ///< absolute; "(embedded default)" without --config
     /// The ticks per second over the last second, kept by the supervising thread.
     const std::atomic<double>* measured_rate_hz = nullptr;
+    double velocity_filter_hz = 0.0;  ///< [coupling] velocity_filter: a coupling request keeps it
+    bool coupling_enabled = true;     ///< [coupling] enabled
+    /// The start-up check on the config with these gains ([coupling] check; docs/control.md).
+    std::function<CouplingVerdict(const servo::CouplingGains&)> check_coupling{};
 };
 
 /// The status reply's body: state, tick, rates, forces, positions and faults.

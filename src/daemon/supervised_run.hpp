@@ -28,6 +28,7 @@
 #include "hapticd/daemon/realtime_advice.hpp"
 #include "hapticd/daemon/run.hpp"
 #include "hapticd/daemon/service_notifier.hpp"
+#include "hapticd/daemon/startup_check.hpp"
 #include "hapticd/daemon/summary_json.hpp"
 #include "hapticd/daemon/telemetry_writer.hpp"
 #include "hapticd/device/device.hpp"
@@ -53,10 +54,28 @@ class LoopControl final : public control::ServoControl {
     void arm() noexcept override { loop_.arm(); }
     void disarm() noexcept override { loop_.disarm(); }
     void reset() noexcept override { loop_.request_fault_reset(); }
+    void set_coupling(const servo::CouplingGains& gains) noexcept override {
+        loop_.request_coupling(gains);
+    }
 
   private:
     Loop& loop_;
 };
+
+/// The start-up check of `config` with the coupling `gains` in place of its own: what a
+/// control socket's coupling request must pass ([coupling] check, docs/control.md).
+inline control::CouplingVerdict check_new_coupling(const Config& config,
+                                                   const servo::CouplingGains& gains) {
+    Config candidate = config;
+    candidate.coupling.stiffness_n_per_m = gains.stiffness_n_per_m;
+    candidate.coupling.damping_n_s_per_m = gains.damping_n_s_per_m;
+    try {
+        const StartupCheck check = check_coupling_at_startup(candidate);
+        return {.accepted = check.skipped || check.passed, .verdict = check.describe()};
+    } catch (const std::exception& e) {
+        return {.accepted = false, .verdict = e.what()};
+    }
+}
 
 /// Stops the control socket's thread when it goes out of scope: before the loop that its
 /// handler reaches is destroyed, on every path.
@@ -148,7 +167,12 @@ int run_loop(const RunOptions& options, const Config& config,
                                   .config_path = context.config_path.empty()
                                                      ? std::string("(embedded default)")
                                                      : context.config_path,
-                                  .measured_rate_hz = &measured_rate_hz};
+                                  .measured_rate_hz = &measured_rate_hz,
+                                  .velocity_filter_hz = config.coupling.velocity_filter_hz,
+                                  .coupling_enabled = config.coupling.enabled,
+                                  .check_coupling = [&config](const servo::CouplingGains& gains) {
+                                      return check_new_coupling(config, gains);
+                                  }};
     const ControlStopper control_stopper{outputs.control.get()};
     if (outputs.control) {
         outputs.control->start([&](const control::Request& request, const control::Peer& peer) {

@@ -57,6 +57,43 @@ TEST(DaemonControlProtocol, EveryBadLineIsRefusedNamingWhatIsWrong) {
     }
 }
 
+TEST(DaemonControlProtocol, ACouplingRequestCarriesItsGains) {
+    const Request both{.kind = RequestKind::coupling,
+                       .id = 3,
+                       .stiffness_n_per_m = 2500.0,
+                       .damping_n_s_per_m = 0.5};
+    const std::string line = request_line(both);
+    const ParsedRequest parsed = parse_request(line.substr(0, line.size() - 1));
+    ASSERT_TRUE(parsed.request.has_value()) << parsed.error;
+    EXPECT_EQ(parsed.request->kind, RequestKind::coupling);
+    EXPECT_EQ(parsed.request->stiffness_n_per_m, 2500.0);
+    EXPECT_EQ(parsed.request->damping_n_s_per_m, 0.5);
+    const ParsedRequest stiffness_only =
+        parse_request(R"({"v":1,"request":"coupling","stiffness":100})");
+    ASSERT_TRUE(stiffness_only.request.has_value()) << stiffness_only.error;
+    EXPECT_FALSE(stiffness_only.request->damping_n_s_per_m.has_value());
+
+    const Refusal refusals[] = {
+        {R"({"v":1,"request":"coupling"})", "\"stiffness\" is missing"},
+        {R"({"v":1,"request":"coupling","stiffness":"stiff"})",
+         "\"stiffness\" = \"stiff\": must be a finite number"},
+        // JSON has no infinity: a number past double's range is no JSON at all.
+        {R"({"v":1,"request":"coupling","stiffness":1e999})", "is not JSON"},
+        {R"({"v":1,"request":"coupling","stiffness":1,"damping":null})",
+         "\"damping\" = null: must be a finite number"},
+        {R"({"v":1,"request":"coupling","stiffness":1,"mass":2})",
+         "unknown field \"mass\" in a \"coupling\" request: it takes only v, id, request, "
+         "stiffness, damping"},
+        {R"({"v":1,"request":"status","stiffness":1})", "unknown field \"stiffness\""},
+    };
+    for (const Refusal& r : refusals) {
+        SCOPED_TRACE(r.line);
+        const ParsedRequest bad = parse_request(r.line);
+        EXPECT_FALSE(bad.request.has_value());
+        EXPECT_NE(bad.error.find(r.says), std::string::npos) << bad.error;
+    }
+}
+
 TEST(DaemonControlProtocol, ARefusalKeepsTheRequestsId) {
     const ParsedRequest parsed = parse_request(R"({"v":1,"id":9,"request":"launch"})");
     EXPECT_FALSE(parsed.request.has_value());

@@ -232,6 +232,50 @@ TEST(HilControlSocket, HostileClientsGetErrorsOrDisconnectsAndTheServoNeverNotic
     EXPECT_NE(messages.find("clients already connected"), std::string::npos) << messages;
 }
 
+// The default config: the pen display (m = 0.1 kg, b = 2 N s/m) at 1 kHz, checked by the
+// passive model, whose bound with no delay is b_c + k_c T/2 < b: k_c < 4000 N/m at b_c = 0.
+TEST(HilControlSocket, ACouplingRequestIsCheckedAndRefusedWithTheVerdictWhenItFails) {
+    const ScratchDir dir;
+    Daemon d(dir, "lab");
+    ASSERT_TRUE(d.process.wait_for_socket(d.socket)) << d.process.messages();
+    EXPECT_EQ(status_of(d.socket)["coupling"]["stiffness"], 3600.0);  // the config's
+
+    const CommandResult accepted = hapticctl(d.socket, "coupling 2000");
+    EXPECT_EQ(accepted.exit_code, 0) << accepted.err;
+    EXPECT_NE(accepted.out.find("coupling k_c 2000 N/m, b_c 0 N s/m"), std::string::npos)
+        << accepted.out;
+    EXPECT_NE(accepted.out.find("passive model"), std::string::npos) << accepted.out;
+    const nlohmann::json now = status_when(
+        d.socket, [](const nlohmann::json& s) { return s["coupling"]["stiffness"] == 2000.0; });
+    EXPECT_EQ(now["coupling"]["stiffness"], 2000.0);
+    EXPECT_EQ(now["coupling"]["damping"], 0.0);
+
+    // Above the passive bound: refused with the check's verdict, the gains in force kept.
+    const CommandResult unstable = hapticctl(d.socket, "coupling 4500");
+    EXPECT_EQ(unstable.exit_code, 1);
+    EXPECT_NE(unstable.err.find("coupling refused: "), std::string::npos) << unstable.err;
+    EXPECT_NE(unstable.err.find("passive model"), std::string::npos) << unstable.err;
+    // k_c T/2 + b_c = 1 + 1.5 N s/m is past b = 2 too: the damping counts.
+    EXPECT_EQ(hapticctl(d.socket, "coupling 2000 1.5").exit_code, 1);
+    const CommandResult out_of_range = hapticctl(d.socket, "coupling 5e9");
+    EXPECT_EQ(out_of_range.exit_code, 1);
+    EXPECT_NE(out_of_range.err.find("stiffness = 5e+09 is out of range"), std::string::npos)
+        << out_of_range.err;
+    EXPECT_EQ(status_of(d.socket)["coupling"]["stiffness"], 2000.0);
+
+    for (const char* bad :
+         {"coupling", "coupling -5", "coupling stiff", "coupling 100 -1", "coupling 100 1 2"}) {
+        SCOPED_TRACE(bad);
+        const CommandResult r = hapticctl(d.socket, bad);
+        EXPECT_EQ(r.exit_code, 2) << r.err;
+    }
+    EXPECT_EQ(d.process.stop(), 0) << d.process.messages();
+    const std::string messages = d.process.messages();
+    EXPECT_NE(messages.find("control: coupling from pid "), std::string::npos) << messages;
+    EXPECT_NE(messages.find("k_c 2000 N/m, b_c 0 N s/m from the next tick"), std::string::npos)
+        << messages;
+}
+
 TEST(HilControlSocket, TwoInstancesAreEachControlledOnTheirOwnSocket) {
     const ScratchDir dir;
     Daemon a(dir, "lab0", "");

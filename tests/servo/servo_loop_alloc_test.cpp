@@ -122,10 +122,14 @@ TEST(ServoAllocation, FaultPathDoesNotAllocate) {
     const bool frozen_by_the_fault = recorder.frozen();
     recorder.thaw();
     loop.request_fault_reset();
+    // New coupling gains (the control socket's coupling request) are taken in a tick too.
+    loop.request_coupling({.stiffness_n_per_m = 1500.0, .damping_n_s_per_m = 1.0});
     for (int n = 0; n < 10; ++n) loop.tick();
     EXPECT_EQ(guard.allocations(), 0u);
     EXPECT_NE(loop.faults_seen(), 0u);
     EXPECT_TRUE(frozen_by_the_fault);
+    EXPECT_EQ(loop.coupling().gains().stiffness_n_per_m, 1500.0);
+    EXPECT_EQ(loop.status().stiffness_n_per_m, 1500.0);
 }
 
 // The interval-unknown and stale-sample paths (docs/architecture.md §7.6, §7.1): a device

@@ -57,8 +57,13 @@ ControlConnection::~ControlConnection() {
 }
 
 nlohmann::json ControlConnection::request(daemon::control::RequestKind kind) {
+    return request(daemon::control::Request{.kind = kind});
+}
+
+nlohmann::json ControlConnection::request(daemon::control::Request request) {
     const std::int64_t id = next_id_++;
-    const std::string line = daemon::control::request_line(kind, id);
+    request.id = id;
+    const std::string line = daemon::control::request_line(request);
     for (std::size_t sent = 0; sent < line.size();) {
         const ssize_t n = ::send(fd_, line.data() + sent, line.size() - sent, MSG_NOSIGNAL);
         if (n < 0 && errno == EINTR) continue;

@@ -32,6 +32,7 @@ class ControlConnection {
     /// Sends one request and returns its reply (ok or not); throws ConnectionError when the
     /// daemon goes away, is silent for the timeout, or replies outside the protocol.
     nlohmann::json request(daemon::control::RequestKind kind);
+    nlohmann::json request(daemon::control::Request request);
 
   private:
     std::string read_line();

@@ -1,7 +1,7 @@
 // hapticctl: the operator's command line for a running hapticd (docs/control.md).
 //
 //   hapticctl [-i NAME | --socket PATH] status [--json] | watch [--count N] | arm | disarm |
-//             reset
+//             reset | coupling K [B]
 //
 // Exit status: 0 done; 1 the daemon refused, or could not be reached; 2 bad usage.
 #include <CLI/CLI.hpp>
@@ -70,6 +70,7 @@ int change_state(ControlConnection& daemon, RequestKind kind) {
             case RequestKind::reset:
                 return state != "fault";
             case RequestKind::status:
+            case RequestKind::coupling:
                 break;
         }
         return true;
@@ -86,6 +87,25 @@ int change_state(ControlConnection& daemon, RequestKind kind) {
                   << " (a latched fault that returns at once, or a stalled servo thread)\n";
         return hapticd::daemon::kExitFault;
     }
+    return hapticd::daemon::kExitOk;
+}
+
+// coupling K [B]: the daemon checks the gains (its range, then its stability check) and
+// says why when it refuses them.
+int set_coupling(ControlConnection& daemon, double stiffness, std::optional<double> damping) {
+    const nlohmann::json reply =
+        daemon.request(hapticd::daemon::control::Request{.kind = RequestKind::coupling,
+                                                         .id = nullptr,
+                                                         .stiffness_n_per_m = stiffness,
+                                                         .damping_n_s_per_m = damping});
+    if (!reply.at("ok").get<bool>()) {
+        std::cerr << "hapticctl: " << reply.value("error", std::string("refused")) << "\n";
+        return hapticd::daemon::kExitFault;
+    }
+    std::cout << "coupling k_c " << reply.at("stiffness").get<double>() << " N/m, b_c "
+              << reply.at("damping").get<double>()
+              << " N s/m from the next tick, through the soft start\n"
+              << reply.at("verdict").get<std::string>() << "\n";
     return hapticd::daemon::kExitOk;
 }
 
@@ -137,6 +157,17 @@ int main(int argc, char** argv) {
     auto* reset = app.add_subcommand(
         "reset", "clear a latched fault; an armed servo then starts again through the soft start");
 
+    double stiffness = 0.0;
+    double damping = 0.0;
+    auto* coupling = app.add_subcommand(
+        "coupling",
+        "set the coupling's k_c [and b_c] (16): checked by the daemon's stability check first, "
+        "refused with its verdict when they fail it; forces return through the soft start");
+    coupling->add_option("K", stiffness, "k_c, N/m")->required()->check(CLI::NonNegativeNumber);
+    auto* damping_option =
+        coupling->add_option("B", damping, "b_c, N s/m (default: the damping in force)")
+            ->check(CLI::NonNegativeNumber);
+
     // A word that is not a command is said below, by name; the commands themselves (made
     // above, before this) still refuse what they do not take.
     app.allow_extras();
@@ -155,7 +186,7 @@ int main(int argc, char** argv) {
                   << (app.remaining().empty()
                           ? std::string("no command")
                           : "\"" + app.remaining().front() + "\" is not a command")
-                  << ": one of status, watch, arm, disarm, reset (hapticctl --help)\n";
+                  << ": one of status, watch, arm, disarm, reset, coupling (hapticctl --help)\n";
         return hapticd::daemon::kExitBadInput;
     }
     if (instance_option->count() == 0 && socket_option->count() == 0) {
@@ -170,7 +201,9 @@ int main(int argc, char** argv) {
         socket_path = hapticd::ctl::instance_socket(instance);
     }
     try {
-        ControlConnection daemon(socket_path);
+        // The stability check of a coupling request may take seconds (check = "exact").
+        ControlConnection daemon(
+            socket_path, coupling->parsed() ? std::chrono::seconds(120) : std::chrono::seconds(2));
         if (status->parsed()) {
             const nlohmann::json s = status_of(daemon);
             std::cout << (as_json ? s.dump() + "\n" : hapticd::ctl::status_text(s));
@@ -180,6 +213,11 @@ int main(int argc, char** argv) {
         if (arm->parsed()) return change_state(daemon, RequestKind::arm);
         if (disarm->parsed()) return change_state(daemon, RequestKind::disarm);
         if (reset->parsed()) return change_state(daemon, RequestKind::reset);
+        if (coupling->parsed()) {
+            return set_coupling(
+                daemon, stiffness,
+                damping_option->count() != 0 ? std::optional<double>(damping) : std::nullopt);
+        }
     } catch (const ConnectionError& e) {
         std::cerr << "hapticctl: " << e.what() << "\n";
         return hapticd::daemon::kExitFault;

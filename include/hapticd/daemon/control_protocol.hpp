@@ -17,14 +17,19 @@ inline constexpr int kProtocolVersion = 1;
 /// The longest request line, its newline included.
 inline constexpr std::size_t kMaxRequestBytes = 4096;
 
-enum class RequestKind { status, arm, disarm, reset };
+enum class RequestKind { status, arm, disarm, reset, coupling };
 
 /// The name on the wire ("status", ...).
 std::string_view request_name(RequestKind kind) noexcept;
 
 struct Request {
     RequestKind kind = RequestKind::status;
-    nlohmann::json id;  ///< echoed in the reply; null when the request had none
+    nlohmann::json id{};  ///< echoed in the reply; null when the request had none
+    /// coupling: "stiffness" (required), k_c of (16), N/m; finite. Its range is the
+    /// daemon's to check ([coupling] stiffness), as is the stability check.
+    std::optional<double> stiffness_n_per_m{};
+    /// coupling: "damping" (optional: the damping in force stays), b_c, N s/m; finite.
+    std::optional<double> damping_n_s_per_m{};
 };
 
 /// A line, parsed: the request, or the error to reply with (the id is kept where the line
@@ -38,7 +43,9 @@ struct ParsedRequest {
 /// Parses one request line (without its newline).
 ParsedRequest parse_request(std::string_view line);
 
-/// A request line, its newline included: {"v":1,"id":id,"request":name}.
+/// A request line, its newline included: {"v":1,"id":id,"request":name} and the request's
+/// own fields (coupling: stiffness, and damping when given).
+std::string request_line(const Request& request);
 std::string request_line(RequestKind kind, const nlohmann::json& id = nullptr);
 
 /// A reply line, its newline included: `body` with "v", "id" and "ok": true added.

@@ -80,6 +80,8 @@ class VirtualCoupling {
         : gains_(gains), options_(options) {}
 
     const CouplingGains& gains() const noexcept { return gains_; }
+    /// New gains from the next step on (the caller restarts the history: reset()).
+    void set_gains(const CouplingGains& gains) noexcept { gains_ = gains; }
 
     /// Both sides at rest at `device_position_m`: x_d[n-1] = x_e[n-1] = it, u[n-1] = 0.
     void reset(const Vec3& device_position_m) noexcept {

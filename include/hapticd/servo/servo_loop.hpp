@@ -170,6 +170,11 @@ class ServoLoop {
     void disarm() noexcept { armed_.store(false, std::memory_order_release); }
     /// Clears the fault latch at the start of the next tick; soft start begins again.
     void request_fault_reset() noexcept { reset_requested_.store(true, std::memory_order_release); }
+    /// New coupling gains (16) from the start of the next tick, through the soft start: the
+    /// force drops to zero, and ramps back once the handle is still, with the coupling
+    /// restarted where the handle is. Check them first (daemon: the stability check); one
+    /// thread at a time may call this.
+    void request_coupling(const CouplingGains& gains) noexcept { pending_gains_.store(gains); }
     /// The latest tick's state, lock-free.
     StatusSnapshot status() const noexcept { return status_.load(); }
 
@@ -496,6 +501,12 @@ class ServoLoop {
     // Returns whether the loop is armed.
     bool take_requests() noexcept {
         if (reset_requested_.exchange(false, std::memory_order_acq_rel)) clear_fault_latch();
+        if (const std::uint64_t version = pending_gains_.version(); version != gains_version_) {
+            gains_version_ = version;
+            coupling_.set_gains(pending_gains_.load());
+            safety_.restart_soft_start();
+            initialised_ = false;  // the coupling restarts where the handle is
+        }
         const bool armed = armed_.load(std::memory_order_acquire);
         if (armed && !was_armed_) {
             safety_.restart_soft_start();
@@ -626,6 +637,8 @@ class ServoLoop {
         snapshot.energy_j = record_.energy_j;
         snapshot.soft_start_scale = soft_start_scale;
         snapshot.armed = armed;
+        snapshot.stiffness_n_per_m = coupling_.gains().stiffness_n_per_m;
+        snapshot.damping_n_s_per_m = coupling_.gains().damping_n_s_per_m;
         snapshot.read_timeouts = stats_.read_timeouts;
         snapshot.link_recoveries = stats_.link_recoveries;
         // The soft start's own scale: a tick without a sample filters nothing, and must not
@@ -656,6 +669,8 @@ class ServoLoop {
     Seqlock<StatusSnapshot> status_;
     std::atomic<bool> armed_;
     std::atomic<bool> reset_requested_{false};
+    Seqlock<CouplingGains> pending_gains_;  ///< request_coupling()'s, taken at a tick's start
+    std::uint64_t gains_version_ = 0;       ///< pending_gains_.version() last taken
     bool was_armed_;
     bool initialised_ = false;
     int consecutive_overruns_ = 0;

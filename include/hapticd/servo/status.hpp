@@ -24,6 +24,8 @@ struct StatusSnapshot {
     double soft_start_scale = 0.0;
     bool armed = false;
     ServoState state = ServoState::disabled;  ///< from armed, faults and the soft start
+    double stiffness_n_per_m = 0.0;           ///< the coupling's k_c in force
+    double damping_n_s_per_m = 0.0;           ///< the coupling's b_c in force
     std::uint64_t read_timeouts = 0;          ///< reads that gave no sample, so far
     std::uint64_t link_recoveries = 0;        ///< link-fault latches cleared, so far
     /// Wake-up latency and tick compute since the start, us: refreshed once a second (the
