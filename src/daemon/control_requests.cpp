@@ -43,7 +43,7 @@ Answer set_coupling(const Request& request, const Peer& peer, ServoControl& loop
     }
     const servo::CouplingGains gains{
         .stiffness_n_per_m = request.stiffness_n_per_m.value_or(0.0),
-        .damping_n_s_per_m = request.damping_n_s_per_m.value_or(now.damping_n_s_per_m),
+        .damping_n_s_per_m = request.damping_n_s_per_m.value_or(loop.coupling().damping_n_s_per_m),
         .velocity_filter_hz = facts.velocity_filter_hz};
     const input::Range& k_range = schema::kCouplingStiffness.range;
     const input::Range& b_range = schema::kCouplingDamping.range;

@@ -24,6 +24,8 @@ class ServoControl {
     virtual void disarm() noexcept = 0;
     virtual void reset() noexcept = 0;
     virtual void set_coupling(const servo::CouplingGains& gains) noexcept = 0;
+    /// The gains last set (or the config's): what a coupling request without damping keeps.
+    virtual servo::CouplingGains coupling() const noexcept = 0;
 };
 
 /// What the stability check made of new coupling gains.

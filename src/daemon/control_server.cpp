@@ -221,7 +221,10 @@ void ControlServer::accept_clients() {
 
 void ControlServer::read_from(Client& client) {
     std::array<char, 4096> buffer{};
-    while (!client.read_closed && !client.closing) {
+    // At most 16 reads a wake: epoll (level-triggered) comes back for the rest, so a client
+    // that writes as fast as it reads cannot keep this thread from the others, or from stop().
+    constexpr int kReadsPerWake = 16;
+    for (int reads = 0; reads < kReadsPerWake && !client.read_closed && !client.closing; ++reads) {
         const ssize_t got = ::recv(client.fd, buffer.data(), buffer.size(), MSG_DONTWAIT);
         if (got < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) break;
         if (got < 0 && errno == EINTR) continue;
@@ -259,6 +262,8 @@ void ControlServer::answer_lines(Client& client) {
         } else {
             client.out += error_reply(parsed.id, parsed.error);
         }
+        // Unread means not taken by the socket: offer the replies first.
+        if (client.out.size() > limits_.max_unread_reply_bytes) flush(client);
         if (client.out.size() > limits_.max_unread_reply_bytes) {
             note("control: disconnected pid " + std::to_string(client.peer.pid) +
                  ": it left more than " + std::to_string(limits_.max_unread_reply_bytes) +

@@ -49,17 +49,20 @@ inline constexpr std::size_t kLockstepRingRecords = std::size_t{1} << 14;
 template <typename Loop>
 class LoopControl final : public control::ServoControl {
   public:
-    explicit LoopControl(Loop& loop) : loop_(loop) {}
+    LoopControl(Loop& loop, const servo::CouplingGains& gains) : loop_(loop), gains_(gains) {}
     servo::StatusSnapshot status() const noexcept override { return loop_.status(); }
     void arm() noexcept override { loop_.arm(); }
     void disarm() noexcept override { loop_.disarm(); }
     void reset() noexcept override { loop_.request_fault_reset(); }
     void set_coupling(const servo::CouplingGains& gains) noexcept override {
+        gains_ = gains;
         loop_.request_coupling(gains);
     }
+    servo::CouplingGains coupling() const noexcept override { return gains_; }
 
   private:
     Loop& loop_;
+    servo::CouplingGains gains_;  // the last accepted: the servo may not have taken it yet
 };
 
 /// The start-up check of `config` with the coupling `gains` in place of its own: what a
@@ -83,6 +86,18 @@ struct ControlStopper {
     control::ControlServer* server;
     ~ControlStopper() {
         if (server != nullptr) server->stop();
+    }
+};
+
+/// Stops and joins the servo thread when it goes out of scope, if nobody has.
+struct ServoJoiner {
+    std::thread& thread;
+    std::atomic<bool>& stop;
+    ~ServoJoiner() {
+        if (thread.joinable()) {
+            stop.store(true, std::memory_order_release);
+            thread.join();
+        }
     }
 };
 
@@ -160,7 +175,7 @@ int run_loop(const RunOptions& options, const Config& config,
     // The control socket (docs/control.md), on its own thread from here to the servo
     // thread's end; the rate it reports is the watcher's, over the last second.
     std::atomic<double> measured_rate_hz{0.0};
-    LoopControl control_port(loop);
+    LoopControl control_port(loop, servo_config.coupling);
     const control::RunFacts facts{.axes = info.axes,
                                   .rate_hz = config.servo.rate_hz,
                                   .device = device_line(info),
@@ -203,6 +218,10 @@ int run_loop(const RunOptions& options, const Config& config,
         }
         servo_done.store(true, std::memory_order_release);
     });
+    // Should anything on this thread throw before the join below, the servo thread is stopped
+    // and joined (a joinable std::thread's destructor would end the process with the force
+    // held); the loop's destructor then writes zero force.
+    const ServoJoiner servo_joiner{servo_thread, stop_servo};
 
     // This thread: signals, the duration and the status line.
     // --duration counts servo time: from the first tick, not from before the real-time set-up

@@ -144,6 +144,23 @@ TEST(DaemonControlServer, AClientThatFloodsAndNeverReadsIsDisconnected) {
     EXPECT_EQ(reply_of(polite)["ok"], true);
 }
 
+// A client that reads may send many requests at once: replies the socket has taken are not
+// "unread", whatever the burst's total.
+TEST(DaemonControlServer, ABurstFromAClientThatReadsIsAnsweredWhole) {
+    const ScratchDir dir;
+    Served served(dir.file("c.sock"), Limits{.max_clients = 16, .max_unread_reply_bytes = 4096});
+    UnixClient client(dir.file("c.sock"));
+    std::string burst;
+    for (int i = 0; i < 300; ++i) burst += kStatus;  // replies: ~10 kB, past the 4 kB limit
+    ASSERT_TRUE(client.send(burst));
+    for (int i = 1; i <= 300; ++i) {
+        const nlohmann::json reply = reply_of(client);
+        ASSERT_FALSE(reply.is_null()) << "reply " << i << " never came";
+        EXPECT_EQ(reply["seen"], i);
+    }
+    EXPECT_FALSE(any_message_has(served.server->take_messages(), "unread"));
+}
+
 TEST(DaemonControlServer, OneClientTooManyIsToldSoAndTheOthersStay) {
     const ScratchDir dir;
     Served served(dir.file("c.sock"), Limits{.max_clients = 3});

@@ -263,8 +263,20 @@ TEST(HilControlSocket, ACouplingRequestIsCheckedAndRefusedWithTheVerdictWhenItFa
         << out_of_range.err;
     EXPECT_EQ(status_of(d.socket)["coupling"]["stiffness"], 2000.0);
 
-    for (const char* bad :
-         {"coupling", "coupling -5", "coupling stiff", "coupling 100 -1", "coupling 100 1 2"}) {
+    {  // Pipelined: the second request keeps the damping the first set, taken or not.
+        UnixClient raw(d.socket);
+        raw.send(R"({"v":1,"id":1,"request":"coupling","stiffness":100,"damping":1.5})"
+                 "\n"
+                 R"({"v":1,"id":2,"request":"coupling","stiffness":200})"
+                 "\n");
+        const auto first = raw.line(10s);
+        const auto second = raw.line(10s);
+        ASSERT_TRUE(first.has_value() && second.has_value());
+        EXPECT_EQ(nlohmann::json::parse(*first)["ok"], true) << *first;
+        EXPECT_EQ(nlohmann::json::parse(*second)["damping"], 1.5) << *second;
+    }
+    for (const char* bad : {"coupling", "coupling -5", "coupling stiff", "coupling 100 -1",
+                            "coupling 100 1 2", "coupling inf", "coupling 100 nan"}) {
         SCOPED_TRACE(bad);
         const CommandResult r = hapticctl(d.socket, bad);
         EXPECT_EQ(r.exit_code, 2) << r.err;

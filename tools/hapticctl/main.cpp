@@ -6,6 +6,7 @@
 // Exit status: 0 done; 1 the daemon refused, or could not be reached; 2 bad usage.
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <iostream>
 #include <optional>
@@ -214,6 +215,11 @@ int main(int argc, char** argv) {
         if (disarm->parsed()) return change_state(daemon, RequestKind::disarm);
         if (reset->parsed()) return change_state(daemon, RequestKind::reset);
         if (coupling->parsed()) {
+            if (!std::isfinite(stiffness) || !std::isfinite(damping)) {
+                std::cerr << "hapticctl: coupling " << stiffness << " " << damping
+                          << ": K and B must be finite numbers >= 0\n";
+                return hapticd::daemon::kExitBadInput;
+            }
             return set_coupling(
                 daemon, stiffness,
                 damping_option->count() != 0 ? std::optional<double>(damping) : std::nullopt);

@@ -6,7 +6,7 @@
 // new fault, after recording that tick. Another thread, seeing it frozen, reads the records
 // (the servo thread no longer writes them), writes them out and thaws it; the servo thread
 // records again from its next tick. A fault latched while the recorder is still frozen
-// finds the previous fault's ticks there and is not recorded on its own.
+// freezes it at the first tick it keeps after the thaw (ServoLoop's record step).
 //
 // Ordering: the servo thread's stores to the ring happen before its release store of
 // `frozen_`; the reader's acquire load of it sees them. Only the servo thread sets it, and
@@ -31,11 +31,14 @@ class FlightRecorder {
     FlightRecorder& operator=(const FlightRecorder&) = delete;
 
     // --- the servo thread -------------------------------------------------------------
-    /// Keeps `record`, dropping the oldest once full; nothing while frozen.
-    void record(const TelemetryRecord& record) noexcept {
-        if (frozen_.load(std::memory_order_acquire)) return;
+    /// Keeps `record`, dropping the oldest once full; nothing while frozen. Returns whether
+    /// it kept it: only a kept record may freeze the ring (else a reader's thaw between this
+    /// and freeze() would freeze the previous fault's ticks again).
+    bool record(const TelemetryRecord& record) noexcept {
+        if (frozen_.load(std::memory_order_acquire)) return false;
         ring_[static_cast<std::size_t>(recorded_ % ring_.size())] = record;
         ++recorded_;
+        return true;
     }
     /// Keeps what it holds for a reader (the tick that latched a fault, after record()).
     void freeze() noexcept {

@@ -481,9 +481,12 @@ class ServoLoop {
         fill_record(wake, paced, sample, sensed, coupled, flags, compute_ns);
         if (telemetry_ != nullptr) telemetry_->try_push(record_);
         if (recorder_ != nullptr) {
-            recorder_->record(record_);
-            if ((record_.faults & ~recorded_faults_) != 0u) recorder_->freeze();  // a new fault
-            recorded_faults_ = record_.faults;
+            // A fault new to the records kept freezes them; one that came while they were
+            // frozen freezes them at the first tick kept after the thaw.
+            if (recorder_->record(record_)) {
+                if ((record_.faults & ~recorded_faults_) != 0u) recorder_->freeze();
+                recorded_faults_ = record_.faults;
+            }
         }
         ++stats_.ticks;
         if (link_action == LinkAction::recover) {
