@@ -1,5 +1,6 @@
 // haptic-tune size and check, end to end through the real executable.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cctype>
 #include <nlohmann/json.hpp>
@@ -228,7 +229,8 @@ TEST(HapticTuneCheck, AClassAndASceneAreStatedInTheVerdict) {
 }
 
 TEST(HapticTuneConfig, ErrorsNameTheFileTheKeyAndTheRange) {
-    const std::string path = "/tmp/hapticd-cli-test-bad.toml";
+    const std::string path =
+        "/tmp/hapticd-cli-test-bad-" + std::to_string(::getpid()) + ".toml";  // per process
     std::FILE* f = std::fopen(path.c_str(), "w");
     std::fputs("[servo]\nrate_hz = 1000\n[device.model]\nmass = -0.5\ndamping = 2\n", f);
     std::fclose(f);
@@ -321,7 +323,8 @@ TEST(HapticTuneVelocityFilter, SizeCheckAndPlotPassItToTheModels) {
 }
 
 TEST(HapticTuneVelocityFilter, ReadsItFromAConfigAndRejectsCutoffsOutOfRange) {
-    const std::string path = "/tmp/hapticd-cli-test-filter.toml";
+    const std::string path =
+        "/tmp/hapticd-cli-test-filter-" + std::to_string(::getpid()) + ".toml";  // per process
     std::FILE* f = std::fopen(path.c_str(), "w");
     std::fputs(
         "[servo]\nrate_hz = 1000\n[device.model]\nmass = 0.1\ndamping = 2\n"

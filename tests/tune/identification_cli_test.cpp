@@ -1,6 +1,7 @@
 // haptic-tune identify end to end: a simulated run written by the daemon's CSV writer into a
 // file, identified by the real executable.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -19,11 +20,13 @@ using nlohmann::json;
 
 std::string tune(const std::string& args) { return std::string(HAPTIC_TUNE) + " " + args; }
 
-/// A log file that removes itself.
+/// A log file that removes itself; named per process, so that two runs of the suite at once
+/// (a CI clone and a checkout on one machine) do not share it.
 class LogFile {
   public:
     LogFile(const std::string& name, const std::string& text)
-        : path_(std::filesystem::temp_directory_path() / ("hapticd-identify-" + name + ".csv")) {
+        : path_(std::filesystem::temp_directory_path() /
+                ("hapticd-identify-" + name + "-" + std::to_string(::getpid()) + ".csv")) {
         std::ofstream(path_) << text;
     }
     ~LogFile() { std::filesystem::remove(path_); }
