@@ -85,9 +85,13 @@ nlohmann::json status_body(const servo::StatusSnapshot& s, const RunFacts& facts
     j["solver_not_converged"] = s.solver_not_converged;
     j["energy_j"] = s.energy_j;
     j["coupling"] = {{"stiffness", s.stiffness_n_per_m}, {"damping", s.damping_n_s_per_m}};
-    j["wake_latency_us"] = {{"p50", s.wake_p50_us}, {"p99", s.wake_p99_us}, {"max", s.wake_max_us}};
-    j["tick_compute_us"] = {
-        {"p50", s.compute_p50_us}, {"p99", s.compute_p99_us}, {"max", s.compute_max_us}};
+    j["wake_latency_us"] = {{"p50", s.wake_latency_us.p50},
+                            {"p99", s.wake_latency_us.p99},
+                            {"p999", s.wake_latency_us.p999},
+                            {"max", s.wake_latency_us.max}};
+    j["tick_compute_us"] = {{"p50", s.tick_compute_us.p50},
+                            {"p99", s.tick_compute_us.p99},
+                            {"max", s.tick_compute_us.max}};
     j["link"] = {{"read_timeouts", s.read_timeouts}, {"link_recoveries", s.link_recoveries}};
     j["axes"] = facts.axes;
     j["x_m"] = first_axes(s.x_m, facts.axes);

@@ -7,6 +7,15 @@
 
 namespace hapticd::servo {
 
+WakeLatencySummaryUs wake_latency_summary(const DurationHistogram& wake_latency) noexcept {
+    return {wake_latency.quantile_us(0.50), wake_latency.quantile_us(0.99),
+            wake_latency.quantile_us(0.999), wake_latency.max_us()};
+}
+
+TickComputeSummaryUs tick_compute_summary(const DurationHistogram& compute) noexcept {
+    return {compute.quantile_us(0.50), compute.quantile_us(0.99), compute.max_us()};
+}
+
 Summary make_summary(const TickStats& stats, double rate_hz, std::uint32_t faults_seen,
                      std::uint64_t telemetry_dropped, double passivity_energy_j) {
     Summary summary;
@@ -14,11 +23,8 @@ Summary make_summary(const TickStats& stats, double rate_hz, std::uint32_t fault
     summary.overruns = stats.overruns;
     summary.missed_periods = stats.missed_periods;
     summary.rate_hz = rate_hz;
-    summary.wake_latency_us = {stats.wake_latency.quantile_us(0.50),
-                               stats.wake_latency.quantile_us(0.99),
-                               stats.wake_latency.quantile_us(0.999), stats.wake_latency.max_us()};
-    summary.tick_compute_us = {stats.compute.quantile_us(0.50), stats.compute.quantile_us(0.99),
-                               stats.compute.max_us()};
+    summary.wake_latency_us = wake_latency_summary(stats.wake_latency);
+    summary.tick_compute_us = tick_compute_summary(stats.compute);
     summary.max_force_n = stats.max_force_n;
     for_each_fault(faults_seen, [&](std::string_view name) { summary.faults.emplace_back(name); });
     summary.telemetry_dropped = telemetry_dropped;

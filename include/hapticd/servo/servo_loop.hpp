@@ -618,16 +618,14 @@ class ServoLoop {
     // The percentiles for status(), from the run's histograms (a walk of their low buckets:
     // well under a microsecond, once a second).
     void refresh_percentiles() noexcept {
-        percentiles_.wake_p50_us = stats_.wake_latency.quantile_us(0.5);
-        percentiles_.wake_p99_us = stats_.wake_latency.quantile_us(0.99);
-        percentiles_.wake_max_us = stats_.wake_latency.max_us();
-        percentiles_.compute_p50_us = stats_.compute.quantile_us(0.5);
-        percentiles_.compute_p99_us = stats_.compute.quantile_us(0.99);
-        percentiles_.compute_max_us = stats_.compute.max_us();
+        wake_latency_us_ = wake_latency_summary(stats_.wake_latency);
+        tick_compute_us_ = tick_compute_summary(stats_.compute);
     }
 
     void publish_status(double soft_start_scale, bool armed) noexcept {
-        StatusSnapshot snapshot = percentiles_;
+        StatusSnapshot snapshot;
+        snapshot.wake_latency_us = wake_latency_us_;
+        snapshot.tick_compute_us = tick_compute_us_;
         snapshot.tick = record_.tick;
         snapshot.t_s = record_.t_s;
         snapshot.x_m = record_.x_m;
@@ -660,8 +658,9 @@ class ServoLoop {
     LinkRecovery link_recovery_;
     TelemetryRing* telemetry_;
     FlightRecorder* recorder_ = nullptr;
-    std::uint32_t recorded_faults_ = 0;    ///< the faults of the last record the recorder kept
-    StatusSnapshot percentiles_{};         ///< only its percentile fields: refresh_percentiles()
+    std::uint32_t recorded_faults_ = 0;       ///< the faults of the last record the recorder kept
+    WakeLatencySummaryUs wake_latency_us_{};  ///< refresh_percentiles()
+    TickComputeSummaryUs tick_compute_us_{};
     std::uint64_t percentiles_every_ = 1;  ///< ticks between refreshes: one second's
     Clock clock_;
     LoopPacer<Clock> pacer_;

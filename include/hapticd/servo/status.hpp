@@ -7,6 +7,7 @@
 
 #include "hapticd/servo/io.hpp"
 #include "hapticd/servo/servo_state.hpp"
+#include "hapticd/servo/summary.hpp"
 
 namespace hapticd::servo {
 
@@ -28,14 +29,11 @@ struct StatusSnapshot {
     double damping_n_s_per_m = 0.0;           ///< the coupling's b_c in force
     std::uint64_t read_timeouts = 0;          ///< reads that gave no sample, so far
     std::uint64_t link_recoveries = 0;        ///< link-fault latches cleared, so far
-    /// Wake-up latency and tick compute since the start, us: refreshed once a second (the
-    /// histograms' walk is off the tick's compute time, after its write).
-    double wake_p50_us = 0.0;
-    double wake_p99_us = 0.0;
-    double wake_max_us = 0.0;
-    double compute_p50_us = 0.0;
-    double compute_p99_us = 0.0;
-    double compute_max_us = 0.0;
+    /// Wake-up latency and tick compute since the start, as the summary counts them:
+    /// refreshed once a second (the histograms' walk is off the tick's compute time, after
+    /// its write).
+    WakeLatencySummaryUs wake_latency_us{};
+    TickComputeSummaryUs tick_compute_us{};
 };
 
 }  // namespace hapticd::servo

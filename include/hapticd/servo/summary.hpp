@@ -19,6 +19,11 @@ struct TickComputeSummaryUs {
     double p50 = 0.0, p99 = 0.0, max = 0.0;
 };
 
+/// The percentiles of a run's histograms (TickStats::wake_latency, TickStats::compute), as the
+/// summary and the live status both report them. No allocation: a walk of the buckets.
+WakeLatencySummaryUs wake_latency_summary(const DurationHistogram& wake_latency) noexcept;
+TickComputeSummaryUs tick_compute_summary(const DurationHistogram& compute) noexcept;
+
 /// The overrun that latched overrun_budget, beside the budget it broke (ServoConfig::overrun).
 struct OverrunBudgetBreach {
     double late_ms = 0.0;             ///< how late the tick woke
