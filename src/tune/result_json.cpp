@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-namespace hapticd::tune {
+namespace hapticd {
 namespace {
 
 template <typename Check>
@@ -16,13 +16,31 @@ nlohmann::ordered_json exact_check_json(const Check& check) {
             {"cases_checked", check.cases_checked}};
 }
 
-/// JSON null for a number that is not finite (nlohmann writes null for NaN anyway; this
-/// makes it explicit).
+/// JSON null for a number that is not finite: an infinite m_c or b_c (no mass, no series
+/// damper), a residual the log cannot give. nlohmann would write null for NaN anyway; this
+/// makes it explicit.
 nlohmann::ordered_json number(double value) {
     return std::isfinite(value) ? nlohmann::ordered_json(value) : nlohmann::ordered_json(nullptr);
 }
 
 }  // namespace
+
+namespace theory {
+
+void to_json(nlohmann::ordered_json& json, const DeviceModel& device) {
+    json = {{"mass", device.mass_kg}, {"damping", device.damping_n_s_per_m}};
+}
+
+void to_json(nlohmann::ordered_json& json, const ForceSensorFilter& filter) {
+    json = {{"cutoff_hz", filter.cutoff_hz},
+            {"damping_ratio", filter.damping_ratio},
+            {"order", filter.order},
+            {"description", filter.describe()}};
+}
+
+}  // namespace theory
+
+namespace tune {
 
 void to_json(nlohmann::ordered_json& json, const ExactCheck& check) {
     json = exact_check_json(check);
@@ -60,4 +78,75 @@ void to_json(nlohmann::ordered_json& json, const IdentifiedAxis& a) {
     };
 }
 
-}  // namespace hapticd::tune
+void to_json(nlohmann::ordered_json& json, const SizingReport& report) {
+    json = {{"method", report.method},
+            {"ceres_iterations", report.ceres_iterations},
+            {"verify_points", report.verify_points},
+            {"solver_time_s", report.solver_time_s}};
+}
+
+void to_json(nlohmann::ordered_json& json, const ImpedanceSizing& sizing) {
+    json = {{"stiffness", sizing.coupling.stiffness_n_per_m},
+            {"damping", sizing.coupling.damping_n_s_per_m},
+            {"velocity_filter_hz", sizing.coupling.velocity_filter_hz},
+            {"binding_frequency_hz", sizing.binding_frequency_hz},
+            {"solver_time_s", sizing.report.solver_time_s},
+            {"verified_worst_margin", sizing.verified_worst_margin},
+            {"solver", sizing.report}};
+}
+
+void to_json(nlohmann::ordered_json& json, const AdmittanceSizing& sizing) {
+    json = {{"coupling_mass", sizing.coupling.mass_kg},
+            {"damping", number(sizing.coupling.damping_n_s_per_m)},
+            {"binding_frequency_hz", sizing.binding_frequency_hz},
+            {"solver_time_s", sizing.report.solver_time_s},
+            {"verified_worst_margin", sizing.verified_worst_margin},
+            {"solver", sizing.report}};
+}
+
+void to_json(nlohmann::ordered_json& json, const PassiveAdmittanceSizing& sizing) {
+    json = {{"coupling_mass", number(sizing.coupling.mass_kg)},
+            {"damping", number(sizing.coupling.damping_n_s_per_m)},
+            {"binding_frequency_hz", sizing.binding_frequency_hz},
+            {"binding_environment", sizing.binding_environment},
+            {"worst_margin", sizing.worst_margin},
+            {"finite_mass_fails_at_dc", sizing.finite_mass_fails_at_dc},
+            {"solver_time_s", sizing.report.solver_time_s},
+            {"solver", sizing.report},
+            {"exact_check", sizing.exact}};
+}
+
+void to_json(nlohmann::ordered_json& json, const ExactAdmittanceSizing& sizing) {
+    json = {{"coupling_mass", sizing.coupling.mass_kg},
+            {"damping", number(sizing.coupling.damping_n_s_per_m)},
+            {"binding_frequency_hz", sizing.binding_frequency_hz},
+            {"limit_coupling_mass", sizing.limit_mass_kg},
+            {"binding_operator", sizing.binding_operator.describe()},
+            {"binding_environment", sizing.binding_environment.describe()},
+            {"solver_time_s", sizing.report.solver_time_s},
+            {"solver", sizing.report},
+            {"exact_check", sizing.check}};
+}
+
+void to_json(nlohmann::ordered_json& json, const StabilityVerdict& verdict) {
+    json = {{"unconditionally_stable", verdict.passed},
+            {"worst_margin", verdict.worst_margin},
+            {"worst_frequency_hz", verdict.worst_frequency_hz},
+            {"model", std::string(to_string(verdict.model))}};
+    if (verdict.exact) {
+        json["worst_operator"] = verdict.exact->worst_operator.describe();
+        json["worst_environment"] = verdict.exact->worst_environment.describe();
+        json["worst_spectral_radius"] = verdict.exact->worst_spectral_radius;
+        json["cases_checked"] = verdict.exact->cases_checked;
+    } else if (verdict.scene) {
+        json["worst_environment"] = verdict.scene->worst_environment;
+        json["damping_needed"] = verdict.scene->damping_needed;
+    }
+    json["holds_for"] = verdict.holds_for;
+    json["delay_s"] = verdict.delay_s;
+    json["velocity_filter_hz"] = verdict.velocity_filter_hz;
+    json["verdict"] = verdict.describe();
+}
+
+}  // namespace tune
+}  // namespace hapticd

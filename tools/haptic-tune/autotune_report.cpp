@@ -63,7 +63,7 @@ nlohmann::ordered_json outcome_json(const Outcome& o) {
         {"margin", r.margin},
         {"optimize_damping", r.optimize_damping},
         {"binding_axis", r.binding().identified.axis},
-        {"device", {{"mass", r.device.mass_kg}, {"damping", r.device.damping_n_s_per_m}}},
+        {"device", r.device},
         {"bound",
          {{"stiffness", r.bound.stiffness_n_per_m},
           {"stiffness_std_error", r.binding().bound_stiffness_std_error_n_per_m},

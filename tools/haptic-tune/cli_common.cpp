@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "hapticd/tune/input_checks.hpp"
+#include "hapticd/tune/result_json.hpp"
 
 namespace hapticd::tools {
 namespace {
@@ -169,6 +170,13 @@ std::string number_text(double value, int digits) {
     std::ostringstream text;
     text << std::setprecision(digits) << value;
     return text.str();
+}
+
+void add_input_fields(const DesignInput& input, nlohmann::ordered_json& out) {
+    out["delay_s"] = input.delay_s;
+    out["delay_periods"] = input.delay_periods();
+    out["device"] = input.device;
+    out["rate_hz"] = input.rate_hz;
 }
 
 void print_result(const nlohmann::ordered_json& fields, bool json) {

@@ -77,6 +77,9 @@ struct DesignInput {
 /// flag out of its range (device, rate, delay, velocity filter), daemon::ConfigError for
 /// the config (its message is the one hapticd gives).
 DesignInput resolve_design_input(const DeviceOptions& options);
+/// The input a result was computed for, after the result's own fields: delay_s,
+/// delay_periods, device {mass, damping} and rate_hz.
+void add_input_fields(const DesignInput& input, nlohmann::ordered_json& out);
 
 /// `text` without leading and trailing white space.
 std::string trimmed(const std::string& text);

@@ -7,6 +7,7 @@
 #include "assumption_options.hpp"
 #include "commands.hpp"
 #include "hapticd/daemon/startup_check.hpp"
+#include "hapticd/tune/result_json.hpp"
 #include "hapticd/tune/stability_check.hpp"
 
 namespace hapticd::tools {
@@ -86,28 +87,13 @@ tune::StabilityDesign design_of(const CheckOptions& o) {
 int run_check(const CheckOptions& o) {
     const tune::StabilityDesign design = design_of(o);
     const tune::StabilityVerdict verdict = tune::check_stability(design);
-    nlohmann::ordered_json out = {{"unconditionally_stable", verdict.passed},
-                                  {"worst_margin", verdict.worst_margin},
-                                  {"worst_frequency_hz", verdict.worst_frequency_hz},
-                                  {"model", std::string(tune::to_string(verdict.model))}};
-    if (verdict.exact) {
-        out["worst_operator"] = verdict.exact->worst_operator.describe();
-        out["worst_environment"] = verdict.exact->worst_environment.describe();
-        out["worst_spectral_radius"] = verdict.exact->worst_spectral_radius;
-        out["cases_checked"] = verdict.exact->cases_checked;
-    } else if (verdict.scene) {
-        out["worst_environment"] = verdict.scene->worst_environment;
-        out["damping_needed"] = verdict.scene->damping_needed;
-    }
+    nlohmann::ordered_json out = verdict;
     out["holds_for"] = holds_for(verdict, design);
-    out["delay_s"] = design.delay_s;
     out["delay_periods"] = design.delay_s * design.rate_hz;
     out["stiffness"] = design.coupling.stiffness_n_per_m;
     out["damping"] = design.coupling.damping_n_s_per_m;
-    out["velocity_filter_hz"] = design.coupling.velocity_filter_hz;
-    out["device"] = {{"mass", design.device.mass_kg}, {"damping", design.device.damping_n_s_per_m}};
+    out["device"] = design.device;
     out["rate_hz"] = design.rate_hz;
-    out["verdict"] = verdict.describe();  // the line hapticd logs for this design
     print_result(out, o.json);
     return verdict.passed ? kExitOk : kExitVerdictNo;
 }

@@ -9,6 +9,7 @@
 #include "commands.hpp"
 #include "hapticd/theory/coupling_check.hpp"
 #include "hapticd/theory/unit_circle.hpp"
+#include "hapticd/tune/result_json.hpp"
 
 namespace hapticd::tools {
 namespace {
@@ -74,7 +75,7 @@ int run_plot(const ChartOptions& o) {
     nlohmann::ordered_json chart = {
         {"kind", "design-procedure"},
         {"title", title},
-        {"device", {{"mass", input.device.mass_kg}, {"damping", input.device.damping_n_s_per_m}}},
+        {"device", input.device},
         {"rate_hz", input.rate_hz},
         {"delay_s", input.delay_s},
         {"nyquist_hz", theory::nyquist_hz(period)},
@@ -97,7 +98,7 @@ int run_plot(const ChartOptions& o) {
                                 ? "sized from (21) with the passive model (no --stiffness, "
                                   "no [coupling] stiffness)"
                                 : design.source},
-        {"device", {{"mass", input.device.mass_kg}, {"damping", input.device.damping_n_s_per_m}}},
+        {"device", input.device},
         {"rate_hz", input.rate_hz},
     };
     for (const auto& [name, curve] : per_model.items()) {

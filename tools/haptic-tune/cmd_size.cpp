@@ -47,18 +47,7 @@ std::optional<theory::ForceSensorFilter> force_filter_of(const SizeOptions& o, d
 }
 
 nlohmann::ordered_json filter_fields(const std::optional<theory::ForceSensorFilter>& filter) {
-    if (!filter) return nullptr;
-    return {{"cutoff_hz", filter->cutoff_hz},
-            {"damping_ratio", filter->damping_ratio},
-            {"order", filter->order},
-            {"description", filter->describe()}};
-}
-
-nlohmann::ordered_json report_fields(const tune::SizingReport& report) {
-    return {{"method", report.method},
-            {"ceres_iterations", report.ceres_iterations},
-            {"verify_points", report.verify_points},
-            {"solver_time_s", report.solver_time_s}};
+    return filter ? nlohmann::ordered_json(*filter) : nlohmann::ordered_json(nullptr);
 }
 
 /// The sized design held against the exact sampled-data model, the ground truth the
@@ -93,21 +82,10 @@ int run_impedance(const SizeOptions& o, const DesignInput& input, theory::HoldMo
                                              : std::optional<double>(o.coupling_damping.value_or(
                                                    input.coupling_damping_n_s_per_m.value_or(0.0)));
     const tune::ImpedanceSizing sizing = tune::size_impedance_coupling(request);
-    nlohmann::ordered_json out = {
-        {"display", "impedance"},
-        {"stiffness", sizing.coupling.stiffness_n_per_m},
-        {"damping", sizing.coupling.damping_n_s_per_m},
-        {"velocity_filter_hz", sizing.coupling.velocity_filter_hz},
-        {"binding_frequency_hz", sizing.binding_frequency_hz},
-        {"model", std::string(theory::to_string(model))},
-        {"delay_s", input.delay_s},
-        {"delay_periods", input.delay_periods()},
-        {"solver_time_s", sizing.report.solver_time_s},
-        {"verified_worst_margin", sizing.verified_worst_margin},
-        {"device", {{"mass", input.device.mass_kg}, {"damping", input.device.damping_n_s_per_m}}},
-        {"rate_hz", input.rate_hz},
-        {"solver", report_fields(sizing.report)},
-    };
+    nlohmann::ordered_json out = {{"display", "impedance"}};
+    out.update(nlohmann::ordered_json(sizing));
+    out["model"] = std::string(theory::to_string(model));
+    add_input_fields(input, out);
     bool stable = true;
     if (!o.skip_exact_check)
         out["exact_check"] = exact_cross_check(input, sizing.coupling, {}, &stable);
@@ -172,17 +150,22 @@ int run_assumed(const SizeOptions& o, const DesignInput& input,
     out["rejected_stiffness"] = rejected;
     out["model"] = o.model;
     out["holds_for"] = assumption.describe();
-    out["delay_s"] = input.delay_s;
-    out["delay_periods"] = input.delay_periods();
     out["checks"] = checks;
-    out["device"] = {{"mass", input.device.mass_kg}, {"damping", input.device.damping_n_s_per_m}};
-    out["rate_hz"] = input.rate_hz;
+    add_input_fields(input, out);
     bool stable = true;
     if (o.model != "exact" && !o.skip_exact_check) {
         out["exact_check"] = exact_cross_check(input, coupling, assumption, &stable);
     }
     print_result(out, o.json);
     return stable ? kExitOk : kExitVerdictNo;
+}
+
+/// The admittance display's PI gains (pi_gains {kp, ki}) and the input it was sized for.
+void add_pi_and_input_fields(const theory::PiVelocityLoop& loop, const DesignInput& input,
+                             nlohmann::ordered_json& out) {
+    out["pi_gains"] = {{"kp", loop.proportional_gain_n_s_per_m},
+                       {"ki", loop.integral_gain_n_per_m}};
+    add_input_fields(input, out);
 }
 
 void warn_exact_admittance_rejects(const tune::AdmittanceExactCheck& exact) {
@@ -193,10 +176,6 @@ void warn_exact_admittance_rejects(const tune::AdmittanceExactCheck& exact) {
               << exact.worst_frequency_hz
               << " Hz. (37) leaves out the aliasing of the hold and of the force sensor "
                  "(docs/stability-models.md); exit 1.\n";
-}
-
-nlohmann::ordered_json null_if_infinite(double value) {
-    return std::isinf(value) ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(value);
 }
 
 int run_admittance(const SizeOptions& o, const DesignInput& input, const std::string& model) {
@@ -220,33 +199,17 @@ int run_admittance(const SizeOptions& o, const DesignInput& input, const std::st
                                                      input.delay_periods(), damping, filter};
         const tune::PassiveAdmittanceSizing sizing =
             tune::size_admittance_coupling_passive(request);
-        nlohmann::ordered_json out = {
-            {"display", "admittance"},
-            // null: m_c = inf, the coupling is the damper alone.
-            {"coupling_mass", null_if_infinite(sizing.coupling.mass_kg)},
-            {"damping", null_if_infinite(sizing.coupling.damping_n_s_per_m)},
-            {"binding_frequency_hz", sizing.binding_frequency_hz},
-            {"model", "passive"},
-            {"force_filter", filter_fields(filter)},
-            {"binding_environment", sizing.binding_environment},
-            {"worst_margin", sizing.worst_margin},
-            {"finite_mass_fails_at_dc", sizing.finite_mass_fails_at_dc},
-            {"holds_for",
-             "every passive operator and every passive environment, with the force sensor "
-             "behind the " +
-                 filter->describe() +
-                 " ((P2) with the whole alias sums, tails bounded; frequencies on a grid of "
-                 "4096 + 256 log-spaced points, refined at the worst)"},
-            {"delay_s", input.delay_s},
-            {"delay_periods", input.delay_periods()},
-            {"solver_time_s", sizing.report.solver_time_s},
-            {"device",
-             {{"mass", input.device.mass_kg}, {"damping", input.device.damping_n_s_per_m}}},
-            {"pi_gains", {{"kp", *o.kp}, {"ki", *o.ki}}},
-            {"rate_hz", input.rate_hz},
-            {"solver", report_fields(sizing.report)},
-            {"exact_check", sizing.exact},
-        };
+        nlohmann::ordered_json out = {{"display", "admittance"}};
+        out.update(nlohmann::ordered_json(sizing));
+        out["model"] = "passive";
+        out["force_filter"] = filter_fields(filter);
+        out["holds_for"] =
+            "every passive operator and every passive environment, with the force sensor "
+            "behind the " +
+            filter->describe() +
+            " ((P2) with the whole alias sums, tails bounded; frequencies on a grid of "
+            "4096 + 256 log-spaced points, refined at the worst)";
+        add_pi_and_input_fields(loop, input, out);
         if (!sizing.exact.stable) warn_exact_admittance_rejects(sizing.exact);
         print_result(out, o.json);
         return sizing.exact.stable ? kExitOk : kExitVerdictNo;
@@ -265,32 +228,17 @@ int run_admittance(const SizeOptions& o, const DesignInput& input, const std::st
         request.coupling_damping_n_s_per_m = damping;
         request.force_filter = filter;
         const tune::ExactAdmittanceSizing sizing = tune::size_admittance_coupling_exact(request);
-        nlohmann::ordered_json out = {
-            {"display", "admittance"},
-            {"coupling_mass", sizing.coupling.mass_kg},
-            {"damping", null_if_infinite(sizing.coupling.damping_n_s_per_m)},
-            {"binding_frequency_hz", sizing.binding_frequency_hz},
-            {"model", "exact"},
-            {"force_filter", filter_fields(filter)},
-            {"limit_coupling_mass", sizing.limit_mass_kg},
-            {"safety_factor", request.safety_factor},
-            {"binding_operator", sizing.binding_operator.describe()},
-            {"binding_environment", sizing.binding_environment.describe()},
-            {"holds_for",
-             "the operators and environments the exact admittance model checks (its sweep: "
-             "hands-off, heavy hands, stiff grasps, two-mass grasps, steel grips resonating "
-             "with the handle at up to the Nyquist frequency; free space, rigid wall, virtual "
-             "masses and mass-springs), not every passive operator"},
-            {"delay_s", input.delay_s},
-            {"delay_periods", input.delay_periods()},
-            {"solver_time_s", sizing.report.solver_time_s},
-            {"device",
-             {{"mass", input.device.mass_kg}, {"damping", input.device.damping_n_s_per_m}}},
-            {"pi_gains", {{"kp", *o.kp}, {"ki", *o.ki}}},
-            {"rate_hz", input.rate_hz},
-            {"solver", report_fields(sizing.report)},
-            {"exact_check", sizing.check},
-        };
+        nlohmann::ordered_json out = {{"display", "admittance"}};
+        out.update(nlohmann::ordered_json(sizing));
+        out["model"] = "exact";
+        out["force_filter"] = filter_fields(filter);
+        out["safety_factor"] = request.safety_factor;
+        out["holds_for"] =
+            "the operators and environments the exact admittance model checks (its sweep: "
+            "hands-off, heavy hands, stiff grasps, two-mass grasps, steel grips resonating "
+            "with the handle at up to the Nyquist frequency; free space, rigid wall, virtual "
+            "masses and mass-springs), not every passive operator";
+        add_pi_and_input_fields(loop, input, out);
         if (!sizing.check.stable) warn_exact_admittance_rejects(sizing.check);
         print_result(out, o.json);
         return sizing.check.stable ? kExitOk : kExitVerdictNo;
@@ -308,21 +256,10 @@ int run_admittance(const SizeOptions& o, const DesignInput& input, const std::st
     request.model = hold;
     if (!o.optimize_damping) request.coupling_damping_n_s_per_m = damping;
     const tune::AdmittanceSizing sizing = tune::size_admittance_coupling(request);
-    const double b_c = sizing.coupling.damping_n_s_per_m;
-    nlohmann::ordered_json out = {
-        {"display", "admittance"},
-        {"coupling_mass", sizing.coupling.mass_kg},
-        // null: no series damper (b_c = inf), the coupling is a pure mass.
-        {"damping", null_if_infinite(b_c)},
-        {"binding_frequency_hz", sizing.binding_frequency_hz},
-        {"model", model},
-        {"solver_time_s", sizing.report.solver_time_s},
-        {"verified_worst_margin", sizing.verified_worst_margin},
-        {"device", {{"mass", input.device.mass_kg}, {"damping", input.device.damping_n_s_per_m}}},
-        {"pi_gains", {{"kp", *o.kp}, {"ki", *o.ki}}},
-        {"rate_hz", input.rate_hz},
-        {"solver", report_fields(sizing.report)},
-    };
+    nlohmann::ordered_json out = {{"display", "admittance"}};
+    out.update(nlohmann::ordered_json(sizing));
+    out["model"] = model;
+    add_pi_and_input_fields(loop, input, out);
     bool stable = true;
     if (!o.skip_exact_check) {
         const tune::AdmittanceExactCheck exact =

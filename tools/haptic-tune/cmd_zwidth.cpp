@@ -14,6 +14,7 @@
 #include "hapticd/theory/zwidth.hpp"
 #include "hapticd/tune/coupling_sizing.hpp"
 #include "hapticd/tune/input_checks.hpp"
+#include "hapticd/tune/result_json.hpp"
 
 namespace hapticd::tools {
 namespace {
@@ -40,10 +41,6 @@ nlohmann::ordered_json magnitudes(const std::vector<double>& frequencies, double
         max_magnitude.push_back(std::abs(zmax(theta)));
     }
     return {{"zmin_magnitude", min_magnitude}, {"zmax_magnitude", max_magnitude}};
-}
-
-nlohmann::ordered_json device_json(const DesignInput& input) {
-    return {{"mass", input.device.mass_kg}, {"damping", input.device.damping_n_s_per_m}};
 }
 
 int finish(const ZwidthOptions& o, nlohmann::ordered_json chart) {
@@ -94,7 +91,7 @@ int run_impedance(const ZwidthOptions& o, const std::vector<theory::HoldModel>& 
                          {"display", "impedance"},
                          {"title", "Z-width of the impedance display, (24)-(25): " +
                                        describe_device(input) + "\n" + describe_design(design)},
-                         {"device", device_json(input)},
+                         {"device", input.device},
                          {"rate_hz", input.rate_hz},
                          {"nyquist_hz", theory::nyquist_hz(period)},
                          {"design", design_json(design)},
@@ -176,7 +173,7 @@ int run_admittance(const ZwidthOptions& o, const std::vector<theory::HoldModel>&
                          {"display", "admittance"},
                          {"title", "Z-width of the admittance display, (42)-(43): " +
                                        describe_device(input) + "\n" + described},
-                         {"device", device_json(input)},
+                         {"device", input.device},
                          {"rate_hz", input.rate_hz},
                          {"nyquist_hz", theory::nyquist_hz(period)},
                          {"design", design},
