@@ -10,12 +10,14 @@
 namespace hapticd::daemon::control {
 namespace {
 
-constexpr std::array kRequests{RequestKind::status, RequestKind::arm, RequestKind::disarm,
-                               RequestKind::reset, RequestKind::coupling};
+constexpr std::array kRequests{
+    RequestKind::status,   RequestKind::arm,       RequestKind::disarm,     RequestKind::reset,
+    RequestKind::coupling, RequestKind::subscribe, RequestKind::unsubscribe};
 
 // The fields each request takes besides v, id and request.
 std::vector<std::string_view> own_fields(RequestKind kind) {
     if (kind == RequestKind::coupling) return {"stiffness", "damping"};
+    if (kind == RequestKind::subscribe) return {"rate_hz"};
     return {};
 }
 
@@ -60,6 +62,10 @@ std::string_view request_name(RequestKind kind) noexcept {
             return "reset";
         case RequestKind::coupling:
             return "coupling";
+        case RequestKind::subscribe:
+            return "subscribe";
+        case RequestKind::unsubscribe:
+            return "unsubscribe";
     }
     return "unknown";
 }
@@ -130,6 +136,18 @@ ParsedRequest parse_request(std::string_view line) {
             if (!request.damping_n_s_per_m) return parsed;
         }
     }
+    if (*kind == RequestKind::subscribe) {
+        request.rate_hz = kDefaultSubscribeRateHz;
+        if (const auto rate = j.find("rate_hz"); rate != j.end()) {
+            request.rate_hz = finite_number(*rate, "rate_hz", parsed.error);
+            if (!request.rate_hz) return parsed;
+            if (*request.rate_hz <= 0.0 || *request.rate_hz > kMaxSubscribeRateHz) {
+                parsed.error =
+                    "\"rate_hz\" = " + shown(*rate) + ": allowed > 0 and <= 100 (events a second)";
+                return parsed;
+            }
+        }
+    }
     parsed.request = request;
     return parsed;
 }
@@ -139,6 +157,7 @@ std::string request_line(const Request& request) {
     if (!request.id.is_null()) j["id"] = request.id;
     if (request.stiffness_n_per_m) j["stiffness"] = *request.stiffness_n_per_m;
     if (request.damping_n_s_per_m) j["damping"] = *request.damping_n_s_per_m;
+    if (request.rate_hz) j["rate_hz"] = *request.rate_hz;
     return j.dump() + "\n";
 }
 
@@ -157,6 +176,12 @@ std::string error_reply(const nlohmann::json& id, std::string_view message) {
     const nlohmann::json j{
         {"v", kProtocolVersion}, {"id", id}, {"ok", false}, {"error", std::string(message)}};
     return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
+}
+
+std::string event_line(std::string_view name, nlohmann::json body) {
+    body["v"] = kProtocolVersion;
+    body["event"] = std::string(name);
+    return body.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
 }
 
 }  // namespace hapticd::daemon::control

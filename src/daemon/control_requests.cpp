@@ -22,24 +22,21 @@ nlohmann::json fault_list(std::uint32_t faults) {
     return names;
 }
 
-std::string who(const Peer& peer) {
-    return "pid " + std::to_string(peer.pid) + " uid " + std::to_string(peer.uid);
-}
-
 std::string state_of(const servo::StatusSnapshot& s) {
     return std::string(servo::servo_state_name(s.state));
 }
 
-// coupling: the range of [coupling] stiffness and damping, then the start-up stability check
-// on the config with the new gains; only gains that pass reach the loop.
+// coupling: the range of [coupling] stiffness and damping here, then, on the server's worker
+// (Answer::later: the exact model's check takes seconds), the start-up stability check on the
+// config with the new gains; only gains that pass reach the loop.
 Answer set_coupling(const Request& request, const Peer& peer, ServoControl& loop,
                     const RunFacts& facts, const servo::StatusSnapshot& now) {
-    const auto refuse = [&](const std::string& why) {
-        return Answer{.reply = error_reply(request.id, "coupling refused: " + why),
-                      .journal = "control: coupling from " + who(peer) + " refused: " + why};
+    const auto refusal = [id = request.id, peer](const std::string& why) {
+        return Answer{.reply = error_reply(id, "coupling refused: " + why),
+                      .journal = "control: coupling from " + peer.describe() + " refused: " + why};
     };
     if (!facts.coupling_enabled) {
-        return refuse("the config runs without the coupling ([coupling] enabled = false)");
+        return refusal("the config runs without the coupling ([coupling] enabled = false)");
     }
     const servo::CouplingGains gains{
         .stiffness_n_per_m = request.stiffness_n_per_m.value_or(0.0),
@@ -48,24 +45,27 @@ Answer set_coupling(const Request& request, const Peer& peer, ServoControl& loop
     const input::Range& k_range = schema::kCouplingStiffness.range;
     const input::Range& b_range = schema::kCouplingDamping.range;
     if (!k_range.contains(gains.stiffness_n_per_m)) {
-        return refuse(input::out_of_range("stiffness", gains.stiffness_n_per_m, k_range));
+        return refusal(input::out_of_range("stiffness", gains.stiffness_n_per_m, k_range));
     }
     if (!b_range.contains(gains.damping_n_s_per_m)) {
-        return refuse(input::out_of_range("damping", gains.damping_n_s_per_m, b_range));
+        return refusal(input::out_of_range("damping", gains.damping_n_s_per_m, b_range));
     }
-    if (!facts.check_coupling) return refuse("this run has no stability check to pass");
-    const CouplingVerdict verdict = facts.check_coupling(gains);
-    if (!verdict.accepted) return refuse(verdict.verdict);
-    loop.set_coupling(gains);
-    std::ostringstream set;
-    set << "k_c " << input::format_number(gains.stiffness_n_per_m) << " N/m, b_c "
-        << input::format_number(gains.damping_n_s_per_m) << " N s/m";
-    return {.reply = ok_reply(request.id, {{"state_before", state_of(now)},
-                                           {"stiffness", gains.stiffness_n_per_m},
-                                           {"damping", gains.damping_n_s_per_m},
-                                           {"verdict", verdict.verdict}}),
-            .journal = "control: coupling from " + who(peer) + ": " + set.str() +
-                       " from the next tick, through the soft start; " + verdict.verdict};
+    if (!facts.check_coupling) return refusal("this run has no stability check to pass");
+    return {.later = [&loop, &facts, gains, refusal, id = request.id, peer,
+                      state_before = state_of(now)]() -> Answer {
+        const CouplingVerdict verdict = facts.check_coupling(gains);
+        if (!verdict.accepted) return refusal(verdict.verdict);
+        loop.set_coupling(gains);
+        std::ostringstream set;
+        set << "k_c " << input::format_number(gains.stiffness_n_per_m) << " N/m, b_c "
+            << input::format_number(gains.damping_n_s_per_m) << " N s/m";
+        return {.reply = ok_reply(id, {{"state_before", state_before},
+                                       {"stiffness", gains.stiffness_n_per_m},
+                                       {"damping", gains.damping_n_s_per_m},
+                                       {"verdict", verdict.verdict}}),
+                .journal = "control: coupling from " + peer.describe() + ": " + set.str() +
+                           " from the next tick, through the soft start; " + verdict.verdict};
+    }};
 }
 
 }  // namespace
@@ -102,6 +102,16 @@ nlohmann::json status_body(const servo::StatusSnapshot& s, const RunFacts& facts
     return j;
 }
 
+std::string telemetry_event(const servo::StatusSnapshot& s, const RunFacts& facts) {
+    return event_line("telemetry", {{"tick", s.tick},
+                                    {"t_s", s.t_s},
+                                    {"state", state_of(s)},
+                                    {"x_m", first_axes(s.x_m, facts.axes)},
+                                    {"xe_m", first_axes(s.xe_m, facts.axes)},
+                                    {"f_n", first_axes(s.f_n, facts.axes)},
+                                    {"faults", fault_list(s.faults)}});
+}
+
 Answer answer(const Request& request, const Peer& peer, ServoControl& loop, const RunFacts& facts) {
     const servo::StatusSnapshot now = loop.status();
     const std::string name(request_name(request.kind));
@@ -110,11 +120,13 @@ Answer answer(const Request& request, const Peer& peer, ServoControl& loop, cons
             return {.reply = ok_reply(request.id, {{"status", status_body(now, facts)}}),
                     .journal = {}};
         case RequestKind::arm:
-            if (now.faults != 0u) {
+            // A reset asked for and not yet taken (a pipelined reset, arm) clears the latch at
+            // the same tick's start, before the arming.
+            if (now.faults != 0u && !loop.reset_pending()) {
                 const std::string why = "a fault is latched (" + fault_list(now.faults).dump() +
                                         "): reset it first (hapticctl reset)";
                 return {.reply = error_reply(request.id, "arm refused: " + why),
-                        .journal = "control: arm from " + who(peer) + " refused: " + why};
+                        .journal = "control: arm from " + peer.describe() + " refused: " + why};
             }
             loop.arm();
             break;
@@ -126,12 +138,21 @@ Answer answer(const Request& request, const Peer& peer, ServoControl& loop, cons
             break;
         case RequestKind::coupling:
             return set_coupling(request, peer, loop, facts, now);
+        case RequestKind::subscribe: {
+            const double rate_hz = request.rate_hz.value_or(kDefaultSubscribeRateHz);
+            return {.reply = ok_reply(request.id, {{"rate_hz", rate_hz}, {"axes", facts.axes}}),
+                    .journal = "control: " + peer.describe() + " subscribed at " +
+                               input::format_number(rate_hz) + " Hz",
+                    .subscribe_hz = rate_hz};
+        }
+        case RequestKind::unsubscribe:
+            return {.reply = ok_reply(request.id), .journal = {}, .subscribe_hz = 0.0};
     }
     // The servo thread takes the request at the start of its next tick; the reply says the
     // state it was asked in, and `status` shows what came of it.
     return {.reply = ok_reply(request.id, {{"state_before", state_of(now)}}),
-            .journal =
-                "control: " + name + " from " + who(peer) + " (state was " + state_of(now) + ")"};
+            .journal = "control: " + name + " from " + peer.describe() + " (state was " +
+                       state_of(now) + ")"};
 }
 
 }  // namespace hapticd::daemon::control

@@ -1,7 +1,8 @@
 // What each control request does to a running servo loop (docs/control.md, "Requests").
-// The server (control_server.hpp) parses; this answers. It runs on the server's thread, and
-// everything it asks of the loop is lock-free: status() reads a seqlock, arm(), disarm() and
-// reset() set atomics that the servo thread takes at the start of its next tick.
+// The server (control_server.hpp) parses; this answers. It runs on the server's thread (a
+// coupling's stability check on the server's worker), and everything it asks of the loop is
+// lock-free: status() reads a seqlock, arm(), disarm() and reset() set atomics, and new gains
+// go through a seqlock, all taken by the servo thread at the start of its next tick.
 #pragma once
 
 #include <atomic>
@@ -23,8 +24,12 @@ class ServoControl {
     virtual void arm() noexcept = 0;
     virtual void disarm() noexcept = 0;
     virtual void reset() noexcept = 0;
+    /// A reset() the servo has not taken yet.
+    virtual bool reset_pending() const noexcept = 0;
+    /// From the control server's worker thread (one at a time).
     virtual void set_coupling(const servo::CouplingGains& gains) noexcept = 0;
     /// The gains last set (or the config's): what a coupling request without damping keeps.
+    /// From the server's thread while the worker may set them.
     virtual servo::CouplingGains coupling() const noexcept = 0;
 };
 
@@ -50,6 +55,10 @@ struct RunFacts {
 
 /// The status reply's body: state, tick, rates, forces, positions and faults.
 nlohmann::json status_body(const servo::StatusSnapshot& s, const RunFacts& facts);
+
+/// A subscriber's event (docs/control.md, "subscribe"): tick, t_s, state, x_m, xe_m, f_n and
+/// faults, from the servo's last status.
+std::string telemetry_event(const servo::StatusSnapshot& s, const RunFacts& facts);
 
 /// Answers one request.
 Answer answer(const Request& request, const Peer& peer, ServoControl& loop, const RunFacts& facts);

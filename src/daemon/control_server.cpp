@@ -18,13 +18,20 @@
 namespace hapticd::daemon::control {
 
 struct ControlServer::Client {
+    std::uint64_t id = 0;  // never reused, unlike the descriptor: a finished job finds its client
     int fd = -1;
     Peer peer;
-    std::string in;   // bytes of the request line being read
-    std::string out;  // replies not yet taken by the client
-    bool read_closed = false;
-    bool closing = false;                          // close once `out` is flushed
-    std::uint32_t watched = EPOLLIN | EPOLLRDHUP;  // the events registered with epoll
+    std::string in;            // bytes of the request line being read
+    std::string out;           // replies not yet taken by the client
+    bool read_closed = false;  // the client shut its side down: answer what came, then close
+    bool closing = false;      // answer nothing more; close once `out` is flushed
+    bool gone = false;         // the connection broke: close now
+    bool waiting = false;      // its request is on the worker; its next ones wait
+    std::uint32_t watched = EPOLLIN | EPOLLRDHUP;           // the events registered with epoll
+    std::chrono::steady_clock::time_point last_request{};   // or the connect
+    std::chrono::steady_clock::time_point last_progress{};  // a byte of `out` taken, or new
+    std::chrono::steady_clock::duration event_period{0};    // subscribed while > 0
+    std::chrono::steady_clock::time_point next_event{};
 };
 
 namespace {
@@ -52,15 +59,23 @@ void clear_stale_socket(const std::string& path, const sockaddr_un& address) {
                                  "\": the path exists and is not a socket; remove it or "
                                  "choose another with --socket");
     }
-    const int probe = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    // Non-blocking: a live daemon whose listen queue is full answers EAGAIN at once, where a
+    // blocking connect() would wait for it.
+    const int probe = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
     if (probe < 0) throw ControlSocketError("control socket: socket(): " + errno_text(errno));
-    const bool live =
-        ::connect(probe, reinterpret_cast<const sockaddr*>(&address), sizeof(address)) == 0;
+    const int connected =
+        ::connect(probe, reinterpret_cast<const sockaddr*>(&address), sizeof(address));
+    const int error = errno;
     ::close(probe);
-    if (live) {
+    if (connected == 0 || error == EAGAIN || error == EINPROGRESS) {
         throw ControlSocketError("control socket \"" + path +
                                  "\" is in use: another hapticd answers on it (one socket per "
                                  "instance: --socket, or the instance name)");
+    }
+    if (error != ECONNREFUSED && error != ENOENT) {
+        throw ControlSocketError("control socket \"" + path +
+                                 "\": cannot tell whether it is in use (" + errno_text(error) +
+                                 "); remove it or choose another with --socket");
     }
     ::unlink(path.c_str());
 }
@@ -84,22 +99,33 @@ void give_group(const std::string& path, const std::string& group_name, std::str
 
 }  // namespace
 
+std::string Peer::describe() const {
+    return "pid " + std::to_string(pid) + " uid " + std::to_string(uid) + " gid " +
+           std::to_string(gid);
+}
+
 ControlServer::ControlServer(std::string path, Limits limits, std::string group)
     : path_(std::move(path)), limits_(limits) {
     const sockaddr_un address = address_of(path_);
     clear_stale_socket(path_, address);
     listen_fd_ = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
     if (listen_fd_ < 0) throw ControlSocketError("control socket: socket(): " + errno_text(errno));
-    // Created as 0660 at once: no moment when others could connect.
+    // Created as 0660 at once: no moment when others could connect. listen() follows bind()
+    // at once: a socket file that refuses connections is what another daemon's start-up
+    // takes for stale (clear_stale_socket).
     const mode_t old_mask = ::umask(0117);
     const int bound =
         ::bind(listen_fd_, reinterpret_cast<const sockaddr*>(&address), sizeof(address));
     const int bind_error = errno;
     ::umask(old_mask);
-    if (bound != 0) {
+    const int listening = bound == 0 ? ::listen(listen_fd_, limits_.max_clients) : -1;
+    const int listen_error = errno;
+    if (bound != 0 || listening != 0) {
+        if (bound == 0) ::unlink(path_.c_str());
         ::close(listen_fd_);
-        throw ControlSocketError("control socket \"" + path_ +
-                                 "\": bind(): " + errno_text(bind_error));
+        throw ControlSocketError("control socket \"" + path_ + "\": " +
+                                 (bound != 0 ? "bind(): " + errno_text(bind_error)
+                                             : "listen(): " + errno_text(listen_error)));
     }
     ::chmod(path_.c_str(), 0660);
     std::string group_note;
@@ -107,55 +133,86 @@ ControlServer::ControlServer(std::string path, Limits limits, std::string group)
     if (!group_note.empty()) note(group_note);
     epoll_fd_ = ::epoll_create1(EPOLL_CLOEXEC);
     stop_fd_ = ::eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
-    if (::listen(listen_fd_, limits_.max_clients) != 0 || epoll_fd_ < 0 || stop_fd_ < 0) {
+    done_fd_ = ::eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
+    bool watched = epoll_fd_ >= 0 && stop_fd_ >= 0 && done_fd_ >= 0;
+    for (const int fd : {listen_fd_, stop_fd_, done_fd_}) {
+        epoll_event event{};
+        event.events = EPOLLIN;
+        event.data.fd = fd;
+        watched = watched && ::epoll_ctl(epoll_fd_, EPOLL_CTL_ADD, fd, &event) == 0;
+    }
+    if (!watched) {
         const int error = errno;
         ::unlink(path_.c_str());
-        for (const int fd : {listen_fd_, epoll_fd_, stop_fd_}) {
+        for (const int fd : {listen_fd_, epoll_fd_, stop_fd_, done_fd_}) {
             if (fd >= 0) ::close(fd);
         }
         throw ControlSocketError("control socket \"" + path_ + "\": " + errno_text(error));
     }
-    epoll_event event{};
-    event.events = EPOLLIN;
-    event.data.fd = listen_fd_;
-    ::epoll_ctl(epoll_fd_, EPOLL_CTL_ADD, listen_fd_, &event);
-    event.data.fd = stop_fd_;
-    ::epoll_ctl(epoll_fd_, EPOLL_CTL_ADD, stop_fd_, &event);
 }
 
 ControlServer::~ControlServer() {
     stop();
     for (const Client& client : clients_) ::close(client.fd);
     ::unlink(path_.c_str());
-    for (const int fd : {listen_fd_, epoll_fd_, stop_fd_}) ::close(fd);
+    for (const int fd : {listen_fd_, epoll_fd_, stop_fd_, done_fd_}) ::close(fd);
 }
 
-void ControlServer::start(Handler handler) {
+void ControlServer::start(Handler handler, EventSource events) {
     handler_ = std::move(handler);
+    events_ = std::move(events);
+    worker_ = std::thread([this] { work(); });
     thread_ = std::thread([this] { serve(); });
 }
 
+// The server first, then the worker: a job under way is finished (a stability check takes
+// seconds at most) and its answer dropped.
 void ControlServer::stop() noexcept {
     const std::uint64_t one = 1;
     (void)!::write(stop_fd_, &one, sizeof(one));
     if (thread_.joinable()) thread_.join();
+    {
+        const std::lock_guard lock(job_mutex_);
+        worker_stopping_ = true;
+    }
+    job_ready_.notify_one();
+    if (worker_.joinable()) worker_.join();
 }
 
 std::vector<std::string> ControlServer::take_messages() {
     const std::lock_guard lock(messages_mutex_);
-    return std::exchange(messages_, {});
+    std::vector<std::string> taken = std::exchange(messages_, {});
+    if (dropped_messages_ > 0) {
+        taken.push_back("control: " + std::to_string(dropped_messages_) +
+                        " more messages for the journal dropped (at most 256 wait)");
+        dropped_messages_ = 0;
+    }
+    return taken;
 }
 
 void ControlServer::note(std::string message) {
     const std::lock_guard lock(messages_mutex_);
     constexpr std::size_t kMostMessages = 256;  // a flood of connects does not grow this
-    if (messages_.size() < kMostMessages) messages_.push_back(std::move(message));
+    if (messages_.size() < kMostMessages) {
+        messages_.push_back(std::move(message));
+    } else {
+        ++dropped_messages_;
+    }
+}
+
+ControlServer::Client* ControlServer::find_client(int fd) {
+    const auto it = std::find_if(clients_.begin(), clients_.end(),
+                                 [fd](const Client& c) { return c.fd == fd; });
+    return it == clients_.end() ? nullptr : &*it;
 }
 
 void ControlServer::serve() noexcept {
     std::array<epoll_event, 32> events{};
+    // Deadlines are swept a few times per the shorter limit, and at least once a second, while
+    // anyone is connected or accepting is paused; otherwise the thread sleeps until an event.
     for (;;) {
-        const int n = ::epoll_wait(epoll_fd_, events.data(), static_cast<int>(events.size()), -1);
+        const int n = ::epoll_wait(epoll_fd_, events.data(), static_cast<int>(events.size()),
+                                   wait_ms(Clock::now()));
         if (n < 0 && errno == EINTR) continue;
         if (n < 0) {
             note("control socket " + path_ + ": epoll_wait(): " + errno_text(errno) +
@@ -170,51 +227,154 @@ void ControlServer::serve() noexcept {
                 accept_clients();
                 continue;
             }
-            const auto it = std::find_if(clients_.begin(), clients_.end(),
-                                         [fd](const Client& c) { return c.fd == fd; });
-            if (it == clients_.end()) continue;  // closed earlier in this batch
-            Client& client = *it;
-            if ((what & EPOLLOUT) != 0u) flush(client);
-            if ((what & (EPOLLIN | EPOLLRDHUP | EPOLLHUP | EPOLLERR)) != 0u) read_from(client);
+            if (fd == done_fd_) {
+                take_finished_job();
+                continue;
+            }
+            Client* client = find_client(fd);
+            if (client == nullptr) continue;  // closed earlier in this batch
+            if ((what & (EPOLLHUP | EPOLLERR)) != 0u) {
+                // Both directions are down: nothing sent would arrive. (A client that only
+                // shut its writing side gets EPOLLRDHUP, and its answers.)
+                client->gone = true;
+                continue;
+            }
+            if ((what & EPOLLOUT) != 0u) flush(*client);
+            if ((what & (EPOLLIN | EPOLLRDHUP)) != 0u) read_from(*client);
         }
-        // Clients done with: everything answered and flushed, or dropped.
+        const Clock::time_point now = Clock::now();
+        send_events(now);
+        enforce_deadlines(now);
+        // Clients done with: everything answered and flushed, or gone.
         for (std::size_t i = clients_.size(); i-- > 0;) {
-            Client& client = clients_[i];
-            if (client.closing && client.out.empty()) close_client(client.fd);
+            const Client& client = clients_[i];
+            const bool finished =
+                (client.closing || client.read_closed) && client.out.empty() && !client.waiting;
+            if (client.gone || finished) close_client(client.fd);
         }
     }
+}
+
+// How long epoll may sleep: until the next subscriber's event, and while anyone is connected
+// (or accepting is paused) a few times per the shorter deadline, at least once a second;
+// otherwise until an event.
+int ControlServer::wait_ms(Clock::time_point now) const {
+    if (clients_.empty() && accepting_) return -1;
+    auto wait = std::clamp(std::min(limits_.idle, limits_.stalled_reader) / 4,
+                           std::chrono::milliseconds{10}, std::chrono::milliseconds{1000});
+    for (const Client& client : clients_) {
+        if (client.event_period.count() == 0) continue;
+        const auto until = std::chrono::ceil<std::chrono::milliseconds>(client.next_event - now);
+        wait = std::min(wait, std::max(until, std::chrono::milliseconds{0}));
+    }
+    return static_cast<int>(wait.count());
+}
+
+// Every subscriber that is due gets the same event line, made once. A subscriber more than a
+// period behind (a slow wake) skips ahead instead of getting a burst.
+void ControlServer::send_events(Clock::time_point now) {
+    std::string line;
+    for (Client& client : clients_) {
+        if (client.event_period.count() == 0 || client.next_event > now || client.gone ||
+            client.closing || client.waiting) {
+            continue;
+        }
+        if (line.empty() && events_) line = events_();
+        if (client.out.empty()) client.last_progress = now;
+        client.out += line;
+        client.next_event += client.event_period;
+        if (client.next_event <= now) client.next_event = now + client.event_period;
+        flush(client);
+        if (client.out.size() > limits_.max_unread_reply_bytes) {
+            note("control: disconnected " + client.peer.describe() + ": it left more than " +
+                 std::to_string(limits_.max_unread_reply_bytes) + " bytes of events unread");
+            client.out.clear();
+            client.gone = true;
+        }
+    }
+}
+
+void ControlServer::enforce_deadlines(Clock::time_point now) {
+    if (!accepting_ && now >= accept_again_) watch_listener(true);
+    for (Client& client : clients_) {
+        if (client.gone) continue;
+        if (!client.out.empty() && now - client.last_progress > limits_.stalled_reader) {
+            note("control: disconnected " + client.peer.describe() + ": it took none of its " +
+                 std::to_string(client.out.size()) + " bytes of replies for " +
+                 std::to_string(limits_.stalled_reader.count()) + " ms");
+            client.gone = true;
+            continue;
+        }
+        // A part of a line is no request: a client that trickles bytes is idle too.
+        const bool quiet = !client.waiting && !client.closing && !client.read_closed &&
+                           client.out.empty() && client.event_period.count() == 0;
+        if (quiet && now - client.last_request > limits_.idle) {
+            client.out =
+                error_reply(nullptr, "no request for " + std::to_string(limits_.idle.count()) +
+                                         " ms: closed; connect again when needed");
+            client.last_progress = now;
+            client.closing = true;
+            note("control: disconnected " + client.peer.describe() + ": idle for " +
+                 std::to_string(limits_.idle.count()) + " ms");
+            flush(client);
+        }
+    }
+}
+
+// Out of descriptors (EMFILE, ENFILE) the listening socket stays readable: it is taken off
+// epoll for a second, or until a client closes, instead of waking this thread in a loop.
+void ControlServer::watch_listener(bool on) {
+    epoll_event event{};
+    event.events = on ? EPOLLIN : 0u;
+    event.data.fd = listen_fd_;
+    ::epoll_ctl(epoll_fd_, EPOLL_CTL_MOD, listen_fd_, &event);
+    accepting_ = on;
+    accept_again_ = Clock::now() + std::chrono::seconds{1};
 }
 
 void ControlServer::accept_clients() {
     for (;;) {
         const int fd = ::accept4(listen_fd_, nullptr, nullptr, SOCK_CLOEXEC | SOCK_NONBLOCK);
-        if (fd < 0) return;  // EAGAIN: none left; anything else: try at the next event
+        if (fd < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return;  // none left
+        if (fd < 0 && (errno == EINTR || errno == ECONNABORTED)) continue;
+        if (fd < 0) {
+            note("control: accept(): " + errno_text(errno) +
+                 "; new clients wait (accepting again in a second)");
+            watch_listener(false);
+            return;
+        }
+        const Clock::time_point now = Clock::now();
         Client client;
+        client.id = next_client_id_++;
         client.fd = fd;
+        client.last_request = now;
+        client.last_progress = now;
         ucred credentials{};
         socklen_t size = sizeof(credentials);
         if (::getsockopt(fd, SOL_SOCKET, SO_PEERCRED, &credentials, &size) == 0) {
             client.peer =
                 Peer{.pid = credentials.pid, .uid = credentials.uid, .gid = credentials.gid};
         }
-        const std::string who = "pid " + std::to_string(client.peer.pid) + " uid " +
-                                std::to_string(client.peer.uid) + " gid " +
-                                std::to_string(client.peer.gid);
         if (static_cast<int>(clients_.size()) >= limits_.max_clients) {
             const std::string refusal = error_reply(
                 nullptr, "too many clients: this hapticd serves " +
                              std::to_string(limits_.max_clients) + " at once; try again later");
             (void)!::send(fd, refusal.data(), refusal.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
             ::close(fd);
-            note("control: refused " + who + ": " + std::to_string(limits_.max_clients) +
-                 " clients already connected");
+            note("control: refused " + client.peer.describe() + ": " +
+                 std::to_string(limits_.max_clients) + " clients already connected");
             continue;
         }
-        note("control: client connected: " + who);
         epoll_event event{};
         event.events = EPOLLIN | EPOLLRDHUP;
         event.data.fd = fd;
-        ::epoll_ctl(epoll_fd_, EPOLL_CTL_ADD, fd, &event);
+        if (::epoll_ctl(epoll_fd_, EPOLL_CTL_ADD, fd, &event) != 0) {
+            note("control: refused " + client.peer.describe() +
+                 ": epoll_ctl(): " + errno_text(errno));
+            ::close(fd);
+            continue;
+        }
+        note("control: client connected: " + client.peer.describe());
         clients_.push_back(std::move(client));
     }
 }
@@ -224,13 +384,18 @@ void ControlServer::read_from(Client& client) {
     // At most 16 reads a wake: epoll (level-triggered) comes back for the rest, so a client
     // that writes as fast as it reads cannot keep this thread from the others, or from stop().
     constexpr int kReadsPerWake = 16;
-    for (int reads = 0; reads < kReadsPerWake && !client.read_closed && !client.closing; ++reads) {
+    for (int reads = 0;
+         reads < kReadsPerWake && !client.read_closed && !client.closing && !client.waiting;
+         ++reads) {
         const ssize_t got = ::recv(client.fd, buffer.data(), buffer.size(), MSG_DONTWAIT);
         if (got < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) break;
         if (got < 0 && errno == EINTR) continue;
-        if (got <= 0) {  // the client shut its side down, or the connection broke
+        if (got < 0) {  // the connection broke
+            client.gone = true;
+            break;
+        }
+        if (got == 0) {  // the client shut its side down: what it sent is still answered
             client.read_closed = true;
-            client.closing = true;
             break;
         }
         client.in.append(buffer.data(), static_cast<std::size_t>(got));
@@ -241,40 +406,56 @@ void ControlServer::read_from(Client& client) {
 
 void ControlServer::answer_lines(Client& client) {
     std::size_t begin = 0;
-    for (std::size_t end; (end = client.in.find('\n', begin)) != std::string::npos;
-         begin = end + 1) {
-        if (client.closing) break;
-        if (end - begin + 1 > kMaxRequestBytes) {
+    while (!client.closing && !client.waiting) {
+        const std::size_t end = client.in.find('\n', begin);
+        if (end == std::string::npos) break;
+        if (client.out.empty()) client.last_progress = Clock::now();  // replies from now on
+        std::string_view line(client.in.data() + begin, end - begin);
+        begin = end + 1;
+        if (line.size() + 1 > kMaxRequestBytes) {
             client.out += error_reply(
-                nullptr, "a request line of " + std::to_string(end - begin + 1) +
+                nullptr, "a request line of " + std::to_string(line.size() + 1) +
                              " bytes: at most " + std::to_string(kMaxRequestBytes) + " allowed");
             client.closing = true;
             break;
         }
-        std::string_view line(client.in.data() + begin, end - begin);
         if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
         if (line.empty()) continue;
+        client.last_request = Clock::now();
         const ParsedRequest parsed = parse_request(line);
-        if (parsed.request) {
-            Answer answer = handler_(*parsed.request, client.peer);
+        if (!parsed.request) {
+            client.out += error_reply(parsed.id, parsed.error);
+        } else if (Answer answer = handler_(*parsed.request, client.peer); answer.later) {
+            std::unique_lock lock(job_mutex_);
+            if (job_) {
+                lock.unlock();
+                client.out += error_reply(parsed.request->id,
+                                          "busy: another client's request is being checked "
+                                          "(one at a time); try again in a moment");
+            } else {
+                job_ = Job{.client_id = client.id, .work = std::move(answer.later), .answer = {}};
+                job_done_ = false;
+                lock.unlock();
+                job_ready_.notify_one();
+                client.waiting = true;
+            }
+        } else {
             if (!answer.journal.empty()) note(std::move(answer.journal));
             client.out += answer.reply;
-        } else {
-            client.out += error_reply(parsed.id, parsed.error);
+            if (answer.subscribe_hz) subscribe(client, *answer.subscribe_hz);
         }
         // Unread means not taken by the socket: offer the replies first.
         if (client.out.size() > limits_.max_unread_reply_bytes) flush(client);
         if (client.out.size() > limits_.max_unread_reply_bytes) {
-            note("control: disconnected pid " + std::to_string(client.peer.pid) +
-                 ": it left more than " + std::to_string(limits_.max_unread_reply_bytes) +
-                 " bytes of replies unread");
+            note("control: disconnected " + client.peer.describe() + ": it left more than " +
+                 std::to_string(limits_.max_unread_reply_bytes) + " bytes of replies unread");
             client.out.clear();
             client.closing = true;
             break;
         }
     }
     client.in.erase(0, begin);
-    if (!client.closing && client.in.size() >= kMaxRequestBytes) {
+    if (!client.closing && !client.waiting && client.in.size() >= kMaxRequestBytes) {
         client.out +=
             error_reply(nullptr, "a request line longer than " + std::to_string(kMaxRequestBytes) +
                                      " bytes without its newline: at most " +
@@ -282,6 +463,69 @@ void ControlServer::answer_lines(Client& client) {
         client.closing = true;
     }
     if (client.closing) client.in.clear();
+}
+
+void ControlServer::subscribe(Client& client, double rate_hz) {
+    if (rate_hz <= 0.0) {
+        client.event_period = Clock::duration{0};
+        return;
+    }
+    client.event_period =
+        std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / rate_hz));
+    client.next_event = Clock::now();  // the first event right after the reply
+}
+
+// The worker thread: runs each job's work, outside the lock, and tells the server's thread.
+void ControlServer::work() noexcept {
+    for (;;) {
+        std::function<Answer()> job;
+        {
+            std::unique_lock lock(job_mutex_);
+            job_ready_.wait(lock, [this] { return worker_stopping_ || (job_ && !job_done_); });
+            if (worker_stopping_) return;
+            job = std::move(job_->work);
+        }
+        Answer answer;
+        try {
+            answer = job();
+        } catch (const std::exception& e) {
+            answer.reply = error_reply(nullptr, std::string("internal error: ") + e.what());
+        }
+        {
+            const std::lock_guard lock(job_mutex_);
+            job_->answer = std::move(answer);
+            job_done_ = true;
+        }
+        const std::uint64_t one = 1;
+        (void)!::write(done_fd_, &one, sizeof(one));
+    }
+}
+
+// On the server's thread: the finished job's answer goes to its client, if it is still
+// connected, and the client's waiting requests are answered.
+void ControlServer::take_finished_job() {
+    std::uint64_t count = 0;
+    (void)!::read(done_fd_, &count, sizeof(count));
+    std::optional<Job> done;
+    {
+        const std::lock_guard lock(job_mutex_);
+        if (!job_ || !job_done_) return;
+        done = std::exchange(job_, std::nullopt);
+        job_done_ = false;
+    }
+    if (!done->answer.journal.empty()) note(std::move(done->answer.journal));
+    const auto it = std::find_if(clients_.begin(), clients_.end(),
+                                 [&](const Client& c) { return c.id == done->client_id; });
+    if (it == clients_.end()) return;  // it left while its request was checked
+    Client& client = *it;
+    client.waiting = false;
+    client.last_request = Clock::now();
+    if (!client.gone) {
+        if (client.out.empty()) client.last_progress = client.last_request;
+        client.out += done->answer.reply;
+        answer_lines(client);
+        flush(client);
+    }
 }
 
 void ControlServer::flush(Client& client) {
@@ -292,9 +536,10 @@ void ControlServer::flush(Client& client) {
         if (sent < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) break;
         if (sent < 0) {  // the client is gone: nothing more to say to it
             client.out.clear();
-            client.closing = true;
+            client.gone = true;
             break;
         }
+        if (sent > 0) client.last_progress = Clock::now();
         client.out.erase(0, static_cast<std::size_t>(sent));
     }
     watch(client);
@@ -304,8 +549,9 @@ void ControlServer::flush(Client& client) {
 // that reads nothing, or has shut its side down, costs no wake-ups.
 void ControlServer::watch(Client& client) {
     const std::uint32_t want =
-        (client.read_closed || client.closing ? 0u
-                                              : static_cast<std::uint32_t>(EPOLLIN | EPOLLRDHUP)) |
+        (client.read_closed || client.closing || client.waiting || client.gone
+             ? 0u
+             : static_cast<std::uint32_t>(EPOLLIN | EPOLLRDHUP)) |
         (client.out.empty() ? 0u : static_cast<std::uint32_t>(EPOLLOUT));
     if (want == client.watched) return;
     epoll_event event{};
@@ -322,6 +568,7 @@ void ControlServer::close_client(int fd) {
     ::epoll_ctl(epoll_fd_, EPOLL_CTL_DEL, fd, nullptr);
     ::close(fd);
     clients_.erase(it);
+    if (!accepting_) watch_listener(true);  // a descriptor is free again
 }
 
 }  // namespace hapticd::daemon::control

@@ -13,6 +13,7 @@
 #include <cstring>
 #include <iomanip>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <ostream>
 #include <sstream>
@@ -54,14 +55,20 @@ class LoopControl final : public control::ServoControl {
     void arm() noexcept override { loop_.arm(); }
     void disarm() noexcept override { loop_.disarm(); }
     void reset() noexcept override { loop_.request_fault_reset(); }
+    bool reset_pending() const noexcept override { return loop_.fault_reset_pending(); }
     void set_coupling(const servo::CouplingGains& gains) noexcept override {
+        const std::lock_guard lock(gains_mutex_);  // two non-real-time threads; never the servo's
         gains_ = gains;
         loop_.request_coupling(gains);
     }
-    servo::CouplingGains coupling() const noexcept override { return gains_; }
+    servo::CouplingGains coupling() const noexcept override {
+        const std::lock_guard lock(gains_mutex_);
+        return gains_;
+    }
 
   private:
     Loop& loop_;
+    mutable std::mutex gains_mutex_;
     servo::CouplingGains gains_;  // the last accepted: the servo may not have taken it yet
 };
 
@@ -190,9 +197,11 @@ int run_loop(const RunOptions& options, const Config& config,
                                   }};
     const ControlStopper control_stopper{outputs.control.get()};
     if (outputs.control) {
-        outputs.control->start([&](const control::Request& request, const control::Peer& peer) {
-            return control::answer(request, peer, control_port, facts);
-        });
+        outputs.control->start(
+            [&](const control::Request& request, const control::Peer& peer) {
+                return control::answer(request, peer, control_port, facts);
+            },
+            [&] { return control::telemetry_event(control_port.status(), facts); });
         log << priority::info << "hapticd: control socket " << outputs.control->path() << "\n";
     }
     const auto drain_control_messages = [&] {

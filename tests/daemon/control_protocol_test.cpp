@@ -94,6 +94,45 @@ TEST(DaemonControlProtocol, ACouplingRequestCarriesItsGains) {
     }
 }
 
+TEST(DaemonControlProtocol, ASubscriptionCarriesItsRateWithinItsRange) {
+    const ParsedRequest plain = parse_request(R"({"v":1,"request":"subscribe"})");
+    ASSERT_TRUE(plain.request.has_value()) << plain.error;
+    EXPECT_EQ(plain.request->kind, RequestKind::subscribe);
+    EXPECT_EQ(plain.request->rate_hz, kDefaultSubscribeRateHz);
+    const Request fast{.kind = RequestKind::subscribe, .id = 4, .rate_hz = 100.0};
+    const std::string line = request_line(fast);
+    const ParsedRequest parsed = parse_request(line.substr(0, line.size() - 1));
+    ASSERT_TRUE(parsed.request.has_value()) << parsed.error;
+    EXPECT_EQ(parsed.request->rate_hz, 100.0);
+    const ParsedRequest off = parse_request(R"({"v":1,"request":"unsubscribe"})");
+    ASSERT_TRUE(off.request.has_value()) << off.error;
+    EXPECT_EQ(off.request->kind, RequestKind::unsubscribe);
+
+    const Refusal refusals[] = {
+        {R"({"v":1,"request":"subscribe","rate_hz":0})",
+         "\"rate_hz\" = 0: allowed > 0 and <= 100 (events a second)"},
+        {R"({"v":1,"request":"subscribe","rate_hz":100.5})", "\"rate_hz\" = 100.5: allowed"},
+        {R"({"v":1,"request":"subscribe","rate_hz":-3})", "\"rate_hz\" = -3: allowed"},
+        {R"({"v":1,"request":"subscribe","rate_hz":"fast"})",
+         "\"rate_hz\" = \"fast\": must be a finite number"},
+        {R"({"v":1,"request":"subscribe","rate":5})",
+         "unknown field \"rate\" in a \"subscribe\" request: it takes only v, id, request, "
+         "rate_hz"},
+        {R"({"v":1,"request":"unsubscribe","rate_hz":5})", "unknown field \"rate_hz\""},
+    };
+    for (const Refusal& r : refusals) {
+        SCOPED_TRACE(r.line);
+        const ParsedRequest bad = parse_request(r.line);
+        EXPECT_FALSE(bad.request.has_value());
+        EXPECT_NE(bad.error.find(r.says), std::string::npos) << bad.error;
+    }
+    const nlohmann::json event = nlohmann::json::parse(event_line("telemetry", {{"tick", 5}}));
+    EXPECT_EQ(event["v"], kProtocolVersion);
+    EXPECT_EQ(event["event"], "telemetry");
+    EXPECT_EQ(event["tick"], 5);
+    EXPECT_FALSE(event.contains("ok"));
+}
+
 TEST(DaemonControlProtocol, ARefusalKeepsTheRequestsId) {
     const ParsedRequest parsed = parse_request(R"({"v":1,"id":9,"request":"launch"})");
     EXPECT_FALSE(parsed.request.has_value());

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -310,6 +311,64 @@ TEST(HilControlSocket, TwoInstancesAreEachControlledOnTheirOwnSocket) {
     EXPECT_EQ(b.process.stop(), 0) << b.process.messages();
 }
 
+std::vector<std::string> lines_of(const std::string& text) {
+    std::vector<std::string> lines;
+    std::istringstream in(text);
+    for (std::string line; std::getline(in, line);) lines.push_back(line);
+    return lines;
+}
+
+std::vector<std::string> fields_of(const std::string& row) {
+    std::vector<std::string> fields;
+    std::istringstream in(row);
+    for (std::string field; std::getline(in, field, ',');) fields.push_back(field);
+    if (!row.empty() && row.back() == ',') fields.emplace_back();  // an empty last column
+    return fields;
+}
+
+// hapticctl stream: the --log's column names, a row per event at the rate asked, the ticks
+// moving on with the servo's; and a reader that leaves ends it quietly.
+TEST(HilControlSocket, HapticctlStreamWritesTheTelemetryAsCsv) {
+    const ScratchDir dir;
+    Daemon daemon(dir, "lab0", "");
+    ASSERT_TRUE(daemon.process.wait_for_socket(daemon.socket)) << daemon.process.messages();
+    const int axes = status_of(daemon.socket)["axes"].get<int>();
+    const CommandResult r = hapticctl(daemon.socket, "stream --rate 50 --count 20");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const std::vector<std::string> lines = lines_of(r.out);
+    ASSERT_EQ(lines.size(), 21u) << r.out;
+    std::string header = "tick,t_s,state";
+    for (const char* column : {"x", "xe", "f"}) {
+        for (int i = 0; i < axes; ++i) {
+            header += "," + std::string(column) + std::to_string(i) +
+                      (std::string(column) == "f" ? "_n" : "_m");
+        }
+    }
+    EXPECT_EQ(lines[0], header + ",faults");
+    std::uint64_t first_tick = 0;
+    std::uint64_t last_tick = 0;
+    for (std::size_t i = 1; i < lines.size(); ++i) {
+        const std::vector<std::string> fields = fields_of(lines[i]);
+        ASSERT_EQ(fields.size(), static_cast<std::size_t>(4 + 3 * axes)) << lines[i];
+        const std::uint64_t tick = std::stoull(fields[0]);
+        EXPECT_GE(tick, last_tick) << lines[i];
+        if (i == 1) first_tick = tick;
+        last_tick = tick;
+        EXPECT_TRUE(fields[2] == "arming" || fields[2] == "running") << lines[i];
+        EXPECT_EQ(fields.back(), "") << "a fault on the default scene: " << lines[i];
+    }
+    // 19 periods of 20 ms at 1 kHz: about 380 ticks apart (a shared machine's wakes vary).
+    EXPECT_GT(last_tick - first_tick, 250u);
+    EXPECT_LT(last_tick - first_tick, 1500u);
+    const CommandResult piped =
+        run_command("bash -c 'set -o pipefail; \"" + std::string(HAPTICCTL_BIN) + "\" --socket \"" +
+                    daemon.socket + "\" stream --rate 100 | head -n 3'");
+    EXPECT_EQ(piped.exit_code, 0) << piped.err;
+    EXPECT_EQ(lines_of(piped.out).size(), 3u);
+    EXPECT_EQ(piped.err, "");
+    EXPECT_EQ(daemon.process.stop(), 0) << daemon.process.messages();
+}
+
 struct BadUsage {
     std::string arguments;
     int exit_code;
@@ -328,6 +387,10 @@ TEST(HilControlSocket, HapticctlRefusesBadUsageWith2AndAnUnreachableDaemonWith1)
         {"--socket " + nowhere + " launch", 2, "\"launch\" is not a command: one of status"},
         {"--socket " + nowhere + " watch --count -1", 2, "--count"},
         {"--socket " + nowhere + " status --rate 5", 2, "--rate"},
+        {"--socket " + nowhere + " stream --rate 0", 2, "--rate"},
+        {"--socket " + nowhere + " stream --rate 101", 2, "--rate"},
+        {"--socket " + nowhere + " stream --rate fast", 2, "--rate"},
+        {"--socket " + nowhere + " stream --count -2", 2, "--count"},
         {"--socket " + nowhere + " status", 1, "cannot connect to " + nowhere + ": no hapticd"},
         {"-i no-such-instance-here arm", 1,
          "cannot connect to /run/hapticd/no-such-instance-here/control.sock"},
@@ -338,7 +401,8 @@ TEST(HilControlSocket, HapticctlRefusesBadUsageWith2AndAnUnreachableDaemonWith1)
         EXPECT_EQ(r.exit_code, c.exit_code) << r.err;
         EXPECT_NE(r.err.find(c.says), std::string::npos) << r.err;
     }
-    for (const char* command : {"status", "watch", "arm", "disarm", "reset"}) {
+    for (const char* command :
+         {"status", "watch", "arm", "disarm", "reset", "coupling", "stream"}) {
         const CommandResult help =
             run_command(shell_quote(HAPTICCTL_BIN) + " " + command + " --help");
         EXPECT_EQ(help.exit_code, 0) << command;

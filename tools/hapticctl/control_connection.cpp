@@ -73,15 +73,34 @@ nlohmann::json ControlConnection::request(daemon::control::Request request) {
         sent += static_cast<std::size_t>(n);
     }
     for (;;) {
-        const std::string reply_line = read_line();
-        nlohmann::json reply = nlohmann::json::parse(reply_line, nullptr, false);
-        if (reply.is_discarded() || !reply.is_object() || !reply.contains("ok")) {
-            throw ConnectionError("hapticd at " + path_ +
-                                  " replied outside the protocol: " + reply_line.substr(0, 80));
-        }
+        nlohmann::json reply = read_message();
+        if (reply.contains("event")) continue;  // a subscription's, between the replies
         // A reply without our id is one the daemon sent on its own (a refusal): it is ours.
         if (reply.value("id", nlohmann::json(id)) == id || reply["id"].is_null()) return reply;
     }
+}
+
+nlohmann::json ControlConnection::next_event() {
+    for (;;) {
+        nlohmann::json message = read_message();
+        if (message.contains("event")) return message;
+        // A reply now is the daemon's own word (a refusal, the idle close): it ends the stream.
+        if (!message.value("ok", true)) {
+            throw ConnectionError("hapticd at " + path_ + ": " +
+                                  message.value("error", std::string("refused")));
+        }
+    }
+}
+
+nlohmann::json ControlConnection::read_message() {
+    const std::string line = read_line();
+    nlohmann::json message = nlohmann::json::parse(line, nullptr, false);
+    if (message.is_discarded() || !message.is_object() ||
+        (!message.contains("ok") && !message.contains("event"))) {
+        throw ConnectionError("hapticd at " + path_ +
+                              " replied outside the protocol: " + line.substr(0, 80));
+    }
+    return message;
 }
 
 std::string ControlConnection::read_line() {

@@ -33,9 +33,14 @@ class ControlConnection {
     /// daemon goes away, is silent for the timeout, or replies outside the protocol.
     nlohmann::json request(daemon::control::RequestKind kind);
     nlohmann::json request(daemon::control::Request request);
+    /// The next event line of a subscription (docs/control.md, "subscribe"); throws
+    /// ConnectionError as request() does.
+    nlohmann::json next_event();
 
   private:
     std::string read_line();
+    /// The next line as a JSON object that is either a reply ("ok") or an event ("event").
+    nlohmann::json read_message();
 
     std::string path_;
     std::chrono::milliseconds timeout_;

@@ -1,10 +1,11 @@
 // hapticctl: the operator's command line for a running hapticd (docs/control.md).
 //
 //   hapticctl [-i NAME | --socket PATH] status [--json] | watch [--count N] | arm | disarm |
-//             reset | coupling K [B]
+//             reset | coupling K [B] | stream [--rate HZ] [--count N]
 //
 // Exit status: 0 done; 1 the daemon refused, or could not be reached; 2 bad usage.
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -72,6 +73,8 @@ int change_state(ControlConnection& daemon, RequestKind kind) {
                 return state != "fault";
             case RequestKind::status:
             case RequestKind::coupling:
+            case RequestKind::subscribe:
+            case RequestKind::unsubscribe:
                 break;
         }
         return true;
@@ -118,6 +121,29 @@ int watch(ControlConnection& daemon, int count) {
         std::cout << hapticd::ctl::watch_line(status_of(daemon)) << "\n" << std::flush;
         next += std::chrono::milliseconds(100);
         std::this_thread::sleep_until(next);
+    }
+    return hapticd::daemon::kExitOk;
+}
+
+// stream: CSV on stdout from the daemon's telemetry events, for a pipe into a plot. Ends on
+// SIGINT or SIGTERM, after --count rows, or quietly when the reader of stdout goes away.
+int stream(ControlConnection& daemon, double rate_hz, int count) {
+    std::signal(SIGINT, on_interrupt);
+    std::signal(SIGTERM, on_interrupt);
+    std::signal(SIGPIPE, SIG_IGN);
+    const nlohmann::json reply = daemon.request(hapticd::daemon::control::Request{
+        .kind = RequestKind::subscribe, .id = nullptr, .rate_hz = rate_hz});
+    if (!reply.at("ok").get<bool>()) {
+        std::cerr << "hapticctl: " << reply.value("error", std::string("refused")) << "\n";
+        return hapticd::daemon::kExitFault;
+    }
+    const int axes = reply.at("axes").get<int>();
+    std::cout << hapticd::ctl::stream_header(axes) << "\n" << std::flush;
+    for (int printed = 0; interrupted == 0 && (count == 0 || printed < count); ++printed) {
+        const nlohmann::json event = daemon.next_event();
+        if (interrupted != 0) break;
+        std::cout << hapticd::ctl::stream_row(event, axes) << "\n" << std::flush;
+        if (!std::cout) return hapticd::daemon::kExitOk;  // the pipe's reader is gone
     }
     return hapticd::daemon::kExitOk;
 }
@@ -169,6 +195,18 @@ int main(int argc, char** argv) {
         coupling->add_option("B", damping, "b_c, N s/m (default: the damping in force)")
             ->check(CLI::NonNegativeNumber);
 
+    double stream_rate_hz = hapticd::daemon::control::kDefaultSubscribeRateHz;
+    int stream_count = 0;
+    auto* stream_command = app.add_subcommand(
+        "stream",
+        "write the servo's telemetry as CSV to stdout (tick, t_s, state, x, xe, f per axis, "
+        "faults), decimated to --rate, for a live plot");
+    stream_command
+        ->add_option("--rate", stream_rate_hz, "rows a second, > 0 and <= 100 (default 10)")
+        ->check(CLI::Range(0.001, hapticd::daemon::control::kMaxSubscribeRateHz));
+    stream_command->add_option("--count", stream_count, "stop after N rows (0: until interrupted)")
+        ->check(CLI::Range(0, 100000000));
+
     // A word that is not a command is said below, by name; the commands themselves (made
     // above, before this) still refuse what they do not take.
     app.allow_extras();
@@ -183,11 +221,11 @@ int main(int argc, char** argv) {
         return hapticd::daemon::kExitBadInput;
     }
     if (!app.remaining().empty() || app.get_subcommands().empty()) {
-        std::cerr << "hapticctl: "
-                  << (app.remaining().empty()
-                          ? std::string("no command")
-                          : "\"" + app.remaining().front() + "\" is not a command")
-                  << ": one of status, watch, arm, disarm, reset, coupling (hapticctl --help)\n";
+        std::cerr
+            << "hapticctl: "
+            << (app.remaining().empty() ? std::string("no command")
+                                        : "\"" + app.remaining().front() + "\" is not a command")
+            << ": one of status, watch, arm, disarm, reset, coupling, stream (hapticctl --help)\n";
         return hapticd::daemon::kExitBadInput;
     }
     if (instance_option->count() == 0 && socket_option->count() == 0) {
@@ -202,15 +240,22 @@ int main(int argc, char** argv) {
         socket_path = hapticd::ctl::instance_socket(instance);
     }
     try {
-        // The stability check of a coupling request may take seconds (check = "exact").
-        ControlConnection daemon(
-            socket_path, coupling->parsed() ? std::chrono::seconds(120) : std::chrono::seconds(2));
+        // The stability check of a coupling request may take seconds (check = "exact"); a
+        // stream's events come once a period.
+        std::chrono::milliseconds timeout = std::chrono::seconds(2);
+        if (coupling->parsed()) timeout = std::chrono::seconds(120);
+        if (stream_command->parsed()) {
+            timeout = std::max(timeout, std::chrono::milliseconds(static_cast<std::int64_t>(
+                                            std::ceil(3000.0 / stream_rate_hz))));
+        }
+        ControlConnection daemon(socket_path, timeout);
         if (status->parsed()) {
             const nlohmann::json s = status_of(daemon);
             std::cout << (as_json ? s.dump() + "\n" : hapticd::ctl::status_text(s));
             return hapticd::daemon::kExitOk;
         }
         if (watch_command->parsed()) return watch(daemon, count);
+        if (stream_command->parsed()) return stream(daemon, stream_rate_hz, stream_count);
         if (arm->parsed()) return change_state(daemon, RequestKind::arm);
         if (disarm->parsed()) return change_state(daemon, RequestKind::disarm);
         if (reset->parsed()) return change_state(daemon, RequestKind::reset);

@@ -67,4 +67,31 @@ std::string watch_line(const nlohmann::json& s) {
     return out.str();
 }
 
+std::string stream_header(int axes) {
+    std::string header = "tick,t_s,state";
+    for (const char* column : {"x", "xe", "f"}) {
+        const std::string unit = std::string(column) == "f" ? "_n" : "_m";
+        for (int i = 0; i < axes; ++i)
+            header += "," + std::string(column) + std::to_string(i) + unit;
+    }
+    return header + ",faults";
+}
+
+std::string stream_row(const nlohmann::json& event, int axes) {
+    std::ostringstream row;
+    row << std::setprecision(17) << event.at("tick").get<std::uint64_t>() << ","
+        << event.at("t_s").get<double>() << "," << event.at("state").get<std::string>();
+    for (const char* column : {"x_m", "xe_m", "f_n"}) {
+        const nlohmann::json& values = event.at(column);
+        for (int i = 0; i < axes; ++i)
+            row << "," << values.at(static_cast<std::size_t>(i)).get<double>();
+    }
+    std::string faults;
+    for (const auto& fault : event.at("faults")) {
+        faults += (faults.empty() ? "" : "|") + fault.get<std::string>();
+    }
+    row << "," << faults;
+    return row.str();
+}
+
 }  // namespace hapticd::ctl

@@ -17,7 +17,11 @@ inline constexpr int kProtocolVersion = 1;
 /// The longest request line, its newline included.
 inline constexpr std::size_t kMaxRequestBytes = 4096;
 
-enum class RequestKind { status, arm, disarm, reset, coupling };
+/// The fastest telemetry stream a client may subscribe to, and the default rate.
+inline constexpr double kMaxSubscribeRateHz = 100.0;
+inline constexpr double kDefaultSubscribeRateHz = 10.0;
+
+enum class RequestKind { status, arm, disarm, reset, coupling, subscribe, unsubscribe };
 
 /// The name on the wire ("status", ...).
 std::string_view request_name(RequestKind kind) noexcept;
@@ -30,6 +34,9 @@ struct Request {
     std::optional<double> stiffness_n_per_m{};
     /// coupling: "damping" (optional: the damping in force stays), b_c, N s/m; finite.
     std::optional<double> damping_n_s_per_m{};
+    /// subscribe: "rate_hz" (optional, kDefaultSubscribeRateHz), the telemetry events a
+    /// second; 0 < rate_hz <= kMaxSubscribeRateHz.
+    std::optional<double> rate_hz{};
 };
 
 /// A line, parsed: the request, or the error to reply with (the id is kept where the line
@@ -52,5 +59,8 @@ std::string request_line(RequestKind kind, const nlohmann::json& id = nullptr);
 std::string ok_reply(const nlohmann::json& id, nlohmann::json body = nlohmann::json::object());
 /// A reply line, its newline included: {"v":1,"id":id,"ok":false,"error":message}.
 std::string error_reply(const nlohmann::json& id, std::string_view message);
+/// An event line (a subscription's telemetry), its newline included: `body` with "v" and
+/// "event": name added. Events carry "event" and never "ok", replies the other way round.
+std::string event_line(std::string_view name, nlohmann::json body);
 
 }  // namespace hapticd::daemon::control

@@ -1,16 +1,26 @@
 // hapticd's control socket (docs/control.md): a Unix stream socket on a thread of its own,
-// never the servo thread. One epoll loop serves every client; each has bounded buffers, so
-// that no client can make the daemon allocate without bound or wait for it:
+// never the servo thread. One epoll loop serves every client; each has bounded buffers and
+// deadlines, so that no client can make the daemon allocate without bound, wait for it, or
+// hold a place it does not use:
 //
 //   - a request line longer than kMaxRequestBytes: an error reply, then the disconnect;
-//   - replies a client does not read, beyond Limits::max_unread_reply_bytes: the disconnect;
+//   - replies a client does not read, beyond Limits::max_unread_reply_bytes, or replies it
+//     takes nothing of for Limits::stalled_reader: the disconnect;
+//   - no request for Limits::idle: an error reply, then the disconnect (a place among
+//     Limits::max_clients is not held by a client that says nothing);
 //   - more than Limits::max_clients at once: an error reply to the newcomer, then its
-//     disconnect;
+//     disconnect; out of file descriptors: accepting pauses for a second, no busy loop;
 //   - a client that shuts its side down: its complete requests are answered, then it is
 //     closed.
 //
-// The handler answers one parsed request; it runs on the server's thread and must not block
+// A subscriber (Answer::subscribe_hz) gets an event line at its rate, from the EventSource,
+// under the same limits: one that does not read is closed like any other.
+//
+// The handler answers one parsed request on the server's thread and must not block
 // (ServoLoop's arm(), disarm(), request_fault_reset() and status() are atomics and a seqlock).
+// Work that takes longer (a stability check) goes in Answer::later: one worker thread runs
+// it, one job at a time, while the server goes on serving the others; that client's further
+// requests wait, so its replies keep their order.
 // Who connected (SO_PEERCRED), and every disconnect the server chose, become messages for the
 // journal that another thread takes (take_messages()): the server never writes to a stream
 // that the supervising thread writes to.
@@ -19,9 +29,13 @@
 #include <sys/types.h>
 
 #include <atomic>
+#include <chrono>
+#include <condition_variable>
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -42,22 +56,37 @@ struct Peer {
     pid_t pid = 0;
     uid_t uid = 0;
     gid_t gid = 0;
+
+    /// "pid P uid U gid G", for the journal.
+    std::string describe() const;
 };
 
 struct Limits {
     int max_clients = 16;
     std::size_t max_unread_reply_bytes = std::size_t{64} * 1024;
+    /// A client that sends no request for this long is told and closed.
+    std::chrono::milliseconds idle{std::chrono::seconds{60}};
+    /// A client that takes none of its waiting replies for this long is closed.
+    std::chrono::milliseconds stalled_reader{std::chrono::seconds{10}};
 };
 
 /// What a handler made of a request.
 struct Answer {
     std::string reply{};    ///< the reply line (control_protocol.hpp: ok_reply(), error_reply())
     std::string journal{};  ///< a line for the journal (a change of state, who asked); may be empty
+    /// Work too slow for the server's thread: when set, `reply` and `journal` are ignored and
+    /// the Answer this returns, on the worker thread, is the one sent.
+    std::function<Answer()> later{};
+    /// Events a second from now on, after the reply (subscribe); 0 ends the subscription.
+    std::optional<double> subscribe_hz{};
 };
 
 class ControlServer {
   public:
     using Handler = std::function<Answer(const Request&, const Peer&)>;
+    /// The event line a subscriber gets now (control_protocol.hpp: event_line()); called on
+    /// the server's thread at most once a wake, for every subscriber due.
+    using EventSource = std::function<std::string()>;
 
     /// Binds `path` (mode 0660; group `group` when that group exists and this process may
     /// give it) and listens. A socket file that nobody listens on is replaced; one that a
@@ -70,16 +99,19 @@ class ControlServer {
     ControlServer& operator=(const ControlServer&) = delete;
 
     /// Serves on a thread of its own until stop() or the destructor, answering with
-    /// `handler`. Clients that connect before this wait in the listen queue.
-    void start(Handler handler);
+    /// `handler`; subscribers get `events`' lines. Clients that connect before this wait in the
+    /// listen queue.
+    void start(Handler handler, EventSource events = {});
     void stop() noexcept;
 
     const std::string& path() const noexcept { return path_; }
-    /// Lines for the journal since the last call (connects, refusals, disconnects).
+    /// Lines for the journal since the last call (connects, refusals, disconnects); when more
+    /// than 256 waited, the last line says how many were dropped.
     std::vector<std::string> take_messages();
 
   private:
     struct Client;
+    using Clock = std::chrono::steady_clock;
     void serve() noexcept;
     void accept_clients();
     void read_from(Client& client);
@@ -87,18 +119,46 @@ class ControlServer {
     void flush(Client& client);
     void close_client(int fd);
     void watch(Client& client);
+    void watch_listener(bool on);
+    void enforce_deadlines(Clock::time_point now);
+    void send_events(Clock::time_point now);
+    void subscribe(Client& client, double rate_hz);
+    int wait_ms(Clock::time_point now) const;
+    void take_finished_job();
+    void work() noexcept;
+    Client* find_client(int fd);
     void note(std::string message);
 
     std::string path_;
     Handler handler_;
+    EventSource events_;
     Limits limits_;
     int listen_fd_ = -1;
     int epoll_fd_ = -1;
     int stop_fd_ = -1;  // an eventfd: written by stop()
+    int done_fd_ = -1;  // an eventfd: written by the worker when a job is done
     std::vector<Client> clients_;
+    std::uint64_t next_client_id_ = 1;
+    bool accepting_ = true;  // false for a second after accept() ran out of descriptors
+    Clock::time_point accept_again_{};
     std::thread thread_;
+
+    // The worker: one job at a time, from the server's thread to the worker and back.
+    struct Job {
+        std::uint64_t client_id = 0;
+        std::function<Answer()> work{};
+        Answer answer{};
+    };
+    std::thread worker_;
+    std::mutex job_mutex_;
+    std::condition_variable job_ready_;
+    std::optional<Job> job_;        // given to the worker, not yet taken back (guarded)
+    bool job_done_ = false;         // guarded
+    bool worker_stopping_ = false;  // guarded
+
     std::mutex messages_mutex_;
     std::vector<std::string> messages_;
+    std::size_t dropped_messages_ = 0;  // guarded by messages_mutex_
 };
 
 }  // namespace hapticd::daemon::control

@@ -1,6 +1,12 @@
-// A sequence lock for one writer (the servo tick) and any number of readers on other threads
-// (e.g. the daemon's 1 Hz status line). The writer never waits; a reader retries while a
-// write is in progress. The payload lives in relaxed atomic words, so there is no data race
+// A sequence lock for one writer and any number of readers on other threads. The writer never
+// waits. Two directions are in use:
+//   - the servo tick writes (its status), other threads read with load(), which retries while
+//     a write is in progress;
+//   - another thread writes (the control socket's coupling gains), the servo tick reads with
+//     try_load(), which never retries: a write in progress may belong to a thread the
+//     real-time servo thread has preempted, and waiting for it would never end. The tick
+//     takes the value at a later tick instead. The payload lives in relaxed atomic words, so there
+//     is no data race
 // (Boehm, "Can seqlocks get along with programming language memory models?", 2012).
 #pragma once
 
@@ -46,6 +52,22 @@ class Seqlock {
         std::memcpy(static_cast<void*>(&value), words.data(),
                     sizeof(T));  // T is trivially copyable
         return value;
+    }
+
+    /// One attempt, for a reader that must not wait (the servo tick): false while a write is
+    /// in progress or when one raced the copy; else the value and the number of completed
+    /// stores it is the last of.
+    bool try_load(T& value, std::uint64_t& version) const noexcept {
+        const std::uint64_t before = sequence_.load(std::memory_order_acquire);
+        if ((before & 1u) != 0u) return false;
+        std::array<std::uint64_t, kWords> words{};
+        for (std::size_t i = 0; i < kWords; ++i)
+            words[i] = words_[i].load(std::memory_order_relaxed);
+        std::atomic_thread_fence(std::memory_order_acquire);
+        if (sequence_.load(std::memory_order_relaxed) != before) return false;
+        std::memcpy(static_cast<void*>(&value), words.data(), sizeof(T));
+        version = before / 2;
+        return true;
     }
 
     /// Number of completed stores.

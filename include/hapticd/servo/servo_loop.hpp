@@ -170,6 +170,10 @@ class ServoLoop {
     void disarm() noexcept { armed_.store(false, std::memory_order_release); }
     /// Clears the fault latch at the start of the next tick; soft start begins again.
     void request_fault_reset() noexcept { reset_requested_.store(true, std::memory_order_release); }
+    /// A request_fault_reset() that no tick has taken yet.
+    bool fault_reset_pending() const noexcept {
+        return reset_requested_.load(std::memory_order_acquire);
+    }
     /// New coupling gains (16) from the start of the next tick, through the soft start: the
     /// force drops to zero, and ramps back once the handle is still, with the coupling
     /// restarted where the handle is. Check them first (daemon: the stability check); one
@@ -504,9 +508,14 @@ class ServoLoop {
     // Returns whether the loop is armed.
     bool take_requests() noexcept {
         if (reset_requested_.exchange(false, std::memory_order_acq_rel)) clear_fault_latch();
-        if (const std::uint64_t version = pending_gains_.version(); version != gains_version_) {
+        // New gains: taken only when the writer is not mid-store (Seqlock::try_load), else at
+        // a later tick; the tick never waits for the control socket's thread.
+        CouplingGains gains;
+        std::uint64_t version = 0;
+        if (pending_gains_.version() != gains_version_ && pending_gains_.try_load(gains, version) &&
+            version != gains_version_) {
             gains_version_ = version;
-            coupling_.set_gains(pending_gains_.load());
+            coupling_.set_gains(gains);
             safety_.restart_soft_start();
             initialised_ = false;  // the coupling restarts where the handle is
         }
