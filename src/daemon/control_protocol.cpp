@@ -11,13 +11,15 @@ namespace hapticd::daemon::control {
 namespace {
 
 constexpr std::array kRequests{
-    RequestKind::status,   RequestKind::arm,       RequestKind::disarm,     RequestKind::reset,
-    RequestKind::coupling, RequestKind::subscribe, RequestKind::unsubscribe};
+    RequestKind::status,      RequestKind::arm,          RequestKind::disarm,
+    RequestKind::reset,       RequestKind::coupling,     RequestKind::subscribe,
+    RequestKind::unsubscribe, RequestKind::record_start, RequestKind::record_stop};
 
 // The fields each request takes besides v, id and request.
 std::vector<std::string_view> own_fields(RequestKind kind) {
     if (kind == RequestKind::coupling) return {"stiffness", "damping"};
     if (kind == RequestKind::subscribe) return {"rate_hz"};
+    if (kind == RequestKind::record_start) return {"path"};
     return {};
 }
 
@@ -66,6 +68,10 @@ std::string_view request_name(RequestKind kind) noexcept {
             return "subscribe";
         case RequestKind::unsubscribe:
             return "unsubscribe";
+        case RequestKind::record_start:
+            return "record_start";
+        case RequestKind::record_stop:
+            return "record_stop";
     }
     return "unknown";
 }
@@ -148,6 +154,26 @@ ParsedRequest parse_request(std::string_view line) {
             }
         }
     }
+    if (*kind == RequestKind::record_start) {
+        const auto path = j.find("path");
+        if (path == j.end()) {
+            parsed.error = "\"path\" is missing: record_start names the file to record to";
+            return parsed;
+        }
+        if (!path->is_string()) {
+            parsed.error = "\"path\" = " + shown(*path) + ": must be a string";
+            return parsed;
+        }
+        const std::string& text = path->get_ref<const std::string&>();
+        if (text.empty() || text.front() != '/' || text.size() > kMaxRecordPathBytes ||
+            text.find('\0') != std::string::npos) {
+            parsed.error = "\"path\" = " + shown(*path) +
+                           ": an absolute path of at most 4095 bytes is needed (the daemon's "
+                           "working directory is not the client's)";
+            return parsed;
+        }
+        request.path = text;
+    }
     parsed.request = request;
     return parsed;
 }
@@ -158,6 +184,7 @@ std::string request_line(const Request& request) {
     if (request.stiffness_n_per_m) j["stiffness"] = *request.stiffness_n_per_m;
     if (request.damping_n_s_per_m) j["damping"] = *request.damping_n_s_per_m;
     if (request.rate_hz) j["rate_hz"] = *request.rate_hz;
+    if (request.path) j["path"] = *request.path;
     return j.dump() + "\n";
 }
 

@@ -68,6 +68,35 @@ Answer set_coupling(const Request& request, const Peer& peer, ServoControl& loop
     }};
 }
 
+// record_start, record_stop: on the worker (a file to create, a writer to drain).
+Answer record(const Request& request, const Peer& peer, const RunFacts& facts) {
+    const std::string name(request_name(request.kind));
+    if (facts.recording == nullptr) {
+        return {.reply = error_reply(request.id, name + " refused: this run cannot record"),
+                .journal = {}};
+    }
+    return {.later = [recording = facts.recording, kind = request.kind, path = request.path,
+                      id = request.id, peer, name]() -> Answer {
+        const RecordingResult result = kind == RequestKind::record_start
+                                           ? recording->start(path.value_or(std::string()))
+                                           : recording->stop();
+        if (!result.ok) {
+            return {.reply = error_reply(id, name + " refused: " + result.message),
+                    .journal = "control: " + name + " from " + peer.describe() +
+                               " refused: " + result.message};
+        }
+        nlohmann::json body{{"path", result.path}};
+        if (kind == RequestKind::record_start) {
+            body["first_tick"] = result.first_tick;
+        } else {
+            body["records"] = result.records;
+            body["dropped"] = result.dropped;
+        }
+        return {.reply = ok_reply(id, body),
+                .journal = "control: " + name + " from " + peer.describe() + ": " + result.message};
+    }};
+}
+
 }  // namespace
 
 nlohmann::json status_body(const servo::StatusSnapshot& s, const RunFacts& facts) {
@@ -99,6 +128,9 @@ nlohmann::json status_body(const servo::StatusSnapshot& s, const RunFacts& facts
     j["f_n"] = first_axes(s.f_n, facts.axes);
     j["device"] = facts.device;
     j["config_path"] = facts.config_path;
+    const std::optional<std::string> recording =
+        facts.recording != nullptr ? facts.recording->active_path() : std::nullopt;
+    j["recording"] = recording ? nlohmann::json(*recording) : nlohmann::json(nullptr);
     return j;
 }
 
@@ -147,6 +179,9 @@ Answer answer(const Request& request, const Peer& peer, ServoControl& loop, cons
         }
         case RequestKind::unsubscribe:
             return {.reply = ok_reply(request.id), .journal = {}, .subscribe_hz = 0.0};
+        case RequestKind::record_start:
+        case RequestKind::record_stop:
+            return record(request, peer, facts);
     }
     // The servo thread takes the request at the start of its next tick; the reply says the
     // state it was asked in, and `status` shows what came of it.

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "hapticd/daemon/control_server.hpp"
+#include "hapticd/daemon/recording.hpp"
 #include "hapticd/servo/environment_port.hpp"
 #include "hapticd/servo/status.hpp"
 
@@ -51,6 +52,8 @@ struct RunFacts {
     bool coupling_enabled = true;     ///< [coupling] enabled
     /// The start-up check on the config with these gains ([coupling] check; docs/control.md).
     std::function<CouplingVerdict(const servo::CouplingGains&)> check_coupling{};
+    /// record_start and record_stop's; null: this run cannot record.
+    Recording* recording = nullptr;
 };
 
 /// The status reply's body: state, tick, rates, forces, positions and faults.

@@ -104,7 +104,7 @@ std::string Peer::describe() const {
            std::to_string(gid);
 }
 
-ControlServer::ControlServer(std::string path, Limits limits, std::string group)
+ControlServer::ControlServer(std::string path, Limits limits, const std::string& group)
     : path_(std::move(path)), limits_(limits) {
     const sockaddr_un address = address_of(path_);
     clear_stale_socket(path_, address);

@@ -183,18 +183,28 @@ int run_loop(const RunOptions& options, const Config& config,
     // thread's end; the rate it reports is the watcher's, over the last second.
     std::atomic<double> measured_rate_hz{0.0};
     LoopControl control_port(loop, servo_config.coupling);
-    const control::RunFacts facts{.axes = info.axes,
-                                  .rate_hz = config.servo.rate_hz,
-                                  .device = device_line(info),
-                                  .config_path = context.config_path.empty()
-                                                     ? std::string("(embedded default)")
-                                                     : context.config_path,
-                                  .measured_rate_hz = &measured_rate_hz,
-                                  .velocity_filter_hz = config.coupling.velocity_filter_hz,
-                                  .coupling_enabled = config.coupling.enabled,
-                                  .check_coupling = [&config](const servo::CouplingGains& gains) {
-                                      return check_new_coupling(config, gains);
-                                  }};
+    control::RunFacts facts{.axes = info.axes,
+                            .rate_hz = config.servo.rate_hz,
+                            .device = device_line(info),
+                            .config_path = context.config_path.empty()
+                                               ? std::string("(embedded default)")
+                                               : context.config_path,
+                            .measured_rate_hz = &measured_rate_hz,
+                            .velocity_filter_hz = config.coupling.velocity_filter_hz,
+                            .coupling_enabled = config.coupling.enabled,
+                            .check_coupling = [&config](const servo::CouplingGains& gains) {
+                                return check_new_coupling(config, gains);
+                            }};
+    // record start/stop (recording.hpp): a ring for the run, only with a control socket.
+    std::optional<Recording> recording;
+    if (outputs.control) {
+        recording.emplace(
+            [&loop](servo::TelemetryRing* recording_ring) {
+                loop.attach_recording(recording_ring);
+            },
+            [&loop] { return loop.status().tick; }, info.axes, info.lockstep);
+        facts.recording = &*recording;
+    }
     const ControlStopper control_stopper{outputs.control.get()};
     if (outputs.control) {
         outputs.control->start(
@@ -326,6 +336,14 @@ int run_loop(const RunOptions& options, const Config& config,
     servo_thread.join();
     if (outputs.control) outputs.control->stop();
     drain_control_messages();
+    if (recording) {  // a recording still running ends with the run, whole
+        if (const std::optional<RecordingResult> ended = recording->finish_at_exit()) {
+            log << (ended->ok ? priority::notice : priority::err) << "hapticd: "
+                << (ended->ok ? ended->message + ", at the end of the run"
+                              : "recording " + ended->path + ": " + ended->message)
+                << "\n";
+        }
+    }
     write_flight_record();  // the fault that ended the run
     loop.write_zero_force();
     // Once more, to know that it landed: the summary's final_command.

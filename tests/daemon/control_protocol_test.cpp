@@ -133,6 +133,37 @@ TEST(DaemonControlProtocol, ASubscriptionCarriesItsRateWithinItsRange) {
     EXPECT_FALSE(event.contains("ok"));
 }
 
+TEST(DaemonControlProtocol, ARecordingNamesAnAbsolutePath) {
+    const Request start{.kind = RequestKind::record_start, .id = 2, .path = "/var/log/run 1.csv"};
+    const std::string line = request_line(start);
+    const ParsedRequest parsed = parse_request(line.substr(0, line.size() - 1));
+    ASSERT_TRUE(parsed.request.has_value()) << parsed.error;
+    EXPECT_EQ(parsed.request->kind, RequestKind::record_start);
+    EXPECT_EQ(parsed.request->path, "/var/log/run 1.csv");
+    const ParsedRequest stop = parse_request(R"({"v":1,"request":"record_stop"})");
+    ASSERT_TRUE(stop.request.has_value()) << stop.error;
+    EXPECT_EQ(stop.request->kind, RequestKind::record_stop);
+
+    const std::string too_long = "/" + std::string(kMaxRecordPathBytes, 'a');
+    const Refusal refusals[] = {
+        {R"({"v":1,"request":"record_start"})", "\"path\" is missing"},
+        {R"({"v":1,"request":"record_start","path":7})", "\"path\" = 7: must be a string"},
+        {R"({"v":1,"request":"record_start","path":"run.csv"})",
+         "\"path\" = \"run.csv\": an absolute path of at most 4095 bytes is needed"},
+        {R"({"v":1,"request":"record_start","path":""})", "an absolute path"},
+        {R"({"v":1,"request":"record_start","path":"/a\u0000b"})", "an absolute path"},
+        {R"({"v":1,"request":"record_start","path":")" + too_long + R"("})", "an absolute path"},
+        {R"({"v":1,"request":"record_stop","path":"/x"})",
+         "unknown field \"path\" in a \"record_stop\" request"},
+    };
+    for (const Refusal& r : refusals) {
+        SCOPED_TRACE(r.line.substr(0, 80));
+        const ParsedRequest bad = parse_request(r.line);
+        EXPECT_FALSE(bad.request.has_value());
+        EXPECT_NE(bad.error.find(r.says), std::string::npos) << bad.error;
+    }
+}
+
 TEST(DaemonControlProtocol, ARefusalKeepsTheRequestsId) {
     const ParsedRequest parsed = parse_request(R"({"v":1,"id":9,"request":"launch"})");
     EXPECT_FALSE(parsed.request.has_value());

@@ -16,6 +16,7 @@
 #include "hapticd_run.hpp"
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
+#include "telemetry_csv.hpp"
 #include "text_file.hpp"
 #include "unix_client.hpp"
 
@@ -170,6 +171,34 @@ TEST(HilControlSocket, StatusDisarmArmAFaultItsRefusalAndResetThroughHapticctl) 
     EXPECT_FALSE(std::filesystem::exists(d.socket)) << "the socket outlived the daemon";
 }
 
+// A reset and an arm sent together: the arm finds the fault still latched (the servo takes
+// the reset at its next tick) and is accepted, because the same tick clears the latch first.
+TEST(HilControlSocket, APipelinedResetThenArmIsAccepted) {
+    const ScratchDir dir;
+    Daemon d(dir, "lab", "[device.sim.faults]\njump_at = 0.3\njump_counts = 20000\n");
+    ASSERT_TRUE(d.process.wait_for_socket(d.socket)) << d.process.messages();
+    const nlohmann::json faulted =
+        status_when(d.socket, [](const nlohmann::json& s) { return s["state"] == "fault"; });
+    ASSERT_EQ(faulted["state"], "fault") << faulted.dump();
+    UnixClient client(d.socket);
+    ASSERT_TRUE(client.send(R"({"v":1,"id":1,"request":"reset"})"
+                            "\n"
+                            R"({"v":1,"id":2,"request":"arm"})"
+                            "\n"));
+    for (int id = 1; id <= 2; ++id) {
+        const auto line = client.line();
+        ASSERT_TRUE(line.has_value());
+        const nlohmann::json reply = nlohmann::json::parse(*line);
+        EXPECT_EQ(reply["id"], id);
+        EXPECT_EQ(reply["ok"], true) << reply.dump();
+    }
+    const nlohmann::json after =
+        status_when(d.socket, [](const nlohmann::json& s) { return s["state"] != "fault"; });
+    EXPECT_TRUE(armed_state(after)) << after.dump();
+    EXPECT_EQ(after["faults"], nlohmann::json::array());
+    EXPECT_EQ(d.process.stop(), 0) << d.process.messages();
+}
+
 TEST(HilControlSocket, HostileClientsGetErrorsOrDisconnectsAndTheServoNeverNotices) {
     const ScratchDir dir;
     Daemon d(dir, "lab");
@@ -311,13 +340,6 @@ TEST(HilControlSocket, TwoInstancesAreEachControlledOnTheirOwnSocket) {
     EXPECT_EQ(b.process.stop(), 0) << b.process.messages();
 }
 
-std::vector<std::string> lines_of(const std::string& text) {
-    std::vector<std::string> lines;
-    std::istringstream in(text);
-    for (std::string line; std::getline(in, line);) lines.push_back(line);
-    return lines;
-}
-
 std::vector<std::string> fields_of(const std::string& row) {
     std::vector<std::string> fields;
     std::istringstream in(row);
@@ -335,7 +357,7 @@ TEST(HilControlSocket, HapticctlStreamWritesTheTelemetryAsCsv) {
     const int axes = status_of(daemon.socket)["axes"].get<int>();
     const CommandResult r = hapticctl(daemon.socket, "stream --rate 50 --count 20");
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    const std::vector<std::string> lines = lines_of(r.out);
+    const std::vector<std::string> lines = lines_of_text(r.out);
     ASSERT_EQ(lines.size(), 21u) << r.out;
     std::string header = "tick,t_s,state";
     for (const char* column : {"x", "xe", "f"}) {
@@ -364,9 +386,55 @@ TEST(HilControlSocket, HapticctlStreamWritesTheTelemetryAsCsv) {
         run_command("bash -c 'set -o pipefail; \"" + std::string(HAPTICCTL_BIN) + "\" --socket \"" +
                     daemon.socket + "\" stream --rate 100 | head -n 3'");
     EXPECT_EQ(piped.exit_code, 0) << piped.err;
-    EXPECT_EQ(lines_of(piped.out).size(), 3u);
+    EXPECT_EQ(lines_of_text(piped.out).size(), 3u);
     EXPECT_EQ(piped.err, "");
     EXPECT_EQ(daemon.process.stop(), 0) << daemon.process.messages();
+}
+
+// hapticctl record: every tick from the start to the stop in a --log file the product's reader
+// reads, status naming the file meanwhile; refusals with exit 1; and a recording the run's end
+// interrupts is closed whole.
+TEST(HilControlSocket, HapticctlRecordsEveryTickLosslessly) {
+    const ScratchDir dir;
+    Daemon daemon(dir, "lab0", "");
+    ASSERT_TRUE(daemon.process.wait_for_socket(daemon.socket)) << daemon.process.messages();
+    const std::string file = dir.file("take1.csv");
+    const CommandResult started = hapticctl(daemon.socket, "record start " + shell_quote(file));
+    ASSERT_EQ(started.exit_code, 0) << started.err;
+    EXPECT_NE(started.out.find("recording to " + file + " from tick "), std::string::npos)
+        << started.out;
+    EXPECT_EQ(status_of(daemon.socket)["recording"], file);
+    const CommandResult again = hapticctl(daemon.socket, "record start " + dir.file("take2.csv"));
+    EXPECT_EQ(again.exit_code, 1);
+    EXPECT_NE(again.err.find("already recording to " + file), std::string::npos) << again.err;
+    std::this_thread::sleep_for(500ms);
+    const CommandResult stopped = hapticctl(daemon.socket, "record stop");
+    ASSERT_EQ(stopped.exit_code, 0) << stopped.err;
+    EXPECT_NE(stopped.out.find("records, none lost"), std::string::npos) << stopped.out;
+    EXPECT_TRUE(status_of(daemon.socket)["recording"].is_null());
+    const TelemetryLog log = read_telemetry(file);
+    EXPECT_EQ(stopped.out, file + ": " + std::to_string(log.rows()) + " records, none lost\n");
+    EXPECT_GT(log.rows(), 300u) << "0.5 s at 1 kHz";
+    const std::vector<double>& tick = log.column("tick");
+    for (std::size_t i = 1; i < tick.size(); ++i) {
+        ASSERT_EQ(tick[i], tick[i - 1] + 1.0) << "tick lost at row " << i;
+    }
+    const CommandResult not_recording = hapticctl(daemon.socket, "record stop");
+    EXPECT_EQ(not_recording.exit_code, 1);
+    EXPECT_NE(not_recording.err.find("not recording"), std::string::npos) << not_recording.err;
+    const CommandResult over = hapticctl(daemon.socket, "record start " + shell_quote(file));
+    EXPECT_EQ(over.exit_code, 1);
+    EXPECT_NE(over.err.find("a recording never overwrites a file"), std::string::npos) << over.err;
+    // A relative FILE is hapticctl's working directory's, as a shell user means it.
+    const CommandResult relative =
+        run_command("cd " + shell_quote(dir.path().string()) + " && " + shell_quote(HAPTICCTL_BIN) +
+                    " --socket " + shell_quote(daemon.socket) + " record start take3.csv");
+    ASSERT_EQ(relative.exit_code, 0) << relative.err;
+    EXPECT_NE(relative.out.find(dir.file("take3.csv")), std::string::npos) << relative.out;
+    EXPECT_EQ(daemon.process.stop(), 0) << daemon.process.messages();
+    EXPECT_NE(daemon.process.messages().find("take3.csv closed: "), std::string::npos)
+        << daemon.process.messages();
+    EXPECT_GT(read_telemetry(dir.file("take3.csv")).rows(), 0u);
 }
 
 struct BadUsage {
@@ -391,6 +459,9 @@ TEST(HilControlSocket, HapticctlRefusesBadUsageWith2AndAnUnreachableDaemonWith1)
         {"--socket " + nowhere + " stream --rate 101", 2, "--rate"},
         {"--socket " + nowhere + " stream --rate fast", 2, "--rate"},
         {"--socket " + nowhere + " stream --count -2", 2, "--count"},
+        {"--socket " + nowhere + " record", 2, "record needs start FILE or stop"},
+        {"--socket " + nowhere + " record start", 2, "FILE"},
+        {"--socket " + nowhere + " record begin x", 2, "record \"begin\": give start FILE or stop"},
         {"--socket " + nowhere + " status", 1, "cannot connect to " + nowhere + ": no hapticd"},
         {"-i no-such-instance-here arm", 1,
          "cannot connect to /run/hapticd/no-such-instance-here/control.sock"},

@@ -1,7 +1,8 @@
 // hapticctl: the operator's command line for a running hapticd (docs/control.md).
 //
 //   hapticctl [-i NAME | --socket PATH] status [--json] | watch [--count N] | arm | disarm |
-//             reset | coupling K [B] | stream [--rate HZ] [--count N]
+//             reset | coupling K [B] | stream [--rate HZ] [--count N] |
+//             record start FILE | record stop
 //
 // Exit status: 0 done; 1 the daemon refused, or could not be reached; 2 bad usage.
 #include <CLI/CLI.hpp>
@@ -9,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <csignal>
+#include <filesystem>
 #include <iostream>
 #include <optional>
 #include <string>
@@ -75,6 +77,8 @@ int change_state(ControlConnection& daemon, RequestKind kind) {
             case RequestKind::coupling:
             case RequestKind::subscribe:
             case RequestKind::unsubscribe:
+            case RequestKind::record_start:
+            case RequestKind::record_stop:
                 break;
         }
         return true;
@@ -125,6 +129,30 @@ int watch(ControlConnection& daemon, int count) {
     return hapticd::daemon::kExitOk;
 }
 
+// record start FILE (made absolute here: the daemon's working directory is not ours), record
+// stop: the daemon creates and closes the file; hapticctl says what it holds.
+int record(ControlConnection& daemon, const std::optional<std::string>& path) {
+    hapticd::daemon::control::Request request{
+        .kind = path ? RequestKind::record_start : RequestKind::record_stop, .id = nullptr};
+    if (path) request.path = std::filesystem::absolute(*path).lexically_normal().string();
+    const nlohmann::json reply = daemon.request(request);
+    if (!reply.at("ok").get<bool>()) {
+        std::cerr << "hapticctl: " << reply.value("error", std::string("refused")) << "\n";
+        return hapticd::daemon::kExitFault;
+    }
+    if (path) {
+        std::cout << "recording to " << reply.at("path").get<std::string>() << " from tick "
+                  << reply.at("first_tick").get<std::uint64_t>() << "\n";
+        return hapticd::daemon::kExitOk;
+    }
+    const auto dropped = reply.at("dropped").get<std::uint64_t>();
+    std::cout << reply.at("path").get<std::string>() << ": "
+              << reply.at("records").get<std::uint64_t>() << " records, "
+              << (dropped == 0 ? std::string("none lost") : std::to_string(dropped) + " lost")
+              << "\n";
+    return dropped == 0 ? hapticd::daemon::kExitOk : hapticd::daemon::kExitFault;
+}
+
 // stream: CSV on stdout from the daemon's telemetry events, for a pipe into a plot. Ends on
 // SIGINT or SIGTERM, after --count rows, or quietly when the reader of stdout goes away.
 int stream(ControlConnection& daemon, double rate_hz, int count) {
@@ -148,9 +176,7 @@ int stream(ControlConnection& daemon, double rate_hz, int count) {
     return hapticd::daemon::kExitOk;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run_main(int argc, char** argv) {
     CLI::App app{
         "hapticctl: the operator's command line for a running hapticd, through its control "
         "socket (docs/control.md; hapticctl(1)).\n\n"
@@ -207,6 +233,16 @@ int main(int argc, char** argv) {
     stream_command->add_option("--count", stream_count, "stop after N rows (0: until interrupted)")
         ->check(CLI::Range(0, 100000000));
 
+    std::string record_path;
+    auto* record_command =
+        app.add_subcommand("record", "record every tick to a file, in the hapticd --log format");
+    auto* record_start = record_command->add_subcommand(
+        "start", "start recording to FILE (created by the daemon; never over an existing file)");
+    record_start->add_option("FILE", record_path, "the file to create")->required();
+    auto* record_stop =
+        record_command->add_subcommand("stop", "stop recording; print how many records it holds");
+    record_command->allow_extras();  // a word that is neither start nor stop is named below
+
     // A word that is not a command is said below, by name; the commands themselves (made
     // above, before this) still refuse what they do not take.
     app.allow_extras();
@@ -220,12 +256,20 @@ int main(int argc, char** argv) {
         app.exit(error);
         return hapticd::daemon::kExitBadInput;
     }
+    if (record_command->parsed() && !record_start->parsed() && !record_stop->parsed()) {
+        const std::vector<std::string> words = record_command->remaining();
+        std::cerr << "hapticctl: record "
+                  << (words.empty() ? std::string("needs") : "\"" + words.front() + "\": give")
+                  << " start FILE or stop (hapticctl record --help)\n";
+        return hapticd::daemon::kExitBadInput;
+    }
     if (!app.remaining().empty() || app.get_subcommands().empty()) {
         std::cerr
             << "hapticctl: "
             << (app.remaining().empty() ? std::string("no command")
                                         : "\"" + app.remaining().front() + "\" is not a command")
-            << ": one of status, watch, arm, disarm, reset, coupling, stream (hapticctl --help)\n";
+            << ": one of status, watch, arm, disarm, reset, coupling, stream, record (hapticctl "
+               "--help)\n";
         return hapticd::daemon::kExitBadInput;
     }
     if (instance_option->count() == 0 && socket_option->count() == 0) {
@@ -244,6 +288,7 @@ int main(int argc, char** argv) {
         // stream's events come once a period.
         std::chrono::milliseconds timeout = std::chrono::seconds(2);
         if (coupling->parsed()) timeout = std::chrono::seconds(120);
+        if (record_command->parsed()) timeout = std::chrono::seconds(30);
         if (stream_command->parsed()) {
             timeout = std::max(timeout, std::chrono::milliseconds(static_cast<std::int64_t>(
                                             std::ceil(3000.0 / stream_rate_hz))));
@@ -256,6 +301,8 @@ int main(int argc, char** argv) {
         }
         if (watch_command->parsed()) return watch(daemon, count);
         if (stream_command->parsed()) return stream(daemon, stream_rate_hz, stream_count);
+        if (record_start->parsed()) return record(daemon, record_path);
+        if (record_stop->parsed()) return record(daemon, std::nullopt);
         if (arm->parsed()) return change_state(daemon, RequestKind::arm);
         if (disarm->parsed()) return change_state(daemon, RequestKind::disarm);
         if (reset->parsed()) return change_state(daemon, RequestKind::reset);
@@ -278,4 +325,17 @@ int main(int argc, char** argv) {
         return hapticd::daemon::kExitFault;
     }
     return hapticd::daemon::kExitBadInput;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    try {
+        return run_main(argc, argv);
+    } catch (const std::exception& error) {
+        std::cerr << "hapticctl: error: " << error.what() << "\n";
+    } catch (...) {
+        std::cerr << "hapticctl: error: an unknown exception\n";
+    }
+    return hapticd::daemon::kExitFault;
 }

@@ -54,6 +54,9 @@ std::string status_text(const nlohmann::json& s) {
         << " recoveries\n"
         << "device    " << s.at("device").get<std::string>() << "\n"
         << "config    " << s.at("config_path").get<std::string>() << "\n";
+    if (s.contains("recording") && s["recording"].is_string()) {
+        out << "recording " << s["recording"].get<std::string>() << "\n";
+    }
     return out.str();
 }
 

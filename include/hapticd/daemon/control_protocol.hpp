@@ -21,7 +21,20 @@ inline constexpr std::size_t kMaxRequestBytes = 4096;
 inline constexpr double kMaxSubscribeRateHz = 100.0;
 inline constexpr double kDefaultSubscribeRateHz = 10.0;
 
-enum class RequestKind { status, arm, disarm, reset, coupling, subscribe, unsubscribe };
+/// The longest path a record_start request may name (PATH_MAX less its terminator).
+inline constexpr std::size_t kMaxRecordPathBytes = 4095;
+
+enum class RequestKind {
+    status,
+    arm,
+    disarm,
+    reset,
+    coupling,
+    subscribe,
+    unsubscribe,
+    record_start,
+    record_stop
+};
 
 /// The name on the wire ("status", ...).
 std::string_view request_name(RequestKind kind) noexcept;
@@ -37,10 +50,15 @@ struct Request {
     /// subscribe: "rate_hz" (optional, kDefaultSubscribeRateHz), the telemetry events a
     /// second; 0 < rate_hz <= kMaxSubscribeRateHz.
     std::optional<double> rate_hz{};
+    /// record_start: "path" (required), the file the recording goes to: absolute, at most
+    /// kMaxRecordPathBytes, no NUL. Whether the daemon may create it is the daemon's to say.
+    std::optional<std::string> path{};
 };
 
 /// A line, parsed: the request, or the error to reply with (the id is kept where the line
 /// had one, so that the client can match the error to its request).
+// NOLINTNEXTLINE(bugprone-exception-escape): the implicit moves are noexcept; the check cannot
+// see that nlohmann::json's assert_invariant() throws nothing with NDEBUG or without.
 struct ParsedRequest {
     std::optional<Request> request;
     nlohmann::json id;

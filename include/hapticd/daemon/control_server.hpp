@@ -91,7 +91,7 @@ class ControlServer {
     /// Binds `path` (mode 0660; group `group` when that group exists and this process may
     /// give it) and listens. A socket file that nobody listens on is replaced; one that a
     /// process answers on is refused, as is any other kind of file. Throws ControlSocketError.
-    ControlServer(std::string path, Limits limits = {}, std::string group = "hapticd");
+    ControlServer(std::string path, Limits limits = {}, const std::string& group = "hapticd");
     /// Stops the thread, closes every client and removes the socket file.
     ~ControlServer();
 

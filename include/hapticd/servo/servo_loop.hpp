@@ -179,6 +179,12 @@ class ServoLoop {
     /// restarted where the handle is. Check them first (daemon: the stability check); one
     /// thread at a time may call this.
     void request_coupling(const CouplingGains& gains) noexcept { pending_gains_.store(gains); }
+    /// Any thread: a second ring that every tick's record also goes to from the next tick on
+    /// (a control socket's `record start`), or null to stop. A tick that read the old ring
+    /// may still push to it: the caller keeps it alive for the run (daemon/recording.hpp).
+    void attach_recording(TelemetryRing* ring) noexcept {
+        recording_.store(ring, std::memory_order_release);
+    }
     /// The latest tick's state, lock-free.
     StatusSnapshot status() const noexcept { return status_.load(); }
 
@@ -236,9 +242,13 @@ class ServoLoop {
 
     // Lockstep only (ServoConfig::telemetry_backpressure): between ticks, wait for the
     // telemetry writer to make room, so that every record of a virtual-time run is logged.
+    // A recording's ring (attach_recording) is waited for the same way.
     void wait_for_telemetry_room(const std::atomic<bool>& stop) const noexcept {
-        if (!config_.telemetry_backpressure || telemetry_ == nullptr) return;
-        while (telemetry_->size() + 1 >= telemetry_->capacity() &&
+        if (!config_.telemetry_backpressure) return;
+        const auto full = [](const TelemetryRing* ring) {
+            return ring != nullptr && ring->size() + 1 >= ring->capacity();
+        };
+        while ((full(telemetry_) || full(recording_.load(std::memory_order_acquire))) &&
                !stop.load(std::memory_order_acquire)) {
             std::this_thread::yield();
         }
@@ -484,6 +494,9 @@ class ServoLoop {
         count_tick(wake, paced, compute_ns);
         fill_record(wake, paced, sample, sensed, coupled, flags, compute_ns);
         if (telemetry_ != nullptr) telemetry_->try_push(record_);
+        if (TelemetryRing* const recording = recording_.load(std::memory_order_acquire)) {
+            recording->try_push(record_);
+        }
         if (recorder_ != nullptr) {
             // A fault new to the records kept freezes them; one that came while they were
             // frozen freezes them at the first tick kept after the thaw.
@@ -666,6 +679,7 @@ class ServoLoop {
     SafetySupervisor safety_;
     LinkRecovery link_recovery_;
     TelemetryRing* telemetry_;
+    std::atomic<TelemetryRing*> recording_{nullptr};  ///< attach_recording()'s
     FlightRecorder* recorder_ = nullptr;
     std::uint32_t recorded_faults_ = 0;       ///< the faults of the last record the recorder kept
     WakeLatencySummaryUs wake_latency_us_{};  ///< refresh_percentiles()

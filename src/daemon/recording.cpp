@@ -1,0 +1,125 @@
+#include "hapticd/daemon/recording.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+#include <stdexcept>
+#include <thread>
+
+namespace hapticd::daemon {
+namespace {
+
+// 65 s of records at 1 kHz, as the --log's ring: a disk that stalls for a minute loses nothing.
+constexpr std::size_t kRecordingRingRecords = std::size_t{1} << 16;
+
+}  // namespace
+
+Recording::Recording(std::function<void(servo::TelemetryRing*)> attach,
+                     std::function<std::uint64_t()> tick, int axes, bool lockstep)
+    : ring_(kRecordingRingRecords),
+      attach_(std::move(attach)),
+      tick_(std::move(tick)),
+      axes_(axes),
+      lockstep_(lockstep) {}
+
+Recording::~Recording() { attach_(nullptr); }
+
+RecordingResult Recording::start(const std::string& path) {
+    const std::lock_guard lock(mutex_);
+    if (writer_) {
+        return {.ok = false,
+                .message = "already recording to " + writer_->path() + " (record stop first)",
+                .path = writer_->path()};
+    }
+    const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0640);
+    if (fd < 0) {
+        const int error = errno;
+        std::string why = std::strerror(error);
+        if (error == EEXIST) why = "it exists, and a recording never overwrites a file";
+        if (error == EACCES || error == EROFS || error == EPERM) {
+            why +=
+                " (as a service, hapticd may write only under its LogsDirectory, "
+                "/var/log/hapticd/NAME)";
+        }
+        return {.ok = false, .message = "cannot create " + path + ": " + why, .path = path};
+    }
+    servo::TelemetryRecord stale;
+    while (ring_.try_pop(stale)) {
+    }  // a tick that pushed after the last stop's wait gave up
+    dropped_before_ = ring_.dropped();
+    try {
+        writer_ = std::make_unique<TelemetryWriter>(
+            ring_, fd, path, axes_,
+            lockstep_ ? std::chrono::milliseconds{0} : std::chrono::milliseconds{1000});
+        writer_->start();
+    } catch (const std::exception& e) {
+        writer_.reset();
+        ::unlink(path.c_str());
+        return {.ok = false, .message = std::string("cannot record: ") + e.what(), .path = path};
+    }
+    const std::uint64_t first_tick = tick_() + 1;
+    attach_(&ring_);
+    {
+        const std::lock_guard path_lock(path_mutex_);
+        active_path_ = path;
+    }
+    return {.ok = true,
+            .message = "recording to " + path + " from tick " + std::to_string(first_tick),
+            .path = path,
+            .first_tick = first_tick};
+}
+
+RecordingResult Recording::stop() {
+    const std::lock_guard lock(mutex_);
+    if (!writer_) return {.ok = false, .message = "not recording (record start FILE first)"};
+    return end(/*servo_stopped=*/false);
+}
+
+std::optional<RecordingResult> Recording::finish_at_exit() {
+    const std::lock_guard lock(mutex_);
+    if (!writer_) return std::nullopt;
+    return end(/*servo_stopped=*/true);
+}
+
+// The servo stops pushing; once two more ticks have been published, the tick that may have
+// read the ring before the detach has recorded, and the writer drains the rest and closes.
+RecordingResult Recording::end(bool servo_stopped) {
+    attach_(nullptr);
+    if (!servo_stopped) {
+        const std::uint64_t detached_at = tick_();
+        const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(2);
+        while (tick_() < detached_at + 2 && std::chrono::steady_clock::now() < deadline) {
+            std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        }
+    }
+    RecordingResult result{.ok = true, .path = writer_->path()};
+    try {
+        writer_->finish();
+    } catch (const std::exception& e) {
+        result.ok = false;
+        result.message = e.what();
+    }
+    result.records = writer_->records_written();
+    result.dropped = ring_.dropped() - dropped_before_;
+    if (result.ok) {
+        result.message =
+            "recording " + result.path + " closed: " + std::to_string(result.records) + " records" +
+            (result.dropped == 0
+                 ? std::string(", none lost")
+                 : ", " + std::to_string(result.dropped) + " lost: the disk did not keep up");
+    }
+    writer_.reset();
+    const std::lock_guard path_lock(path_mutex_);
+    active_path_.reset();
+    return result;
+}
+
+std::optional<std::string> Recording::active_path() const {
+    const std::lock_guard lock(path_mutex_);
+    return active_path_;
+}
+
+}  // namespace hapticd::daemon
