@@ -15,6 +15,9 @@ install(FILES ${PROJECT_SOURCE_DIR}/config/udev/70-hapticd.rules
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/config/scenes ${PROJECT_SOURCE_DIR}/config/devices
                   ${PROJECT_SOURCE_DIR}/config/operators ${PROJECT_SOURCE_DIR}/config/examples
         DESTINATION ${HAPTICD_DATA_INSTALL_DIR} FILES_MATCHING PATTERN "*.toml")
+# The drop-in that binds an instance to its device (docs/install.md, "Started by its device").
+install(FILES ${PROJECT_SOURCE_DIR}/config/examples/systemd/bind-to-device.conf
+        DESTINATION ${HAPTICD_DATA_INSTALL_DIR}/examples/systemd)
 
 # The group of the control sockets (config/sysusers/hapticd.conf).
 install(FILES ${PROJECT_SOURCE_DIR}/config/sysusers/hapticd.conf DESTINATION lib/sysusers.d)

@@ -2,6 +2,11 @@
 # is the install's: /usr for the .deb, /usr/local or --prefix for `cmake --install`.
 # file(INSTALL) honours DESTDIR and records the files in install_manifest.txt.
 
+# The files written here are staged per install (prefix and DESTDIR): two installs of one build
+# at once (the InstalledTree tests under ctest -j) must not write each other's unit.
+string(MD5 install_key "${CMAKE_INSTALL_PREFIX}|$ENV{DESTDIR}")
+set(HAPTICD_STAGING_DIR "${HAPTICD_STAGING_DIR}/${install_key}")
+
 # The system configuration directory as GNUInstallDirs has it: /etc for prefix /usr.
 if(CMAKE_INSTALL_PREFIX STREQUAL "/usr")
   set(HAPTICD_CONFIG_INSTALL_DIR "/etc/hapticd")

@@ -152,9 +152,9 @@ Answer answer(const Request& request, const Peer& peer, ServoControl& loop, cons
             return {.reply = ok_reply(request.id, {{"status", status_body(now, facts)}}),
                     .journal = {}};
         case RequestKind::arm:
-            // A reset asked for and not yet taken (a pipelined reset, arm) clears the latch at
-            // the same tick's start, before the arming.
-            if (now.faults != 0u && !loop.reset_pending()) {
+            // A reset asked for that this status does not show taken (a pipelined reset, arm)
+            // clears the latch at a tick's start, before or with the arming.
+            if (now.faults != 0u && now.fault_resets_taken >= loop.resets_requested()) {
                 const std::string why = "a fault is latched (" + fault_list(now.faults).dump() +
                                         "): reset it first (hapticctl reset)";
                 return {.reply = error_reply(request.id, "arm refused: " + why),

@@ -25,8 +25,9 @@ class ServoControl {
     virtual void arm() noexcept = 0;
     virtual void disarm() noexcept = 0;
     virtual void reset() noexcept = 0;
-    /// A reset() the servo has not taken yet.
-    virtual bool reset_pending() const noexcept = 0;
+    /// How many reset()s were asked for so far (the status's fault_resets_taken catches up
+    /// once the servo has taken them and published a status).
+    virtual std::uint64_t resets_requested() const noexcept = 0;
     /// From the control server's worker thread (one at a time).
     virtual void set_coupling(const servo::CouplingGains& gains) noexcept = 0;
     /// The gains last set (or the config's): what a coupling request without damping keeps.

@@ -27,6 +27,7 @@ struct ControlServer::Client {
     bool closing = false;      // answer nothing more; close once `out` is flushed
     bool gone = false;         // the connection broke: close now
     bool waiting = false;      // its request is on the worker; its next ones wait
+    bool registered = true;    // with epoll (a hung-up client waiting for its job is not)
     std::uint32_t watched = EPOLLIN | EPOLLRDHUP;           // the events registered with epoll
     std::chrono::steady_clock::time_point last_request{};   // or the connect
     std::chrono::steady_clock::time_point last_progress{};  // a byte of `out` taken, or new
@@ -233,14 +234,21 @@ void ControlServer::serve() noexcept {
             }
             Client* client = find_client(fd);
             if (client == nullptr) continue;  // closed earlier in this batch
-            if ((what & (EPOLLHUP | EPOLLERR)) != 0u) {
-                // Both directions are down: nothing sent would arrive. (A client that only
-                // shut its writing side gets EPOLLRDHUP, and its answers.)
+            if ((what & EPOLLERR) != 0u) {
                 client->gone = true;
                 continue;
             }
             if ((what & EPOLLOUT) != 0u) flush(*client);
-            if ((what & (EPOLLIN | EPOLLRDHUP)) != 0u) read_from(*client);
+            // A client that sent its requests and closed at once (EPOLLHUP, often with the
+            // requests still unread) has them carried out all the same; replies to it fail
+            // and end it.
+            if ((what & (EPOLLIN | EPOLLRDHUP | EPOLLHUP)) != 0u) read_from(*client);
+            if ((what & EPOLLHUP) != 0u && client->waiting && client->registered) {
+                // EPOLLHUP cannot be masked: off epoll until its job is back, or it would
+                // wake this thread in a loop.
+                ::epoll_ctl(epoll_fd_, EPOLL_CTL_DEL, client->fd, nullptr);
+                client->registered = false;
+            }
         }
         const Clock::time_point now = Clock::now();
         send_events(now);
@@ -263,7 +271,10 @@ int ControlServer::wait_ms(Clock::time_point now) const {
     auto wait = std::clamp(std::min(limits_.idle, limits_.stalled_reader) / 4,
                            std::chrono::milliseconds{10}, std::chrono::milliseconds{1000});
     for (const Client& client : clients_) {
-        if (client.event_period.count() == 0) continue;
+        // send_events() passes over these: their next event is not due while they are so.
+        if (client.event_period.count() == 0 || client.waiting || client.closing || client.gone) {
+            continue;
+        }
         const auto until = std::chrono::ceil<std::chrono::milliseconds>(client.next_event - now);
         wait = std::min(wait, std::max(until, std::chrono::milliseconds{0}));
     }
@@ -333,7 +344,9 @@ void ControlServer::watch_listener(bool on) {
 }
 
 void ControlServer::accept_clients() {
-    for (;;) {
+    // At most 16 a wake: a flood of connects (each refused once max_clients are in) cannot keep
+    // this thread from the clients it serves; epoll comes back for the rest.
+    for (int accepted = 0; accepted < 16; ++accepted) {
         const int fd = ::accept4(listen_fd_, nullptr, nullptr, SOCK_CLOEXEC | SOCK_NONBLOCK);
         if (fd < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return;  // none left
         if (fd < 0 && (errno == EINTR || errno == ECONNABORTED)) continue;
@@ -426,19 +439,13 @@ void ControlServer::answer_lines(Client& client) {
         if (!parsed.request) {
             client.out += error_reply(parsed.id, parsed.error);
         } else if (Answer answer = handler_(*parsed.request, client.peer); answer.later) {
-            std::unique_lock lock(job_mutex_);
-            if (job_) {
-                lock.unlock();
-                client.out += error_reply(parsed.request->id,
-                                          "busy: another client's request is being checked "
-                                          "(one at a time); try again in a moment");
-            } else {
-                job_ = Job{.client_id = client.id, .work = std::move(answer.later), .answer = {}};
-                job_done_ = false;
-                lock.unlock();
-                job_ready_.notify_one();
-                client.waiting = true;
+            {
+                const std::lock_guard lock(job_mutex_);
+                jobs_.push_back(
+                    Job{.client_id = client.id, .work = std::move(answer.later), .answer = {}});
             }
+            job_ready_.notify_one();
+            client.waiting = true;
         } else {
             if (!answer.journal.empty()) note(std::move(answer.journal));
             client.out += answer.reply;
@@ -478,23 +485,23 @@ void ControlServer::subscribe(Client& client, double rate_hz) {
 // The worker thread: runs each job's work, outside the lock, and tells the server's thread.
 void ControlServer::work() noexcept {
     for (;;) {
-        std::function<Answer()> job;
+        Job job;
         {
             std::unique_lock lock(job_mutex_);
-            job_ready_.wait(lock, [this] { return worker_stopping_ || (job_ && !job_done_); });
+            job_ready_.wait(lock, [this] { return worker_stopping_ || !jobs_.empty(); });
             if (worker_stopping_) return;
-            job = std::move(job_->work);
+            job = std::move(jobs_.front());
+            jobs_.pop_front();
         }
-        Answer answer;
         try {
-            answer = job();
+            job.answer = job.work();
         } catch (const std::exception& e) {
-            answer.reply = error_reply(nullptr, std::string("internal error: ") + e.what());
+            job.answer.reply = error_reply(nullptr, std::string("internal error: ") + e.what());
         }
+        job.work = nullptr;
         {
             const std::lock_guard lock(job_mutex_);
-            job_->answer = std::move(answer);
-            job_done_ = true;
+            done_.push_back(std::move(job));
         }
         const std::uint64_t one = 1;
         (void)!::write(done_fd_, &one, sizeof(one));
@@ -506,25 +513,28 @@ void ControlServer::work() noexcept {
 void ControlServer::take_finished_job() {
     std::uint64_t count = 0;
     (void)!::read(done_fd_, &count, sizeof(count));
-    std::optional<Job> done;
+    std::deque<Job> done;
     {
         const std::lock_guard lock(job_mutex_);
-        if (!job_ || !job_done_) return;
-        done = std::exchange(job_, std::nullopt);
-        job_done_ = false;
+        done.swap(done_);
     }
-    if (!done->answer.journal.empty()) note(std::move(done->answer.journal));
-    const auto it = std::find_if(clients_.begin(), clients_.end(),
-                                 [&](const Client& c) { return c.id == done->client_id; });
-    if (it == clients_.end()) return;  // it left while its request was checked
-    Client& client = *it;
-    client.waiting = false;
-    client.last_request = Clock::now();
-    if (!client.gone) {
+    for (Job& job : done) {
+        if (!job.answer.journal.empty()) note(std::move(job.answer.journal));
+        const auto it = std::find_if(clients_.begin(), clients_.end(),
+                                     [&](const Client& c) { return c.id == job.client_id; });
+        if (it == clients_.end()) continue;  // it left while its request was worked on
+        Client& client = *it;
+        client.waiting = false;
+        client.last_request = Clock::now();
+        if (client.gone) continue;
         if (client.out.empty()) client.last_progress = client.last_request;
-        client.out += done->answer.reply;
-        answer_lines(client);
+        client.out += job.answer.reply;
+        answer_lines(client);  // its requests that waited (a next slow one queues behind others)
         flush(client);
+        if (!client.registered) {  // hung up: what it sent before is still carried out
+            while (!client.waiting && !client.read_closed && !client.gone) read_from(client);
+            if (!client.waiting) client.gone = true;
+        }
     }
 }
 
@@ -553,7 +563,7 @@ void ControlServer::watch(Client& client) {
              ? 0u
              : static_cast<std::uint32_t>(EPOLLIN | EPOLLRDHUP)) |
         (client.out.empty() ? 0u : static_cast<std::uint32_t>(EPOLLOUT));
-    if (want == client.watched) return;
+    if (want == client.watched || !client.registered) return;
     epoll_event event{};
     event.events = want;
     event.data.fd = client.fd;

@@ -50,18 +50,23 @@ RecordingResult Recording::start(const std::string& path) {
     while (ring_.try_pop(stale)) {
     }  // a tick that pushed after the last stop's wait gave up
     dropped_before_ = ring_.dropped();
+    // Attached first, then the first tick the file holds: the tick after the next one to be
+    // published cannot have read the ring pointer before the attach. The writer skips
+    // anything earlier (a tick that was already under way).
+    attach_(&ring_);
+    const std::uint64_t first_tick = tick_() + 2;
     try {
         writer_ = std::make_unique<TelemetryWriter>(
             ring_, fd, path, axes_,
             lockstep_ ? std::chrono::milliseconds{0} : std::chrono::milliseconds{1000});
+        writer_->skip_ticks_before(first_tick);
         writer_->start();
     } catch (const std::exception& e) {
+        attach_(nullptr);
         writer_.reset();
         ::unlink(path.c_str());
         return {.ok = false, .message = std::string("cannot record: ") + e.what(), .path = path};
     }
-    const std::uint64_t first_tick = tick_() + 1;
-    attach_(&ring_);
     {
         const std::lock_guard path_lock(path_mutex_);
         active_path_ = path;

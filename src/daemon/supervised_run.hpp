@@ -54,8 +54,13 @@ class LoopControl final : public control::ServoControl {
     servo::StatusSnapshot status() const noexcept override { return loop_.status(); }
     void arm() noexcept override { loop_.arm(); }
     void disarm() noexcept override { loop_.disarm(); }
-    void reset() noexcept override { loop_.request_fault_reset(); }
-    bool reset_pending() const noexcept override { return loop_.fault_reset_pending(); }
+    void reset() noexcept override {
+        resets_requested_.fetch_add(1, std::memory_order_acq_rel);
+        loop_.request_fault_reset();
+    }
+    std::uint64_t resets_requested() const noexcept override {
+        return resets_requested_.load(std::memory_order_acquire);
+    }
     void set_coupling(const servo::CouplingGains& gains) noexcept override {
         const std::lock_guard lock(gains_mutex_);  // two non-real-time threads; never the servo's
         gains_ = gains;
@@ -68,6 +73,7 @@ class LoopControl final : public control::ServoControl {
 
   private:
     Loop& loop_;
+    std::atomic<std::uint64_t> resets_requested_{0};
     mutable std::mutex gains_mutex_;
     servo::CouplingGains gains_;  // the last accepted: the servo may not have taken it yet
 };

@@ -104,6 +104,7 @@ void TelemetryWriter::run() noexcept {
 void TelemetryWriter::drain() noexcept {
     servo::TelemetryRecord record;
     while (ring_.try_pop(record)) {
+        if (record.tick < first_tick_) continue;
         if (buffer_.size() - used_ < servo::kMaxCsvLineChars) flush_buffer();
         if (buffered_records_ == 0) oldest_buffered_ = Clock::now();
         used_ += servo::format_csv_record(

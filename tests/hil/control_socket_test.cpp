@@ -388,6 +388,14 @@ TEST(HilControlSocket, HapticctlStreamWritesTheTelemetryAsCsv) {
     EXPECT_EQ(piped.exit_code, 0) << piped.err;
     EXPECT_EQ(lines_of_text(piped.out).size(), 3u);
     EXPECT_EQ(piped.err, "");
+    // At a slow rate, SIGINT ends the wait for the next event at once.
+    const auto before = std::chrono::steady_clock::now();
+    const CommandResult slow =
+        run_command("timeout --preserve-status -s INT 0.5 " + shell_quote(HAPTICCTL_BIN) +
+                    " --socket " + shell_quote(daemon.socket) + " stream --rate 0.01");
+    EXPECT_EQ(slow.exit_code, 0) << slow.err;
+    EXPECT_LT(std::chrono::steady_clock::now() - before, 3s) << "SIGINT waited for an event";
+    EXPECT_EQ(lines_of_text(slow.out).size(), 2u) << slow.out;  // the header and the first row
     EXPECT_EQ(daemon.process.stop(), 0) << daemon.process.messages();
 }
 

@@ -121,6 +121,33 @@ TEST_F(InstalledTree, TheTemplateUnitRunsTheInstalledHapticdOnTheInstancesConfig
     EXPECT_EQ(unit.find('@' + std::string("HAPTICD_")), std::string::npos) << unit;
 }
 
+// udev names each device by its serial number and tags it for systemd; the installed drop-in
+// binds an instance to the device unit of /dev/hapticd/NAME, and systemd-analyze reads the
+// installed unit with it applied without a word (an unknown key would be named).
+TEST_F(InstalledTree, AnInstanceCanBeBoundToItsDevice) {
+    const std::string rules = read_file(installed("lib/udev/rules.d/70-hapticd.rules"));
+    for (const char* line :
+         {"ATTR{serial}==\"?*\", TAG+=\"systemd\", SYMLINK+=\"hapticd/usb-$attr{serial}\"\n",
+          "ATTRS{serial}==\"?*\", TAG+=\"systemd\", SYMLINK+=\"hapticd/hid-$attr{serial}\"\n",
+          "ENV{SYSTEMD_WANTS}+=\"hapticd@lab0.service\""}) {
+        EXPECT_NE(rules.find(line), std::string::npos) << line;
+    }
+    const std::string drop_in = installed("share/hapticd/examples/systemd/bind-to-device.conf");
+    const std::string text = read_file(drop_in);
+    EXPECT_NE(text.find("\nBindsTo=dev-hapticd-%i.device\nAfter=dev-hapticd-%i.device\n"),
+              std::string::npos)
+        << text;
+    const std::string units = scratch_->file("units");
+    fs::create_directories(units + "/hapticd@lab0.service.d");
+    fs::copy_file(installed("lib/systemd/system/hapticd@.service"), units + "/hapticd@.service");
+    fs::copy_file(drop_in, units + "/hapticd@lab0.service.d/bind-to-device.conf");
+    const CommandResult verify =
+        run_command("cd " + units + " && systemd-analyze verify --man=no ./hapticd@lab0.service");
+    EXPECT_EQ(verify.exit_code, 0) << verify.err;
+    EXPECT_EQ(verify.err, "");
+    EXPECT_EQ(verify.out, "");
+}
+
 TEST_F(InstalledTree, TheServiceFilesManPagesAndDataAreInstalled) {
     for (const char* file :
          {"lib/udev/rules.d/70-hapticd.rules", "share/man/man8/hapticd.8",

@@ -115,7 +115,10 @@ std::string ControlConnection::read_line() {
             deadline - std::chrono::steady_clock::now());
         pollfd p{.fd = fd_, .events = POLLIN, .revents = 0};
         const int ready = left.count() > 0 ? ::poll(&p, 1, static_cast<int>(left.count())) : 0;
-        if (ready < 0 && errno == EINTR) continue;
+        if (ready < 0 && errno == EINTR) {
+            if (interrupt_ != nullptr && *interrupt_ != 0) throw Interrupted();
+            continue;
+        }
         if (ready == 0) {
             throw ConnectionError("hapticd at " + path_ + " did not reply within " +
                                   std::to_string(timeout_.count()) + " ms");

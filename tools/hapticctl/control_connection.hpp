@@ -3,6 +3,7 @@
 #pragma once
 
 #include <chrono>
+#include <csignal>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
@@ -15,6 +16,12 @@ namespace hapticd::ctl {
 class ConnectionError : public std::runtime_error {
   public:
     using std::runtime_error::runtime_error;
+};
+
+/// A wait for the daemon ended by the flag given to ControlConnection::interrupt_on (a signal).
+class Interrupted : public ConnectionError {
+  public:
+    Interrupted() : ConnectionError("interrupted") {}
 };
 
 /// /run/hapticd/NAME/control.sock: where the template unit hapticd@NAME serves it.
@@ -36,6 +43,9 @@ class ControlConnection {
     /// The next event line of a subscription (docs/control.md, "subscribe"); throws
     /// ConnectionError as request() does.
     nlohmann::json next_event();
+    /// From now on a wait that a signal interrupts throws Interrupted when `*flag` is set
+    /// (a signal handler's flag), instead of waiting on.
+    void interrupt_on(const volatile std::sig_atomic_t* flag) noexcept { interrupt_ = flag; }
 
   private:
     std::string read_line();
@@ -47,6 +57,7 @@ class ControlConnection {
     int fd_ = -1;
     std::string pending_;
     std::int64_t next_id_ = 1;
+    const volatile std::sig_atomic_t* interrupt_ = nullptr;
 };
 
 }  // namespace hapticd::ctl

@@ -167,8 +167,14 @@ int stream(ControlConnection& daemon, double rate_hz, int count) {
     }
     const int axes = reply.at("axes").get<int>();
     std::cout << hapticd::ctl::stream_header(axes) << "\n" << std::flush;
+    daemon.interrupt_on(&interrupted);  // a slow --rate: SIGINT ends the wait for an event
     for (int printed = 0; interrupted == 0 && (count == 0 || printed < count); ++printed) {
-        const nlohmann::json event = daemon.next_event();
+        nlohmann::json event;
+        try {
+            event = daemon.next_event();
+        } catch (const hapticd::ctl::Interrupted&) {
+            break;
+        }
         if (interrupted != 0) break;
         std::cout << hapticd::ctl::stream_row(event, axes) << "\n" << std::flush;
         if (!std::cout) return hapticd::daemon::kExitOk;  // the pipe's reader is gone

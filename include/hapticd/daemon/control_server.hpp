@@ -18,9 +18,10 @@
 //
 // The handler answers one parsed request on the server's thread and must not block
 // (ServoLoop's arm(), disarm(), request_fault_reset() and status() are atomics and a seqlock).
-// Work that takes longer (a stability check) goes in Answer::later: one worker thread runs
-// it, one job at a time, while the server goes on serving the others; that client's further
-// requests wait, so its replies keep their order.
+// Work that takes longer (a stability check, a recording's start or stop) goes in
+// Answer::later: one worker thread runs it, one job at a time in the order asked, while the
+// server goes on serving the others; that client's further requests wait, so its replies keep
+// their order.
 // Who connected (SO_PEERCRED), and every disconnect the server chose, become messages for the
 // journal that another thread takes (take_messages()): the server never writes to a stream
 // that the supervising thread writes to.
@@ -33,6 +34,7 @@
 #include <condition_variable>
 #include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <mutex>
 #include <optional>
@@ -143,7 +145,8 @@ class ControlServer {
     Clock::time_point accept_again_{};
     std::thread thread_;
 
-    // The worker: one job at a time, from the server's thread to the worker and back.
+    // The worker: one job at a time, in the order asked (a client has at most one queued,
+    // since its next requests wait for it), from the server's thread to the worker and back.
     struct Job {
         std::uint64_t client_id = 0;
         std::function<Answer()> work{};
@@ -152,8 +155,8 @@ class ControlServer {
     std::thread worker_;
     std::mutex job_mutex_;
     std::condition_variable job_ready_;
-    std::optional<Job> job_;        // given to the worker, not yet taken back (guarded)
-    bool job_done_ = false;         // guarded
+    std::deque<Job> jobs_;          // waiting for the worker (guarded)
+    std::deque<Job> done_;          // answered, for the server's thread (guarded)
     bool worker_stopping_ = false;  // guarded
 
     std::mutex messages_mutex_;

@@ -26,7 +26,7 @@ struct RecordingResult {
     bool ok = false;
     std::string message{};  ///< why not, or what was done (for the journal)
     std::string path{};
-    std::uint64_t first_tick = 0;  ///< start: no tick before this is in the file
+    std::uint64_t first_tick = 0;  ///< start: the file's first tick; none before it
     std::uint64_t records = 0;     ///< stop: whole lines in the file after its header
     std::uint64_t dropped = 0;     ///< stop: records the ring refused (0: lossless)
 };

@@ -45,6 +45,9 @@ class TelemetryWriter {
     TelemetryWriter(const TelemetryWriter&) = delete;
     TelemetryWriter& operator=(const TelemetryWriter&) = delete;
 
+    /// Before start(): records of earlier ticks are taken from the ring and not written (a
+    /// recording's, whose file begins at a tick: daemon/recording.hpp).
+    void skip_ticks_before(std::uint64_t tick) noexcept { first_tick_ = tick; }
     /// Starts the writer thread.
     void start();
     /// After the producer has stopped: drains the ring, writes and closes the file. Throws
@@ -80,6 +83,7 @@ class TelemetryWriter {
     std::uint64_t file_bytes_ = 0;        ///< bytes on disk: whole lines only
     bool header_pending_ = true;          ///< the header row is still in buffer_
     int write_errno_ = 0;
+    std::uint64_t first_tick_ = 0;
     std::chrono::steady_clock::time_point oldest_buffered_{};
     std::chrono::steady_clock::time_point last_sync_{};
     std::atomic<bool> producer_done_{false};

@@ -170,10 +170,7 @@ class ServoLoop {
     void disarm() noexcept { armed_.store(false, std::memory_order_release); }
     /// Clears the fault latch at the start of the next tick; soft start begins again.
     void request_fault_reset() noexcept { reset_requested_.store(true, std::memory_order_release); }
-    /// A request_fault_reset() that no tick has taken yet.
-    bool fault_reset_pending() const noexcept {
-        return reset_requested_.load(std::memory_order_acquire);
-    }
+
     /// New coupling gains (16) from the start of the next tick, through the soft start: the
     /// force drops to zero, and ramps back once the handle is still, with the coupling
     /// restarted where the handle is. Check them first (daemon: the stability check); one
@@ -520,7 +517,10 @@ class ServoLoop {
     // (the soft start begins again, and the environment restarts where the handle is).
     // Returns whether the loop is armed.
     bool take_requests() noexcept {
-        if (reset_requested_.exchange(false, std::memory_order_acq_rel)) clear_fault_latch();
+        if (reset_requested_.exchange(false, std::memory_order_acq_rel)) {
+            clear_fault_latch();
+            ++fault_resets_taken_;
+        }
         // New gains: taken only when the writer is not mid-store (Seqlock::try_load), else at
         // a later tick; the tick never waits for the control socket's thread.
         CouplingGains gains;
@@ -655,6 +655,7 @@ class ServoLoop {
         snapshot.f_n = record_.f_n;
         snapshot.faults = record_.faults;
         snapshot.flags = record_.flags;
+        snapshot.fault_resets_taken = fault_resets_taken_;
         snapshot.overruns = stats_.overruns;
         snapshot.solver_not_converged = stats_.solver_not_converged;
         snapshot.energy_j = record_.energy_j;
@@ -694,6 +695,7 @@ class ServoLoop {
     Seqlock<StatusSnapshot> status_;
     std::atomic<bool> armed_;
     std::atomic<bool> reset_requested_{false};
+    std::uint64_t fault_resets_taken_ = 0;  ///< servo thread only; published in the status
     Seqlock<CouplingGains> pending_gains_;  ///< request_coupling()'s, taken at a tick's start
     std::uint64_t gains_version_ = 0;       ///< pending_gains_.version() last taken
     bool was_armed_;

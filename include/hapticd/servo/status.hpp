@@ -29,6 +29,7 @@ struct StatusSnapshot {
     double damping_n_s_per_m = 0.0;           ///< the coupling's b_c in force
     std::uint64_t read_timeouts = 0;          ///< reads that gave no sample, so far
     std::uint64_t link_recoveries = 0;        ///< link-fault latches cleared, so far
+    std::uint64_t fault_resets_taken = 0;     ///< request_fault_reset()s the ticks took, so far
     /// Wake-up latency and tick compute since the start, as the summary counts them:
     /// refreshed once a second (the histograms' walk is off the tick's compute time, after
     /// its write).
