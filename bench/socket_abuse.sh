@@ -8,21 +8,23 @@
 #           half-closes, idle clients and a polite client polling status as fast as it can
 #   other   socket_hammer on a second hapticd's socket, not this one's: the same load on the
 #           machine, none of it on this process (what is the machine's, what is hapticd's)
+#   stream  the heaviest use that is meant: 15 `hapticctl stream --rate 100` subscribers and
+#           a `hapticctl record` of every tick, for the run less its last second
 # each SECONDS long, real time, the embedded default (sim device, demo wall), as root
 # (SCHED_FIFO 80, mlockall); ROUNDS rounds of the five, interleaved, so that the machine's
 # drift falls on all of them alike. Prints each run, then the medians over the rounds.
 #
 # Usage: bench/socket_abuse.sh [SECONDS] [ROUNDS] [BIN]
 #   SECONDS  length of each run (default 10)
-#   ROUNDS   rounds of quiet, cpu, cpu2, hammer, other (default 3)
-#   BIN      the directory of hapticd and socket_hammer (default build/bench/bin)
+#   ROUNDS   rounds of quiet, cpu, cpu2, hammer, other, stream (default 3)
+#   BIN      the directory of hapticd, hapticctl and socket_hammer (default build/bench/bin)
 set -euo pipefail
 
 seconds=${1:-10}
 rounds=${2:-3}
 bin=${3:-build/bench/bin}
 python=/usr/bin/python3
-for tool in "$bin/hapticd" "$bin/socket_hammer" stress-ng "$python"; do
+for tool in "$bin/hapticd" "$bin/hapticctl" "$bin/socket_hammer" stress-ng "$python"; do
     command -v "$tool" >/dev/null || {
         echo "socket_abuse.sh: $tool not found" >&2
         exit 2
@@ -35,7 +37,7 @@ echo "socket_abuse.sh: $(date -u +%Y-%m-%dT%H:%M:%SZ), $(nproc) cpus, kernel $(u
     "load $(cut -d' ' -f1-3 /proc/loadavg); $rounds rounds of $seconds s"
 
 for round in $(seq "$rounds"); do
-    for arm in quiet cpu cpu2 hammer other; do
+    for arm in quiet cpu cpu2 hammer other stream; do
         socket="$work/$arm-$round.sock"
         summary="$work/$arm-$round.json"
         "$bin/hapticd" --duration "$seconds" --no-status --socket "$socket" \
@@ -55,6 +57,19 @@ for round in $(seq "$rounds"); do
                 kill "$other" 2>/dev/null || true
                 wait "$other" 2>/dev/null || true
                 ;;
+            stream)
+                streams=()
+                for _ in $(seq 15); do
+                    timeout -s INT "$((seconds - 1))" "$bin/hapticctl" --socket "$socket" \
+                        stream --rate 100 >/dev/null &
+                    streams+=($!)
+                done
+                "$bin/hapticctl" --socket "$socket" record start "$work/take-$round.csv" \
+                    >/dev/null
+                sleep "$((seconds - 1))"
+                "$bin/hapticctl" --socket "$socket" record stop >>"$work/records.txt"
+                wait "${streams[@]}" || true
+                ;;
         esac
         # A host stall may exhaust the overrun budget (exit 1, the fault in the summary, which
         # the table shows); no summary at all is a failure.
@@ -71,7 +86,7 @@ import json, statistics, sys
 work, rounds = sys.argv[1], int(sys.argv[2])
 fields = [("wake p50", "wake_latency_us", "p50"), ("wake p99", "wake_latency_us", "p99"),
           ("compute p50", "tick_compute_us", "p50"), ("compute p99", "tick_compute_us", "p99")]
-arms = ["quiet", "cpu", "cpu2", "hammer", "other"]
+arms = ["quiet", "cpu", "cpu2", "hammer", "other", "stream"]
 runs = {arm: [json.load(open(f"{work}/{arm}-{r}.json")) for r in range(1, rounds + 1)]
         for arm in arms}
 print("run                 " + "".join(f"{name:>13}" for name, _, _ in fields)
@@ -87,8 +102,10 @@ for arm in arms:
     print(f"{arm:<20}" + "".join(
         f"{statistics.median(s[k][q] for s in runs[arm]):>10.2f} us" for _, k, q in fields))
 quiet = {f: statistics.median(s[k][q] for s in runs["quiet"]) for f, k, q in fields}
-for arm in ["cpu", "cpu2", "hammer", "other"]:
+for arm in ["cpu", "cpu2", "hammer", "other", "stream"]:
     print(f"{arm + ' / quiet':<20}" + "".join(
         f"{statistics.median(s[k][q] for s in runs[arm]) / quiet[f]:>13.2f}"
         for f, k, q in fields))
 PY
+echo "recordings of the stream arm (hapticctl record stop):"
+cat "$work/records.txt"
