@@ -32,6 +32,17 @@ struct Refusal {
     std::string says;  // a part of the error
 };
 
+// Each line is refused, and the error says what the case expects.
+template <std::size_t N>
+void expect_refused(const Refusal (&refusals)[N]) {
+    for (const Refusal& r : refusals) {
+        SCOPED_TRACE(r.line.substr(0, 80));
+        const ParsedRequest parsed = parse_request(r.line);
+        EXPECT_FALSE(parsed.request.has_value());
+        EXPECT_NE(parsed.error.find(r.says), std::string::npos) << parsed.error;
+    }
+}
+
 TEST(DaemonControlProtocol, EveryBadLineIsRefusedNamingWhatIsWrong) {
     const Refusal refusals[] = {
         {"status", "is not JSON"},
@@ -49,12 +60,7 @@ TEST(DaemonControlProtocol, EveryBadLineIsRefusedNamingWhatIsWrong) {
         {R"({"v":1,"id":[1],"request":"status"})", "\"id\" = [1]: must be an integer, a string"},
         {R"({"v":1,"id":1.5,"request":"status"})", "\"id\" = 1.5"},
     };
-    for (const Refusal& r : refusals) {
-        SCOPED_TRACE(r.line);
-        const ParsedRequest parsed = parse_request(r.line);
-        EXPECT_FALSE(parsed.request.has_value());
-        EXPECT_NE(parsed.error.find(r.says), std::string::npos) << parsed.error;
-    }
+    expect_refused(refusals);
 }
 
 TEST(DaemonControlProtocol, ACouplingRequestCarriesItsGains) {
@@ -86,12 +92,7 @@ TEST(DaemonControlProtocol, ACouplingRequestCarriesItsGains) {
          "stiffness, damping"},
         {R"({"v":1,"request":"status","stiffness":1})", "unknown field \"stiffness\""},
     };
-    for (const Refusal& r : refusals) {
-        SCOPED_TRACE(r.line);
-        const ParsedRequest bad = parse_request(r.line);
-        EXPECT_FALSE(bad.request.has_value());
-        EXPECT_NE(bad.error.find(r.says), std::string::npos) << bad.error;
-    }
+    expect_refused(refusals);
 }
 
 TEST(DaemonControlProtocol, ASubscriptionCarriesItsRateWithinItsRange) {
@@ -120,12 +121,7 @@ TEST(DaemonControlProtocol, ASubscriptionCarriesItsRateWithinItsRange) {
          "rate_hz"},
         {R"({"v":1,"request":"unsubscribe","rate_hz":5})", "unknown field \"rate_hz\""},
     };
-    for (const Refusal& r : refusals) {
-        SCOPED_TRACE(r.line);
-        const ParsedRequest bad = parse_request(r.line);
-        EXPECT_FALSE(bad.request.has_value());
-        EXPECT_NE(bad.error.find(r.says), std::string::npos) << bad.error;
-    }
+    expect_refused(refusals);
     const nlohmann::json event = nlohmann::json::parse(event_line("telemetry", {{"tick", 5}}));
     EXPECT_EQ(event["v"], kProtocolVersion);
     EXPECT_EQ(event["event"], "telemetry");
@@ -156,12 +152,7 @@ TEST(DaemonControlProtocol, ARecordingNamesAnAbsolutePath) {
         {R"({"v":1,"request":"record_stop","path":"/x"})",
          "unknown field \"path\" in a \"record_stop\" request"},
     };
-    for (const Refusal& r : refusals) {
-        SCOPED_TRACE(r.line.substr(0, 80));
-        const ParsedRequest bad = parse_request(r.line);
-        EXPECT_FALSE(bad.request.has_value());
-        EXPECT_NE(bad.error.find(r.says), std::string::npos) << bad.error;
-    }
+    expect_refused(refusals);
 }
 
 TEST(DaemonControlProtocol, ARefusalKeepsTheRequestsId) {
