@@ -439,6 +439,9 @@ TEST(HilControlSocket, HapticctlRecordsEveryTickLosslessly) {
                     " --socket " + shell_quote(daemon.socket) + " record start take3.csv");
     ASSERT_EQ(relative.exit_code, 0) << relative.err;
     EXPECT_NE(relative.out.find(dir.file("take3.csv")), std::string::npos) << relative.out;
+    // The recording begins at the tick after the request; give the loop ticks to record before
+    // the run ends, or a stop that races the first tick would leave a whole but empty file.
+    std::this_thread::sleep_for(200ms);
     EXPECT_EQ(daemon.process.stop(), 0) << daemon.process.messages();
     EXPECT_NE(daemon.process.messages().find("take3.csv closed: "), std::string::npos)
         << daemon.process.messages();
