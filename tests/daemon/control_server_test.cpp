@@ -516,7 +516,7 @@ TEST(DaemonControlServer, ASubscriberThatDoesNotReadIsClosed) {
     // 4 kB events at 100 Hz: the deaf one's socket buffer fills within a second.
     Streaming served(dir.file("c.sock"),
                      Limits{.max_clients = 16,
-                            .max_unread_reply_bytes = 16 * 1024,
+                            .max_unread_reply_bytes = std::size_t{16} * 1024,
                             .stalled_reader = std::chrono::milliseconds(300)},
                      4000);
     UnixClient reader(dir.file("c.sock"));

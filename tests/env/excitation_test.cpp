@@ -135,6 +135,7 @@ TEST(EnvExcitation, SpectrumIsTheLinesAndNothingElse) {
 TEST(EnvExcitation, AxesGetDisjointLinesSoTheirSignalsAreOrthogonal) {
     const ExcitationEnvironment e(pen_excitation(3));
     std::vector<std::vector<double>> x;
+    x.reserve(3);
     for (int axis = 0; axis < 3; ++axis) x.push_back(full_periods(e, axis));
     std::set<int> seen;
     for (int axis = 0; axis < 3; ++axis) {

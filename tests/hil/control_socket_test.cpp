@@ -222,6 +222,7 @@ TEST(HilControlSocket, HostileClientsGetErrorsOrDisconnectsAndTheServoNeverNotic
     }
     // Clients that connect and never send, up to the limit and past it.
     std::vector<std::unique_ptr<UnixClient>> idle;
+    idle.reserve(16);
     for (int i = 0; i < 16; ++i) idle.push_back(std::make_unique<UnixClient>(d.socket));
     {
         UnixClient one_too_many(d.socket);

@@ -149,6 +149,7 @@ std::string heavy_hand_config(const CouplingGains& gains, std::string_view check
     return config.toml();
 }
 
+// NOLINTNEXTLINE(bugprone-exception-escape): nlohmann::json's noexcept move is reported as throwing
 struct DelayedContact {
     DaemonRun run;
     Prediction predicted;        ///< the penalty wall in series
@@ -343,6 +344,7 @@ constexpr CouplingGains kPassiveNyquistGains{
         0.99 * 2.0 * (kPenDampingNsPerM - kIssueGains.damping_n_s_per_m) / kPeriodS,
     .damping_n_s_per_m = kIssueGains.damping_n_s_per_m};
 
+// NOLINTNEXTLINE(bugprone-exception-escape): nlohmann::json's noexcept move is reported as throwing
 struct NyquistGrowth : NyquistFit {
     DaemonRun run;
     Prediction predicted;

@@ -65,6 +65,7 @@ class Child {
         posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, err.c_str(),
                                          O_WRONLY | O_CREAT | O_TRUNC, 0644);
         std::vector<char*> argv;
+        argv.reserve(args.size() + 1);
         for (std::string& arg : args) argv.push_back(arg.data());
         argv.push_back(nullptr);
         const int error = ::posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), environ);

@@ -104,6 +104,7 @@ double nyquist_margin(const CouplingGains& gains) {
            1.0;
 }
 
+// NOLINTNEXTLINE(bugprone-exception-escape): nlohmann::json's noexcept move is reported as throwing
 struct NyquistRun : NyquistFit {
     DaemonRun run;
     Prediction predicted;

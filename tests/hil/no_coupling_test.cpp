@@ -58,7 +58,7 @@ ContactJudgement run_rigid_wall(double wall_stiffness_n_per_m, double wall_dampi
     if (run.log.rows() == 0) return {};
     // No coupling: the tool is the handle in every tick.
     EXPECT_EQ(run.log.column("xe0_m"), run.log.column("x0_m"));
-    const ContactJudgement judged = judge_wall_contact(run.log, kJudgeFromS);
+    ContactJudgement judged = judge_wall_contact(run.log, kJudgeFromS);
     std::cout << "[hil] no coupling, K = " << wall_stiffness_n_per_m
               << " N/m, B = " << wall_damping_n_s_per_m << " N s/m (K T/2 + B = "
               << wall_stiffness_n_per_m * kPeriodS / 2.0 + wall_damping_n_s_per_m

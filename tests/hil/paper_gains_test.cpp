@@ -58,7 +58,7 @@ ContactJudgement run_contact(const std::string& label, const CouplingGains& gain
     EXPECT_EQ(fault_list(run), "") << label;
     EXPECT_EQ(run.log.rows(), static_cast<std::size_t>(kDurationS * kRateHz)) << label;
     if (run.log.rows() == 0) return {};
-    const ContactJudgement judged = judge_wall_contact(run.log, kJudgeFromS, kWindowS);
+    ContactJudgement judged = judge_wall_contact(run.log, kJudgeFromS, kWindowS);
     std::cout << "[hil] " << label << " (k_c = " << gains.stiffness_n_per_m
               << " N/m): " << describe(judged) << "\n";
     return judged;

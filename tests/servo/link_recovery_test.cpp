@@ -225,6 +225,7 @@ class LinkRecoveryLoop : public ::testing::Test {
 
     std::vector<Trace> steps(Link link, int ticks) {
         std::vector<Trace> traces;
+        traces.reserve(static_cast<std::size_t>(ticks));
         for (int n = 0; n < ticks; ++n) traces.push_back(step(link));
         return traces;
     }

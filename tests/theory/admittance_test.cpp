@@ -7,9 +7,12 @@
 
 #include "hapticd/theory/llewellyn.hpp"
 #include "hapticd/theory/zwidth.hpp"
+#include "stepped.hpp"
 
 namespace hapticd::theory {
 namespace {
+
+using hapticd::testing::stepped;
 
 constexpr double kT = 1e-3;
 const DeviceModel kDevice{2.0, 5.0};       // a heavy, admittance-type manipulator
@@ -94,7 +97,7 @@ TEST(Admittance, TooHighLoopGainMakesTheBoundInfinite) {
     // Re Z_dA = b + sinc²(θ/2)(k_p cos θ - k_i T/2) < 0 near Nyquist.
     const PiVelocityLoop hot{2000.0, 0.0};
     bool found_negative = false;
-    for (double theta = 0.01; theta < 3.14; theta += 0.01) {
+    for (const double theta : stepped(0.01, 3.13, 0.01)) {
         if (admittance_display_conductance(kDevice, hot, HoldModel::encoder, theta, kT) < 0.0) {
             found_negative = true;
             EXPECT_TRUE(

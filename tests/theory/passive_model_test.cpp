@@ -127,6 +127,7 @@ TEST(PassiveHoldNumerator, WholePeriodsAreTheAliasSumWithTheDelay) {
 TEST_P(EveryDelay, TableEqualsTheValuesOneByOne) {
     const double delay = GetParam();
     std::vector<double> thetas;
+    thetas.reserve(4000);
     for (int i = 0; i < 4000; ++i) thetas.push_back(1e-6 * std::pow(kPi / 1e-6, i / 3999.0));
     const std::vector<double> table = passive_hold_numerators(thetas, delay);
     ASSERT_EQ(table.size(), thetas.size());

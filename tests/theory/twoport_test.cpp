@@ -8,9 +8,12 @@
 
 #include "hapticd/theory/benchmark.hpp"
 #include "hapticd/theory/llewellyn.hpp"
+#include "stepped.hpp"
 
 namespace hapticd::theory {
 namespace {
+
+using hapticd::testing::stepped;
 
 constexpr std::array<ImmittanceForm, 4> kForms = {
     ImmittanceForm::impedance, ImmittanceForm::admittance, ImmittanceForm::hybrid,
@@ -97,7 +100,7 @@ TEST(Llewellyn, VerdictAndStabilityFactorAreTheSameInAllFourForms) {
 TEST(Llewellyn, TheHapticInterfaceGivesTheSameVerdictInAllFourForms) {
     const DeviceModel device{0.1, 2.0};
     for (double k : {1000.0, 4000.0, 20000.0}) {
-        for (double theta = 0.01; theta < 3.14; theta += 0.05) {
+        for (const double theta : stepped(0.01, 3.11, 0.05)) {
             const TwoPort h =
                 impedance_interface(device, {k, 0.5}, HoldModel::encoder, theta, 1e-3);
             const bool verdict = llewellyn(h).unconditionally_stable;
@@ -121,7 +124,7 @@ TEST(Llewellyn, SweepFindsTheWorstFrequencyOfTheInterface) {
     EXPECT_GT(sweep.worst_re_p11, 0.0);  // Re Z_dI = b > 0: only the second inequality fails
     double worst = 1e300;
     double worst_theta = 0.0;
-    for (double theta = 1e-3; theta <= 3.14159; theta += 1e-5) {
+    for (const double theta : stepped(1e-3, 3.14159, 1e-5)) {
         const double m = coupling_margin(device, coupling, HoldModel::encoder, theta, 1e-3);
         if (m < worst) worst = m, worst_theta = theta;
     }

@@ -13,9 +13,12 @@
 
 #include "hapticd/theory/admittance_passive.hpp"
 #include "hapticd/tune/operator_synthesis.hpp"
+#include "stepped.hpp"
 
 namespace hapticd::tune {
 namespace {
+
+using hapticd::testing::stepped;
 
 using theory::DeviceModel;
 using theory::HoldModel;
@@ -181,8 +184,8 @@ TEST(PassiveFilteredSizing, TheLightestPureDamperIsNeverOptimisticAndIsReached) 
     EXPECT_TRUE(check_exact_admittance(design(lightest)).stable);
     const auto worst_adversary = [&](double b_c) {
         double worst = 0.0;
-        for (double theta = 0.2; theta <= 0.8; theta += 0.02) {
-            for (double x = -3000.0; x <= 0.0; x += 20.0) {
+        for (const double theta : stepped(0.2, 0.8, 0.02)) {
+            for (const double x : stepped(-3000.0, 0.0, 20.0)) {
                 const OperatorModel h = alias_tuned_operator(kArm, theta, kRateHz, 1, x);
                 worst = std::max(worst, admittance_closed_loop_poles(
                                             design(b_c), h, AdmittanceEnvironment::free_space())

@@ -158,6 +158,7 @@ TEST(ClassCheck, NoRandomMemberBeatsTheSearch) {
     std::mt19937 random(9);
     std::uniform_real_distribution<double> unit(0.0, 1.0);
     std::vector<OperatorModel> members;
+    members.reserve(300);
     for (int i = 0; i < 300; ++i) {
         members.push_back(
             c.member({unit(random), unit(random), unit(random), unit(random), unit(random)}));

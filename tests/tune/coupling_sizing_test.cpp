@@ -11,9 +11,12 @@
 #include <vector>
 
 #include "hapticd/theory/coupling_check.hpp"
+#include "stepped.hpp"
 
 namespace hapticd::tune {
 namespace {
+
+using hapticd::testing::stepped;
 
 using theory::DeviceModel;
 using theory::HoldModel;
@@ -146,7 +149,7 @@ TEST_P(OptimizeDamping, BestPairBeatsEveryDampingOnABruteForceScan) {
     const ImpedanceSizing best = size_impedance_coupling({device, 1000, GetParam(), std::nullopt});
     double brute = 0.0;
     double brute_b_c = 0.0;
-    for (double b_c = 0.0; b_c < 4.0; b_c += 0.01) {
+    for (const double b_c : stepped(0.0, 3.99, 0.01)) {
         try {
             const double k =
                 size_impedance_coupling({device, 1000, GetParam(), b_c}).coupling.stiffness_n_per_m;
@@ -300,7 +303,7 @@ TEST_P(FilteredOptimizeDamping, BestPairBeatsEveryDampingOnABruteForceScan) {
     EXPECT_EQ(best.report.method, "golden-section");
     double brute = 0.0;
     double brute_b_c = 0.0;
-    for (double b_c = 0.0; b_c < 6.0; b_c += 0.02) {
+    for (const double b_c : stepped(0.0, 5.98, 0.02)) {
         request.coupling_damping_n_s_per_m = b_c;
         try {
             const double k = size_impedance_coupling(request).coupling.stiffness_n_per_m;
@@ -357,7 +360,7 @@ TEST(AdmittanceSizing, MeetsThirtySevenWithEqualityAndIsMinimal) {
     bool violated = false;
     const theory::MassDamperCoupling lighter{s.coupling.mass_kg * 0.99,
                                              s.coupling.damping_n_s_per_m};
-    for (double theta = 1e-4; theta < 3.1416; theta += 1e-4) {
+    for (const double theta : stepped(1e-4, 3.1415, 1e-4)) {
         const double re_zca = (1.0 / theory::coupling_admittance(lighter, theta, period)).real();
         if (re_zca < theory::admittance_coupling_bound(request.device, request.loop, request.model,
                                                        theta, period)) {

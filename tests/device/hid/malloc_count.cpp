@@ -13,11 +13,7 @@ std::uint64_t thread_malloc_count() noexcept { return thread_allocation_count();
 }  // namespace hapticd::testing
 #else
 
-extern "C" {
-void* __libc_malloc(std::size_t size);
-void* __libc_calloc(std::size_t count, std::size_t size);
-void* __libc_realloc(void* pointer, std::size_t size);
-}
+#include "glibc_malloc.hpp"
 
 namespace {
 // Constant-initialised static TLS: reading it never allocates.

@@ -115,6 +115,7 @@ struct UmockdevHidraw::Impl {
                     const std::vector<std::string>& properties) {
         auto c_array = [](const std::vector<std::string>& strings) {
             std::vector<gchar*> array;
+            array.reserve(strings.size() + 1);
             for (const std::string& s : strings) array.push_back(const_cast<gchar*>(s.c_str()));
             array.push_back(nullptr);
             return array;

@@ -750,6 +750,7 @@ std::vector<std::int64_t> measured_delays_us(double delay_periods, int commands)
         latest_us = answer.time_us;
     }
     std::vector<std::int64_t> delays;
+    delays.reserve(applied_us.size());
     for (const auto& [command, at_us] : applied_us) {
         delays.push_back(static_cast<std::int64_t>(at_us) -
                          static_cast<std::int64_t>(basis_us.at(command)));

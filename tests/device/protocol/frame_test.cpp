@@ -108,7 +108,7 @@ TEST(ProtocolFrame, BadCrcOnAnySingleBitFlip) {
     const Bytes frame = command_frame();
     FrameView view;
     // Every bit after the length byte (flipping magic or length is caught earlier).
-    for (std::size_t bit = 8 * 4; bit < frame.size() * 8; ++bit) {
+    for (std::size_t bit = std::size_t{8} * 4; bit < frame.size() * 8; ++bit) {
         Bytes broken = frame;
         broken[bit / 8] ^= static_cast<std::byte>(1u << (bit % 8));
         EXPECT_EQ(decode_frame(broken, view), Error::bad_crc) << "bit " << bit;

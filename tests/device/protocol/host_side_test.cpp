@@ -274,7 +274,8 @@ TEST(ProtocolReplyTracker, BadAcknowledgementsAreCountedAndNotUsedButTheSampleIs
     tracker.start(1, kProtocolVersion2);
     for (std::uint32_t n = 1; n <= 3; ++n) {
         tracker.command_sent(n);
-        ASSERT_EQ(tracker.check(reply2(n, n, 1000 * n, 0, 0)).applied, Applied::reported);
+        ASSERT_EQ(tracker.check(reply2(n, n, std::uint64_t{1000} * n, 0, 0)).applied,
+                  Applied::reported);
     }
     tracker.command_sent(4);
     // A command never sent: four sent, so a lag of 4 names command 0.

@@ -32,7 +32,7 @@ void fix_crc(Bytes& frame) {
 /// encode -> typed decode and variant decode -> equal; returns the frame.
 template <typename M>
 Bytes round_trip(const M& message, std::size_t expected_size) {
-    const Bytes frame = encoded(message);
+    Bytes frame = encoded(message);
     EXPECT_EQ(frame.size(), expected_size);
     M typed;
     EXPECT_EQ(decode(frame, typed), Error::none);
@@ -83,7 +83,7 @@ EncoderSample a_sample(int axes) {
     m.time_us = 123456;
     m.status = kSampleForceActive;
     m.axes = static_cast<std::uint8_t>(axes);
-    for (int i = 0; i < axes; ++i) m.counts[i] = -100 * (i + 1);
+    for (int i = 0; i < axes; ++i) m.counts[i] = -100L * (i + 1);
     return m;
 }
 

@@ -309,7 +309,7 @@ class LineFaults {
         }
         if (fire(Kind::delay)) {
             std::this_thread::sleep_for(
-                std::chrono::microseconds(pick(2 * kReplyTimeoutMs * 1000)));
+                std::chrono::microseconds(pick(std::size_t{2} * kReplyTimeoutMs * 1000)));
         }
         bytes = std::move(line);
     }

@@ -74,7 +74,7 @@ class SerialLinkTest : public ::testing::Test {
         proto::EncoderSample sample;
         sample.session = kSession;
         sample.sample_sequence = sample_sequence;
-        sample.time_us = 1000 * sample_sequence;
+        sample.time_us = std::uint64_t{1000} * sample_sequence;
         sample.axes = 1;
         sample.counts[0] = -12345;
         return encoded(sample);

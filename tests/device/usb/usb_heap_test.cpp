@@ -18,12 +18,7 @@
 #include "usb_testbed.hpp"
 
 #if !HAPTICD_ALLOC_GUARD_HOOKS
-extern "C" {
-void* __libc_malloc(std::size_t size);
-void* __libc_calloc(std::size_t count, std::size_t size);
-void* __libc_realloc(void* pointer, std::size_t size);
-void __libc_free(void* pointer);
-}
+#include "glibc_malloc.hpp"
 
 namespace {
 

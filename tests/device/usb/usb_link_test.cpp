@@ -443,7 +443,8 @@ TEST_F(UsbLinkTest, ManyRoundTripsWithoutAllocation) {
             }
         }
         // Each round trip submits one OUT and one IN transfer.
-        EXPECT_EQ(guard.allocations(), hapticd::testing::libusb_urb_allocations(2 * 2000));
+        EXPECT_EQ(guard.allocations(),
+                  hapticd::testing::libusb_urb_allocations(std::uint64_t{2} * 2000));
     }
     EXPECT_EQ(ok, 2000);
 }

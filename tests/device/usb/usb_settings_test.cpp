@@ -98,7 +98,7 @@ class Descriptor {
         std::uint16_t max_packet;
     };
     void add(std::uint8_t number, std::uint8_t cls, std::uint8_t sub, std::uint8_t protocol,
-             std::vector<Endpoint> endpoints) {
+             const std::vector<Endpoint>& endpoints) {
         std::vector<libusb_endpoint_descriptor> eps;
         for (const Endpoint& e : endpoints) {
             libusb_endpoint_descriptor d{};
