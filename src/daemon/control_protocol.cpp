@@ -10,16 +10,17 @@
 namespace hapticd::daemon::control {
 namespace {
 
-constexpr std::array kRequests{
-    RequestKind::status,      RequestKind::arm,          RequestKind::disarm,
-    RequestKind::reset,       RequestKind::coupling,     RequestKind::subscribe,
-    RequestKind::unsubscribe, RequestKind::record_start, RequestKind::record_stop};
+constexpr std::array kRequests{RequestKind::status,      RequestKind::arm,
+                               RequestKind::disarm,      RequestKind::reset,
+                               RequestKind::coupling,    RequestKind::subscribe,
+                               RequestKind::unsubscribe, RequestKind::record_start,
+                               RequestKind::record_stop, RequestKind::scene_load};
 
 // The fields each request takes besides v, id and request.
 std::vector<std::string_view> own_fields(RequestKind kind) {
     if (kind == RequestKind::coupling) return {"stiffness", "damping"};
     if (kind == RequestKind::subscribe) return {"rate_hz"};
-    if (kind == RequestKind::record_start) return {"path"};
+    if (kind == RequestKind::record_start || kind == RequestKind::scene_load) return {"path"};
     return {};
 }
 
@@ -72,6 +73,8 @@ std::string_view request_name(RequestKind kind) noexcept {
             return "record_start";
         case RequestKind::record_stop:
             return "record_stop";
+        case RequestKind::scene_load:
+            return "scene_load";
     }
     return "unknown";
 }
@@ -154,10 +157,12 @@ ParsedRequest parse_request(std::string_view line) {
             }
         }
     }
-    if (*kind == RequestKind::record_start) {
+    if (*kind == RequestKind::record_start || *kind == RequestKind::scene_load) {
         const auto path = j.find("path");
         if (path == j.end()) {
-            parsed.error = "\"path\" is missing: record_start names the file to record to";
+            parsed.error = *kind == RequestKind::record_start
+                               ? "\"path\" is missing: record_start names the file to record to"
+                               : "\"path\" is missing: scene_load names the scene file to render";
             return parsed;
         }
         if (!path->is_string()) {
@@ -165,7 +170,7 @@ ParsedRequest parse_request(std::string_view line) {
             return parsed;
         }
         const std::string& text = path->get_ref<const std::string&>();
-        if (text.empty() || text.front() != '/' || text.size() > kMaxRecordPathBytes ||
+        if (text.empty() || text.front() != '/' || text.size() > kMaxRequestPathBytes ||
             text.find('\0') != std::string::npos) {
             parsed.error = "\"path\" = " + shown(*path) +
                            ": an absolute path of at most 4095 bytes is needed (the daemon's "

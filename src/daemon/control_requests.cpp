@@ -97,6 +97,32 @@ Answer record(const Request& request, const Peer& peer, const RunFacts& facts) {
     }};
 }
 
+// scene_load: on the worker (a file to read and build, the stability check to run), checked
+// against the gains in force; the loop takes the scene at the start of a tick.
+Answer load_scene(const Request& request, const Peer& peer, ServoControl& loop,
+                  const RunFacts& facts, const servo::StatusSnapshot& now) {
+    if (facts.scenes == nullptr) {
+        return {.reply = error_reply(request.id,
+                                     "scene_load refused: this run renders no scene (an "
+                                     "identification run)"),
+                .journal = {}};
+    }
+    return {.later = [scenes = facts.scenes, &loop, path = request.path.value_or(std::string()),
+                      id = request.id, peer, state_before = state_of(now)]() -> Answer {
+        const SceneLoadResult result = scenes->load(path, loop.coupling());
+        if (!result.ok) {
+            return {.reply = error_reply(id, "scene_load refused: " + result.message),
+                    .journal = "control: scene_load from " + peer.describe() +
+                               " refused: " + result.message};
+        }
+        return {.reply = ok_reply(id, {{"state_before", state_before},
+                                       {"scene", result.name},
+                                       {"path", result.path},
+                                       {"verdict", result.verdict}}),
+                .journal = "control: scene_load from " + peer.describe() + ": " + result.message};
+    }};
+}
+
 }  // namespace
 
 nlohmann::json status_body(const servo::StatusSnapshot& s, const RunFacts& facts) {
@@ -131,6 +157,12 @@ nlohmann::json status_body(const servo::StatusSnapshot& s, const RunFacts& facts
     const std::optional<std::string> recording =
         facts.recording != nullptr ? facts.recording->active_path() : std::nullopt;
     j["recording"] = recording ? nlohmann::json(*recording) : nlohmann::json(nullptr);
+    if (facts.scenes != nullptr) {
+        const SceneInForce scene = facts.scenes->in_force();
+        j["scene"] = {{"name", scene.name}, {"source", scene.source}};
+    } else {
+        j["scene"] = nullptr;
+    }
     return j;
 }
 
@@ -182,6 +214,8 @@ Answer answer(const Request& request, const Peer& peer, ServoControl& loop, cons
         case RequestKind::record_start:
         case RequestKind::record_stop:
             return record(request, peer, facts);
+        case RequestKind::scene_load:
+            return load_scene(request, peer, loop, facts, now);
     }
     // The servo thread takes the request at the start of its next tick; the reply says the
     // state it was asked in, and `status` shows what came of it.

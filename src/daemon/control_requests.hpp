@@ -11,6 +11,7 @@
 
 #include "hapticd/daemon/control_server.hpp"
 #include "hapticd/daemon/recording.hpp"
+#include "hapticd/daemon/scene_switch.hpp"
 #include "hapticd/servo/environment_port.hpp"
 #include "hapticd/servo/status.hpp"
 
@@ -55,6 +56,8 @@ struct RunFacts {
     std::function<CouplingVerdict(const servo::CouplingGains&)> check_coupling{};
     /// record_start and record_stop's; null: this run cannot record.
     Recording* recording = nullptr;
+    /// scene_load's; null: this run renders no scene (an identification run).
+    SceneSwitch* scenes = nullptr;
 };
 
 /// The status reply's body: state, tick, rates, forces, positions and faults.

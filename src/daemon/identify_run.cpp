@@ -133,8 +133,8 @@ int run_identify(const RunOptions& options, const RunStamp& stamp, std::atomic<b
                 break;
         }
     };
-    return run_loop(run_options, config, servo_config, *device, *excitation, context, outputs, stop,
-                    out, log, report);
+    return run_loop(run_options, config, servo_config, *device, *excitation, RunScene{}, context,
+                    outputs, stop, out, log, report);
 }
 
 }  // namespace hapticd::daemon

@@ -26,9 +26,10 @@ int run_daemon(const RunOptions& given, std::atomic<bool>& stop, std::ostream& o
         RunContext context = begin_context(options, config, stamp);
         context.check = run_startup_check(config, log);
         env::Scene scene = load_any_scene(config);
-        check_scene_renderable(scene, config,
-                               config.scene_file.empty() ? std::string("<embedded demo-wall scene>")
-                                                         : config.scene_file);
+        const std::string scene_source = config.scene_file.empty()
+                                             ? std::string("<embedded demo-wall scene>")
+                                             : config.scene_file;
+        check_scene_renderable(scene, config, scene_source);
         context.scene = scene.name;
         context.causality = env::to_string(scene.causality);
         if (!config.coupling.enabled && scene.causality == env::Causality::admittance) {
@@ -52,12 +53,13 @@ int run_daemon(const RunOptions& given, std::atomic<bool>& stop, std::ostream& o
         // and waits (docs/control.md, "Faults and reset"). Without one nobody can, so
         // the run ends on it.
         if (options.socket_path) servo_config.stop_on_fault = false;
+        const RunScene rendered{.scene = &scene, .source = scene_source};
         if (scene.causality == env::Causality::impedance) {
-            return run_loop(options, config, servo_config, *device, *scene.impedance, context,
-                            outputs, stop, out, log);
+            return run_loop(options, config, servo_config, *device, *scene.impedance, rendered,
+                            context, outputs, stop, out, log);
         }
-        return run_loop(options, config, servo_config, *device, *scene.admittance, context, outputs,
-                        stop, out, log);
+        return run_loop(options, config, servo_config, *device, *scene.admittance, rendered,
+                        context, outputs, stop, out, log);
     } catch (const BadInput& e) {
         log << priority::err << "hapticd: " << e.what() << "\n";
         return kExitBadInput;

@@ -1,5 +1,6 @@
 #include "hapticd/daemon/startup_check.hpp"
 
+#include <functional>
 #include <sstream>
 
 namespace hapticd::daemon {
@@ -43,6 +44,15 @@ tune::EnvironmentAssumption scene_environments(const env::Scene& scene,
     return out;
 }
 
+void require_device_model(const Config& config) {
+    if (!config.device.model_mass_kg || !config.device.model_damping_n_s_per_m) {
+        throw ConfigError(config.source +
+                          ": [device.model] mass and damping are required: the start-up "
+                          "stability check sizes nothing without them (measure them with "
+                          "haptic-tune identify)");
+    }
+}
+
 namespace {
 
 tune::EnvironmentAssumption configured_environments(const Config& config) {
@@ -57,18 +67,8 @@ tune::EnvironmentAssumption configured_environments(const Config& config) {
                               config.scene_file);
 }
 
-}  // namespace
-
-void require_device_model(const Config& config) {
-    if (!config.device.model_mass_kg || !config.device.model_damping_n_s_per_m) {
-        throw ConfigError(config.source +
-                          ": [device.model] mass and damping are required: the start-up "
-                          "stability check sizes nothing without them (measure them with "
-                          "haptic-tune identify)");
-    }
-}
-
-tune::StabilityDesign stability_design(const Config& config) {
+// Everything of the design but the environments, checked in this order.
+tune::StabilityDesign design_but_environments(const Config& config) {
     if (!config.coupling.check) {
         throw ConfigError(config.source +
                           ": [coupling] check = \"off\": the config asks for no stability "
@@ -87,19 +87,45 @@ tune::StabilityDesign stability_design(const Config& config) {
     design.rate_hz = config.servo.rate_hz;
     design.delay_s = config.device.model_delay_s;
     design.model = *config.coupling.check;
-    design.assumption = {config.operators, configured_environments(config)};
+    design.assumption.operators = config.operators;
     return design;
 }
 
-StartupCheck check_coupling_at_startup(const Config& config) {
+// check = "off" skips it; else the design with `environments()` (read after the rest of the
+// design is checked, so that its errors come first, as they always have).
+StartupCheck check_design(const Config& config,
+                          const std::function<tune::EnvironmentAssumption()>& environments) {
     StartupCheck check;
     if (!config.coupling.check) {
         check.skipped = true;
         check.passed = true;
         return check;
     }
-    static_cast<tune::StabilityVerdict&>(check) = tune::check_stability(stability_design(config));
+    tune::StabilityDesign design = design_but_environments(config);
+    design.assumption.environments = environments();
+    static_cast<tune::StabilityVerdict&>(check) = tune::check_stability(design);
     return check;
+}
+
+}  // namespace
+
+tune::StabilityDesign stability_design(const Config& config) {
+    tune::StabilityDesign design = design_but_environments(config);
+    design.assumption.environments = configured_environments(config);
+    return design;
+}
+
+StartupCheck check_coupling_at_startup(const Config& config) {
+    return check_design(config, [&config] { return configured_environments(config); });
+}
+
+StartupCheck check_coupling_at_startup(const Config& config, const env::Scene& scene,
+                                       const std::string& scene_source) {
+    return check_design(config, [&] {
+        return config.coupling.environments == EnvironmentClass::scene
+                   ? scene_environments(scene, scene_source)
+                   : tune::EnvironmentAssumption{};
+    });
 }
 
 }  // namespace hapticd::daemon

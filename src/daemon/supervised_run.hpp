@@ -19,6 +19,7 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 #include "control_requests.hpp"
@@ -28,6 +29,7 @@
 #include "hapticd/daemon/journal.hpp"
 #include "hapticd/daemon/realtime_advice.hpp"
 #include "hapticd/daemon/run.hpp"
+#include "hapticd/daemon/scene_switch.hpp"
 #include "hapticd/daemon/service_notifier.hpp"
 #include "hapticd/daemon/startup_check.hpp"
 #include "hapticd/daemon/summary_json.hpp"
@@ -78,18 +80,43 @@ class LoopControl final : public control::ServoControl {
     servo::CouplingGains gains_;  // the last accepted: the servo may not have taken it yet
 };
 
-/// The start-up check of `config` with the coupling `gains` in place of its own: what a
-/// control socket's coupling request must pass ([coupling] check, docs/control.md).
-inline control::CouplingVerdict check_new_coupling(const Config& config,
+/// The start-up check of `config` with the coupling `gains` in place of its own, against the
+/// scene in force (`scenes`; without, the config's): what a control socket's coupling request
+/// must pass ([coupling] check, docs/control.md).
+inline control::CouplingVerdict check_new_coupling(const Config& config, const SceneSwitch* scenes,
                                                    const servo::CouplingGains& gains) {
-    Config candidate = config;
-    candidate.coupling.stiffness_n_per_m = gains.stiffness_n_per_m;
-    candidate.coupling.damping_n_s_per_m = gains.damping_n_s_per_m;
     try {
+        if (scenes != nullptr) {
+            const StartupCheck check = scenes->check_coupling(gains);
+            return {.accepted = check.skipped || check.passed, .verdict = check.describe()};
+        }
+        Config candidate = config;
+        candidate.coupling.stiffness_n_per_m = gains.stiffness_n_per_m;
+        candidate.coupling.damping_n_s_per_m = gains.damping_n_s_per_m;
         const StartupCheck check = check_coupling_at_startup(candidate);
         return {.accepted = check.skipped || check.passed, .verdict = check.describe()};
     } catch (const std::exception& e) {
         return {.accepted = false, .verdict = e.what()};
+    }
+}
+
+/// The scene a run renders (`environment` of run_loop is one of its environments), for the
+/// control socket's scene_load; an identification run has none.
+struct RunScene {
+    const env::Scene* scene = nullptr;
+    std::string source;  ///< its file, or "<embedded demo-wall scene>"
+};
+
+/// The environment of `scene` that a loop over `Environment` renders; null for the other
+/// causality.
+template <typename Environment>
+Environment* environment_of(env::Scene& scene) noexcept {
+    if constexpr (std::is_same_v<Environment, env::ImpedanceEnvironment>) {
+        return scene.impedance.get();
+    } else if constexpr (std::is_same_v<Environment, env::AdmittanceEnvironment>) {
+        return scene.admittance.get();
+    } else {
+        return nullptr;
     }
 }
 
@@ -125,7 +152,7 @@ struct NoAfterRun {
 template <typename Environment, typename AfterRun = NoAfterRun>
 int run_loop(const RunOptions& options, const Config& config,
              const servo::ServoConfig& servo_config, device::Device& device,
-             Environment& environment, RunContext& context, Outputs& outputs,
+             Environment& environment, const RunScene& scene, RunContext& context, Outputs& outputs,
              std::atomic<bool>& stop, std::ostream& out, std::ostream& log,
              AfterRun after_run = {}) {
     const device::DeviceInfo info = device.info();
@@ -189,18 +216,37 @@ int run_loop(const RunOptions& options, const Config& config,
     // thread's end; the rate it reports is the watcher's, over the last second.
     std::atomic<double> measured_rate_hz{0.0};
     LoopControl control_port(loop, servo_config.coupling);
-    control::RunFacts facts{.axes = info.axes,
-                            .rate_hz = config.servo.rate_hz,
-                            .device = device_line(info),
-                            .config_path = context.config_path.empty()
-                                               ? std::string("(embedded default)")
-                                               : context.config_path,
-                            .measured_rate_hz = &measured_rate_hz,
-                            .velocity_filter_hz = config.coupling.velocity_filter_hz,
-                            .coupling_enabled = config.coupling.enabled,
-                            .check_coupling = [&config](const servo::CouplingGains& gains) {
-                                return check_new_coupling(config, gains);
-                            }};
+    // scene_load (scene_switch.hpp): a scene of the run's causality, only with a control socket.
+    std::optional<SceneSwitch> scenes;
+    if (outputs.control && scene.scene != nullptr) {
+        scenes.emplace(
+            config, *scene.scene, scene.source,
+            SceneLoopPort{.offer =
+                              [&loop](env::Scene& next) {
+                                  Environment* const e = environment_of<Environment>(next);
+                                  return e != nullptr && loop.offer_environment(*e);
+                              },
+                          .taken = [&loop] { return loop.offer_taken(); },
+                          .withdraw =
+                              [&loop](env::Scene& next) {
+                                  Environment* const e = environment_of<Environment>(next);
+                                  return e != nullptr && loop.withdraw_environment(*e);
+                              }});
+    }
+    control::RunFacts facts{
+        .axes = info.axes,
+        .rate_hz = config.servo.rate_hz,
+        .device = device_line(info),
+        .config_path =
+            context.config_path.empty() ? std::string("(embedded default)") : context.config_path,
+        .measured_rate_hz = &measured_rate_hz,
+        .velocity_filter_hz = config.coupling.velocity_filter_hz,
+        .coupling_enabled = config.coupling.enabled,
+        .check_coupling =
+            [&config, &scenes](const servo::CouplingGains& gains) {
+                return check_new_coupling(config, scenes ? &*scenes : nullptr, gains);
+            },
+        .scenes = scenes ? &*scenes : nullptr};
     // record start/stop (recording.hpp): a ring for the run, only with a control socket.
     std::optional<Recording> recording;
     if (outputs.control) {
@@ -382,6 +428,7 @@ int run_loop(const RunOptions& options, const Config& config,
     }
 
     const servo::Summary summary = loop.summary();
+    if (scenes) context.scene = scenes->in_force().name;  // the last loaded, if any was
     context.final_state = std::string(servo::servo_state_name(loop.status().state));
     context.realtime = loop.realtime_report();
     context.run_time_s =

@@ -15,7 +15,7 @@ struct AxisColumn {
 };
 constexpr AxisColumn kAxisColumns[] = {{"x", "_m"}, {"v", "_mps"}, {"xe", "_m"}, {"f", "_n"}};
 
-constexpr const char* kStatusColumns[] = {"status",          "flags",      "faults",
+constexpr const char* kStatusColumns[] = {"status",          "flags",      "faults",  "state",
                                           "wake_latency_us", "compute_us", "energy_j"};
 
 bool axes_in_range(int axes) noexcept { return axes >= 1 && axes <= kMaxAxes; }
@@ -85,7 +85,7 @@ std::size_t format_csv_record(const TelemetryRecord& record, int axes,
             line.number(value);
         }
     }
-    for (std::uint32_t value : {record.status, record.flags, record.faults}) {
+    for (std::uint32_t value : {record.status, record.flags, record.faults, record.state}) {
         line.character(',');
         line.number(value);
     }

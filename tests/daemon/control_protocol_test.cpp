@@ -140,7 +140,7 @@ TEST(DaemonControlProtocol, ARecordingNamesAnAbsolutePath) {
     ASSERT_TRUE(stop.request.has_value()) << stop.error;
     EXPECT_EQ(stop.request->kind, RequestKind::record_stop);
 
-    const std::string too_long = "/" + std::string(kMaxRecordPathBytes, 'a');
+    const std::string too_long = "/" + std::string(kMaxRequestPathBytes, 'a');
     const Refusal refusals[] = {
         {R"({"v":1,"request":"record_start"})", "\"path\" is missing"},
         {R"({"v":1,"request":"record_start","path":7})", "\"path\" = 7: must be a string"},
@@ -151,6 +151,30 @@ TEST(DaemonControlProtocol, ARecordingNamesAnAbsolutePath) {
         {R"({"v":1,"request":"record_start","path":")" + too_long + R"("})", "an absolute path"},
         {R"({"v":1,"request":"record_stop","path":"/x"})",
          "unknown field \"path\" in a \"record_stop\" request"},
+    };
+    expect_refused(refusals);
+}
+
+TEST(DaemonControlProtocol, ASceneLoadNamesAnAbsolutePath) {
+    const Request load{.kind = RequestKind::scene_load, .id = "s", .path = "/etc/hapticd/w.toml"};
+    const std::string line = request_line(load);
+    const ParsedRequest parsed = parse_request(line.substr(0, line.size() - 1));
+    ASSERT_TRUE(parsed.request.has_value()) << parsed.error;
+    EXPECT_EQ(parsed.request->kind, RequestKind::scene_load);
+    EXPECT_EQ(parsed.request->path, "/etc/hapticd/w.toml");
+    EXPECT_EQ(parsed.request->id, "s");
+    const std::string too_long = "/" + std::string(kMaxRequestPathBytes, 'a');
+    const Refusal refusals[] = {
+        {R"({"v":1,"request":"scene_load"})",
+         "\"path\" is missing: scene_load names the scene file to render"},
+        {R"({"v":1,"request":"scene_load","path":["/a"]})",
+         "\"path\" = [\"/a\"]: must be a string"},
+        {R"({"v":1,"request":"scene_load","path":"scenes/w.toml"})",
+         "\"path\" = \"scenes/w.toml\": an absolute path of at most 4095 bytes is needed"},
+        {R"({"v":1,"request":"scene_load","path":")" + too_long + R"("})", "an absolute path"},
+        {R"({"v":1,"request":"scene_load","path":"/w.toml","rate_hz":1})",
+         "unknown field \"rate_hz\" in a \"scene_load\" request: it takes only v, id, request, "
+         "path"},
     };
     expect_refused(refusals);
 }

@@ -75,6 +75,29 @@ TEST(StartupCheck, TheSceneBuysStiffnessWithADelayAndTheVerdictSaysSo) {
         << demo.describe();
 }
 
+// A scene loaded over the control socket is checked as built: the config's [scene] file (here
+// the embedded demo wall) is not read. At 1600 N/m a soft wall passes and the demo wall fails.
+TEST(StartupCheck, ASceneGivenIsCheckedInPlaceOfTheConfigsOwn) {
+    const Config config = parse_config(
+        "[device.model]\nmass = 0.1\ndamping = 2\ndelay = 0.001\n[coupling]\nstiffness = "
+        "1600\ndamping = 0\nenvironments = \"scene\"\n",
+        "lab.toml", "");
+    EXPECT_FALSE(check_coupling_at_startup(config).passed);
+    const env::Scene soft = env::parse_scene(
+        "[scene]\nname = \"soft\"\naxes = 1\n[[wall]]\nnormal = [-1.0]\nstiffness = 500\n",
+        "soft.toml", 1);
+    const StartupCheck check = check_coupling_at_startup(config, soft, "soft.toml");
+    EXPECT_TRUE(check.passed) << check.describe();
+    EXPECT_NE(check.describe().find("the scene soft.toml's 1 environment: [[wall]] #1"),
+              std::string::npos)
+        << check.describe();
+    // Against every passive environment the scene is not consulted: the same verdict.
+    Config every = config;
+    every.coupling.environments = EnvironmentClass::every_passive;
+    EXPECT_EQ(check_coupling_at_startup(every, soft, "soft.toml").describe(),
+              check_coupling_at_startup(every).describe());
+}
+
 TEST(StartupCheck, AClassVerdictNamesTheClass) {
     const StartupCheck check = check_coupling_at_startup(parse_config(
         "[device.model]\nmass = 0.1\ndamping = 2\n[coupling]\nstiffness = 4000\ndamping = 1\n"

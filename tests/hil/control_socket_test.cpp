@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "background_daemon.hpp"
+#include "control_daemon.hpp"
 #include "default_config.hpp"
 #include "hapticd_run.hpp"
 #include "run_command.hpp"
@@ -24,59 +25,6 @@ namespace hapticd::testing {
 namespace {
 
 using namespace std::chrono_literals;
-
-// The default config with an overrun budget that a shared VM's stalls (tens of ms) do not
-// exhaust: what these tests judge is the socket, not the host's scheduling.
-std::string config_with_room(const std::string& extra_toml) {
-    std::string config = default_config() + extra_toml;
-    const std::string safety = "[safety]\n";
-    config.replace(config.find(safety), safety.size(),
-                   safety + "max_missed_periods = 1000\nmax_consecutive_overruns = 1000\n");
-    return config;
-}
-
-// A hapticd on the default config with a control socket, until stop().
-struct Daemon {
-    Daemon(const ScratchDir& dir, const std::string& name, const std::string& extra_toml = "")
-        : socket(dir.file(name + ".sock")),
-          summary(dir.file(name + "-summary.json")),
-          process(
-              HAPTICD_BIN,
-              {"--no-status", "--config", dir.write(name + ".toml", config_with_room(extra_toml)),
-               "--socket", socket, "--summary", summary},
-              dir.file(name + ".err")) {}
-    std::string socket;
-    std::string summary;
-    BackgroundDaemon process;
-};
-
-CommandResult hapticctl(const std::string& socket, const std::string& arguments) {
-    return run_command(shell_quote(HAPTICCTL_BIN) + " --socket " + shell_quote(socket) + " " +
-                       arguments);
-}
-
-nlohmann::json status_of(const std::string& socket) {
-    const CommandResult r = hapticctl(socket, "status --json");
-    EXPECT_EQ(r.exit_code, 0) << r.err;
-    return r.exit_code == 0 ? nlohmann::json::parse(r.out) : nlohmann::json();
-}
-
-// Polls status until `done(status)` or `timeout`; returns the last status.
-template <typename Done>
-nlohmann::json status_when(const std::string& socket, Done done,
-                           std::chrono::milliseconds timeout = 10s) {
-    const auto deadline = std::chrono::steady_clock::now() + timeout;
-    nlohmann::json s = status_of(socket);
-    while (!s.is_null() && !done(s) && std::chrono::steady_clock::now() < deadline) {
-        std::this_thread::sleep_for(20ms);
-        s = status_of(socket);
-    }
-    return s;
-}
-
-bool armed_state(const nlohmann::json& s) {
-    return s["state"] == "arming" || s["state"] == "running";
-}
 
 TEST(HilControlSocket, StatusDisarmArmAFaultItsRefusalAndResetThroughHapticctl) {
     const ScratchDir dir;

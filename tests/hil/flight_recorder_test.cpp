@@ -50,6 +50,16 @@ TEST(HilFlightRecorder, AFaultWritesTheTicksBeforeItBesideTheSummaryWithoutALog)
     for (std::size_t i = 0; i + 1 < faults.size(); ++i) {
         ASSERT_EQ(faults[i], 0.0) << "tick " << tick[i];
     }
+    // The state column (§4.5): arming (1) from the start, running (2) once the soft start
+    // is done, and fault (3) in the tick that latched it, never before.
+    const std::vector<double>& state = flight.column("state");
+    EXPECT_EQ(state.front(), 1.0);
+    EXPECT_EQ(state.back(), 3.0);
+    for (std::size_t i = 1; i + 1 < state.size(); ++i) {
+        ASSERT_TRUE(state[i] == 1.0 || state[i] == 2.0) << "tick " << tick[i];
+        ASSERT_GE(state[i], state[i - 1]) << "running went back to arming at tick " << tick[i];
+    }
+    EXPECT_EQ(state[state.size() - 2], 2.0) << "the soft start never finished before the fault";
     // The telemetry the run would have logged: the push into the wall left a force.
     double most_force_n = 0.0;
     for (const double f : flight.column("f0_n")) most_force_n = std::max(most_force_n, std::abs(f));

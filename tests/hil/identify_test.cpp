@@ -98,9 +98,10 @@ TEST(HilIdentify, PenDisplayLogsTheSignalItCommandedAndStaysInTheWorkspace) {
 
     // Complete: the columns of docs/architecture.md §4.5, one row per tick of the whole
     // excitation and its tail.
-    EXPECT_EQ(run.log_header,
-              "tick,t_s,x0_m,v0_mps,xe0_m,f0_n,status,flags,faults,wake_latency_us,compute_us,"
-              "energy_j");
+    EXPECT_EQ(
+        run.log_header,
+        "tick,t_s,x0_m,v0_mps,xe0_m,f0_n,status,flags,faults,state,wake_latency_us,compute_us,"
+        "energy_j");
     const std::size_t expected_rows = static_cast<std::size_t>(kStartTick + e.samples() + 500);
     ASSERT_EQ(run.log.rows(), expected_rows);
     EXPECT_EQ(run.summary.at("telemetry_records"), expected_rows);

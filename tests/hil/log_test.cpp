@@ -32,9 +32,10 @@ TEST(HilLog, LockstepLogIsCompleteAndConsistent) {
                                             .duration_s = kDurationS});
     ASSERT_EQ(run.exit_code, 0) << run.err;
 
-    EXPECT_EQ(run.log_header,
-              "tick,t_s,x0_m,v0_mps,xe0_m,f0_n,status,flags,faults,wake_latency_us,compute_us,"
-              "energy_j");
+    EXPECT_EQ(
+        run.log_header,
+        "tick,t_s,x0_m,v0_mps,xe0_m,f0_n,status,flags,faults,state,wake_latency_us,compute_us,"
+        "energy_j");
     const auto ticks = run.summary.at("ticks").get<std::size_t>();
     EXPECT_EQ(ticks, static_cast<std::size_t>(kDurationS * kRateHz));
     EXPECT_EQ(run.log.rows(), ticks);
@@ -73,7 +74,7 @@ TEST(HilLog, HeaderNamesEveryAxis) {
     ASSERT_EQ(run.exit_code, 0) << run.err;
     EXPECT_EQ(run.log_header,
               "tick,t_s,x0_m,v0_mps,xe0_m,f0_n,x1_m,v1_mps,xe1_m,f1_n,x2_m,v2_mps,xe2_m,f2_n,"
-              "status,flags,faults,wake_latency_us,compute_us,energy_j");
+              "status,flags,faults,state,wake_latency_us,compute_us,energy_j");
     EXPECT_EQ(run.log.rows(), 500u);
 }
 

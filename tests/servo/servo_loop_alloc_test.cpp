@@ -109,6 +109,28 @@ TEST(ServoAllocation, FilteredCouplingTicksDoNotAllocate) {
     expect_ticks_do_not_allocate(proxy, 10'000, 100.0);
 }
 
+// A scene load (the control socket's scene_load): the loop takes the new environment at a
+// tick's start, restarts the soft start and resets the environment, all without the heap.
+TEST(ServoAllocation, TakingAnOfferedEnvironmentDoesNotAllocate) {
+    VirtualTime time;
+    SweepingDevice device;
+    fakes::PlaneWall first{.wall_m = 0.0, .stiffness_n_per_m = 8000.0, .damping_n_s_per_m = 5.0};
+    fakes::PlaneWall second{.wall_m = 0.001, .stiffness_n_per_m = 4000.0};
+    ServoLoop<SweepingDevice, fakes::PlaneWall, FakeClock> loop(device, first, alloc_config(),
+                                                                nullptr, FakeClock{&time});
+    hapticd::testing::AllocationGuard guard;
+    for (int n = 0; n < 1000; ++n) {
+        if (n % 100 == 50) {
+            ASSERT_TRUE(loop.offer_environment(n % 200 == 50 ? second : first));
+        }
+        loop.tick();
+    }
+    EXPECT_EQ(guard.allocations(), 0u);
+    EXPECT_TRUE(loop.offer_taken());
+    EXPECT_EQ(second.resets, 5);
+    EXPECT_GT(second.commits, 0);
+}
+
 TEST(ServoAllocation, FaultPathDoesNotAllocate) {
     VirtualTime time;
     SweepingDevice device;

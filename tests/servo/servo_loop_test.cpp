@@ -453,6 +453,51 @@ TEST(ServoLoop, DisarmZeroesAndArmSoftStartsAgain) {
     EXPECT_NEAR(device.last_command.force_n[0], 3.0, 1e-12);
 }
 
+// scene_load's path through the loop: an offered environment is taken at the start of the
+// next tick, reset where the handle is, and rendered through the soft start; the one it
+// replaced is not touched again. A second offer waits for the first; a withdrawn one is
+// never taken.
+TEST(ServoLoop, AnOfferedEnvironmentIsTakenAtATicksStartThroughTheSoftStart) {
+    VirtualTime time;
+    FakeDevice device;
+    device.set_position_counts(-2000);  // 2 mm inside the first wall, 4 mm inside the second
+    PlaneWall first{.wall_m = 0.0, .stiffness_n_per_m = 6000.0};
+    PlaneWall second{.wall_m = 0.002, .stiffness_n_per_m = 6000.0};
+    ServoConfig config = test_config();
+    config.safety.soft_start = {
+        .still_speed_mps = 0.01, .still_time_s = 0.002, .ramp_time_s = 0.002};
+    TestLoop<PlaneWall> loop(device, first, config, nullptr, FakeClock{&time});
+    for (int n = 0; n < 5; ++n) loop.tick();
+    EXPECT_NEAR(device.last_command.force_n[0], 3.0, 1e-12);  // 1500 N/m in series, 2 mm
+    const int first_commits = first.commits;
+    const int first_resets = first.resets;
+
+    ASSERT_TRUE(loop.offer_environment(second));
+    EXPECT_FALSE(loop.offer_taken());
+    EXPECT_FALSE(loop.offer_environment(first)) << "a second offer while one waits";
+    loop.tick();  // taken: the soft start begins again, still for 1 ms
+    EXPECT_TRUE(loop.offer_taken());
+    EXPECT_FALSE(loop.withdraw_environment(second)) << "taken already";
+    EXPECT_EQ(second.resets, 1);
+    EXPECT_EQ(device.last_command.force_n[0], 0.0);
+    EXPECT_EQ(loop.status().state, ServoState::arming);
+    loop.tick();
+    loop.tick();  // half the ramp: half of 1500 N/m x 4 mm
+    EXPECT_NEAR(device.last_command.force_n[0], 3.0, 1e-12);
+    loop.tick();
+    EXPECT_NEAR(device.last_command.force_n[0], 6.0, 1e-12);
+    EXPECT_EQ(loop.status().state, ServoState::running);
+    EXPECT_EQ(first.commits, first_commits) << "the replaced environment was rendered again";
+    EXPECT_EQ(first.resets, first_resets);
+
+    ASSERT_TRUE(loop.offer_environment(first));
+    EXPECT_TRUE(loop.withdraw_environment(first));
+    EXPECT_TRUE(loop.offer_taken());
+    for (int n = 0; n < 3; ++n) loop.tick();
+    EXPECT_EQ(first.commits, first_commits) << "a withdrawn offer was taken";
+    EXPECT_NEAR(device.last_command.force_n[0], 6.0, 1e-12) << "the soft start restarted";
+}
+
 TEST(ServoLoop, AdmittanceProxyGivesTheCouplingSpringForce) {
     VirtualTime time;
     FakeDevice device;

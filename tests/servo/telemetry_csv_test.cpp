@@ -21,11 +21,12 @@ std::vector<std::string> split(const std::string& line) {
 }
 
 TEST(ServoTelemetryCsv, HeaderHasTheDesignColumnNames) {
-    EXPECT_EQ(csv_header(1),
-              "tick,t_s,x0_m,v0_mps,xe0_m,f0_n,status,flags,faults,wake_latency_us,compute_us,"
-              "energy_j");
+    EXPECT_EQ(
+        csv_header(1),
+        "tick,t_s,x0_m,v0_mps,xe0_m,f0_n,status,flags,faults,state,wake_latency_us,compute_us,"
+        "energy_j");
     const std::vector<std::string> three = split(csv_header(3));
-    ASSERT_EQ(three.size(), 2u + 3u * 4u + 6u);
+    ASSERT_EQ(three.size(), 2u + 3u * 4u + 7u);
     EXPECT_EQ(three[10], "x2_m");
     EXPECT_EQ(three[13], "f2_n");
     EXPECT_THROW(csv_header(0), std::invalid_argument);
@@ -43,6 +44,7 @@ TEST(ServoTelemetryCsv, RecordRoundTripsThroughText) {
     record.status = kStatusStale | kStatusLate;
     record.flags = kFlagSaturated;
     record.faults = 0;
+    record.state = 2;  // running
     record.wake_latency_us = 12.5;
     record.compute_us = 0.75;
     record.energy_j = -1e-9;
@@ -61,7 +63,8 @@ TEST(ServoTelemetryCsv, RecordRoundTripsThroughText) {
     EXPECT_EQ(std::stod(fields[9]), 0.5);      // f1_n
     EXPECT_EQ(fields[10], "10");               // status: stale | late
     EXPECT_EQ(fields[11], "2");                // flags
-    EXPECT_EQ(std::stod(fields[15]), -1e-9);   // energy_j
+    EXPECT_EQ(fields[13], "2");                // state
+    EXPECT_EQ(std::stod(fields[16]), -1e-9);   // energy_j
 
     std::ostringstream stream;
     write_csv_header(stream, 2);

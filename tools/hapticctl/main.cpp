@@ -2,7 +2,7 @@
 //
 //   hapticctl [-i NAME | --socket PATH] status [--json] | watch [--count N] | arm | disarm |
 //             reset | coupling K [B] | stream [--rate HZ] [--count N] |
-//             record start FILE | record stop
+//             record start FILE | record stop | scene FILE
 //
 // Exit status: 0 done; 1 the daemon refused, or could not be reached; 2 bad usage.
 #include <CLI/CLI.hpp>
@@ -79,6 +79,7 @@ int change_state(ControlConnection& daemon, RequestKind kind) {
             case RequestKind::unsubscribe:
             case RequestKind::record_start:
             case RequestKind::record_stop:
+            case RequestKind::scene_load:
                 break;
         }
         return true;
@@ -151,6 +152,23 @@ int record(ControlConnection& daemon, const std::optional<std::string>& path) {
               << (dropped == 0 ? std::string("none lost") : std::to_string(dropped) + " lost")
               << "\n";
     return dropped == 0 ? hapticd::daemon::kExitOk : hapticd::daemon::kExitFault;
+}
+
+// scene FILE (made absolute here): the daemon reads, builds and checks it, and the servo takes
+// it at the start of a tick, through the soft start.
+int load_scene(ControlConnection& daemon, const std::string& path) {
+    hapticd::daemon::control::Request request{.kind = RequestKind::scene_load, .id = nullptr};
+    request.path = std::filesystem::absolute(path).lexically_normal().string();
+    const nlohmann::json reply = daemon.request(request);
+    if (!reply.at("ok").get<bool>()) {
+        std::cerr << "hapticctl: " << reply.value("error", std::string("refused")) << "\n";
+        return hapticd::daemon::kExitFault;
+    }
+    std::cout << "scene \"" << reply.at("scene").get<std::string>() << "\" from "
+              << reply.at("path").get<std::string>()
+              << " from the next tick, through the soft start\n"
+              << reply.at("verdict").get<std::string>() << "\n";
+    return hapticd::daemon::kExitOk;
 }
 
 // stream: CSV on stdout from the daemon's telemetry events, for a pipe into a plot. Ends on
@@ -249,6 +267,14 @@ int run_main(int argc, char** argv) {
         record_command->add_subcommand("stop", "stop recording; print how many records it holds");
     record_command->allow_extras();  // a word that is neither start nor stop is named below
 
+    std::string scene_path;
+    auto* scene_command = app.add_subcommand(
+        "scene",
+        "render the scene in FILE from a tick boundary on, through the soft start: the daemon "
+        "refuses a scene of the other causality, or one that fails its stability check with "
+        "the gains in force, and says why");
+    scene_command->add_option("FILE", scene_path, "the scene file (docs/scenes.md)")->required();
+
     // A word that is not a command is said below, by name; the commands themselves (made
     // above, before this) still refuse what they do not take.
     app.allow_extras();
@@ -270,12 +296,12 @@ int run_main(int argc, char** argv) {
         return hapticd::daemon::kExitBadInput;
     }
     if (!app.remaining().empty() || app.get_subcommands().empty()) {
-        std::cerr
-            << "hapticctl: "
-            << (app.remaining().empty() ? std::string("no command")
-                                        : "\"" + app.remaining().front() + "\" is not a command")
-            << ": one of status, watch, arm, disarm, reset, coupling, stream, record (hapticctl "
-               "--help)\n";
+        std::cerr << "hapticctl: "
+                  << (app.remaining().empty()
+                          ? std::string("no command")
+                          : "\"" + app.remaining().front() + "\" is not a command")
+                  << ": one of status, watch, arm, disarm, reset, coupling, stream, record, scene "
+                     "(hapticctl --help)\n";
         return hapticd::daemon::kExitBadInput;
     }
     if (instance_option->count() == 0 && socket_option->count() == 0) {
@@ -290,10 +316,10 @@ int run_main(int argc, char** argv) {
         socket_path = hapticd::ctl::instance_socket(instance);
     }
     try {
-        // The stability check of a coupling request may take seconds (check = "exact"); a
-        // stream's events come once a period.
+        // The stability check of a coupling or scene request may take seconds (check =
+        // "exact"); a stream's events come once a period.
         std::chrono::milliseconds timeout = std::chrono::seconds(2);
-        if (coupling->parsed()) timeout = std::chrono::seconds(120);
+        if (coupling->parsed() || scene_command->parsed()) timeout = std::chrono::seconds(120);
         if (record_command->parsed()) timeout = std::chrono::seconds(30);
         if (stream_command->parsed()) {
             timeout = std::max(timeout, std::chrono::milliseconds(static_cast<std::int64_t>(
@@ -309,6 +335,7 @@ int run_main(int argc, char** argv) {
         if (stream_command->parsed()) return stream(daemon, stream_rate_hz, stream_count);
         if (record_start->parsed()) return record(daemon, record_path);
         if (record_stop->parsed()) return record(daemon, std::nullopt);
+        if (scene_command->parsed()) return load_scene(daemon, scene_path);
         if (arm->parsed()) return change_state(daemon, RequestKind::arm);
         if (disarm->parsed()) return change_state(daemon, RequestKind::disarm);
         if (reset->parsed()) return change_state(daemon, RequestKind::reset);

@@ -54,6 +54,10 @@ std::string status_text(const nlohmann::json& s) {
         << " recoveries\n"
         << "device    " << s.at("device").get<std::string>() << "\n"
         << "config    " << s.at("config_path").get<std::string>() << "\n";
+    if (s.contains("scene") && s["scene"].is_object()) {
+        out << "scene     \"" << s["scene"].at("name").get<std::string>() << "\" from "
+            << s["scene"].at("source").get<std::string>() << "\n";
+    }
     if (s.contains("recording") && s["recording"].is_string()) {
         out << "recording " << s["recording"].get<std::string>() << "\n";
     }

@@ -21,8 +21,9 @@ inline constexpr std::size_t kMaxRequestBytes = 4096;
 inline constexpr double kMaxSubscribeRateHz = 100.0;
 inline constexpr double kDefaultSubscribeRateHz = 10.0;
 
-/// The longest path a record_start request may name (PATH_MAX less its terminator).
-inline constexpr std::size_t kMaxRecordPathBytes = 4095;
+/// The longest path a record_start or scene_load request may name (PATH_MAX less its
+/// terminator).
+inline constexpr std::size_t kMaxRequestPathBytes = 4095;
 
 enum class RequestKind {
     status,
@@ -33,7 +34,8 @@ enum class RequestKind {
     subscribe,
     unsubscribe,
     record_start,
-    record_stop
+    record_stop,
+    scene_load
 };
 
 /// The name on the wire ("status", ...).
@@ -50,8 +52,9 @@ struct Request {
     /// subscribe: "rate_hz" (optional, kDefaultSubscribeRateHz), the telemetry events a
     /// second; 0 < rate_hz <= kMaxSubscribeRateHz.
     std::optional<double> rate_hz{};
-    /// record_start: "path" (required), the file the recording goes to: absolute, at most
-    /// kMaxRecordPathBytes, no NUL. Whether the daemon may create it is the daemon's to say.
+    /// record_start: "path" (required), the file the recording goes to; scene_load: "path"
+    /// (required), the scene file to render. Absolute, at most kMaxRequestPathBytes, no NUL.
+    /// Whether the daemon may create or read it is the daemon's to say.
     std::optional<std::string> path{};
 };
 

@@ -40,6 +40,10 @@ void require_device_model(const Config& config);
 /// Throws as stability_design() does, and std::invalid_argument from a model's own range
 /// checks.
 StartupCheck check_coupling_at_startup(const Config& config);
+/// The same for `scene` (from `scene_source`) in place of [scene] file: a scene loaded over
+/// the control socket, as built, not read again.
+StartupCheck check_coupling_at_startup(const Config& config, const env::Scene& scene,
+                                       const std::string& scene_source);
 
 /// The scene's linearised objects as the environments a check holds for. Throws
 /// ConfigError naming the scene and the object when it has no linear model or no objects.

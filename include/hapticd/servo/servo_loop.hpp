@@ -19,7 +19,8 @@
 // one and never sleep).
 //
 // Threads: tick() and run() belong to one thread (the servo thread). arm(), disarm(),
-// request_fault_reset() and status() may be called from any thread (atomics, a seqlock).
+// request_fault_reset(), offer_environment() and status() may be called from any thread
+// (atomics, a seqlock).
 // stats() and summary() are for the servo thread, or for any thread after run() returned.
 //
 // Real-time: nothing reachable from tick() allocates, locks, logs, throws or makes a system
@@ -50,6 +51,7 @@
 #include "hapticd/servo/safety.hpp"
 #include "hapticd/servo/seqlock.hpp"
 #include "hapticd/servo/servo_config.hpp"
+#include "hapticd/servo/servo_state.hpp"
 #include "hapticd/servo/status.hpp"
 #include "hapticd/servo/summary.hpp"
 #include "hapticd/servo/telemetry.hpp"
@@ -80,7 +82,7 @@ class ServoLoop {
     ServoLoop(Device& device, Environment& environment, const ServoConfig& config,
               TelemetryRing* telemetry = nullptr, Clock clock = Clock{})
         : device_(device),
-          environment_(environment),
+          environment_(&environment),
           config_(validated(config)),
           period_s_(config.period_s()),
           counts_to_m_(1.0 / config.counts_per_meter),
@@ -181,6 +183,26 @@ class ServoLoop {
     /// may still push to it: the caller keeps it alive for the run (daemon/recording.hpp).
     void attach_recording(TelemetryRing* ring) noexcept {
         recording_.store(ring, std::memory_order_release);
+    }
+    /// Any thread: render `next` in place of the environment from the start of a coming tick,
+    /// through the soft start (as new gains are: zero force, then the ramp once the handle is
+    /// still), with `next` reset where the handle is. False when an offer is already waiting.
+    /// The caller owns every environment: the one replaced is the servo's no more once
+    /// offer_taken() (a daemon's `scene load`: daemon/scene_switch.hpp).
+    bool offer_environment(Environment& next) noexcept {
+        Environment* none = nullptr;
+        return offered_environment_.compare_exchange_strong(none, &next, std::memory_order_acq_rel);
+    }
+    /// Any thread: the offer is no longer waiting. Every tick after the one that took it
+    /// renders it; the environment it replaced is not touched again.
+    bool offer_taken() const noexcept {
+        return offered_environment_.load(std::memory_order_acquire) == nullptr;
+    }
+    /// Any thread: takes back `next` if no tick has taken it (true), else false: it was taken.
+    bool withdraw_environment(Environment& next) noexcept {
+        Environment* offered = &next;
+        return offered_environment_.compare_exchange_strong(offered, nullptr,
+                                                            std::memory_order_acq_rel);
     }
     /// The latest tick's state, lock-free.
     StatusSnapshot status() const noexcept { return status_.load(); }
@@ -513,8 +535,9 @@ class ServoLoop {
 
     // ---- the steps' parts ----
 
-    // The requests of other threads, at the start of a tick: a fault reset, and arming
-    // (the soft start begins again, and the environment restarts where the handle is).
+    // The requests of other threads, at the start of a tick: a fault reset, new gains, a new
+    // environment, and arming (for the last three the soft start begins again, and the
+    // coupling and the environment restart where the handle is).
     // Returns whether the loop is armed.
     bool take_requests() noexcept {
         if (reset_requested_.exchange(false, std::memory_order_acq_rel)) {
@@ -531,6 +554,17 @@ class ServoLoop {
             coupling_.set_gains(gains);
             safety_.restart_soft_start();
             initialised_ = false;  // the coupling restarts where the handle is
+        }
+        // A new environment (offer_environment): it starts where the handle is, through the
+        // soft start. The exchange releases the old one to its owner (offer_taken()).
+        if (offered_environment_.load(std::memory_order_relaxed) != nullptr) {
+            Environment* const next =
+                offered_environment_.exchange(nullptr, std::memory_order_acq_rel);
+            if (next != nullptr) {  // not withdrawn since the load
+                environment_ = next;
+                safety_.restart_soft_start();
+                initialised_ = false;
+            }
         }
         const bool armed = armed_.load(std::memory_order_acquire);
         if (armed && !was_armed_) {
@@ -560,7 +594,7 @@ class ServoLoop {
     void continue_history(const Sample& sample, const Sensed& sensed) noexcept {
         if (!initialised_) {
             coupling_.reset(sensed.x_d);
-            environment_.reset(sensed.x_d);
+            environment_->reset(sensed.x_d);
             start_history(sample);
             initialised_ = true;
         } else if (config_.safety.encoder_jump_m > 0.0 &&
@@ -574,9 +608,9 @@ class ServoLoop {
 
     CouplingStep coupling_step(const Vec3& x_d, double interval_s) noexcept {
         if constexpr (ImpedancePort<Environment>) {
-            if (rigid_) return coupling_.step_rigid(environment_, x_d, interval_s);
+            if (rigid_) return coupling_.step_rigid(*environment_, x_d, interval_s);
         }
-        return coupling_.step(environment_, x_d, interval_s);
+        return coupling_.step(*environment_, x_d, interval_s);
     }
 
     // The flags and counts of what safety did to this tick's force.
@@ -623,6 +657,8 @@ class ServoLoop {
         record_.status = sample.status;
         record_.flags = flags;
         record_.faults = safety_.faults();
+        record_.state = static_cast<std::uint32_t>(
+            servo_state(sensed.armed, record_.faults, safety_.soft_start().scale()));
         record_.wake_latency_us = paced ? static_cast<double>(wake.latency_ns) * 1e-3 : 0.0;
         record_.compute_us = static_cast<double>(compute_ns) * 1e-3;
         record_.energy_j = safety_.passivity().energy_j();
@@ -672,7 +708,8 @@ class ServoLoop {
     }
 
     Device& device_;
-    Environment& environment_;
+    Environment* environment_;                                ///< the one the ticks render
+    std::atomic<Environment*> offered_environment_{nullptr};  ///< offer_environment()'s
     ServoConfig config_;
     double period_s_;
     double counts_to_m_;

@@ -36,6 +36,7 @@ struct TelemetryRecord {
     std::uint32_t status = 0;              ///< the sample's StatusBit flags
     std::uint32_t flags = 0;               ///< TickFlag
     std::uint32_t faults = 0;              ///< latched Fault mask
+    std::uint32_t state = 0;               ///< ServoState: 0 disabled 1 arming 2 running 3 fault
     double wake_latency_us = 0.0;          ///< actual wake - deadline
     double compute_us = 0.0;               ///< wake to command written
     double energy_j = 0.0;                 ///< passivity observer energy
