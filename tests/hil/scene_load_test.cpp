@@ -28,6 +28,13 @@ std::string wall_scene(const std::string& name, double surface_m, double stiffne
            "\nstiffness = " + std::to_string(stiffness_n_per_m) + "\n";
 }
 
+// The god-object's plane at x = surface_m, free space on its -x side.
+std::string proxy_scene(const std::string& name, double surface_m) {
+    return "[scene]\nname = \"" + name +
+           "\"\naxes = 1\n[[proxy_plane]]\nnormal = [-1.0]\noffset = " +
+           std::to_string(-surface_m) + "\n";
+}
+
 // hapticctl scene FILE, FILE relative to `dir` as a shell user in it would give it.
 CommandResult load_scene(const ScratchDir& dir, const std::string& socket,
                          const std::string& file) {
@@ -81,6 +88,35 @@ TEST(HilSceneLoad, ASceneLoadedOverTheSocketIsRenderedThroughTheSoftStart) {
     const nlohmann::json summary = nlohmann::json::parse(read_file(d.summary));
     EXPECT_EQ(summary["scene"]["name"], "near-wall")
         << "the summary names the scene in force at the end";
+}
+
+// A run of constraint scenes loads another constraint scene (the god-object's plane 5 mm
+// behind the handle: the coupling spring pushes it out), and refuses a penalty scene.
+TEST(HilSceneLoad, AnAdmittanceRunLoadsAnAdmittanceSceneAndRefusesAnImpedanceOne) {
+    const ScratchDir dir;
+    const std::string first = dir.write("proxy-wall.toml", proxy_scene("proxy-wall", 0.0));
+    const daemon::EditedConfig config =
+        daemon::edit_config_text(config_with_room(""), {{"scene", "file", first}}, "lab.toml");
+    Daemon d(dir, "lab", ConfigText{config.text});
+    ASSERT_TRUE(d.process.wait_for_socket(d.socket)) << d.process.messages();
+    EXPECT_EQ(status_of(d.socket)["scene"]["name"], "proxy-wall");
+    dir.write("near-proxy.toml", proxy_scene("near-proxy", -0.015));
+    const CommandResult loaded = load_scene(dir, d.socket, "near-proxy.toml");
+    ASSERT_EQ(loaded.exit_code, 0) << loaded.err;
+    // The handle at -10 mm is 5 mm past the plane: about k_c 5 mm = 18 N before it gives way.
+    const nlohmann::json pushed = status_when(d.socket, [](const nlohmann::json& s) {
+        return s["state"] == "running" && s["f_n"][0].get<double>() < -2.0;
+    });
+    EXPECT_LT(pushed["f_n"][0].get<double>(), -2.0) << pushed.dump();
+    EXPECT_LT(pushed["xe_m"][0].get<double>(), -0.015 + 1e-9) << "the tool stays on the plane";
+    const CommandResult wall =
+        load_scene(dir, d.socket, HAPTICD_SOURCE_DIR "/config/scenes/demo-wall.toml");
+    EXPECT_EQ(wall.exit_code, 1);
+    EXPECT_NE(wall.err.find("is an impedance scene; this run renders admittance scenes"),
+              std::string::npos)
+        << wall.err;
+    EXPECT_EQ(status_of(d.socket)["scene"]["name"], "near-proxy");
+    EXPECT_EQ(d.process.stop(), 0) << d.process.messages();
 }
 
 struct Refusal {
