@@ -109,6 +109,26 @@ TEST(ServoAllocation, FilteredCouplingTicksDoNotAllocate) {
     expect_ticks_do_not_allocate(proxy, 10'000, 100.0);
 }
 
+// A recording (the control socket's record_start): a second ring attached and detached while
+// the loop ticks, which every tick also pushes to, full or not.
+TEST(ServoAllocation, ARecordingAttachedAndDetachedDoesNotAllocate) {
+    VirtualTime time;
+    SweepingDevice device;
+    fakes::PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 8000.0, .damping_n_s_per_m = 5.0};
+    ServoLoop<SweepingDevice, fakes::PlaneWall, FakeClock> loop(device, wall, alloc_config(),
+                                                                nullptr, FakeClock{&time});
+    TelemetryRing recording(128);
+    hapticd::testing::AllocationGuard guard;
+    for (int n = 0; n < 1000; ++n) {
+        if (n == 100) loop.attach_recording(&recording);
+        if (n == 900) loop.attach_recording(nullptr);
+        loop.tick();
+    }
+    EXPECT_EQ(guard.allocations(), 0u);
+    EXPECT_EQ(recording.size(), 128u);  // full: 800 ticks pushed into 128 places
+    EXPECT_EQ(recording.dropped(), 800u - 128u);
+}
+
 // A scene load (the control socket's scene_load): the loop takes the new environment at a
 // tick's start, restarts the soft start and resets the environment, all without the heap.
 TEST(ServoAllocation, TakingAnOfferedEnvironmentDoesNotAllocate) {
