@@ -10,17 +10,20 @@
 namespace hapticd::daemon::control {
 namespace {
 
-constexpr std::array kRequests{RequestKind::status,      RequestKind::arm,
-                               RequestKind::disarm,      RequestKind::reset,
-                               RequestKind::coupling,    RequestKind::subscribe,
-                               RequestKind::unsubscribe, RequestKind::record_start,
-                               RequestKind::record_stop, RequestKind::scene_load};
+constexpr std::array kRequests{
+    RequestKind::status,      RequestKind::arm,          RequestKind::disarm,
+    RequestKind::reset,       RequestKind::coupling,     RequestKind::subscribe,
+    RequestKind::unsubscribe, RequestKind::record_start, RequestKind::record_stop,
+    RequestKind::scene_load,  RequestKind::identify};
 
 // The fields each request takes besides v, id and request.
 std::vector<std::string_view> own_fields(RequestKind kind) {
     if (kind == RequestKind::coupling) return {"stiffness", "damping"};
     if (kind == RequestKind::subscribe) return {"rate_hz"};
-    if (kind == RequestKind::record_start || kind == RequestKind::scene_load) return {"path"};
+    if (kind == RequestKind::record_start || kind == RequestKind::scene_load ||
+        kind == RequestKind::identify) {
+        return {"path"};
+    }
     return {};
 }
 
@@ -75,6 +78,8 @@ std::string_view request_name(RequestKind kind) noexcept {
             return "record_stop";
         case RequestKind::scene_load:
             return "scene_load";
+        case RequestKind::identify:
+            return "identify";
     }
     return "unknown";
 }
@@ -157,7 +162,8 @@ ParsedRequest parse_request(std::string_view line) {
             }
         }
     }
-    if (*kind == RequestKind::record_start || *kind == RequestKind::scene_load) {
+    if (*kind == RequestKind::record_start || *kind == RequestKind::scene_load ||
+        (*kind == RequestKind::identify && j.contains("path"))) {
         const auto path = j.find("path");
         if (path == j.end()) {
             parsed.error = *kind == RequestKind::record_start

@@ -26,6 +26,9 @@ std::string state_of(const servo::StatusSnapshot& s) {
     return std::string(servo::servo_state_name(s.state));
 }
 
+constexpr const char* kIdentifyPlaying =
+    "identify is playing the excitation: wait for its end, or stop it with hapticctl disarm";
+
 // coupling: the range of [coupling] stiffness and damping here, then, on the server's worker
 // (Answer::later: the exact model's check takes seconds), the start-up stability check on the
 // config with the new gains; only gains that pass reach the loop.
@@ -38,6 +41,7 @@ Answer set_coupling(const Request& request, const Peer& peer, ServoControl& loop
     if (!facts.coupling_enabled) {
         return refusal("the config runs without the coupling ([coupling] enabled = false)");
     }
+    if (facts.identify != nullptr && facts.identify->active()) return refusal(kIdentifyPlaying);
     const servo::CouplingGains gains{
         .stiffness_n_per_m = request.stiffness_n_per_m.value_or(0.0),
         .damping_n_s_per_m = request.damping_n_s_per_m.value_or(loop.coupling().damping_n_s_per_m),
@@ -75,6 +79,12 @@ Answer record(const Request& request, const Peer& peer, const RunFacts& facts) {
         return {.reply = error_reply(request.id, name + " refused: this run cannot record"),
                 .journal = {}};
     }
+    if (request.kind == RequestKind::record_stop && facts.identify != nullptr &&
+        facts.identify->active()) {
+        return {.reply = error_reply(request.id, name + " refused: the recording is identify's "
+                                                        "log, which ends with the excitation"),
+                .journal = {}};
+    }
     return {.later = [recording = facts.recording, kind = request.kind, path = request.path,
                       id = request.id, peer, name]() -> Answer {
         const RecordingResult result = kind == RequestKind::record_start
@@ -107,6 +117,11 @@ Answer load_scene(const Request& request, const Peer& peer, ServoControl& loop,
                                      "identification run)"),
                 .journal = {}};
     }
+    if (facts.identify != nullptr && facts.identify->active()) {
+        return {.reply =
+                    error_reply(request.id, std::string("scene_load refused: ") + kIdentifyPlaying),
+                .journal = {}};
+    }
     return {.later = [scenes = facts.scenes, &loop, path = request.path.value_or(std::string()),
                       id = request.id, peer, state_before = state_of(now)]() -> Answer {
         const SceneLoadResult result = scenes->load(path, loop.coupling());
@@ -121,6 +136,47 @@ Answer load_scene(const Request& request, const Peer& peer, ServoControl& loop,
                                        {"verdict", result.verdict}}),
                 .journal = "control: scene_load from " + peer.describe() + ": " + result.message};
     }};
+}
+
+// identify: on the worker (a plan to make, tables to build, a file to create); the loop takes
+// the excitation at the start of a tick, and the supervising thread sees it end
+// (identify_session.hpp).
+Answer identify(const Request& request, const Peer& peer, const RunFacts& facts) {
+    if (facts.identify == nullptr) {
+        return {.reply = error_reply(request.id,
+                                     "identify refused: this run is an identification run "
+                                     "(hapticd --identify) already"),
+                .journal = {}};
+    }
+    return {.later = [session = facts.identify, path = request.path, id = request.id,
+                      peer]() -> Answer {
+        const IdentifyStart started = session->start(path);
+        if (!started.ok) {
+            return {.reply = error_reply(id, "identify refused: " + started.message),
+                    .journal = "control: identify from " + peer.describe() +
+                               " refused: " + started.message};
+        }
+        return {.reply = ok_reply(id, {{"path", started.path},
+                                       {"excitation_s", started.excitation_s},
+                                       {"wait_s", started.wait_s}}),
+                .journal = "control: identify from " + peer.describe() + ": " + started.message};
+    }};
+}
+
+nlohmann::json identify_body(const RunFacts& facts) {
+    const std::optional<IdentifyProgress> p =
+        facts.identify != nullptr ? facts.identify->progress() : std::nullopt;
+    if (!p) return nullptr;
+    nlohmann::json j{{"active", p->active},
+                     {"phase", p->phase},
+                     {"path", p->path},
+                     {"played_s", p->played_s},
+                     {"excitation_s", p->excitation_s}};
+    if (!p->active) {
+        j["outcome"] = p->outcome;
+        j["complete"] = p->complete;
+    }
+    return j;
 }
 
 }  // namespace
@@ -157,6 +213,7 @@ nlohmann::json status_body(const servo::StatusSnapshot& s, const RunFacts& facts
     const std::optional<std::string> recording =
         facts.recording != nullptr ? facts.recording->active_path() : std::nullopt;
     j["recording"] = recording ? nlohmann::json(*recording) : nlohmann::json(nullptr);
+    j["identify"] = identify_body(facts);
     if (facts.scenes != nullptr) {
         const SceneInForce scene = facts.scenes->in_force();
         j["scene"] = {{"name", scene.name}, {"source", scene.source}};
@@ -216,6 +273,8 @@ Answer answer(const Request& request, const Peer& peer, ServoControl& loop, cons
             return record(request, peer, facts);
         case RequestKind::scene_load:
             return load_scene(request, peer, loop, facts, now);
+        case RequestKind::identify:
+            return identify(request, peer, facts);
     }
     // The servo thread takes the request at the start of its next tick; the reply says the
     // state it was asked in, and `status` shows what came of it.

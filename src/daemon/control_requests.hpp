@@ -10,6 +10,7 @@
 #include <string>
 
 #include "hapticd/daemon/control_server.hpp"
+#include "hapticd/daemon/identify_session.hpp"
 #include "hapticd/daemon/recording.hpp"
 #include "hapticd/daemon/scene_switch.hpp"
 #include "hapticd/servo/environment_port.hpp"
@@ -58,6 +59,8 @@ struct RunFacts {
     Recording* recording = nullptr;
     /// scene_load's; null: this run renders no scene (an identification run).
     SceneSwitch* scenes = nullptr;
+    /// identify's; null: this run cannot play the excitation (an identification run).
+    IdentifySession* identify = nullptr;
 };
 
 /// The status reply's body: state, tick, rates, forces, positions and faults.

@@ -26,6 +26,7 @@
 #include "flight_file.hpp"
 #include "hapticd/daemon/config.hpp"
 #include "hapticd/daemon/control_server.hpp"
+#include "hapticd/daemon/identify_session.hpp"
 #include "hapticd/daemon/journal.hpp"
 #include "hapticd/daemon/realtime_advice.hpp"
 #include "hapticd/daemon/run.hpp"
@@ -257,6 +258,21 @@ int run_loop(const RunOptions& options, const Config& config,
             [&loop] { return loop.status().tick; }, info.axes, info.lockstep);
         facts.recording = &*recording;
     }
+    // identify (identify_session.hpp): the excitation played open loop on a disarmed run that
+    // renders a scene, only with a control socket.
+    std::optional<IdentifySession> identify;
+    if (recording && scene.scene != nullptr) {
+        identify.emplace(config, info, *recording,
+                         IdentifyLoopPort{.play =
+                                              [&loop](servo::OpenLoopSource& source) {
+                                                  return loop.play_open_loop(source);
+                                              },
+                                          .idle = [&loop] { return loop.open_loop_idle(); },
+                                          .disarm = [&loop] { loop.disarm(); },
+                                          .status = [&loop] { return loop.status(); }},
+                         flight_dir, context.stamp.start_name);
+        facts.identify = &*identify;
+    }
     const ControlStopper control_stopper{outputs.control.get()};
     if (outputs.control) {
         outputs.control->start(
@@ -334,6 +350,7 @@ int run_loop(const RunOptions& options, const Config& config,
             }
         }
         drain_control_messages();
+        if (identify) identify->poll(log);
         write_flight_record();
         if (ticking && now - rate_since >= std::chrono::seconds(1)) {
             const std::uint64_t ticks = loop.status().tick;
@@ -388,6 +405,7 @@ int run_loop(const RunOptions& options, const Config& config,
     servo_thread.join();
     if (outputs.control) outputs.control->stop();
     drain_control_messages();
+    if (identify) identify->finish_at_exit(log);
     if (recording) {  // a recording still running ends with the run, whole
         if (const std::optional<RecordingResult> ended = recording->finish_at_exit()) {
             log << (ended->ok ? priority::notice : priority::err) << "hapticd: "

@@ -84,7 +84,7 @@ Vec3 SafetySupervisor::saturate(const Vec3& force_n, bool& saturated) const noex
 }
 
 SafeForce SafetySupervisor::filter(const Vec3& handle_force_n, const Vec3& handle_velocity_mps,
-                                   double period_s) noexcept {
+                                   double period_s, ForceOrigin origin) noexcept {
     SafeForce out;
     const Vec3 velocity = mask_axes(handle_velocity_mps);
     Vec3 force = mask_axes(handle_force_n);
@@ -103,13 +103,16 @@ SafeForce SafetySupervisor::filter(const Vec3& handle_force_n, const Vec3& handl
     }
     if (faulted()) return out;  // zero force, enable = false, in the tick that raised it
 
-    force = passivity_.control(force, velocity, period_s);
-    out.passivity_damping_n_s_per_m = passivity_.damping_n_s_per_m();
+    const bool coupled = origin == ForceOrigin::coupling;
+    if (coupled) {
+        force = passivity_.control(force, velocity, period_s);
+        out.passivity_damping_n_s_per_m = passivity_.damping_n_s_per_m();
+    }
     force = saturate(force, out.saturated);
     // The soft start scales the force that would be commanded, after saturation: the ramp
     // bounds what the handle gets (scale x max_force at most), also for a handle that starts
     // inside an object, whose raw force would saturate at once at any scale.
-    out.soft_start_scale = soft_start_.update(speed, period_s);
+    out.soft_start_scale = coupled ? soft_start_.update(speed, period_s) : 1.0;
     force *= out.soft_start_scale;
     passivity_.record(force, velocity, period_s);
     out.handle_force_n = force;

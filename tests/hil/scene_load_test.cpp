@@ -35,6 +35,15 @@ std::string proxy_scene(const std::string& name, double surface_m) {
            std::to_string(-surface_m) + "\n";
 }
 
+// The default config with its grasp's push moved past the end of a test: the handle stays
+// 1 cm in front of the demo wall however late a slow host gets the scene loaded.
+std::string still_grasp_config() {
+    std::string config = config_with_room("");
+    const std::string push_start = "start = 1.0,";
+    config.replace(config.find(push_start), push_start.size(), "start = 600.0,");
+    return config;
+}
+
 // hapticctl scene FILE, FILE relative to `dir` as a shell user in it would give it.
 CommandResult load_scene(const ScratchDir& dir, const std::string& socket,
                          const std::string& file) {
@@ -45,13 +54,13 @@ CommandResult load_scene(const ScratchDir& dir, const std::string& socket,
 
 TEST(HilSceneLoad, ASceneLoadedOverTheSocketIsRenderedThroughTheSoftStart) {
     const ScratchDir dir;
-    Daemon d(dir, "lab");
+    Daemon d(dir, "lab", ConfigText{still_grasp_config()});
     ASSERT_TRUE(d.process.wait_for_socket(d.socket)) << d.process.messages();
     const nlohmann::json before = status_of(d.socket);
     EXPECT_EQ(before["scene"]["name"], "demo-wall") << before.dump();
-    // The grasp holds the handle 1 cm in front of the demo wall for its first second: no
-    // force. A wall 5 mm behind the handle puts it 5 mm deep: 3600 N/m in series with
-    // 2000 N/m, about 6 N before the grasp gives way.
+    // The grasp holds the handle 1 cm in front of the demo wall: no force. A wall 5 mm
+    // behind the handle puts it 5 mm deep: 3600 N/m in series with 2000 N/m (1286 N/m)
+    // against the grasp's 500 N/m settles at 1286 * 500 / 1786 * 5 mm = 1.8 N.
     const nlohmann::json free = status_when(d.socket, [](const nlohmann::json& s) {
         return s["state"] == "running" && s["t_s"] >= 0.2;
     });
@@ -68,11 +77,11 @@ TEST(HilSceneLoad, ASceneLoadedOverTheSocketIsRenderedThroughTheSoftStart) {
     EXPECT_EQ(after["scene"]["name"], "near-wall");
     EXPECT_EQ(after["scene"]["source"], dir.file("near-wall.toml"));
     const nlohmann::json pushed = status_when(d.socket, [](const nlohmann::json& s) {
-        return s["state"] == "running" && s["f_n"][0].get<double>() < -2.0;
+        return s["state"] == "running" && s["f_n"][0].get<double>() < -1.7;
     });
     EXPECT_EQ(pushed["state"], "running") << pushed.dump();
-    EXPECT_LT(pushed["f_n"][0].get<double>(), -2.0) << "the new wall pushes the handle out (-x)";
-    EXPECT_GT(pushed["f_n"][0].get<double>(), -7.0) << pushed.dump();
+    EXPECT_LT(pushed["f_n"][0].get<double>(), -1.7) << "the new wall pushes the handle out (-x)";
+    EXPECT_GT(pushed["f_n"][0].get<double>(), -2.2) << pushed.dump();
     EXPECT_EQ(pushed["faults"].size(), 0u) << pushed.dump();
     const CommandResult text = hapticctl(d.socket, "status");
     EXPECT_NE(text.out.find("scene     \"near-wall\" from " + dir.file("near-wall.toml")),

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "alloc_guard.hpp"
+#include "hapticd/env/excitation_source.hpp"
 #include "hapticd/servo/servo_loop.hpp"
 #include "servo_fakes.hpp"
 
@@ -149,6 +150,48 @@ TEST(ServoAllocation, TakingAnOfferedEnvironmentDoesNotAllocate) {
     EXPECT_TRUE(loop.offer_taken());
     EXPECT_EQ(second.resets, 5);
     EXPECT_GT(second.commits, 0);
+}
+
+// identify on the control socket: the excitation played open loop (play_open_loop), from
+// its still wait through the fade-in, two periods and the fade-out to the let-go, then the
+// environment armed again, all without the heap.
+TEST(ServoAllocation, PlayingTheExcitationOpenLoopDoesNotAllocate) {
+    VirtualTime time;
+    SweepingDevice device;
+    fakes::PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 8000.0, .damping_n_s_per_m = 5.0};
+    ServoConfig config = alloc_config();
+    config.start_armed = false;
+    ServoLoop<SweepingDevice, fakes::PlaneWall, FakeClock> loop(device, wall, config, nullptr,
+                                                                FakeClock{&time});
+    env::ExcitationSettings settings;
+    settings.signal = {.sample_rate_hz = 1000.0,
+                       .axes = 3,
+                       .band_low_hz = 2.0,
+                       .band_high_hz = 20.0,
+                       .period_s = 0.5,
+                       .lines_per_decade = 10.0,
+                       .peak_force_n = 0.5};
+    settings.periods = 2;
+    settings.fade_s = 0.1;
+    settings.workspace_half_width_m = 0.05;
+    settings.force_limit_n = 5.0;
+    settings.still_speed_mps = 1.0;  // the sweep counts as still
+    settings.still_time_s = 0.01;
+    env::ExcitationSource source(settings);  // its tables are built here, before the guard
+    hapticd::testing::AllocationGuard guard;
+    for (int n = 0; n < 10; ++n) loop.tick();
+    ASSERT_TRUE(loop.play_open_loop(source));
+    for (int n = 0; n < 1500 && !loop.open_loop_idle(); ++n) loop.tick();
+    const bool idle = loop.open_loop_idle();
+    const int wall_commits = wall.commits;
+    loop.arm();
+    for (int n = 0; n < 200; ++n) loop.tick();
+    EXPECT_EQ(guard.allocations(), 0u);
+    EXPECT_TRUE(idle);
+    EXPECT_EQ(source.phase(), env::ExcitationSource::Phase::finished);
+    EXPECT_EQ(source.samples_played(), source.excitation().samples());
+    EXPECT_EQ(source.excitation().samples(), 1200);
+    EXPECT_GT(wall.commits, wall_commits) << "the wall renders again once armed";
 }
 
 TEST(ServoAllocation, FaultPathDoesNotAllocate) {

@@ -498,6 +498,168 @@ TEST(ServoLoop, AnOfferedEnvironmentIsTakenAtATicksStartThroughTheSoftStart) {
     EXPECT_NEAR(device.last_command.force_n[0], 6.0, 1e-12) << "the soft start restarted";
 }
 
+// An open-loop source (the control socket's identify): a constant force for `ticks` commits.
+struct ConstantForceSource final : OpenLoopSource {
+    double force_n = 2.0;
+    int ticks = 5;
+    int commits = 0;
+    int resets = 0;
+    PenaltyForce evaluate(const Vec3& /*x*/, const Vec3& /*v*/) const noexcept override {
+        PenaltyForce out;
+        out.force_n.x = commits < ticks ? force_n : 0.0;
+        return out;
+    }
+    void commit(const Vec3& /*x*/, const Vec3& /*v*/) noexcept override { ++commits; }
+    void reset(const Vec3& /*x*/) noexcept override { ++resets; }
+    bool done() const noexcept override { return commits >= ticks; }
+};
+
+// identify's path through the loop: play_open_loop arms a disarmed loop, and the tick that
+// takes the source hands its force straight to the handle: no soft start (the scene's takes
+// 2 ms), no passivity controller although the source is active and the mode is control; the
+// environment is not touched and an offer waits. The tick after the source is done lets it
+// go, disarmed; arming again renders the environment through the soft start.
+TEST(ServoLoop, AnOpenLoopSourcePlaysStraightToTheHandleAndIsLetGoDisarmed) {
+    VirtualTime time;
+    FakeDevice device;
+    device.set_position_counts(-2000);  // 2 mm inside the wall
+    device.counts_per_read[0] = 10;     // 0.01 m/s, the way the source pushes
+    PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 6000.0};
+    PlaneWall next_wall{.wall_m = 0.0, .stiffness_n_per_m = 6000.0};
+    ServoConfig config = test_config();
+    config.start_armed = false;
+    config.safety.soft_start = {
+        .still_speed_mps = 1.0, .still_time_s = 0.002, .ramp_time_s = 0.002};
+    config.safety.passivity.mode = PassivityMode::control;
+    TestLoop<PlaneWall> loop(device, wall, config, nullptr, FakeClock{&time});
+    for (int n = 0; n < 3; ++n) loop.tick();
+    EXPECT_EQ(loop.status().state, ServoState::disabled);
+    const int wall_commits = wall.commits;
+    const int wall_resets = wall.resets;
+
+    ConstantForceSource source;
+    ConstantForceSource other;
+    ASSERT_TRUE(loop.play_open_loop(source));
+    EXPECT_FALSE(loop.play_open_loop(other)) << "a second source while one is offered";
+    EXPECT_FALSE(loop.open_loop_idle());
+    for (int n = 0; n < source.ticks; ++n) {
+        const TelemetryRecord& record = loop.tick();
+        EXPECT_EQ(device.last_command.force_n[0], 2.0) << n;
+        EXPECT_TRUE(device.last_command.enable);
+        EXPECT_NE(record.flags & kFlagOpenLoop, 0u) << n;
+        EXPECT_EQ(record.flags & (kFlagSoftStart | kFlagPassivityControl), 0u) << n;
+        EXPECT_EQ(record.xe_m[0], record.x_m[0]) << "no coupling: the tool is the handle";
+        EXPECT_EQ(loop.status().state, ServoState::running);
+        if (n == 1) {
+            ASSERT_TRUE(loop.offer_environment(next_wall));
+        }
+    }
+    EXPECT_EQ(source.resets, 1);
+    EXPECT_EQ(source.commits, source.ticks);
+    EXPECT_LT(loop.status().energy_j, 0.0) << "the source did work on the handle";
+    EXPECT_EQ(wall.commits, wall_commits);
+    EXPECT_EQ(wall.resets, wall_resets);
+    EXPECT_FALSE(loop.offer_taken()) << "an offer waits while the source plays";
+    EXPECT_FALSE(loop.open_loop_idle());
+
+    const TelemetryRecord& after = loop.tick();  // done: let go
+    EXPECT_TRUE(loop.open_loop_idle());
+    EXPECT_EQ(after.flags & kFlagOpenLoop, 0u);
+    EXPECT_NE(after.flags & kFlagDisarmed, 0u);
+    EXPECT_EQ(device.last_command.force_n[0], 0.0);
+    EXPECT_FALSE(device.last_command.enable);
+    EXPECT_EQ(loop.status().state, ServoState::disabled);
+    EXPECT_EQ(loop.status().energy_j, 0.0) << "the observer counts from zero again";
+    EXPECT_TRUE(loop.offer_taken());
+    EXPECT_EQ(next_wall.resets, 1) << "taken where the handle is";
+    EXPECT_EQ(source.commits, source.ticks) << "played after it was done";
+
+    loop.arm();
+    loop.tick();
+    EXPECT_EQ(loop.status().state, ServoState::arming);
+    EXPECT_EQ(next_wall.resets, 2) << "arming restarts it where the handle is";
+    EXPECT_EQ(device.last_command.force_n[0], 0.0) << "the soft start waits for a still handle";
+    ASSERT_TRUE(loop.play_open_loop(other)) << "the loop takes a new source once idle";
+}
+
+// A disarm ends a source before it is done, and so does a fault: the tick after lets it go,
+// with zero force, and the loop stays disarmed after the fault is reset.
+TEST(ServoLoop, ADisarmOrAFaultEndsAnOpenLoopSource) {
+    VirtualTime time;
+    FakeDevice device;
+    PlaneWall wall{.wall_m = 0.0};
+    ServoConfig config = test_config();
+    config.start_armed = false;
+    TestLoop<PlaneWall> loop(device, wall, config, nullptr, FakeClock{&time});
+    ConstantForceSource source;
+    source.ticks = 100;
+    ASSERT_TRUE(loop.play_open_loop(source));
+    for (int n = 0; n < 3; ++n) loop.tick();
+    EXPECT_EQ(device.last_command.force_n[0], 2.0);
+    loop.disarm();
+    loop.tick();
+    EXPECT_TRUE(loop.open_loop_idle());
+    EXPECT_EQ(device.last_command.force_n[0], 0.0);
+    EXPECT_EQ(source.commits, 3);
+    EXPECT_FALSE(source.done());
+
+    ConstantForceSource faulted;
+    faulted.ticks = 100;
+    ASSERT_TRUE(loop.play_open_loop(faulted));
+    loop.tick();
+    EXPECT_EQ(device.last_command.force_n[0], 2.0);
+    device.next.status |= kStatusDeviceFault;
+    loop.tick();  // the fault zeroes the force in this tick
+    EXPECT_EQ(device.last_command.force_n[0], 0.0);
+    EXPECT_FALSE(device.last_command.enable);
+    device.next.status &= ~kStatusDeviceFault;
+    loop.tick();  // and the source is let go
+    EXPECT_TRUE(loop.open_loop_idle());
+    EXPECT_EQ(faulted.commits, 1);
+    loop.request_fault_reset();
+    loop.tick();
+    EXPECT_EQ(loop.status().state, ServoState::disabled);
+    EXPECT_EQ(device.last_command.force_n[0], 0.0);
+}
+
+// A disarm between the offer and the tick that would take it withdraws the source unplayed:
+// a later arm renders the environment, and never plays the source on whoever then holds the
+// handle.
+TEST(ServoLoop, ADisarmBeforeTheFirstTickWithdrawsAnOpenLoopSource) {
+    VirtualTime time;
+    FakeDevice device;
+    device.set_position_counts(-2000);
+    PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 6000.0};
+    ServoConfig config = test_config();
+    config.start_armed = false;
+    TestLoop<PlaneWall> loop(device, wall, config, nullptr, FakeClock{&time});
+    loop.tick();
+    ConstantForceSource source;
+    ASSERT_TRUE(loop.play_open_loop(source));
+    loop.disarm();
+    const TelemetryRecord& withdrawn = loop.tick();
+    EXPECT_TRUE(loop.open_loop_idle());
+    EXPECT_EQ(withdrawn.flags & kFlagOpenLoop, 0u);
+    EXPECT_EQ(source.resets, 0);
+    EXPECT_EQ(source.commits, 0);
+    EXPECT_EQ(device.last_command.force_n[0], 0.0);
+    loop.arm();
+    for (int n = 0; n < 3; ++n) {
+        const TelemetryRecord& record = loop.tick();
+        EXPECT_EQ(record.flags & kFlagOpenLoop, 0u) << n;
+    }
+    EXPECT_EQ(source.commits, 0) << "an arm after the withdrawal does not play it";
+
+    // An offer made after a disarm is played: the disarms before it do not withdraw it.
+    loop.disarm();
+    loop.tick();
+    ConstantForceSource later;
+    ASSERT_TRUE(loop.play_open_loop(later));
+    loop.tick();
+    EXPECT_EQ(later.commits, 1);
+    EXPECT_EQ(device.last_command.force_n[0], 2.0);
+}
+
 TEST(ServoLoop, AdmittanceProxyGivesTheCouplingSpringForce) {
     VirtualTime time;
     FakeDevice device;

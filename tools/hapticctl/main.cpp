@@ -2,7 +2,7 @@
 //
 //   hapticctl [-i NAME | --socket PATH] status [--json] | watch [--count N] | arm | disarm |
 //             reset | coupling K [B] | stream [--rate HZ] [--count N] |
-//             record start FILE | record stop | scene FILE
+//             record start FILE | record stop | scene FILE | identify [FILE] [--no-wait]
 //
 // Exit status: 0 done; 1 the daemon refused, or could not be reached; 2 bad usage.
 #include <CLI/CLI.hpp>
@@ -80,6 +80,7 @@ int change_state(ControlConnection& daemon, RequestKind kind) {
             case RequestKind::record_start:
             case RequestKind::record_stop:
             case RequestKind::scene_load:
+            case RequestKind::identify:
                 break;
         }
         return true;
@@ -169,6 +170,59 @@ int load_scene(ControlConnection& daemon, const std::string& path) {
               << " from the next tick, through the soft start\n"
               << reply.at("verdict").get<std::string>() << "\n";
     return hapticd::daemon::kExitOk;
+}
+
+// identify [FILE] (made absolute here; without, the daemon names one beside its logs): the
+// daemon plays the excitation of hapticd --identify open loop and records it. hapticctl waits
+// for its end and prints how it ended: exit 0 only when it ran to its end. Interrupting
+// hapticctl stops the waiting, not the excitation (hapticctl disarm does that).
+int identify(ControlConnection& daemon, const std::optional<std::string>& path, bool wait) {
+    hapticd::daemon::control::Request request{.kind = RequestKind::identify, .id = nullptr};
+    if (path) request.path = std::filesystem::absolute(*path).lexically_normal().string();
+    const nlohmann::json reply = daemon.request(request);
+    if (!reply.at("ok").get<bool>()) {
+        std::cerr << "hapticctl: " << reply.value("error", std::string("refused")) << "\n";
+        return hapticd::daemon::kExitFault;
+    }
+    const auto log = reply.at("path").get<std::string>();
+    const auto excitation_s = reply.at("excitation_s").get<double>();
+    const auto wait_s = reply.at("wait_s").get<double>();
+    std::cout << "identify: the excitation plays for " << excitation_s
+              << " s once the handle is still (let go of it); the log is " << log << "\n"
+              << std::flush;
+    if (!wait) return hapticd::daemon::kExitOk;
+    std::signal(SIGINT, on_interrupt);
+    std::signal(SIGTERM, on_interrupt);
+    const auto deadline = std::chrono::steady_clock::now() +
+                          std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                              std::chrono::duration<double>(wait_s + excitation_s + 10.0));
+    auto next_progress = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+    while (interrupted == 0 && std::chrono::steady_clock::now() < deadline) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+        const nlohmann::json s = status_of(daemon);
+        const nlohmann::json& run = s.at("identify");
+        if (!run.is_object() || run.at("path").get<std::string>() != log) continue;
+        if (!run.at("active").get<bool>()) {
+            const bool complete = run.at("complete").get<bool>();
+            (complete ? std::cout : std::cerr)
+                << (complete ? "identify: " : "hapticctl: identify: ")
+                << run.at("outcome").get<std::string>() << "\n";
+            return complete ? hapticd::daemon::kExitOk : hapticd::daemon::kExitFault;
+        }
+        if (std::chrono::steady_clock::now() >= next_progress) {
+            std::cout << "identify: " << run.at("phase").get<std::string>() << ", "
+                      << run.at("played_s").get<double>() << " of " << excitation_s << " s\n"
+                      << std::flush;
+            next_progress += std::chrono::seconds(5);
+        }
+    }
+    std::cerr
+        << "hapticctl: identify: stopped waiting "
+        << (interrupted != 0
+                ? std::string("(interrupted)")
+                : "after " + std::to_string(static_cast<int>(wait_s + excitation_s + 10.0)) + " s")
+        << "; the excitation plays on: hapticctl status shows it, hapticctl disarm stops it\n";
+    return hapticd::daemon::kExitFault;
 }
 
 // stream: CSV on stdout from the daemon's telemetry events, for a pipe into a plot. Ends on
@@ -275,6 +329,19 @@ int run_main(int argc, char** argv) {
         "the gains in force, and says why");
     scene_command->add_option("FILE", scene_path, "the scene file (docs/scenes.md)")->required();
 
+    std::string identify_path;
+    bool no_wait = false;
+    auto* identify_command = app.add_subcommand(
+        "identify",
+        "play the excitation of hapticd --identify ([identify] of the daemon's config) open "
+        "loop on the disarmed daemon and record it for haptic-tune identify; wait for its end "
+        "and say how it ended (hapticctl disarm stops it)");
+    identify_command->add_option(
+        "FILE", identify_path,
+        "the log to create (default: identify-START-N.csv beside the daemon's logs)");
+    identify_command->add_flag("--no-wait", no_wait,
+                               "return once the excitation is handed to the servo");
+
     // A word that is not a command is said below, by name; the commands themselves (made
     // above, before this) still refuse what they do not take.
     app.allow_extras();
@@ -300,8 +367,8 @@ int run_main(int argc, char** argv) {
                   << (app.remaining().empty()
                           ? std::string("no command")
                           : "\"" + app.remaining().front() + "\" is not a command")
-                  << ": one of status, watch, arm, disarm, reset, coupling, stream, record, scene "
-                     "(hapticctl --help)\n";
+                  << ": one of status, watch, arm, disarm, reset, coupling, stream, record, scene, "
+                     "identify (hapticctl --help)\n";
         return hapticd::daemon::kExitBadInput;
     }
     if (instance_option->count() == 0 && socket_option->count() == 0) {
@@ -320,7 +387,9 @@ int run_main(int argc, char** argv) {
         // "exact"); a stream's events come once a period.
         std::chrono::milliseconds timeout = std::chrono::seconds(2);
         if (coupling->parsed() || scene_command->parsed()) timeout = std::chrono::seconds(120);
-        if (record_command->parsed()) timeout = std::chrono::seconds(30);
+        if (record_command->parsed() || identify_command->parsed()) {
+            timeout = std::chrono::seconds(30);
+        }
         if (stream_command->parsed()) {
             timeout = std::max(timeout, std::chrono::milliseconds(static_cast<std::int64_t>(
                                             std::ceil(3000.0 / stream_rate_hz))));
@@ -336,6 +405,12 @@ int run_main(int argc, char** argv) {
         if (record_start->parsed()) return record(daemon, record_path);
         if (record_stop->parsed()) return record(daemon, std::nullopt);
         if (scene_command->parsed()) return load_scene(daemon, scene_path);
+        if (identify_command->parsed()) {
+            return identify(
+                daemon,
+                identify_path.empty() ? std::nullopt : std::optional<std::string>(identify_path),
+                !no_wait);
+        }
         if (arm->parsed()) return change_state(daemon, RequestKind::arm);
         if (disarm->parsed()) return change_state(daemon, RequestKind::disarm);
         if (reset->parsed()) return change_state(daemon, RequestKind::reset);

@@ -35,7 +35,8 @@ enum class RequestKind {
     unsubscribe,
     record_start,
     record_stop,
-    scene_load
+    scene_load,
+    identify
 };
 
 /// The name on the wire ("status", ...).
@@ -53,7 +54,9 @@ struct Request {
     /// second; 0 < rate_hz <= kMaxSubscribeRateHz.
     std::optional<double> rate_hz{};
     /// record_start: "path" (required), the file the recording goes to; scene_load: "path"
-    /// (required), the scene file to render. Absolute, at most kMaxRequestPathBytes, no NUL.
+    /// (required), the scene file to render; identify: "path" (optional: the daemon names
+    /// one beside its logs), the excitation's log. Absolute, at most kMaxRequestPathBytes, no
+    /// NUL.
     /// Whether the daemon may create or read it is the daemon's to say.
     std::optional<std::string> path{};
 };

@@ -5,6 +5,9 @@
 //   velocity limit (fault, or damping on the speed above max_speed_mps),
 //   passivity controller, force saturation, soft start scale (so the ramp bounds the force
 //   actually commanded), passivity observer.
+// A force played open loop (ForceOrigin::open_loop: open_loop_source.hpp) skips the passivity
+// controller and the soft start: a source is active by design and brings its own fade-in; the
+// observer still counts its energy.
 // Only axes < `axes` ever carry force.
 //
 // Real-time: filter(), raise() never allocate, lock or throw.
@@ -57,6 +60,12 @@ struct SafetyLimits {
     bool is_valid(std::string* error) const;
 };
 
+/// Where the tick's force comes from.
+enum class ForceOrigin {
+    coupling,   ///< the virtual coupling (16) with the environment: every stage applies
+    open_loop,  ///< an OpenLoopSource: no passivity controller, no soft start
+};
+
 /// What the safety stage decided this tick.
 struct SafeForce {
     Vec3 handle_force_n{0.0};  ///< the force to command on the handle, N
@@ -84,8 +93,10 @@ class SafetySupervisor {
     void restart_soft_start() noexcept { soft_start_.restart(); }
 
     /// One tick: see the file comment. `period_s` is the time since the previous tick.
-    SafeForce filter(const Vec3& handle_force_n, const Vec3& handle_velocity_mps,
-                     double period_s) noexcept;
+    SafeForce filter(const Vec3& handle_force_n, const Vec3& handle_velocity_mps, double period_s,
+                     ForceOrigin origin = ForceOrigin::coupling) noexcept;
+    /// The passivity observer counts from zero again (the force's origin changed).
+    void restart_passivity_observer() noexcept { passivity_.reset(); }
 
     const SafetyLimits& limits() const noexcept { return limits_; }
     const SoftStart& soft_start() const noexcept { return soft_start_; }

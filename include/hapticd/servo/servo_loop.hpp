@@ -18,9 +18,12 @@
 // ImpedancePort or an AdmittancePort) and the clock (MonotonicClock; tests inject a virtual
 // one and never sleep).
 //
+// An OpenLoopSource (play_open_loop) may take the place of the coupling and the environment
+// for a while: its force goes straight to the handle (§3.6).
+//
 // Threads: tick() and run() belong to one thread (the servo thread). arm(), disarm(),
-// request_fault_reset(), offer_environment() and status() may be called from any thread
-// (atomics, a seqlock).
+// request_fault_reset(), offer_environment(), play_open_loop() and status() may be called from
+// any thread (atomics, a seqlock).
 // stats() and summary() are for the servo thread, or for any thread after run() returned.
 //
 // Real-time: nothing reachable from tick() allocates, locks, logs, throws or makes a system
@@ -46,6 +49,7 @@
 #include "hapticd/servo/flight_recorder.hpp"
 #include "hapticd/servo/io.hpp"
 #include "hapticd/servo/link_recovery.hpp"
+#include "hapticd/servo/open_loop_source.hpp"
 #include "hapticd/servo/pacing.hpp"
 #include "hapticd/servo/realtime.hpp"
 #include "hapticd/servo/safety.hpp"
@@ -169,7 +173,10 @@ class ServoLoop {
     /// Forces may flow again (after a still handle and the soft-start ramp).
     void arm() noexcept { armed_.store(true, std::memory_order_release); }
     /// Zero force, enable = false, from the next tick on.
-    void disarm() noexcept { armed_.store(false, std::memory_order_release); }
+    void disarm() noexcept {
+        armed_.store(false, std::memory_order_release);
+        disarms_.fetch_add(1, std::memory_order_acq_rel);  // after: see take_open_loop
+    }
     /// Clears the fault latch at the start of the next tick; soft start begins again.
     void request_fault_reset() noexcept { reset_requested_.store(true, std::memory_order_release); }
 
@@ -203,6 +210,34 @@ class ServoLoop {
         Environment* offered = &next;
         return offered_environment_.compare_exchange_strong(offered, nullptr,
                                                             std::memory_order_acq_rel);
+    }
+    /// Any thread: play `source` on the handle open loop, in place of the coupling and the
+    /// environment, from the first tick that finds the loop armed: this call arms it. The
+    /// source brings its own still wait and fade-in, so there is no soft start, and it is
+    /// active by design, so the passivity controller leaves it alone (the observer counts
+    /// from zero); the velocity limit, the saturation and every fault apply. While it plays,
+    /// offers and new gains wait. It ends at the start of the tick after source.done(), at a
+    /// disarm() or at a fault: the loop lets go of it disarmed, with the coupling and the
+    /// environment to restart where the handle is (through the soft start once armed again).
+    /// A disarm() before a tick took it withdraws it unplayed. False when a source is already
+    /// offered or playing. One caller at a time (the daemon's IdentifySession); the caller
+    /// owns `source` and keeps it until open_loop_idle().
+    bool play_open_loop(OpenLoopSource& source) noexcept {
+        // The disarms so far go with the offer (take_open_loop), so they are stored first;
+        // an offer refused puts back the count of the one that stays.
+        const std::uint64_t kept = disarms_at_offer_.exchange(
+            disarms_.load(std::memory_order_acquire), std::memory_order_acq_rel);
+        OpenLoopSource* none = nullptr;
+        if (!open_loop_.compare_exchange_strong(none, &source, std::memory_order_acq_rel)) {
+            disarms_at_offer_.store(kept, std::memory_order_release);
+            return false;
+        }
+        arm();  // after the offer: a tick that sees it armed sees the source
+        return true;
+    }
+    /// Any thread: no source is offered or playing; the last one is the caller's again.
+    bool open_loop_idle() const noexcept {
+        return open_loop_.load(std::memory_order_acquire) == nullptr;
     }
     /// The latest tick's state, lock-free.
     StatusSnapshot status() const noexcept { return status_.load(); }
@@ -392,6 +427,7 @@ class ServoLoop {
     // and the interval that its velocity spans.
     struct Sensed {
         bool armed = false;             ///< armed_, as this tick read it
+        bool open_loop = false;         ///< an OpenLoopSource plays (open_loop_source_)
         bool have_sample = false;       ///< a sample came, neither dropped nor disconnected
         bool interval_unknown = false;  ///< nothing velocity-based may act this tick
         double interval_s = 0.0;        ///< what the backward difference spans, s
@@ -425,7 +461,7 @@ class ServoLoop {
                                         std::uint32_t& flags) noexcept {
         raised_this_tick_ = 0;
         Sensed sensed;
-        sensed.armed = take_requests();
+        sensed.armed = take_requests(sensed.open_loop);
         account_overrun(wake, flags);
         scheduled_periods_ += 1 + static_cast<std::uint64_t>(wake.missed_periods);
         sensed.have_sample = read_sample(sample, flags);
@@ -443,13 +479,14 @@ class ServoLoop {
 
     // Couple: the virtual coupling (16), F = k_c (x_d - x_e) + b_c (v_d - v_e), in series
     // with an impedance environment (17) or driving an admittance environment (22); without
-    // the coupling (coupling_enabled = false) the environment acts on the handle directly.
+    // the coupling (coupling_enabled = false) the environment acts on the handle directly, as
+    // an open-loop source always does.
     // Only when armed, unfaulted and with a sample over a known interval; otherwise there is
     // no force and the tool follows the handle.
     [[gnu::always_inline]] Coupled couple(const Sensed& sensed, std::uint32_t& flags) noexcept {
         Coupled coupled{.x_e = coupling_.previous_tool_position_m()};
         if (sensed.have_sample && sensed.armed && !safety_.faulted() && !sensed.interval_unknown) {
-            const CouplingStep step = coupling_step(sensed.x_d, sensed.interval_s);
+            const CouplingStep step = coupling_step(sensed, sensed.x_d, sensed.interval_s);
             if (!step.finite) raise(kFaultNonFinite);
             if (step.finite && !step.converged) {
                 flags |= kFlagSolverNotConverged;
@@ -478,7 +515,9 @@ class ServoLoop {
         if (!sensed.armed) {
             flags |= kFlagDisarmed;
         } else if (sensed.have_sample && !safety_.faulted()) {
-            safe = safety_.filter(coupled.handle_force_n, coupled.v_d, sensed.interval_s);
+            safe =
+                safety_.filter(coupled.handle_force_n, coupled.v_d, sensed.interval_s,
+                               sensed.open_loop ? ForceOrigin::open_loop : ForceOrigin::coupling);
             for (int axis = 0; axis < config_.axes; ++axis) {
                 force_command.force_n[static_cast<std::size_t>(axis)] = safe.handle_force_n[axis];
             }
@@ -492,6 +531,7 @@ class ServoLoop {
             held_force_n_ = write_command(force_command) ? force_command.force_n
                                                          : std::array<double, kMaxAxes>{};
         }
+        if (sensed.open_loop) flags |= kFlagOpenLoop;
         flag_safety_actions(safe, force_command.enable, flags);
         faults_seen_ |= safety_.faults();
         return safe;
@@ -535,14 +575,20 @@ class ServoLoop {
 
     // ---- the steps' parts ----
 
-    // The requests of other threads, at the start of a tick: a fault reset, new gains, a new
-    // environment, and arming (for the last three the soft start begins again, and the
-    // coupling and the environment restart where the handle is).
-    // Returns whether the loop is armed.
-    bool take_requests() noexcept {
+    // The requests of other threads, at the start of a tick: a fault reset, an open-loop
+    // source, new gains, a new environment, and arming (for the last three the soft start
+    // begins again, and the coupling and the environment restart where the handle is).
+    // Returns whether the loop is armed; `open_loop`: whether a source plays this tick.
+    bool take_requests(bool& open_loop) noexcept {
         if (reset_requested_.exchange(false, std::memory_order_acq_rel)) {
             clear_fault_latch();
             ++fault_resets_taken_;
+        }
+        bool armed = armed_.load(std::memory_order_acquire);
+        open_loop = take_open_loop(armed);
+        if (open_loop) {  // offers and gains wait: a reset would end the source's run
+            was_armed_ = true;
+            return true;
         }
         // New gains: taken only when the writer is not mid-store (Seqlock::try_load), else at
         // a later tick; the tick never waits for the control socket's thread.
@@ -566,13 +612,47 @@ class ServoLoop {
                 initialised_ = false;
             }
         }
-        const bool armed = armed_.load(std::memory_order_acquire);
         if (armed && !was_armed_) {
             safety_.restart_soft_start();
             initialised_ = false;  // the environment restarts where the handle is
         }
         was_armed_ = armed;
         return armed;
+    }
+
+    // The open-loop source (play_open_loop): taken by a tick that finds the loop armed (the
+    // acquire of armed_ sees the offer made before the arm); let go at the start of the tick
+    // after it is done, at a disarm or with a fault latched: disarmed, and the coupling and
+    // the environment start again where the handle is. True while it plays.
+    //
+    // A disarm() after the offer and before any tick took it withdraws the offer, so that
+    // no later arm() plays it: disarm() counts itself after clearing armed_, and an offer
+    // made before that count moved is let go untaken. An offer whose arm() is not yet seen
+    // (and no disarm came) waits for it.
+    bool take_open_loop(bool& armed) noexcept {
+        if (open_loop_source_ == nullptr) {
+            OpenLoopSource* const offered = open_loop_.load(std::memory_order_acquire);
+            if (offered == nullptr) return false;
+            if (disarms_.load(std::memory_order_acquire) !=
+                disarms_at_offer_.load(std::memory_order_acquire)) {
+                open_loop_.store(nullptr, std::memory_order_release);  // withdrawn, unplayed
+                armed = armed_.load(std::memory_order_acquire);
+                return false;
+            }
+            if (!armed) return false;
+            open_loop_source_ = offered;
+            initialised_ = false;  // it starts where the handle is
+            safety_.restart_passivity_observer();
+        }
+        if (armed && !safety_.faulted() && !open_loop_source_->done()) return true;
+        open_loop_source_ = nullptr;
+        initialised_ = false;
+        safety_.restart_soft_start();
+        safety_.restart_passivity_observer();
+        armed = false;
+        armed_.store(false, std::memory_order_release);
+        open_loop_.store(nullptr, std::memory_order_release);  // the caller's again
+        return false;
     }
 
     // The interval since the previous sample (sample_interval_s). When it is unknown,
@@ -594,7 +674,11 @@ class ServoLoop {
     void continue_history(const Sample& sample, const Sensed& sensed) noexcept {
         if (!initialised_) {
             coupling_.reset(sensed.x_d);
-            environment_->reset(sensed.x_d);
+            if (sensed.open_loop) {
+                open_loop_source_->reset(sensed.x_d);
+            } else {
+                environment_->reset(sensed.x_d);
+            }
             start_history(sample);
             initialised_ = true;
         } else if (config_.safety.encoder_jump_m > 0.0 &&
@@ -606,7 +690,8 @@ class ServoLoop {
         }
     }
 
-    CouplingStep coupling_step(const Vec3& x_d, double interval_s) noexcept {
+    CouplingStep coupling_step(const Sensed& sensed, const Vec3& x_d, double interval_s) noexcept {
+        if (sensed.open_loop) return coupling_.step_rigid(*open_loop_source_, x_d, interval_s);
         if constexpr (ImpedancePort<Environment>) {
             if (rigid_) return coupling_.step_rigid(*environment_, x_d, interval_s);
         }
@@ -658,7 +743,7 @@ class ServoLoop {
         record_.flags = flags;
         record_.faults = safety_.faults();
         record_.state = static_cast<std::uint32_t>(
-            servo_state(sensed.armed, record_.faults, safety_.soft_start().scale()));
+            servo_state(sensed.armed, record_.faults, soft_start_scale_for_state()));
         record_.wake_latency_us = paced ? static_cast<double>(wake.latency_ns) * 1e-3 : 0.0;
         record_.compute_us = static_cast<double>(compute_ns) * 1e-3;
         record_.energy_j = safety_.passivity().energy_j();
@@ -678,6 +763,12 @@ class ServoLoop {
     void refresh_percentiles() noexcept {
         wake_latency_us_ = wake_latency_summary(stats_.wake_latency);
         tick_compute_us_ = tick_compute_summary(stats_.compute);
+    }
+
+    // The soft start's scale as the safety state reads it: an open-loop source has none, and
+    // runs at full scale.
+    double soft_start_scale_for_state() const noexcept {
+        return open_loop_source_ != nullptr ? 1.0 : safety_.soft_start().scale();
     }
 
     void publish_status(double soft_start_scale, bool armed) noexcept {
@@ -703,13 +794,17 @@ class ServoLoop {
         snapshot.link_recoveries = stats_.link_recoveries;
         // The soft start's own scale: a tick without a sample filters nothing, and must not
         // make a running loop look as if it were arming again.
-        snapshot.state = servo_state(armed, record_.faults, safety_.soft_start().scale());
+        snapshot.state = servo_state(armed, record_.faults, soft_start_scale_for_state());
         status_.store(snapshot);
     }
 
     Device& device_;
     Environment* environment_;                                ///< the one the ticks render
     std::atomic<Environment*> offered_environment_{nullptr};  ///< offer_environment()'s
+    std::atomic<OpenLoopSource*> open_loop_{nullptr};         ///< play_open_loop()'s, until let go
+    std::atomic<std::uint64_t> disarms_{0};                   ///< disarm() calls
+    std::atomic<std::uint64_t> disarms_at_offer_{0};          ///< disarms_ before the offer
+    OpenLoopSource* open_loop_source_ = nullptr;              ///< the one playing (servo thread)
     ServoConfig config_;
     double period_s_;
     double counts_to_m_;

@@ -24,6 +24,9 @@ enum TickFlag : std::uint32_t {
     /// The time since the last sample is unknown (the device's clock stood still or went
     /// backwards): zero force, and the velocity history starts again at this sample.
     kFlagIntervalUnknown = 1u << 9,
+    /// An OpenLoopSource played this tick's force, in place of the coupling and the
+    /// environment (ServoLoop::play_open_loop: the control socket's identify).
+    kFlagOpenLoop = 1u << 10,
 };
 
 struct TelemetryRecord {
