@@ -179,6 +179,33 @@ TEST(DaemonControlProtocol, ASceneLoadNamesAnAbsolutePath) {
     expect_refused(refusals);
 }
 
+// identify's log is optional (the daemon names one beside its files); when given it is
+// absolute, as a recording's.
+TEST(DaemonControlProtocol, AnIdentifyMayNameAnAbsoluteLog) {
+    const ParsedRequest bare = parse_request(R"({"v":1,"request":"identify"})");
+    ASSERT_TRUE(bare.request.has_value()) << bare.error;
+    EXPECT_EQ(bare.request->kind, RequestKind::identify);
+    EXPECT_FALSE(bare.request->path.has_value());
+    const Request named{.kind = RequestKind::identify, .id = 4, .path = "/var/log/pen.csv"};
+    const std::string line = request_line(named);
+    const ParsedRequest parsed = parse_request(line.substr(0, line.size() - 1));
+    ASSERT_TRUE(parsed.request.has_value()) << parsed.error;
+    EXPECT_EQ(parsed.request->kind, RequestKind::identify);
+    EXPECT_EQ(parsed.request->path, "/var/log/pen.csv");
+    const std::string too_long = "/" + std::string(kMaxRequestPathBytes, 'a');
+    const Refusal refusals[] = {
+        {R"({"v":1,"request":"identify","path":true})", "\"path\" = true: must be a string"},
+        {R"({"v":1,"request":"identify","path":"pen.csv"})",
+         "\"path\" = \"pen.csv\": an absolute path of at most 4095 bytes is needed"},
+        {R"({"v":1,"request":"identify","path":""})", "an absolute path"},
+        {R"({"v":1,"request":"identify","path":")" + too_long + R"("})", "an absolute path"},
+        {R"({"v":1,"request":"identify","periods":2})",
+         "unknown field \"periods\" in a \"identify\" request: it takes only v, id, request, "
+         "path"},
+    };
+    expect_refused(refusals);
+}
+
 TEST(DaemonControlProtocol, ARefusalKeepsTheRequestsId) {
     const ParsedRequest parsed = parse_request(R"({"v":1,"id":9,"request":"launch"})");
     EXPECT_FALSE(parsed.request.has_value());

@@ -174,13 +174,30 @@ TEST(HilIdentifySocket, TheExcitationPlaysOnTheDisarmedDaemonAndIdentifiesThePen
     EXPECT_CONTAINS(messages, "hapticd: identify: the excitation ran to its end");
 }
 
-TEST(HilIdentifySocket, WhileItPlaysTheSceneAndTheRecordingAreItsAndADisarmEndsIt) {
+TEST(HilIdentifySocket, WhileItPlaysTheSceneAndTheRecordingAreItsAndADisarmOrAStopEndsIt) {
     const ScratchDir dir;
     const std::string config = hands_off_config();
     Daemon d(dir, "lab", ConfigText{config});
     ASSERT_TRUE(d.process.wait_for_socket(d.socket)) << d.process.messages();
     ASSERT_EQ(hapticctl(d.socket, "disarm").exit_code, 0);
     status_when(d.socket, [](const nlohmann::json& s) { return s["state"] == "disabled"; });
+
+    // Bad usage is exit 2, and says what is wrong.
+    const struct {
+        const char* arguments;
+        const char* says;
+    } bad_usage[] = {
+        {"identify a.csv b.csv", "b.csv"},
+        {"identify ''", "the path is empty"},
+        {"identify --periods 2", "--periods"},
+    };
+    for (const auto& c : bad_usage) {
+        SCOPED_TRACE(c.arguments);
+        const CommandResult r = hapticctl(d.socket, c.arguments);
+        EXPECT_EQ(r.exit_code, 2) << r.err;
+        EXPECT_CONTAINS(r.err, c.says);
+    }
+    EXPECT_TRUE(status_of(d.socket)["identify"].is_null()) << "nothing was started";
 
     // The recording is the excitation's log, so one already running comes first.
     ASSERT_EQ(hapticctl(d.socket, "record start " + dir.file("take.csv")).exit_code, 0);
@@ -257,13 +274,19 @@ TEST(HilIdentifySocket, WhileItPlaysTheSceneAndTheRecordingAreItsAndADisarmEndsI
     const CommandResult second = hapticctl(d.socket, "identify --no-wait");
     ASSERT_EQ(second.exit_code, 0) << second.err;
     EXPECT_CONTAINS(second.out, "the log is " + dir.file("identify-"));
-    ASSERT_EQ(hapticctl(d.socket, "disarm").exit_code, 0);
-    status_when(d.socket, [](const nlohmann::json& s) {
-        return s["identify"].is_object() && s["identify"]["active"] == false;
+    const nlohmann::json second_playing = status_when(d.socket, [](const nlohmann::json& s) {
+        return s["identify"]["phase"] == "running" && s["identify"]["played_s"] > 0.1;
     });
+    const std::string second_log = second_playing["identify"]["path"].get<std::string>();
 
+    // A run stopped while it plays (SIGTERM) ends it cleanly: zero force, the log whole.
     EXPECT_EQ(d.process.stop(), 0) << d.process.messages();
-    EXPECT_CONTAINS(d.process.messages(), "hapticd: identify: WARNING: the run ended ");
+    const std::string messages = d.process.messages();
+    EXPECT_CONTAINS(messages, ", stopped by a disarm; the log is " + dir.file("pen.csv"));
+    EXPECT_CONTAINS(messages, ", stopped by the end of the run; the log is " + second_log);
+    const TelemetryLog stopped = read_telemetry(second_log);
+    EXPECT_GT(played_ticks(stopped).force_n.size(), 100u);
+    EXPECT_EQ(mismatches_with_plan(played_ticks(stopped).force_n, planned_excitation(config)), 0u);
 }
 
 }  // namespace

@@ -336,9 +336,19 @@ int run_main(int argc, char** argv) {
         "play the excitation of hapticd --identify ([identify] of the daemon's config) open "
         "loop on the disarmed daemon and record it for haptic-tune identify; wait for its end "
         "and say how it ended (hapticctl disarm stops it)");
-    identify_command->add_option(
-        "FILE", identify_path,
-        "the log to create (default: identify-START-N.csv beside the daemon's logs)");
+    auto* identify_file =
+        identify_command
+            ->add_option("FILE", identify_path,
+                         "the log to create (default: identify-START-N.csv beside the daemon's "
+                         "logs)")
+            ->check(CLI::Validator(
+                [](const std::string& file) {
+                    return file.empty() ? std::string(
+                                              "the path is empty: name the log to "
+                                              "create, or leave FILE out")
+                                        : std::string();
+                },
+                "FILE"));
     identify_command->add_flag("--no-wait", no_wait,
                                "return once the excitation is handed to the servo");
 
@@ -406,10 +416,10 @@ int run_main(int argc, char** argv) {
         if (record_stop->parsed()) return record(daemon, std::nullopt);
         if (scene_command->parsed()) return load_scene(daemon, scene_path);
         if (identify_command->parsed()) {
-            return identify(
-                daemon,
-                identify_path.empty() ? std::nullopt : std::optional<std::string>(identify_path),
-                !no_wait);
+            return identify(daemon,
+                            identify_file->count() == 0 ? std::nullopt
+                                                        : std::optional<std::string>(identify_path),
+                            !no_wait);
         }
         if (arm->parsed()) return change_state(daemon, RequestKind::arm);
         if (disarm->parsed()) return change_state(daemon, RequestKind::disarm);
