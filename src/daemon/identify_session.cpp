@@ -229,11 +229,21 @@ void IdentifySession::end(std::ostream& log, const std::string& ended_by, bool s
     log << outcome.priority << "hapticd: identify: " << outcome.text << "\n" << std::flush;
     outcome_ = std::move(outcome);
     active_ = false;
+    ended_.push_back(progress_locked());
 }
 
 std::optional<IdentifyProgress> IdentifySession::progress() const {
     const std::lock_guard lock(mutex_);
     if (!source_) return std::nullopt;
+    return progress_locked();
+}
+
+std::vector<IdentifyProgress> IdentifySession::ended() const {
+    const std::lock_guard lock(mutex_);
+    return ended_;
+}
+
+IdentifyProgress IdentifySession::progress_locked() const {
     const double rate_hz = config_.servo.rate_hz;
     IdentifyProgress p;
     p.active = active_;

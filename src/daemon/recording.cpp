@@ -119,12 +119,18 @@ RecordingResult Recording::end(bool servo_stopped) {
     writer_.reset();
     const std::lock_guard path_lock(path_mutex_);
     active_path_.reset();
+    closed_.push_back(result);
     return result;
 }
 
 std::optional<std::string> Recording::active_path() const {
     const std::lock_guard lock(path_mutex_);
     return active_path_;
+}
+
+std::vector<RecordingResult> Recording::closed() const {
+    const std::lock_guard lock(path_mutex_);
+    return closed_;
 }
 
 }  // namespace hapticd::daemon

@@ -45,6 +45,16 @@ std::string summary_json(const servo::Summary& s, const RunContext& c) {
     j["saturated_ticks"] = s.saturated_ticks;
     j["passivity_energy_j"] = s.passivity_energy_j;
     j["flight_records"] = c.flight_records;
+    j["recordings"] = nlohmann::ordered_json::array();
+    for (const RecordedFile& file : c.recordings) {
+        j["recordings"].push_back(
+            {{"path", file.path}, {"records", file.records}, {"dropped", file.dropped}});
+    }
+    j["identify"] = nlohmann::ordered_json::array();
+    for (const IdentifiedRun& run : c.identify_runs) {
+        j["identify"].push_back(
+            {{"path", run.path}, {"outcome", run.outcome}, {"complete", run.complete}});
+    }
     j["exit"] = c.exit;
     j["state"] = c.final_state;
     if (!c.stopped_by.empty()) j["stopped_by"] = c.stopped_by;
@@ -93,6 +103,13 @@ std::string summary_text(const servo::Summary& s, const RunContext& c) {
         out << "  telemetry: " << c.telemetry_records_written << " of " << c.telemetry_records
             << " records written to " << c.telemetry_log
             << (c.telemetry_complete ? "" : " (INCOMPLETE)") << "\n";
+    }
+    for (const RecordedFile& file : c.recordings) {
+        out << "  recorded: " << file.path << ", " << file.records << " records"
+            << (file.dropped == 0 ? "" : ", " + std::to_string(file.dropped) + " LOST") << "\n";
+    }
+    for (const IdentifiedRun& run : c.identify_runs) {
+        out << "  identify: " << run.outcome << "\n";
     }
     out << "  faults:";
     if (s.faults.empty()) out << " none";

@@ -413,6 +413,16 @@ int run_loop(const RunOptions& options, const Config& config,
                               : "recording " + ended->path + ": " + ended->message)
                 << "\n";
         }
+        for (const RecordingResult& closed : recording->closed()) {
+            context.recordings.push_back(
+                {.path = closed.path, .records = closed.records, .dropped = closed.dropped});
+        }
+    }
+    if (identify) {
+        for (const IdentifyProgress& ended : identify->ended()) {
+            context.identify_runs.push_back(
+                {.path = ended.path, .outcome = ended.outcome, .complete = ended.complete});
+        }
     }
     write_flight_record();  // the fault that ended the run
     loop.write_zero_force();

@@ -16,12 +16,14 @@
 
 #include "control_daemon.hpp"
 #include "hapticd/daemon/config.hpp"
+#include "hapticd/daemon/config_editor.hpp"
 #include "hapticd/daemon/servo_settings.hpp"
 #include "hapticd/env/excitation.hpp"
 #include "hapticd/servo/telemetry.hpp"
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
 #include "telemetry_csv.hpp"
+#include "text_file.hpp"
 
 namespace hapticd::testing {
 namespace {
@@ -172,6 +174,39 @@ TEST(HilIdentifySocket, TheExcitationPlaysOnTheDisarmedDaemonAndIdentifiesThePen
     EXPECT_CONTAINS(messages, "control: identify from pid ");
     EXPECT_CONTAINS(messages, "playing the excitation open loop");
     EXPECT_CONTAINS(messages, "hapticd: identify: the excitation ran to its end");
+    const nlohmann::json summary = nlohmann::json::parse(read_file(d.summary));
+    ASSERT_EQ(summary["identify"].size(), 1u) << summary.dump(2);
+    EXPECT_EQ(summary["identify"][0]["path"], log_path);
+    EXPECT_EQ(summary["identify"][0]["complete"], true);
+    ASSERT_EQ(summary["recordings"].size(), 1u);
+    EXPECT_EQ(summary["recordings"][0]["records"], log.rows());
+}
+
+// A run of constraint scenes (the god-object's plane) plays the same excitation: the source
+// takes the place of the admittance environment and the coupling as it does of a wall's.
+TEST(HilIdentifySocket, AnAdmittanceRunPlaysTheSameExcitation) {
+    const ScratchDir dir;
+    const std::string plane = dir.write(
+        "plane.toml",
+        "[scene]\nname = \"plane\"\naxes = 1\n[[proxy_plane]]\nnormal = [-1.0]\noffset = 0.0\n");
+    const std::string config =
+        daemon::edit_config_text(hands_off_config(), {{"scene", "file", plane}}, "lab.toml").text;
+    Daemon d(dir, "lab", ConfigText{config});
+    ASSERT_TRUE(d.process.wait_for_socket(d.socket)) << d.process.messages();
+    EXPECT_EQ(status_when(d.socket, armed_state)["scene"]["name"], "plane");
+    ASSERT_EQ(hapticctl(d.socket, "disarm").exit_code, 0);
+    const CommandResult played = hapticctl(d.socket, "identify " + dir.file("plane-run.csv"));
+    ASSERT_EQ(played.exit_code, 0) << played.out << played.err;
+    const TelemetryLog log = read_telemetry(dir.file("plane-run.csv"));
+    const PlayedTicks ticks = played_ticks(log);
+    const env::ExcitationEnvironment e = planned_excitation(config);
+    EXPECT_GE(ticks.force_n.size(), static_cast<std::size_t>(e.samples()));
+    EXPECT_EQ(mismatches_with_plan(ticks.force_n, e), 0u);
+    ASSERT_EQ(hapticctl(d.socket, "arm").exit_code, 0);
+    const nlohmann::json rearmed =
+        status_when(d.socket, [](const nlohmann::json& s) { return s["state"] == "running"; });
+    EXPECT_EQ(rearmed["state"], "running") << rearmed.dump();
+    EXPECT_EQ(d.process.stop(), 0) << d.process.messages();
 }
 
 TEST(HilIdentifySocket, WhileItPlaysTheSceneAndTheRecordingAreItsAndADisarmOrAStopEndsIt) {
@@ -284,6 +319,26 @@ TEST(HilIdentifySocket, WhileItPlaysTheSceneAndTheRecordingAreItsAndADisarmOrASt
     const std::string messages = d.process.messages();
     EXPECT_CONTAINS(messages, ", stopped by a disarm; the log is " + dir.file("pen.csv"));
     EXPECT_CONTAINS(messages, ", stopped by the end of the run; the log is " + second_log);
+    // The summary lists every file recorded and every excitation, in order.
+    const nlohmann::json summary = nlohmann::json::parse(read_file(d.summary));
+    const nlohmann::json& recordings = summary["recordings"];
+    ASSERT_EQ(recordings.size(), 3u) << summary.dump(2);
+    EXPECT_EQ(recordings[0]["path"], dir.file("take.csv"));
+    EXPECT_EQ(recordings[1]["path"], dir.file("pen.csv"));
+    EXPECT_EQ(recordings[2]["path"], second_log);
+    for (const nlohmann::json& file : recordings) {
+        EXPECT_EQ(file["records"].get<std::size_t>(),
+                  read_telemetry(file["path"].get<std::string>()).rows())
+            << file.dump();
+        EXPECT_EQ(file["dropped"], 0) << file.dump();
+    }
+    const nlohmann::json& runs = summary["identify"];
+    ASSERT_EQ(runs.size(), 2u) << summary.dump(2);
+    EXPECT_EQ(runs[0]["path"], dir.file("pen.csv"));
+    EXPECT_EQ(runs[0]["complete"], false);
+    EXPECT_CONTAINS(runs[0]["outcome"].get<std::string>(), "stopped by a disarm");
+    EXPECT_EQ(runs[1]["path"], second_log);
+    EXPECT_CONTAINS(runs[1]["outcome"].get<std::string>(), "stopped by the end of the run");
     const TelemetryLog stopped = read_telemetry(second_log);
     EXPECT_GT(played_ticks(stopped).force_n.size(), 100u);
     EXPECT_EQ(mismatches_with_plan(played_ticks(stopped).force_n, planned_excitation(config)), 0u);

@@ -22,6 +22,7 @@
 #include <optional>
 #include <ostream>
 #include <string>
+#include <vector>
 
 #include "hapticd/daemon/config.hpp"
 #include "hapticd/daemon/recording.hpp"
@@ -107,10 +108,14 @@ class IdentifySession {
     std::optional<IdentifyProgress> progress() const;
     /// An excitation is offered or playing.
     bool active() const;
+    /// Every excitation that ended, in order (the summary's `identify`).
+    std::vector<IdentifyProgress> ended() const;
 
   private:
     /// `servo_ticks`: the servo still runs, so the recording is this session's to stop.
     void end(std::ostream& log, const std::string& ended_by, bool servo_ticks);
+    /// progress() of the source there is, under mutex_.
+    IdentifyProgress progress_locked() const;
 
     const Config& config_;
     device::DeviceInfo device_;
@@ -128,6 +133,7 @@ class IdentifySession {
     double wait_s_ = 0.0;
     bool gave_up_ = false;  ///< poll() disarmed the loop: the handle was not still in time
     std::optional<IdentifyOutcome> outcome_;
+    std::vector<IdentifyProgress> ended_;
 };
 
 }  // namespace hapticd::daemon

@@ -15,6 +15,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "hapticd/daemon/telemetry_writer.hpp"
 #include "hapticd/servo/telemetry_ring.hpp"
@@ -49,6 +50,8 @@ class Recording {
     std::optional<RecordingResult> finish_at_exit();
     /// The file being recorded to, if any (cheap: for `status`).
     std::optional<std::string> active_path() const;
+    /// Every recording closed so far, in order (the summary's `recordings`).
+    std::vector<RecordingResult> closed() const;
 
   private:
     RecordingResult end(bool servo_stopped);
@@ -60,6 +63,7 @@ class Recording {
     mutable std::mutex path_mutex_;  // never held while waiting: status reads it
     std::unique_ptr<TelemetryWriter> writer_;
     std::optional<std::string> active_path_;
+    std::vector<RecordingResult> closed_;  // under path_mutex_
     std::uint64_t dropped_before_ = 0;
     int axes_;
     bool lockstep_;

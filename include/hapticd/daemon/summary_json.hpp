@@ -16,6 +16,20 @@
 
 namespace hapticd::daemon {
 
+/// A file the control socket recorded to (recording.hpp), as it was closed.
+struct RecordedFile {
+    std::string path;
+    std::uint64_t records = 0;  ///< whole lines after the header
+    std::uint64_t dropped = 0;  ///< records the disk did not keep up with (0: lossless)
+};
+
+/// An excitation the control socket's identify played (identify_session.hpp).
+struct IdentifiedRun {
+    std::string path;     ///< its log
+    std::string outcome;  ///< the journal's line
+    bool complete = false;
+};
+
 struct RunContext {
     RunStamp stamp;             ///< version, start time, host
     std::string config_source;  ///< file name or "<embedded default>"
@@ -39,6 +53,10 @@ struct RunContext {
     bool telemetry_complete = true;  ///< every record is in the file (none failed, none dropped)
     /// The flight recorder's files, one per fault (docs/daemon.md, "The flight recorder").
     std::vector<std::string> flight_records{};
+    /// The control socket's recordings (record_start and identify), in order, once closed.
+    std::vector<RecordedFile> recordings{};
+    /// The control socket's identify excitations, in order, as they ended.
+    std::vector<IdentifiedRun> identify_runs{};
     StartupCheck check;
     servo::RealtimeReport realtime;
 };
