@@ -1,10 +1,12 @@
 // haptic-tune: the offline design tool. Sizes the virtual coupling from (21), checks any
 // design against the stability models, and draws the design-procedure charts.
 #include <iostream>
+#include <optional>
 
 #include "commands.hpp"
 #include "hapticd/install/version.hpp"
 #include "hapticd/tune/coupling_sizing.hpp"
+#include "parse_command_line.hpp"
 
 namespace {
 
@@ -24,18 +26,7 @@ int run_main(int argc, char** argv) {
     add_diag_command(app, invocation);
     add_identify_command(app, invocation);
     add_autotune_command(app, invocation);
-    try {
-        app.parse(argc, argv);
-    } catch (const CLI::CallForHelp& help) {
-        return app.exit(help);
-    } catch (const CLI::CallForAllHelp& help) {
-        return app.exit(help);
-    } catch (const CLI::CallForVersion& version) {
-        return app.exit(version);
-    } catch (const CLI::ParseError& error) {
-        app.exit(error);  // prints the message and the usage hint
-        return kExitBadInput;
-    }
+    if (const std::optional<int> ended = parse_command_line(app, argc, argv)) return *ended;
     try {
         return invocation.run();
     } catch (const UsageError& error) {

@@ -19,6 +19,7 @@
 #include "control_connection.hpp"
 #include "hapticd/daemon/exit_code.hpp"
 #include "hapticd/install/version.hpp"
+#include "parse_command_line.hpp"
 #include "status_text.hpp"
 
 namespace {
@@ -355,15 +356,8 @@ int run_main(int argc, char** argv) {
     // A word that is not a command is said below, by name; the commands themselves (made
     // above, before this) still refuse what they do not take.
     app.allow_extras();
-    try {
-        app.parse(argc, argv);
-    } catch (const CLI::CallForHelp& help) {
-        return app.exit(help);
-    } catch (const CLI::CallForVersion& version) {
-        return app.exit(version);
-    } catch (const CLI::ParseError& error) {
-        app.exit(error);
-        return hapticd::daemon::kExitBadInput;
+    if (const std::optional<int> ended = hapticd::tools::parse_command_line(app, argc, argv)) {
+        return *ended;
     }
     if (record_command->parsed() && !record_start->parsed() && !record_stop->parsed()) {
         const std::vector<std::string> words = record_command->remaining();

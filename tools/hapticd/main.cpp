@@ -12,6 +12,7 @@
 #include <csignal>
 #include <ctime>
 #include <iostream>
+#include <optional>
 #include <string>
 #include <thread>
 
@@ -19,6 +20,7 @@
 #include "hapticd/daemon/run.hpp"
 #include "hapticd/device/plugin_loader.hpp"
 #include "hapticd/install/version.hpp"
+#include "parse_command_line.hpp"
 
 namespace {
 
@@ -178,15 +180,8 @@ int run_main(int argc, char** argv) {
                    "FD: the read end of a pipe whose write end the parent holds; when it closes "
                    "(the parent died) the run stops as on SIGTERM (haptic-tune autotune passes "
                    "it)");
-    try {
-        app.parse(argc, argv);
-    } catch (const CLI::CallForHelp& help) {
-        return app.exit(help);
-    } catch (const CLI::CallForVersion& version) {
-        return app.exit(version);
-    } catch (const CLI::ParseError& error) {
-        app.exit(error);
-        return hapticd::daemon::kExitBadInput;
+    if (const std::optional<int> ended = hapticd::tools::parse_command_line(app, argc, argv)) {
+        return *ended;
     }
     if (show_plugins) return list_plugins();
     // Given but empty is an error (run_daemon says so), not "not given".
