@@ -296,12 +296,7 @@ void ControlServer::send_events(Clock::time_point now) {
         client.next_event += client.event_period;
         if (client.next_event <= now) client.next_event = now + client.event_period;
         flush(client);
-        if (client.out.size() > limits_.max_unread_reply_bytes) {
-            note("control: disconnected " + client.peer.describe() + ": it left more than " +
-                 std::to_string(limits_.max_unread_reply_bytes) + " bytes of events unread");
-            client.out.clear();
-            client.gone = true;
-        }
+        if (drop_unread(client, "events")) client.gone = true;
     }
 }
 
@@ -453,10 +448,7 @@ void ControlServer::answer_lines(Client& client) {
         }
         // Unread means not taken by the socket: offer the replies first.
         if (client.out.size() > limits_.max_unread_reply_bytes) flush(client);
-        if (client.out.size() > limits_.max_unread_reply_bytes) {
-            note("control: disconnected " + client.peer.describe() + ": it left more than " +
-                 std::to_string(limits_.max_unread_reply_bytes) + " bytes of replies unread");
-            client.out.clear();
+        if (drop_unread(client, "replies")) {
             client.closing = true;
             break;
         }
@@ -571,13 +563,23 @@ void ControlServer::watch(Client& client) {
     client.watched = want;
 }
 
+// More than the limit of `what` (replies, events) that the socket did not take: the client
+// gets no more of them, and the journal says why it is disconnected. True when so.
+bool ControlServer::drop_unread(Client& client, std::string_view what) {
+    if (client.out.size() <= limits_.max_unread_reply_bytes) return false;
+    note("control: disconnected " + client.peer.describe() + ": it left more than " +
+         std::to_string(limits_.max_unread_reply_bytes) + " bytes of " + std::string(what) +
+         " unread");
+    client.out.clear();
+    return true;
+}
+
 void ControlServer::close_client(int fd) {
-    const auto it = std::find_if(clients_.begin(), clients_.end(),
-                                 [fd](const Client& c) { return c.fd == fd; });
-    if (it == clients_.end()) return;
+    const Client* const client = find_client(fd);
+    if (client == nullptr) return;
     ::epoll_ctl(epoll_fd_, EPOLL_CTL_DEL, fd, nullptr);
     ::close(fd);
-    clients_.erase(it);
+    clients_.erase(clients_.begin() + (client - clients_.data()));
     if (!accepting_) watch_listener(true);  // a descriptor is free again
 }
 

@@ -40,6 +40,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <thread>
 #include <vector>
 
@@ -120,6 +121,7 @@ class ControlServer {
     void answer_lines(Client& client);
     void flush(Client& client);
     void close_client(int fd);
+    bool drop_unread(Client& client, std::string_view what);
     void watch(Client& client);
     void watch_listener(bool on);
     void enforce_deadlines(Clock::time_point now);
