@@ -92,6 +92,11 @@ void give_group(const std::string& path, const std::string& group_name, std::str
                "\" on this system, so only this daemon's user may connect (docs/control.md)";
         return;
     }
+    // Under the unit the socket is born in group hapticd (Group=hapticd), and chown() is
+    // outside its system call filter (@privileged): only a daemon in another group, root
+    // outside the unit, hands the socket over (docs/install.md).
+    struct stat st {};
+    if (::stat(path.c_str(), &st) == 0 && st.st_gid == found->gr_gid) return;
     if (::chown(path.c_str(), static_cast<uid_t>(-1), found->gr_gid) != 0) {
         note = "control socket " + path + ": could not give it to group \"" + group_name +
                "\": " + errno_text(errno) + "; only this daemon's user may connect";

@@ -1,8 +1,8 @@
-// hapticd as a service sees it: an unprivileged user (setpriv to nobody, as DynamicUser=
-// runs it) whose real-time request is refused, with stderr on a stream that JOURNAL_STREAM
-// names (systemd.exec(5)). The refusal is reported when the servo starts, not when the run
-// ends, with the remedy in the unit's words; every message line carries its journal priority
-// there, and none anywhere else (docs/daemon.md, "As a service").
+// hapticd as a service sees it: an unprivileged user (setpriv to nobody, as bare as the unit's
+// user hapticd) whose real-time request is refused, with stderr on a stream that
+// JOURNAL_STREAM names (systemd.exec(5)). The refusal is reported when the servo starts, not
+// when the run ends, with the remedy in the unit's words; every message line carries its
+// journal priority there, and none anywhere else (docs/daemon.md, "As a service").
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <unistd.h>

@@ -111,11 +111,12 @@ TEST_F(InstalledTree, TheTemplateUnitRunsTheInstalledHapticdOnTheInstancesConfig
               std::string::npos)
         << unit;
     for (const char* line :
-         {"\nType=notify\n", "\nWatchdogSec=", "\nRestartPreventExitStatus=2\n",
-          "\nDynamicUser=yes\n", "\nSupplementaryGroups=plugdev hapticd\n",
+         {"\nType=notify\n", "\nWatchdogSec=", "\nRestartPreventExitStatus=2\n", "\nUser=hapticd\n",
+          "\nGroup=hapticd\n", "\nSupplementaryGroups=plugdev\n",
           "\nLimitRTPRIO=", "\nLimitMEMLOCK=infinity\n", "\nLogsDirectory=hapticd/%i\n",
-          "\nRuntimeDirectory=hapticd/%i\n", "\nDevicePolicy=closed\n", "summary-{start}.json",
-          " --socket ${RUNTIME_DIRECTORY}/control.sock\n"}) {
+          "\nLogsDirectoryMode=0750\n", "\nRuntimeDirectory=hapticd\n",
+          "\nRuntimeDirectoryPreserve=yes\n", "\nUMask=0027\n", "\nDevicePolicy=closed\n",
+          "summary-{start}.json", " --socket ${RUNTIME_DIRECTORY}/%i.sock\n"}) {
         EXPECT_NE(unit.find(line), std::string::npos) << line;
     }
     EXPECT_EQ(unit.find('@' + std::string("HAPTICD_")), std::string::npos) << unit;
@@ -146,6 +147,25 @@ TEST_F(InstalledTree, AnInstanceCanBeBoundToItsDevice) {
     EXPECT_EQ(verify.exit_code, 0) << verify.err;
     EXPECT_EQ(verify.err, "");
     EXPECT_EQ(verify.out, "");
+
+    // Its commented lines, which narrow DeviceAllow= to the device's own node, read as clean.
+    std::string narrowed;
+    std::istringstream lines(text);
+    for (std::string line; std::getline(lines, line);) {
+        if (line.starts_with("#[Service]") || line.starts_with("#DeviceAllow=")) {
+            line.erase(0, 1);
+        }
+        narrowed += line + "\n";
+    }
+    ASSERT_NE(narrowed.find("\n[Service]\nDeviceAllow=\nDeviceAllow=/dev/hapticd/%i rw\n"),
+              std::string::npos)
+        << narrowed;
+    scratch_->write("units/hapticd@lab0.service.d/bind-to-device.conf", narrowed);
+    const CommandResult narrowed_verify =
+        run_command("cd " + units + " && systemd-analyze verify --man=no ./hapticd@lab0.service");
+    EXPECT_EQ(narrowed_verify.exit_code, 0) << narrowed_verify.err;
+    EXPECT_EQ(narrowed_verify.err, "");
+    EXPECT_EQ(narrowed_verify.out, "");
 }
 
 TEST_F(InstalledTree, TheServiceFilesManPagesAndDataAreInstalled) {

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 #include <thread>
+#include <utility>
 
 #include "background_daemon.hpp"
 #include "default_config.hpp"
@@ -18,9 +19,11 @@
 namespace hapticd::testing {
 
 /// The default config with an overrun budget that a shared VM's stalls (tens of ms) do not
-/// exhaust: what these tests judge is the socket, not the host's scheduling.
-inline std::string config_with_room(const std::string& extra_toml) {
-    std::string config = default_config() + extra_toml;
+/// exhaust: what these tests judge is the socket, not the host's scheduling. `servo_lines` go
+/// at the top of its [servo] table (default_config).
+inline std::string config_with_room(const std::string& extra_toml,
+                                    const std::string& servo_lines = "") {
+    std::string config = default_config(servo_lines) + extra_toml;
     const std::string safety = "[safety]\n";
     config.replace(config.find(safety), safety.size(),
                    safety + "max_missed_periods = 1000\nmax_consecutive_overruns = 1000\n");
@@ -38,7 +41,11 @@ struct Daemon {
     Daemon(const ScratchDir& dir, const std::string& name, const std::string& extra_toml = "")
         : Daemon(dir, name, ConfigText{config_with_room(extra_toml)}) {}
     Daemon(const ScratchDir& dir, const std::string& name, const ConfigText& config)
-        : socket(dir.file(name + ".sock")),
+        : Daemon(dir, name, config, dir.file(name + ".sock")) {}
+    /// Serving the socket at `socket_path` (an instance's, instance_socket()).
+    Daemon(const ScratchDir& dir, const std::string& name, const ConfigText& config,
+           std::string socket_path)
+        : socket(std::move(socket_path)),
           summary(dir.file(name + "-summary.json")),
           process(HAPTICD_BIN,
                   {"--no-status", "--config", dir.write(name + ".toml", config.toml), "--socket",
@@ -48,6 +55,17 @@ struct Daemon {
     std::string summary;
     BackgroundDaemon process;
 };
+
+/// Where hapticd@NAME serves its control socket, which `hapticctl -i NAME` asks:
+/// /run/hapticd/NAME.sock (the unit's RuntimeDirectory=hapticd; docs/install.md).
+inline std::string instance_socket(const std::string& name) {
+    return "/run/hapticd/" + name + ".sock";
+}
+
+/// hapticctl -i NAME ARGUMENTS.
+inline CommandResult hapticctl_instance(const std::string& name, const std::string& arguments) {
+    return run_command(shell_quote(HAPTICCTL_BIN) + " -i " + shell_quote(name) + " " + arguments);
+}
 
 inline CommandResult hapticctl(const std::string& socket, const std::string& arguments) {
     return run_command(shell_quote(HAPTICCTL_BIN) + " --socket " + shell_quote(socket) + " " +

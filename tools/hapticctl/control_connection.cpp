@@ -29,9 +29,7 @@ std::string connect_advice(int error) {
 
 }  // namespace
 
-std::string instance_socket(const std::string& name) {
-    return "/run/hapticd/" + name + "/control.sock";
-}
+std::string instance_socket(const std::string& name) { return "/run/hapticd/" + name + ".sock"; }
 
 ControlConnection::ControlConnection(std::string socket_path, std::chrono::milliseconds timeout)
     : path_(std::move(socket_path)), timeout_(timeout) {

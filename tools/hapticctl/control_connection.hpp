@@ -24,7 +24,7 @@ class Interrupted : public ConnectionError {
     Interrupted() : ConnectionError("interrupted") {}
 };
 
-/// /run/hapticd/NAME/control.sock: where the template unit hapticd@NAME serves it.
+/// /run/hapticd/NAME.sock: where the template unit hapticd@NAME serves it.
 std::string instance_socket(const std::string& name);
 
 class ControlConnection {

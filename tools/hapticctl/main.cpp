@@ -267,7 +267,7 @@ int run_main(int argc, char** argv) {
     std::string socket_path;
     auto* instance_option = app.add_option("-i,--instance", instance,
                                            "the instance NAME of hapticd@NAME: its socket is "
-                                           "/run/hapticd/NAME/control.sock");
+                                           "/run/hapticd/NAME.sock");
     auto* socket_option =
         app.add_option("--socket", socket_path, "the control socket's PATH (hapticd --socket)");
     instance_option->excludes(socket_option);
@@ -375,6 +375,12 @@ int run_main(int argc, char** argv) {
                      "identify (hapticctl --help)\n";
         return hapticd::daemon::kExitBadInput;
     }
+    // Bad input is told before any daemon is asked, whether one answers or not.
+    if (coupling->parsed() && (!std::isfinite(stiffness) || !std::isfinite(damping))) {
+        std::cerr << "hapticctl: coupling " << stiffness << " " << damping
+                  << ": K and B must be finite numbers >= 0\n";
+        return hapticd::daemon::kExitBadInput;
+    }
     if (instance_option->count() == 0 && socket_option->count() == 0) {
         std::cerr << "hapticctl: which daemon? give -i NAME (hapticd@NAME) or --socket PATH\n";
         return hapticd::daemon::kExitBadInput;
@@ -419,11 +425,6 @@ int run_main(int argc, char** argv) {
         if (disarm->parsed()) return change_state(daemon, RequestKind::disarm);
         if (reset->parsed()) return change_state(daemon, RequestKind::reset);
         if (coupling->parsed()) {
-            if (!std::isfinite(stiffness) || !std::isfinite(damping)) {
-                std::cerr << "hapticctl: coupling " << stiffness << " " << damping
-                          << ": K and B must be finite numbers >= 0\n";
-                return hapticd::daemon::kExitBadInput;
-            }
             return set_coupling(
                 daemon, stiffness,
                 damping_option->count() != 0 ? std::optional<double>(damping) : std::nullopt);
