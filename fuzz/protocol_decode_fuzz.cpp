@@ -13,7 +13,7 @@
 //      back unchanged.
 // Out-of-bounds reads are the sanitizers' business (-fsanitize=fuzzer,address,undefined); the
 // invariants abort with a message. The same entry point replays the seed corpus under GCC in
-// ctest (tests/device/protocol/fuzz_replay_main.cpp).
+// ctest (tests/fuzz_replay/fuzz_replay_main.cpp).
 #include <algorithm>
 #include <array>
 #include <cstddef>

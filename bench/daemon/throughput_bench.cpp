@@ -32,7 +32,7 @@ using hapticd::env::ImpedanceEnvironment;
 using hapticd::servo::TelemetryRing;
 
 constexpr std::uint64_t kTicksPerRun = 20000;          // 20 s of virtual time per iteration
-constexpr std::size_t kLockstepRingRecords = 1 << 14;  // as src/daemon/run.cpp
+constexpr std::size_t kLockstepRingRecords = 1 << 14;  // as src/daemon/run_telemetry.hpp
 
 enum class Telemetry { no_ring, ring_popped, csv_writer };
 

@@ -52,6 +52,7 @@ void read_servo(TableReader& servo, ServoSection& out) {
 void read_model(TableReader& model, double rate_hz, DeviceSection& out) {
     out.model_mass_kg = model.read_optional(schema::kModelMass);
     out.model_damping_n_s_per_m = model.read_optional(schema::kModelDamping);
+    out.model_delay_stated = model.has(schema::kModelDelay.key);
     // In periods, as every model checks it.
     out.model_delay_s =
         model.read_periods(schema::kModelDelay.key, tune::kMaxDelayPeriods, rate_hz);
@@ -133,6 +134,7 @@ void read_safety(TableReader& safety, SafetySection& out) {
     out.soft_start_ramp_s = safety.read(schema::kSoftStartRamp);
     out.passivity = safety.read(schema::kPassivity);
     out.reconnect = safety.read(schema::kReconnect);
+    out.arm_at_start = safety.read(schema::kArmAtStart);
     out.reconnect_settle_s = safety.read(schema::kReconnectSettle);
     out.reconnect_timeout_s = safety.read(schema::kReconnectTimeout);
     // The overrun budget: a stall of up to max_missed_periods periods (20 ms at 1 kHz by
@@ -246,13 +248,13 @@ Config parse_config(std::string_view toml_text, const std::string& source,
     Section op(file, "operator");
     if (root.contains("operator")) {
         if (config.coupling.check != tune::StabilityModel::exact) {
-            const std::string check(to_string(config.coupling.check));
             op->fail_table(
                 "declares an operator class, which only [coupling] check = \"exact\" "
                 "can use, but check = \"" +
-                check + "\"" +
-                (check == "passive" ? " (the passive model holds for every passive operator)"
-                                    : "") +
+                std::string(to_string(config.coupling.check)) + "\"" +
+                (config.coupling.check == tune::StabilityModel::passive
+                     ? " (the passive model holds for every passive operator)"
+                     : "") +
                 ": set check = \"exact\", or remove [operator]");
         }
         config.operators = read_operator_class(*op);

@@ -18,7 +18,7 @@
 
 namespace hapticd::daemon::control {
 
-/// The servo loop as the control socket sees it (supervised_run.hpp adapts ServoLoop; tests
+/// The servo loop as the control socket sees it (loop_control.hpp adapts ServoLoop; tests
 /// use their own).
 class ServoControl {
   public:

@@ -1,10 +1,20 @@
 #include "hapticd/daemon/device_open.hpp"
 
 #include <exception>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
 namespace hapticd::daemon {
+namespace {
+
+/// The refusal of a plugin that cannot be loaded, the loader's reason after the config's key.
+ConfigError unloadable(const Config& config, const std::exception& e) {
+    return ConfigError(config.source + ": [device] plugin = \"" + config.device.plugin +
+                       "\": " + e.what());
+}
+
+}  // namespace
 
 device::DeviceConfig device_config(const Config& config, bool lockstep) {
     device::DeviceConfig device_config;
@@ -17,13 +27,25 @@ device::DeviceConfig device_config(const Config& config, bool lockstep) {
     return device_config;
 }
 
+void check_device_config(const Config& config, UnloadablePlugin if_unloadable, bool lockstep) {
+    const device::DeviceConfig table = device_config(config, lockstep);
+    std::optional<std::string> refusal;
+    try {
+        // The message comes back in a string of ours, copied while the plugin was loaded.
+        refusal = device::check_plugin_config(config.device.plugin, table);
+    } catch (const std::exception& e) {
+        if (if_unloadable == UnloadablePlugin::defer) return;
+        throw unloadable(config, e);
+    }
+    if (refusal) throw ConfigError(*refusal);
+}
+
 device::DeviceHandle open_device(const Config& config, bool lockstep) {
     device::DeviceHandle device;
     try {
         device = device::load_device(config.device.plugin);
     } catch (const std::exception& e) {
-        throw ConfigError(config.source + ": [device] plugin = \"" + config.device.plugin +
-                          "\": " + e.what());
+        throw unloadable(config, e);
     }
     // What open() throws is the plugin's: its type and vtable live in the plugin's code, which
     // is unloaded with the handle. Its message is copied here, while the plugin is loaded, and

@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "hapticd/daemon/device_open.hpp"
+#include "hapticd/input/range.hpp"
 #include "hapticd/servo/monotonic_clock.hpp"
 #include "hapticd/servo/tick_stats.hpp"
 #include "hapticd/tune/input_checks.hpp"
@@ -20,6 +21,8 @@ namespace {
 using servo::IoResult;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+/// How long a diagnosis may run (DiagOptions::duration_s).
+constexpr input::Range kDiagDuration{.lo = 0.0, .hi = 3600.0, .lo_open = true, .unit = "s"};
 /// Histogram edges, us: fine below a millisecond, where a 1 kHz loop lives.
 constexpr double kEdgesUs[] = {0, 25, 50, 100, 200, 300, 500, 750, 1000, 2000, 5000, 10000, kInf};
 
@@ -139,10 +142,8 @@ void summarise_delay(const std::vector<double>& delay_s, const std::vector<doubl
 }  // namespace
 
 DiagReport run_link_diag(const Config& config, const DiagOptions& options, std::ostream& log) {
-    if (!(options.duration_s > 0.0) || options.duration_s > 3600.0) {
-        std::ostringstream m;
-        m << "--duration " << options.duration_s << " is not allowed: must be > 0 and <= 3600 s";
-        throw std::invalid_argument(m.str());
+    if (!kDiagDuration.contains(options.duration_s)) {
+        input::reject_out_of_range("--duration", options.duration_s, kDiagDuration);
     }
     device::DeviceHandle device = open_device(config, options.lockstep);
     const device::DeviceInfo info = device->info();

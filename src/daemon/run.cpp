@@ -14,6 +14,26 @@
 #include "supervised_run.hpp"
 
 namespace hapticd::daemon {
+namespace {
+
+template <typename Error>
+bool is(const std::exception& e) {
+    return dynamic_cast<const Error*>(&e) != nullptr;
+}
+
+/// The one mapping of what ended a run to its exit code, its message on `log`: exit 2 for
+/// bad input found before the device moves (BadInput from the set-up steps; ConfigError
+/// from the readers of the config, the scene and the servo settings; ControlSocketError for
+/// a --socket not made; OutputError for a --log or --summary refused or not created), exit 1
+/// for anything else.
+int exit_on(const std::exception& e, std::ostream& log) {
+    const bool socket = is<control::ControlSocketError>(e);
+    const bool bad_input = socket || is<BadInput>(e) || is<ConfigError>(e) || is<OutputError>(e);
+    log << priority::err << "hapticd: " << (socket ? "--socket: " : "") << e.what() << "\n";
+    return bad_input ? kExitBadInput : kExitFault;
+}
+
+}  // namespace
 
 int run_daemon(const RunOptions& given, std::atomic<bool>& stop, std::ostream& out,
                std::ostream& log) {
@@ -39,6 +59,12 @@ int run_daemon(const RunOptions& given, std::atomic<bool>& stop, std::ostream& o
                            "coupling (22) to produce any force");
         }
         check_duration(options, config.servo.rate_hz);
+        if (!config.safety.arm_at_start && !options.socket_path) {
+            throw BadInput(config.source +
+                           ": [safety] arm_at_start = false waits for hapticctl arm, which needs "
+                           "a control socket (--socket PATH; the unit gives one); without it "
+                           "the device would never push");
+        }
         Outputs outputs = prepare_outputs(options, config);
         device::DeviceHandle device = open_device_or_exit(config, options.lockstep);
         const DeviceCloser closer{device.get()};
@@ -60,21 +86,8 @@ int run_daemon(const RunOptions& given, std::atomic<bool>& stop, std::ostream& o
         }
         return run_loop(options, config, servo_config, *device, *scene.admittance, rendered,
                         context, outputs, stop, out, log);
-    } catch (const BadInput& e) {
-        log << priority::err << "hapticd: " << e.what() << "\n";
-        return kExitBadInput;
-    } catch (const ConfigError& e) {  // the config, the scene, the servo settings
-        log << priority::err << "hapticd: " << e.what() << "\n";
-        return kExitBadInput;
-    } catch (const control::ControlSocketError& e) {  // --socket not made
-        log << priority::err << "hapticd: --socket: " << e.what() << "\n";
-        return kExitBadInput;
-    } catch (const OutputError& e) {  // --log or --summary refused or not created
-        log << priority::err << "hapticd: " << e.what() << "\n";
-        return kExitBadInput;
     } catch (const std::exception& e) {
-        log << priority::err << "hapticd: " << e.what() << "\n";
-        return kExitFault;
+        return exit_on(e, log);
     }
 }
 

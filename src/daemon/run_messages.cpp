@@ -49,11 +49,15 @@ std::string status_line(const servo::StatusSnapshot& s, int axes) {
     return out.str();
 }
 
-std::string service_status(const servo::StatusSnapshot& s, double rate_hz,
+std::string service_status(const servo::StatusSnapshot& s, double rate_hz, double measured_rate_hz,
                            const std::string& note) {
     std::ostringstream out;
-    out << servo::servo_state_name(s.state) << ", " << rate_hz << " Hz, tick " << s.tick
-        << ", overruns " << s.overruns << ", faults "
+    out << servo::servo_state_name(s.state) << ", " << rate_hz << " Hz";
+    if (measured_rate_hz > 0.0) {
+        out << std::fixed << std::setprecision(1) << " (measured " << measured_rate_hz << ")"
+            << std::defaultfloat;
+    }
+    out << ", tick " << s.tick << ", overruns " << s.overruns << ", faults "
         << (s.faults == 0u ? std::string("none") : fault_names(s.faults));
     if (!note.empty()) out << ", " << note;
     return out.str();

@@ -11,7 +11,12 @@
 namespace hapticd::daemon {
 
 Config load_any_config(const RunOptions& options) {
-    return options.config_path ? load_config(*options.config_path) : default_config();
+    Config config = options.config_path ? load_config(*options.config_path) : default_config();
+    // The plugin's own table, read as its open() will read it, as haptic-tune reads it: a bad
+    // one is refused here, before the start-up check. A plugin that cannot be loaded is left
+    // to open_device_or_exit, after the outputs are checked (one of them may be the plugin).
+    check_device_config(config, UnloadablePlugin::defer, options.lockstep);
+    return config;
 }
 
 env::Scene load_any_scene(const Config& config) {

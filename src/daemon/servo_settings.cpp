@@ -46,7 +46,7 @@ servo::ServoConfig servo_config_of(const Config& config, const device::DeviceInf
     servo.link_recovery = {.enabled = config.safety.reconnect,
                            .settle_s = config.safety.reconnect_settle_s,
                            .timeout_s = config.safety.reconnect_timeout_s};
-    servo.start_armed = true;
+    servo.start_armed = config.safety.arm_at_start;
     return servo;
 }
 
@@ -74,6 +74,7 @@ servo::ServoConfig make_identify_servo_config(const Config& config, const device
     servo.safety.soft_start.ramp_time_s = 0.0;
     servo.safety.passivity.mode = servo::PassivityMode::observe;
     servo.link_recovery.enabled = false;
+    servo.start_armed = true;  // the excitation is what was asked for: it plays at once
     return checked(servo, config);
 }
 

@@ -4,6 +4,8 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "hapticd/tune/result_json.hpp"
+
 namespace hapticd::daemon {
 
 std::string summary_json(const servo::Summary& s, const RunContext& c) {
@@ -66,15 +68,13 @@ std::string summary_json(const servo::Summary& s, const RunContext& c) {
     if (!c.config_path.empty()) j["config_path"] = c.config_path;
     j["device"] = c.device;
     j["scene"] = {{"name", c.scene}, {"causality", c.causality}};
-    nlohmann::ordered_json check;
-    check["model"] = c.check.model_name();
-    if (!c.check.skipped) {
-        check["passed"] = c.check.passed;
-        check["worst_margin"] = c.check.worst_margin;
-        check["worst_frequency_hz"] = c.check.worst_frequency_hz;
-        if (!c.check.worst_case.empty()) check["worst_case"] = c.check.worst_case;
+    // The start-up check's verdict as haptic-tune check prints it (tune/result_json.hpp); a
+    // check that was skipped names only its model ("off", or why there is none).
+    if (c.check.skipped) {
+        j["stability_check"] = {{"model", c.check.model_name()}};
+    } else {
+        j["stability_check"] = static_cast<const tune::StabilityVerdict&>(c.check);
     }
-    j["stability_check"] = check;
     j["realtime"] = {{"mode", std::string(servo::to_string(c.realtime.mode))},
                      {"sched_fifo", c.realtime.scheduler_fifo},
                      {"priority", c.realtime.priority},

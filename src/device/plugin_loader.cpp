@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <sstream>
 #include <stdexcept>
@@ -58,8 +59,9 @@ const hapticd_device_plugin* entry_of(void* library, std::string& error) {
                 std::to_string(kDeviceAbiVersion) + "; rebuild the plugin against this hapticd";
         return nullptr;
     }
-    if (plugin->create == nullptr || plugin->destroy == nullptr) {
-        error = "its descriptor has a null create or destroy function";
+    if (plugin->create == nullptr || plugin->destroy == nullptr ||
+        plugin->check_config == nullptr) {
+        error = "its descriptor has a null create, destroy or check_config function";
         return nullptr;
     }
     return plugin;
@@ -75,12 +77,51 @@ bool is_regular_file(const std::string& path) {
                              ") cannot be used: " + why);
 }
 
-DeviceHandle load_from_path(std::string_view what, const std::string& path) {
+/// An opened library and its descriptor, after the ABI check.
+struct LoadedPlugin {
+    std::shared_ptr<void> library;
+    const hapticd_device_plugin* plugin = nullptr;
+    std::string path;
+};
+
+LoadedPlugin open_plugin(std::string_view what, const std::string& path) {
     std::string error;
     std::shared_ptr<void> library = open_library(path, error);
     if (!library) fail(what, path, "dlopen failed: " + error);
     const hapticd_device_plugin* plugin = entry_of(library.get(), error);
     if (plugin == nullptr) fail(what, path, error);
+    return {std::move(library), plugin, path};
+}
+
+/// The plugin `name_or_path` found (file comment of plugin_loader.hpp), opened and checked.
+LoadedPlugin find_plugin(std::string_view name_or_path) {
+    if (name_or_path.empty()) throw std::runtime_error("device plugin name is empty");
+    if (name_or_path.find('/') != std::string_view::npos) {
+        return open_plugin(name_or_path, std::string(name_or_path));
+    }
+    std::vector<std::string> tried;
+    for (const std::string& dir : plugin_search_path()) {
+        for (const std::string& file : plugin_file_names(name_or_path)) {
+            const std::string path = dir + "/" + file;
+            if (is_regular_file(path)) return open_plugin(name_or_path, path);
+            tried.push_back(path);
+        }
+    }
+    std::ostringstream message;
+    message << "device plugin '" << name_or_path << "' not found; looked for:";
+    for (const std::string& path : tried) message << "\n  " << path;
+    message << "\n(set HAPTICD_PLUGIN_PATH to a colon-separated list of directories, or give "
+               "a path containing '/')";
+    throw std::runtime_error(message.str());
+}
+
+}  // namespace
+
+DeviceHandle load_device(std::string_view name_or_path) {
+    LoadedPlugin loaded = find_plugin(name_or_path);
+    const hapticd_device_plugin* plugin = loaded.plugin;
+    const std::string& path = loaded.path;
+    const std::string_view what = name_or_path;
     Device* device = nullptr;
     try {
         device = plugin->create();
@@ -88,10 +129,18 @@ DeviceHandle load_from_path(std::string_view what, const std::string& path) {
         fail(what, path, std::string("create() threw: ") + e.what());
     }
     if (device == nullptr) fail(what, path, "create() returned a null device");
-    return DeviceHandle(device, PluginDeleter(plugin->destroy, std::move(library)));
+    return DeviceHandle(device, PluginDeleter(plugin->destroy, std::move(loaded.library)));
 }
 
-}  // namespace
+std::optional<std::string> check_plugin_config(std::string_view name_or_path,
+                                               const DeviceConfig& config, std::size_t capacity) {
+    const LoadedPlugin loaded = find_plugin(name_or_path);
+    // The message is written into our buffer, so nothing of the plugin's outlives it.
+    std::string message(std::max<std::size_t>(capacity, 1), '\0');
+    if (loaded.plugin->check_config(&config, message.data(), message.size())) return std::nullopt;
+    message.resize(std::strlen(message.c_str()));
+    return message;
+}
 
 void PluginDeleter::operator()(Device* device) const noexcept {
     if (device != nullptr && destroy_ != nullptr) destroy_(device);
@@ -118,28 +167,6 @@ std::vector<std::string> plugin_file_names(std::string_view name) {
     const std::string base =
         std::string(kFilePrefix) + std::string(name) + std::string(kFileSuffix);
     return {"lib" + base, base};
-}
-
-DeviceHandle load_device(std::string_view name_or_path) {
-    if (name_or_path.empty()) throw std::runtime_error("device plugin name is empty");
-    if (name_or_path.find('/') != std::string_view::npos) {
-        const std::string path(name_or_path);
-        return load_from_path(name_or_path, path);
-    }
-    std::vector<std::string> tried;
-    for (const std::string& dir : plugin_search_path()) {
-        for (const std::string& file : plugin_file_names(name_or_path)) {
-            const std::string path = dir + "/" + file;
-            if (is_regular_file(path)) return load_from_path(name_or_path, path);
-            tried.push_back(path);
-        }
-    }
-    std::ostringstream message;
-    message << "device plugin '" << name_or_path << "' not found; looked for:";
-    for (const std::string& path : tried) message << "\n  " << path;
-    message << "\n(set HAPTICD_PLUGIN_PATH to a colon-separated list of directories, or give "
-               "a path containing '/')";
-    throw std::runtime_error(message.str());
 }
 
 std::vector<PluginListing> list_plugins() {

@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "hapticd/input/range.hpp"
 #include "hapticd/tune/exact_model.hpp"
 #include "hapticd/tune/input_checks.hpp"
 
@@ -86,11 +87,9 @@ double round_significant(double value, int digits, bool down) {
 void AutotuneOptions::validate() const {
     check_rate(rate_hz);
     if (!(margin > 0.0 && margin <= 1.0)) {
-        std::ostringstream message;
-        message << "margin = " << margin
-                << " is out of range: allowed (0, 1] (the fraction of the largest stable "
-                   "coupling stiffness to use)";
-        throw std::invalid_argument(message.str());
+        input::reject_out_of_range(
+            "margin", margin,
+            "(0, 1] (the fraction of the largest stable coupling stiffness to use)");
     }
     check_delay_periods(delay_periods);
     check_velocity_filter(velocity_filter_hz, rate_hz);

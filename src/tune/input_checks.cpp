@@ -37,7 +37,9 @@ void check_device(const theory::DeviceModel& device) {
 }
 
 void check_rate(double rate_hz) {
-    check_in_range("servo rate", rate_hz, kMinRateHz, kMaxRateHz, "Hz");
+    if (!servo::kRateRange.contains(rate_hz)) {
+        input::reject_out_of_range("servo rate", rate_hz, servo::kRateRange);
+    }
 }
 
 void check_coupling_gains(const theory::SpringDamperCoupling& coupling) {

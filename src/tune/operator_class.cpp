@@ -6,6 +6,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "hapticd/input/range.hpp"
+
 namespace hapticd::tune {
 namespace {
 
@@ -115,12 +117,11 @@ void validate(const OperatorClass& operators, const std::string& source) {
             const bool ok = std::isfinite(value) && value <= limit.max &&
                             (mass ? value > 0.0 : value >= limit.min);
             if (!ok) {
-                std::ostringstream message;
-                message << source << " " << OperatorClass::kKeys[i] << " = " << value << " "
-                        << OperatorClass::kUnits[i] << " is out of range: allowed "
-                        << (mass ? "> 0" : ">= 0") << " and <= " << limit.max << " "
-                        << OperatorClass::kUnits[i];
-                throw std::invalid_argument(message.str());
+                const char* unit = OperatorClass::kUnits[i];
+                input::reject_out_of_range(
+                    source + " " + OperatorClass::kKeys[i], input::format_quantity(value, unit),
+                    std::string(mass ? "> 0" : ">= 0") +
+                        " and <= " + input::format_quantity(limit.max, unit));
             }
         }
         if (r[i].min > r[i].max) {
@@ -133,11 +134,10 @@ void validate(const OperatorClass& operators, const std::string& source) {
     }
     const double f = operators.max_resonance_hz;
     if (!(std::isfinite(f) && f >= 0.0 && f <= OperatorClass::kMaxResonanceLimitHz)) {
-        std::ostringstream message;
-        message << source << " max_resonance = " << f
-                << " Hz is out of range: allowed > 0 and <= " << OperatorClass::kMaxResonanceLimitHz
-                << " Hz (leave it out for no bound)";
-        throw std::invalid_argument(message.str());
+        input::reject_out_of_range(
+            source + " max_resonance", input::format_quantity(f, "Hz"),
+            "> 0 and <= " + input::format_quantity(OperatorClass::kMaxResonanceLimitHz, "Hz") +
+                " (leave it out for no bound)");
     }
     if (f > 0.0) {
         // The least resonance in the box: the softest springs on the heaviest hand.

@@ -38,6 +38,12 @@ void to_json(nlohmann::ordered_json& json, const ForceSensorFilter& filter) {
             {"description", filter.describe()}};
 }
 
+void to_json(nlohmann::ordered_json& json, const CouplingCheck& check) {
+    json = {{"unconditionally_stable", check.unconditionally_stable},
+            {"worst_margin", check.worst_margin},
+            {"worst_frequency_hz", check.worst_frequency_hz}};
+}
+
 }  // namespace theory
 
 namespace tune {

@@ -6,17 +6,17 @@
 //
 // The first two bad files reproduce what disagreed before: `[coupling] enabled = true` ran
 // under hapticd and was an unknown key to haptic-tune; `rate_hz = 50` was analysed by
-// haptic-tune and refused by hapticd.
+// haptic-tune and refused by hapticd. So do the bad plugin tables: hapticd refused them when
+// it opened the device, haptic-tune never read them.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <filesystem>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 #include "run_command.hpp"
+#include "scratch_dir.hpp"
 
 namespace hapticd {
 namespace {
@@ -118,14 +118,8 @@ TEST(ConfigAgreement, EveryShippedConfigGetsOneVerdict) {
 class ConfigAgreementOn : public ::testing::TestWithParam<std::pair<std::string, std::string>> {};
 
 TEST_P(ConfigAgreementOn, HapticdAndHapticTuneSayTheSame) {
-    const std::filesystem::path dir =
-        std::filesystem::temp_directory_path() /
-        ("hapticd-agreement-" + std::to_string(::getpid()) + "-" + GetParam().first);
-    std::filesystem::create_directories(dir);
-    const std::string path = (dir / "lab.toml").string();
-    std::ofstream(path) << GetParam().second;
-    expect_agreement(path);
-    std::filesystem::remove_all(dir);
+    const hapticd::testing::ScratchDir dir;
+    expect_agreement(dir.write("lab.toml", GetParam().second));
 }
 
 const std::string kPen = "[device.model]\nmass = 0.1\ndamping = 2\n";
@@ -163,6 +157,87 @@ INSTANTIATE_TEST_SUITE_P(
         std::pair{"class_without_exact",
                   kPen + "[coupling]\nstiffness = 3000\n[operator]\nhand_mass = 1\n"}),
     [](const auto& param_info) { return param_info.param.first; });
+
+// A plugin's own table ([device.<plugin>]) is read by the plugin (docs/architecture.md §4.3):
+// hapticd and haptic-tune both have it checked by the plugin when they read the config, so
+// a bad one is refused by both with the plugin's message, naming the file, the line and the
+// key. Before, hapticd refused it when it opened the device and haptic-tune never saw it.
+struct BadPluginTable {
+    std::string name;
+    std::string plugin;
+    std::string table;   ///< the lines of [device.<plugin>], from line 11 of the file
+    std::string expect;  ///< in both messages: "lab.toml:LINE: [device.<plugin>] KEY = VALUE"
+    friend void PrintTo(const BadPluginTable& bad, std::ostream* out) { *out << bad.name; }
+};
+
+class ConfigAgreementOnPluginTable : public ::testing::TestWithParam<BadPluginTable> {};
+
+TEST_P(ConfigAgreementOnPluginTable, BothRefuseWithThePluginsMessage) {
+    const BadPluginTable& bad = GetParam();
+    const hapticd::testing::ScratchDir dir;
+    // A config that passes every other check: the table is its only fault.
+    const std::string config =
+        dir.write("lab.toml", "[device]\nplugin = \"" + bad.plugin + "\"\n" + kPen +
+                                  "[coupling]\nstiffness = 3000\n" + kWall + "[device." +
+                                  bad.plugin + "]\n" + bad.table);
+    expect_agreement(config);
+    const Said tune = haptic_tune_on(config);
+    EXPECT_EQ(tune.exit_code, 2);
+    EXPECT_NE(tune.refusal.find(dir.path().string() + "/" + bad.expect), std::string::npos)
+        << tune.refusal;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Files, ConfigAgreementOnPluginTable,
+    ::testing::Values(
+        BadPluginTable{"sim_unknown_key", "sim", "mas = 0.2\n",
+                       "lab.toml:11: [device.sim] mas = 0.2 is not a known key"},
+        BadPluginTable{"sim_out_of_range", "sim", "mass = -1\n",
+                       "lab.toml:11: [device.sim] mass = -1 is out of range"},
+        BadPluginTable{"sim_wrong_type", "sim", "mass = \"heavy\"\n",
+                       "lab.toml:11: [device.sim] mass = \"heavy\""},
+        BadPluginTable{"sim_nested", "sim", "[device.sim.faults]\ndrop_probability = 2\n",
+                       "lab.toml:12: [device.sim.faults] drop_probability = 2 is out of range"},
+        BadPluginTable{"usb_unknown_key", "usb", "vid = 0x1209\nvidd = 1\n",
+                       "lab.toml:12: [device.usb] vidd = 1 is not a known key"},
+        BadPluginTable{"usb_out_of_range", "usb", "vid = 70000\n",
+                       "lab.toml:11: [device.usb] vid = 70000 is out of range"},
+        BadPluginTable{"usb_wrong_type", "usb", "interface = \"zero\"\n",
+                       "lab.toml:11: [device.usb] interface = \"zero\""},
+        BadPluginTable{"hid_unknown_key", "hid", "vendor = 1\n",
+                       "lab.toml:11: [device.hid] vendor = 1 is not a known key"},
+        BadPluginTable{"hid_out_of_range", "hid", "watchdog_ms = 5000\n",
+                       "lab.toml:11: [device.hid] watchdog_ms = 5000 is out of range"},
+        BadPluginTable{"hid_wrong_type", "hid", "path = 3\n", "lab.toml:11: [device.hid] path = 3"},
+        BadPluginTable{"serial_unknown_key", "serial", "port = \"/dev/null\"\nparity = 1\n",
+                       "lab.toml:12: [device.serial] parity = 1 is not a known key"},
+        BadPluginTable{"serial_out_of_range", "serial",
+                       "port = \"/dev/null\"\nreset_wait_ms = 20000\n",
+                       "lab.toml:12: [device.serial] reset_wait_ms = 20000 is out of range"},
+        BadPluginTable{"serial_wrong_type", "serial", "port = \"/dev/null\"\nexclusive = \"yes\"\n",
+                       "lab.toml:12: [device.serial] exclusive = \"yes\""}),
+    [](const auto& param_info) { return param_info.param.name; });
+
+// A [device] plugin that cannot be loaded: hapticd refuses it when it opens the device (after
+// its start-up check and the output files' checks), haptic-tune when it reads the config
+// (it opens no device); both exit 2 with the same message, which names the config and the key.
+TEST(ConfigAgreement, APluginThatCannotBeLoadedIsRefusedByBoth) {
+    const hapticd::testing::ScratchDir dir;
+    const std::string config =
+        dir.write("lab.toml", "[device]\nplugin = \"nosuchdevice\"\n" + kPen +
+                                  "[coupling]\nstiffness = 3000\n" + kWall);
+    const CommandResult daemon =
+        run_command(std::string(HAPTICD_BIN) + " --config " + quoted(config) +
+                    " --lockstep --duration 0.01 --no-status");
+    const std::string refusal = config +
+                                ": [device] plugin = \"nosuchdevice\": device plugin "
+                                "'nosuchdevice' not found; looked for:";
+    EXPECT_EQ(daemon.exit_code, 2);
+    EXPECT_NE(daemon.err.find("hapticd: " + refusal + "\n"), std::string::npos) << daemon.err;
+    const Said tune = haptic_tune_on(config);
+    EXPECT_EQ(tune.exit_code, 2);
+    EXPECT_EQ(tune.refusal, refusal);
+}
 
 }  // namespace
 }  // namespace hapticd

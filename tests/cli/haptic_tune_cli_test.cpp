@@ -1,6 +1,5 @@
 // haptic-tune size and check, end to end through the real executable.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cctype>
 #include <nlohmann/json.hpp>
@@ -8,11 +7,13 @@
 #include <string>
 
 #include "run_command.hpp"
+#include "scratch_dir.hpp"
 
 namespace hapticd {
 namespace {
 
 using hapticd::testing::run_command;
+using hapticd::testing::ScratchDir;
 using nlohmann::json;
 
 std::string tune(const std::string& args) { return std::string(HAPTIC_TUNE) + " " + args; }
@@ -229,23 +230,18 @@ TEST(HapticTuneCheck, AClassAndASceneAreStatedInTheVerdict) {
 }
 
 TEST(HapticTuneConfig, ErrorsNameTheFileTheKeyAndTheRange) {
-    const std::string path =
-        "/tmp/hapticd-cli-test-bad-" + std::to_string(::getpid()) + ".toml";  // per process
-    std::FILE* f = std::fopen(path.c_str(), "w");
-    std::fputs("[servo]\nrate_hz = 1000\n[device.model]\nmass = -0.5\ndamping = 2\n", f);
-    std::fclose(f);
+    const ScratchDir dir;
+    const std::string path = dir.write(
+        "bad.toml", "[servo]\nrate_hz = 1000\n[device.model]\nmass = -0.5\ndamping = 2\n");
     const auto result = run_command(tune("size --config " + path));
     EXPECT_EQ(result.exit_code, 2);
     EXPECT_NE(result.err.find(path), std::string::npos) << result.err;
     EXPECT_NE(result.err.find("[device.model] mass = -0.5"), std::string::npos) << result.err;
     EXPECT_NE(result.err.find(">= 0.0001 and <= 1000 (kg)"), std::string::npos) << result.err;
-    f = std::fopen(path.c_str(), "w");
-    std::fputs("[device.model]\nmass = 0.1\ndamping = 2\ninertia = 3\n", f);
-    std::fclose(f);
+    dir.write("bad.toml", "[device.model]\nmass = 0.1\ndamping = 2\ninertia = 3\n");
     const auto unknown = run_command(tune("size --config " + path + " --rate 1000"));
     EXPECT_EQ(unknown.exit_code, 2);
     EXPECT_NE(unknown.err.find("inertia"), std::string::npos) << unknown.err;
-    std::remove(path.c_str());
 }
 
 TEST(HapticTuneCheck, ExitCodeIsTheVerdict) {
@@ -323,20 +319,16 @@ TEST(HapticTuneVelocityFilter, SizeCheckAndPlotPassItToTheModels) {
 }
 
 TEST(HapticTuneVelocityFilter, ReadsItFromAConfigAndRejectsCutoffsOutOfRange) {
+    const ScratchDir dir;
     const std::string path =
-        "/tmp/hapticd-cli-test-filter-" + std::to_string(::getpid()) + ".toml";  // per process
-    std::FILE* f = std::fopen(path.c_str(), "w");
-    std::fputs(
-        "[servo]\nrate_hz = 1000\n[device.model]\nmass = 0.1\ndamping = 2\n"
-        "[coupling]\nstiffness = 3600\ndamping = 0.5\nvelocity_filter = 100\n",
-        f);
-    std::fclose(f);
+        dir.write("filter.toml",
+                  "[servo]\nrate_hz = 1000\n[device.model]\nmass = 0.1\ndamping = 2\n"
+                  "[coupling]\nstiffness = 3600\ndamping = 0.5\nvelocity_filter = 100\n");
     const auto from_file = run_command(tune("check --config " + path + " --json"));
     EXPECT_EQ(from_file.exit_code, 0) << from_file.err;
     EXPECT_EQ(json::parse(from_file.out).at("velocity_filter_hz").get<double>(), 100.0);
     // The flag overrides the file: 0 is no filter, and 3600 N/m at 0.5 N s/m fails.
     EXPECT_EQ(run_command(tune("check --config " + path + " --velocity-filter 0")).exit_code, 1);
-    std::remove(path.c_str());
     struct Bad {
         const char* args;
         const char* message;

@@ -2,7 +2,6 @@
 // against closed forms computed here, the image files, and the input errors.
 // Every suite name starts with "plot" so that `ctest -R plot` runs them all.
 #include <gtest/gtest.h>
-#include <stdlib.h>
 
 #include <cmath>
 #include <complex>
@@ -17,6 +16,7 @@
 #include <vector>
 
 #include "run_command.hpp"
+#include "scratch_dir.hpp"
 #include "text_file.hpp"
 
 namespace hapticd {
@@ -46,28 +46,8 @@ json run_json(const std::string& args) {
     return json::parse(result.out);
 }
 
-/// A fresh directory under the system temp dir, removed with the object.
-class TempDir {
-  public:
-    TempDir() {
-        std::string pattern =
-            (std::filesystem::temp_directory_path() / "hapticd-plot-XXXXXX").string();
-        if (mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
-        path_ = pattern;
-    }
-    TempDir(const TempDir&) = delete;
-    TempDir& operator=(const TempDir&) = delete;
-    ~TempDir() {
-        std::error_code ignored;
-        std::filesystem::remove_all(path_, ignored);
-    }
-    std::string file(const std::string& name) const { return (path_ / name).string(); }
-
-  private:
-    std::filesystem::path path_;
-};
-
 using hapticd::testing::read_file;
+using hapticd::testing::ScratchDir;
 
 double theta_at(double frequency_hz) { return 2.0 * kPi * frequency_hz * kPeriod; }
 
@@ -220,7 +200,7 @@ TEST(plotCommand, WithoutStiffnessItSizesWithThePassiveModel) {
     EXPECT_EQ(design.at("damping").get<double>(), 0.5);
     EXPECT_NE(j.at("title").get<std::string>().find("sized"), std::string::npos);
     // And the text output says so.
-    TempDir dir;
+    const ScratchDir dir;
     const auto text = run_command(tune("plot " + kDevice + " --out " + dir.file("s.svg")));
     ASSERT_EQ(text.exit_code, 0) << text.err;
     EXPECT_NE(text.out.find("sized from (21) with the passive model"), std::string::npos)
@@ -228,7 +208,7 @@ TEST(plotCommand, WithoutStiffnessItSizesWithThePassiveModel) {
 }
 
 TEST(plotCommand, TakesTheCouplingFromTheConfigFile) {
-    TempDir dir;
+    const ScratchDir dir;
     const std::string config = dir.file("design.toml");
     std::ofstream(config)
         << "[servo]\nrate_hz = 1000\n\n[device.model]\nmass = 0.1\ndamping = 2\n\n"
@@ -263,7 +243,7 @@ void expect_png(const std::string& path) {
 }
 
 TEST(plotFiles, WritesAPng) {
-    TempDir dir;
+    const ScratchDir dir;
     const std::string out = dir.file("design.png");
     const auto result = run_command(tune("plot " + kDesign + " --out " + out));
     ASSERT_EQ(result.exit_code, 0) << result.err;
@@ -272,7 +252,7 @@ TEST(plotFiles, WritesAPng) {
 }
 
 TEST(plotFiles, WritesAnSvgAndJsonTogether) {
-    TempDir dir;
+    const ScratchDir dir;
     const std::string out = dir.file("design.SVG");  // the extension's case does not matter
     const auto result = run_command(tune("plot " + kDesign + " --out " + out + " --json"));
     ASSERT_EQ(result.exit_code, 0) << result.err;
@@ -283,7 +263,7 @@ TEST(plotFiles, WritesAnSvgAndJsonTogether) {
 }
 
 TEST(plotFiles, ZwidthWritesPngAndSvg) {
-    TempDir dir;
+    const ScratchDir dir;
     const auto png = run_command(tune("zwidth " + kDesign + " --out " + dir.file("z.png")));
     ASSERT_EQ(png.exit_code, 0) << png.err;
     expect_png(dir.file("z.png"));
@@ -388,7 +368,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadChartInput{"zwidth " + kDesign + " --kp 20 --json", "--display admittance"}));
 
 TEST(plotRenderer, MissingPythonSaysWhatToInstall) {
-    TempDir dir;
+    const ScratchDir dir;
     const auto result = run_command("HAPTICD_PYTHON=/nonexistent/python3 " +
                                     tune("plot " + kDesign + " --out " + dir.file("x.png")));
     EXPECT_EQ(result.exit_code, 2);
@@ -397,7 +377,7 @@ TEST(plotRenderer, MissingPythonSaysWhatToInstall) {
 }
 
 TEST(plotRenderer, MissingMatplotlibSaysWhatToInstall) {
-    TempDir dir;
+    const ScratchDir dir;
     // A matplotlib package that cannot be imported, ahead of the real one on the path.
     std::filesystem::create_directories(dir.file("fake/matplotlib"));
     std::ofstream(dir.file("fake/matplotlib/__init__.py")) << "raise ImportError('simulated')\n";
@@ -409,7 +389,7 @@ TEST(plotRenderer, MissingMatplotlibSaysWhatToInstall) {
 }
 
 TEST(plotRenderer, AFailingScriptIsReportedWithItsMessage) {
-    TempDir dir;
+    const ScratchDir dir;
     std::ofstream(dir.file("broken.py")) << "import sys\nsys.stdin.read()\n"
                                             "print('renderer exploded', file=sys.stderr)\n"
                                             "sys.exit(1)\n";

@@ -5,9 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 
+#include "scratch_dir.hpp"
 #include "text_file.hpp"
 
 namespace hapticd::daemon {
@@ -93,11 +92,8 @@ TEST(DaemonConfigEditor, NumbersReadBackExactlyAndStayFloats) {
 }
 
 TEST(DaemonConfigEditor, WritesAtomicallyAfterABackup) {
-    const std::filesystem::path dir =
-        std::filesystem::temp_directory_path() / ("hapticd-editor-" + std::to_string(::getpid()));
-    std::filesystem::create_directories(dir);
-    const std::string path = (dir / "lab.toml").string();
-    { std::ofstream(path) << kConfig; }
+    const testing::ScratchDir dir;
+    const std::string path = dir.write("lab.toml", kConfig);
     std::filesystem::permissions(
         path, std::filesystem::perms::owner_read | std::filesystem::perms::owner_write);
     const EditedConfig r = edit_config_text(kConfig, {{"coupling", "stiffness", 1.0}}, path);
@@ -109,7 +105,6 @@ TEST(DaemonConfigEditor, WritesAtomicallyAfterABackup) {
     EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
     EXPECT_EQ(std::filesystem::status(path).permissions() & std::filesystem::perms::all,
               std::filesystem::perms::owner_read | std::filesystem::perms::owner_write);
-    std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -200,6 +200,8 @@ INSTANTIATE_TEST_SUITE_P(
         Bad{"[safety]\npassivity = \"on\"\n", "[safety] passivity = \"on\" is not allowed"},
         Bad{"[safety]\nreconnect = \"yes\"\n",
             "[safety] reconnect = \"yes\" is not a boolean: allowed true or false"},
+        Bad{"[safety]\narm_at_start = \"no\"\n",
+            "[safety] arm_at_start = \"no\" is not a boolean: allowed true or false"},
         Bad{"[safety]\nreconnect_settle = 0\n",
             "[safety] reconnect_settle = 0 is out of range: allowed > 0 and <= 60 (s)"},
         Bad{"[safety]\nreconnect_settle = 61\n",

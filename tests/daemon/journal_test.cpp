@@ -12,6 +12,8 @@
 #include <sstream>
 #include <string>
 
+#include "scratch_dir.hpp"
+
 namespace hapticd::daemon {
 namespace {
 
@@ -61,10 +63,8 @@ class JournalStream : public ::testing::Test {
   protected:
     void SetUp() override {
         if (const char* old = std::getenv("JOURNAL_STREAM")) saved_ = old, had_ = true;
-        char path[] = "/tmp/hapticd-journal-XXXXXX";
-        fd_ = ::mkstemp(path);
+        fd_ = ::open(dir_.file("stream").c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
         ASSERT_GE(fd_, 0);
-        ::unlink(path);
     }
     void TearDown() override {
         ::close(fd_);
@@ -79,6 +79,7 @@ class JournalStream : public ::testing::Test {
         EXPECT_EQ(::fstat(fd, &st), 0);
         return std::to_string(st.st_dev) + ":" + std::to_string(st.st_ino);
     }
+    const hapticd::testing::ScratchDir dir_;
     int fd_ = -1;
     std::string saved_;
     bool had_ = false;

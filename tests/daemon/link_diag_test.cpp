@@ -242,7 +242,10 @@ TEST(DaemonLinkDiag, RefusesADurationOutOfRange) {
         (void)diagnose(sim_config(""), 0.0, true);
         FAIL();
     } catch (const std::invalid_argument& e) {
-        EXPECT_NE(std::string(e.what()).find("--duration 0 is not allowed"), std::string::npos);
+        EXPECT_NE(std::string(e.what()).find(
+                      "--duration = 0 is out of range: allowed > 0 and <= 3600 (s)"),
+                  std::string::npos)
+            << e.what();
     }
 }
 

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "hapticd/servo/telemetry_csv.hpp"
+#include "scratch_dir.hpp"
 #include "text_file.hpp"
 
 namespace hapticd::daemon {
@@ -21,17 +22,14 @@ namespace {
 
 std::vector<std::string> lines_of(const std::string& path) { return testing::lines_of_file(path); }
 
-std::string temp_path(const std::string& name) {
-    return (std::filesystem::temp_directory_path() /
-            ("hapticd-writer-" + std::to_string(::getpid()) + "-" + name))
-        .string();
-}
+using testing::ScratchDir;
 
 TEST(DaemonTelemetryWriter, EveryPushedRecordIsInTheFileInOrder) {
     // A producer pushing faster than a small ring drains, without backpressure: every record
     // the ring accepted is in the file, and accepted + dropped = pushed.
     servo::TelemetryRing ring(64);
-    const std::string path = temp_path("order.csv");
+    const ScratchDir dir;
+    const std::string path = dir.file("order.csv");
     TelemetryWriter writer(ring, path, 2);
     writer.start();
     constexpr std::uint64_t kRecords = 200'000;
@@ -57,12 +55,12 @@ TEST(DaemonTelemetryWriter, EveryPushedRecordIsInTheFileInOrder) {
         }
         previous_tick = tick;
     }
-    std::filesystem::remove(path);
 }
 
 TEST(DaemonTelemetryWriter, RecordsLeftInTheRingAtStopAreWritten) {
     servo::TelemetryRing ring(1024);
-    const std::string path = temp_path("drain.csv");
+    const ScratchDir dir;
+    const std::string path = dir.file("drain.csv");
     TelemetryWriter writer(ring, path, 1);  // never started: finish() drains alone
     for (std::uint64_t n = 0; n < 700; ++n) {
         servo::TelemetryRecord record;
@@ -73,7 +71,6 @@ TEST(DaemonTelemetryWriter, RecordsLeftInTheRingAtStopAreWritten) {
     const std::vector<std::string> lines = lines_of(path);
     ASSERT_EQ(lines.size(), 701u);
     EXPECT_EQ(lines[700].substr(0, 4), "699,");
-    std::filesystem::remove(path);
 }
 
 TEST(DaemonTelemetryWriter, AnUncreatableFileIsNamed) {
@@ -109,7 +106,8 @@ TEST(DaemonTelemetryWriter, RecordsReachTheFileWithinTheFlushIntervalWithoutFini
     // pushed, each line whole, although finish() was never called and the buffer is far
     // from full.
     servo::TelemetryRing ring(1024);
-    const std::string path = temp_path("timer.csv");
+    const ScratchDir dir;
+    const std::string path = dir.file("timer.csv");
     TelemetryWriter writer(ring, path, 1);
     writer.start();
     for (std::uint64_t n = 0; n < 50; ++n) {
@@ -125,7 +123,6 @@ TEST(DaemonTelemetryWriter, RecordsReachTheFileWithinTheFlushIntervalWithoutFini
     EXPECT_EQ(text.back(), '\n');
     EXPECT_EQ(writer.records_written(), 50u);
     writer.finish();
-    std::filesystem::remove(path);
 }
 
 TEST(DaemonTelemetryWriter, AFullDeviceCountsOnlyTheRecordsOnDisk) {

@@ -1,15 +1,20 @@
 // The device plugin loader: the sim plugin by name and by path, and every refusal with the
-// message that says why (wrong ABI, missing entry, null create, dlopen error, not found).
+// message that says why (wrong ABI, missing entry, null create, dlopen error, not found);
+// check_config() through the loader and through the C entry itself (the message cut to the
+// buffer, never past it).
 #include "hapticd/device/plugin_loader.hpp"
 
+#include <dlfcn.h>
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cstdlib>
-#include <fstream>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 
 #include "hapticd/device/plugin_abi.hpp"
+#include "scratch_dir.hpp"
 
 namespace hapticd::device {
 namespace {
@@ -99,6 +104,95 @@ TEST(DevicePluginLoader, ConfigErrorsFromThePluginArriveAsRuntimeErrors) {
     }
 }
 
+TEST(DevicePluginLoader, CheckConfigGivesOpensMessageWithoutOpening) {
+    DeviceConfig config;
+    config.source = "bench.toml";
+    config.plugin_table_toml = "mass = 0.2\ncoulomb = -1";
+    const std::optional<std::string> refusal = check_plugin_config("sim", config);
+    ASSERT_TRUE(refusal.has_value());
+    EXPECT_NE(refusal->find("bench.toml:2: [device.sim] coulomb = -1 is out of range"),
+              std::string::npos)
+        << *refusal;
+    // The same text open() gives for the same table.
+    DeviceHandle device = load_device("sim");
+    try {
+        device->open(config);
+        FAIL() << "bad coulomb accepted";
+    } catch (const std::runtime_error& e) {
+        EXPECT_EQ(*refusal, e.what());
+    }
+    config.plugin_table_toml = "mass = 0.2\ncoulomb = 0.1";
+    EXPECT_EQ(check_plugin_config("sim", config), std::nullopt);
+    config.axes = 4;  // open()'s checks of DeviceConfig's own fields too
+    EXPECT_NE(check_plugin_config(HAPTICD_TEST_SIM_PLUGIN, config).value_or("").find("device.axes"),
+              std::string::npos);
+}
+
+TEST(DevicePluginLoader, CheckConfigOfAnUnloadablePluginThrowsLikeLoad) {
+    PluginPath path(HAPTICD_TEST_PLUGIN_DIR);
+    try {
+        check_plugin_config("badabi", DeviceConfig{});
+        FAIL() << "a plugin of another ABI was asked to check a table";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("ABI version 999"), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(check_plugin_config("nosuch", DeviceConfig{}), std::runtime_error);
+}
+
+/// The nullcreate test plugin refuses any table with the table's own text as its message.
+std::optional<std::string> echo(const std::string& text, std::size_t capacity) {
+    DeviceConfig config;
+    config.plugin_table_toml = text;
+    return check_plugin_config(HAPTICD_TEST_PLUGIN_DIR "/hapticd-device-nullcreate.so", config,
+                               capacity);
+}
+
+TEST(DevicePluginLoader, CheckConfigMessageIsCutToTheBuffer) {
+    EXPECT_EQ(echo("", 64), std::nullopt);
+    EXPECT_EQ(echo("short", 64), "short");
+    EXPECT_EQ(echo("exactly9!", 10), "exactly9!");
+    EXPECT_EQ(echo("exactly10!", 10), "exactly10");
+    // Never in the middle of a UTF-8 character: "é" is two bytes (4 and 5).
+    EXPECT_EQ(echo("abcd\xC3\xA9"
+                   "fg",
+                   6),
+              "abcd");
+    EXPECT_EQ(echo("abcd\xC3\xA9"
+                   "fg",
+                   7),
+              "abcd\xC3\xA9");
+    // A message longer than the loader's own buffer.
+    const std::string huge(3 * kCheckMessageCapacity, 'x');
+    EXPECT_EQ(echo(huge, kCheckMessageCapacity), huge.substr(0, kCheckMessageCapacity - 1));
+    // Not a std::exception: still a message, no exception across the C ABI.
+    EXPECT_NE(echo("throw 42", 256).value_or("").find("not a std::exception"), std::string::npos);
+}
+
+TEST(DevicePluginLoader, CheckConfigEntryWritesNothingPastItsCapacity) {
+    void* library = dlopen(HAPTICD_TEST_PLUGIN_DIR "/hapticd-device-nullcreate.so", RTLD_NOW);
+    ASSERT_NE(library, nullptr) << dlerror();
+    using Entry = const hapticd_device_plugin* (*)();
+    const auto entry = reinterpret_cast<Entry>(dlsym(library, HAPTICD_DEVICE_PLUGIN_ENTRY_SYMBOL));
+    ASSERT_NE(entry, nullptr);
+    const hapticd_device_plugin* plugin = entry();
+    ASSERT_NE(plugin->check_config, nullptr);
+    DeviceConfig config;
+    config.plugin_table_toml = std::string(100, 'm');
+    std::array<char, 32> buffer{};
+    buffer.fill('#');
+    EXPECT_FALSE(plugin->check_config(&config, buffer.data(), 8));
+    EXPECT_EQ(std::string(buffer.data()), "mmmmmmm");
+    for (std::size_t i = 8; i < buffer.size(); ++i) EXPECT_EQ(buffer[i], '#') << i;
+    buffer.fill('#');
+    EXPECT_FALSE(plugin->check_config(&config, buffer.data(), 0));  // room for nothing
+    EXPECT_EQ(buffer[0], '#');
+    EXPECT_FALSE(plugin->check_config(nullptr, buffer.data(), buffer.size()));
+    EXPECT_NE(std::string(buffer.data()).find("was given no"), std::string::npos);
+    config.plugin_table_toml.clear();
+    EXPECT_TRUE(plugin->check_config(&config, buffer.data(), buffer.size()));
+    dlclose(library);
+}
+
 TEST(DevicePluginLoader, TwoDevicesFromOnePluginAreIndependent) {
     DeviceHandle a = load_device("sim");
     DeviceHandle b = load_device("sim");
@@ -127,8 +221,8 @@ TEST(DevicePluginLoader, NullCreateIsRefused) {
 }
 
 TEST(DevicePluginLoader, DlopenErrorTextIsPassedOn) {
-    const std::string fake = ::testing::TempDir() + "/hapticd-device-fake.so";
-    std::ofstream(fake) << "not an ELF file\n";
+    const hapticd::testing::ScratchDir dir;
+    const std::string fake = dir.write("hapticd-device-fake.so", "not an ELF file\n");
     const std::string e = load_error(fake);
     EXPECT_NE(e.find("dlopen failed"), std::string::npos) << e;
     EXPECT_NE(e.find(fake), std::string::npos) << e;

@@ -124,6 +124,39 @@ TEST(HilControlSocket, StatusDisarmArmAFaultItsRefusalAndResetThroughHapticctl) 
 
 // A reset and an arm sent together: the arm finds the fault still latched (the servo takes
 // the reset at its next tick) and is accepted, because the same tick clears the latch first.
+// [safety] arm_at_start = false: the run starts disabled at zero force, and pushes only once
+// an operator arms it; without a control socket nobody could, so hapticd refuses to start.
+TEST(HilControlSocket, ADaemonThatStartsDisarmedWaitsForArm) {
+    const ScratchDir dir;
+    std::string toml = config_with_room("");
+    const std::string safety = "[safety]\n";
+    toml.replace(toml.find(safety), safety.size(), safety + "arm_at_start = false\n");
+    Daemon d(dir, "lab", ConfigText{toml});
+    ASSERT_TRUE(d.process.wait_for_socket(d.socket)) << d.process.messages();
+    // Half a second of ticks, and still disabled at zero force: the demo wall pushes at once
+    // when armed (the handle starts inside it).
+    const nlohmann::json waiting =
+        status_when(d.socket, [](const nlohmann::json& s) { return s["t_s"] >= 0.5; });
+    EXPECT_GE(waiting["t_s"].get<double>(), 0.5) << waiting.dump();
+    EXPECT_EQ(waiting["state"], "disabled") << waiting.dump();
+    EXPECT_EQ(waiting["armed"], false);
+    EXPECT_EQ(waiting["f_n"][0], 0.0);
+    EXPECT_EQ(hapticctl(d.socket, "arm").exit_code, 0);
+    const nlohmann::json running =
+        status_when(d.socket, [](const nlohmann::json& s) { return s["state"] == "running"; });
+    EXPECT_EQ(running["state"], "running") << running.dump();
+    EXPECT_EQ(d.process.stop(), 0) << d.process.messages();
+
+    const CommandResult no_socket =
+        run_command(shell_quote(HAPTICD_BIN) + " --no-status --lockstep --duration 1 --config " +
+                    shell_quote(dir.write("nosocket.toml", toml)));
+    EXPECT_EQ(no_socket.exit_code, 2) << no_socket.err;
+    EXPECT_NE(no_socket.err.find("nosocket.toml: [safety] arm_at_start = false waits for "
+                                 "hapticctl arm, which needs a control socket"),
+              std::string::npos)
+        << no_socket.err;
+}
+
 TEST(HilControlSocket, APipelinedResetThenArmIsAccepted) {
     const ScratchDir dir;
     Daemon d(dir, "lab", "[device.sim.faults]\njump_at = 0.3\njump_counts = 20000\n");
@@ -463,10 +496,10 @@ TEST(HilControlSocket, HapticctlRefusesBadUsageWith2AndAnUnreachableDaemonWith1)
         {"--socket " + nowhere + " record", 2, "record needs start FILE or stop"},
         {"--socket " + nowhere + " record start", 2, "FILE"},
         {"--socket " + nowhere + " record begin x", 2, "record \"begin\": give start FILE or stop"},
-        {"--socket " + nowhere + " coupling inf", 2, "coupling inf "},
-        {"--socket " + nowhere + " coupling 100 nan", 2, "coupling 100 nan: K and B must be"},
+        {"--socket " + nowhere + " coupling inf", 2, "K: \"inf\" is not a finite number >= 0"},
+        {"--socket " + nowhere + " coupling 100 nan", 2, "B: \"nan\" is not a finite number >= 0"},
         {"--socket " + nowhere + " coupling -5", 2, "-5"},
-        {"--socket " + nowhere + " coupling stiff", 2, "stiff"},
+        {"--socket " + nowhere + " coupling stiff", 2, "K: \"stiff\" is not a finite number"},
         {"--socket " + nowhere + " status", 1, "cannot connect to " + nowhere + ": no hapticd"},
         {"-i no-such-instance-here arm", 1,
          "cannot connect to /run/hapticd/no-such-instance-here.sock"},

@@ -8,12 +8,9 @@
 // SIGKILLed, the run stops on its own (the lifeline). HAPTICD_EXIT_TEST_HAPTICD and
 // HAPTICD_EXIT_TEST_HAPTIC_TUNE run these against other builds (to see them fail before a
 // fix). Run serially: the real-time runs are timed.
-#include <fcntl.h>
 #include <gtest/gtest.h>
-#include <spawn.h>
 #include <sys/mount.h>
 #include <sys/prctl.h>
-#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -25,19 +22,17 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <optional>
-#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "child_process.hpp"
 #include "hapticd_run.hpp"
 #include "operators.hpp"
 #include "pen_display.hpp"
 #include "text_file.hpp"
 #include "tuned_gains.hpp"
 #include "wall_contact.hpp"
-
-extern char** environ;
 
 namespace hapticd::testing {
 namespace {
@@ -53,60 +48,6 @@ std::string binary(const char* variable, const char* built) {
 std::string hapticd_bin() { return binary("HAPTICD_EXIT_TEST_HAPTICD", HAPTICD_BIN); }
 std::string haptic_tune_bin() { return binary("HAPTICD_EXIT_TEST_HAPTIC_TUNE", HAPTIC_TUNE_BIN); }
 
-/// A child process with its standard output and error in files.
-class Child {
-  public:
-    Child(std::vector<std::string> args, const std::string& out, const std::string& err)
-        : out_(out), err_(err) {
-        posix_spawn_file_actions_t actions;
-        posix_spawn_file_actions_init(&actions);
-        posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, out.c_str(),
-                                         O_WRONLY | O_CREAT | O_TRUNC, 0644);
-        posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, err.c_str(),
-                                         O_WRONLY | O_CREAT | O_TRUNC, 0644);
-        std::vector<char*> argv;
-        argv.reserve(args.size() + 1);
-        for (std::string& arg : args) argv.push_back(arg.data());
-        argv.push_back(nullptr);
-        const int error = ::posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), environ);
-        posix_spawn_file_actions_destroy(&actions);
-        if (error != 0) throw std::runtime_error("cannot run " + args[0]);
-    }
-    ~Child() {
-        if (!reaped_) {
-            ::kill(pid_, SIGKILL);
-            wait(5s);
-        }
-    }
-    Child(const Child&) = delete;
-    Child& operator=(const Child&) = delete;
-
-    pid_t pid() const { return pid_; }
-    void signal(int number) const { ::kill(pid_, number); }
-    /// Waits up to `timeout`; true when it ended (status()).
-    bool wait(std::chrono::milliseconds timeout) {
-        const auto until = Clock::now() + timeout;
-        while (!reaped_) {
-            const pid_t r = ::waitpid(pid_, &status_, WNOHANG);
-            if (r == pid_) reaped_ = true;
-            if (reaped_ || Clock::now() > until) break;
-            std::this_thread::sleep_for(1ms);
-        }
-        return reaped_;
-    }
-    int status() const { return status_; }
-    /// The exit status, or -signal when it was killed.
-    int exit_code() const { return WIFEXITED(status_) ? WEXITSTATUS(status_) : -WTERMSIG(status_); }
-    std::string err() const { return read_file(err_); }
-    std::string out() const { return read_file(out_); }
-
-  private:
-    std::string out_, err_;
-    pid_t pid_ = -1;
-    int status_ = 0;
-    bool reaped_ = false;
-};
-
 /// Waits until `predicate` holds, up to `timeout`.
 template <typename Predicate>
 bool eventually(Predicate predicate, std::chrono::milliseconds timeout) {
@@ -117,6 +58,13 @@ bool eventually(Predicate predicate, std::chrono::milliseconds timeout) {
     }
     return true;
 }
+
+// The log is read here as bytes, not through the product's reader (telemetry_csv.hpp), on
+// purpose: what these tests check for is a torn line, the last line of a run killed or out of
+// disk cut mid-write, and the reader cannot see one. A line cut inside its last field still
+// has every field, each a number ("0.12" cut to "0.1"), so the reader takes it as a row; only
+// the missing newline at the end of the file shows the cut. last_row_t() and the row counts
+// read the file while hapticd appends to it, where the last line may be cut at any byte.
 
 /// The log's lines, and whether the file ends on a newline (its last line is whole).
 struct LogFile {
@@ -129,8 +77,7 @@ LogFile read_log(const std::string& path) {
     LogFile log;
     log.bytes = text.size();
     log.ends_whole = text.empty() || text.back() == '\n';
-    std::istringstream in(text);
-    for (std::string line; std::getline(in, line);) log.lines.push_back(line);
+    log.lines = lines_of_text(text);
     return log;
 }
 
@@ -180,13 +127,13 @@ struct Bench {
         a.insert(a.end(), more.begin(), more.end());
         return a;
     }
-    std::unique_ptr<Child> start(std::vector<std::string> more = {}) const {
-        return std::make_unique<Child>(args(std::move(more)), dir.file("out.txt"),
-                                       dir.file("err.txt"));
+    std::unique_ptr<ChildProcess> start(std::vector<std::string> more = {}) const {
+        return std::make_unique<ChildProcess>(args(std::move(more)), dir.file("out.txt"),
+                                              dir.file("err.txt"));
     }
     /// Runs to the end (at most `timeout`).
-    std::unique_ptr<Child> run(std::vector<std::string> more,
-                               std::chrono::milliseconds timeout = 60s) const {
+    std::unique_ptr<ChildProcess> run(std::vector<std::string> more,
+                                      std::chrono::milliseconds timeout = 60s) const {
         auto child = start(std::move(more));
         EXPECT_TRUE(child->wait(timeout)) << "hapticd did not end";
         return child;
@@ -262,7 +209,8 @@ TEST(HilExit, EveryStopSignalEndsALockstepRunAsSigtermDoes) {
 
 // --- the log on SIGKILL -----------------------------------------------------------------
 
-/// t_s of the last whole row in the log now, if there is one.
+/// t_s of the last whole row in the log now, if there is one: the file as hapticd is writing
+/// it, its last line perhaps cut (see LogFile).
 std::optional<double> last_row_t(const std::string& path) {
     const std::string text = read_file(path);
     const std::size_t end = text.rfind('\n');
@@ -320,7 +268,7 @@ TEST(HilExit, SigkillLosesAtMostTheFlushIntervalAndNoHalfLine) {
 
 TEST(HilExit, DevFullIsAnIncompleteLogInTheSummaryAndExitThree) {
     const Bench bench("lockstep");
-    auto child = std::make_unique<Child>(
+    auto child = std::make_unique<ChildProcess>(
         std::vector<std::string>{hapticd_bin(), "--no-status", "--lockstep", "--duration", "10",
                                  "--config", bench.config, "--log", "/dev/full", "--summary",
                                  bench.summary},
@@ -351,7 +299,7 @@ TEST(HilExit, AFullFilesystemKeepsWholeLinesAndSaysHowManyAreThere) {
         ~Unmount() { ::umount2(path.c_str(), MNT_DETACH); }
     } unmount{mount};
     const std::string log = (mount / "run.csv").string();
-    auto child = std::make_unique<Child>(
+    auto child = std::make_unique<ChildProcess>(
         std::vector<std::string>{hapticd_bin(), "--no-status", "--lockstep", "--duration", "10",
                                  "--config", bench.config, "--log", log, "--summary",
                                  bench.summary},
@@ -378,7 +326,7 @@ TEST(HilExit, AFullFilesystemKeepsWholeLinesAndSaysHowManyAreThere) {
 void expect_refused(const Bench& bench, std::vector<std::string> args, const std::string& needle) {
     const std::string config_before = read_file(bench.config);
     const std::string scene_before = read_file(bench.dir.file("scene.toml"));
-    Child child(std::move(args), bench.dir.file("out.txt"), bench.dir.file("err.txt"));
+    ChildProcess child(std::move(args), bench.dir.file("out.txt"), bench.dir.file("err.txt"));
     ASSERT_TRUE(child.wait(30s));
     EXPECT_EQ(child.exit_code(), 2) << child.err();
     EXPECT_NE(child.err().find(needle), std::string::npos) << child.err();
@@ -440,9 +388,9 @@ TEST(HilExit, ASecondDaemonOnTheSameLogIsRefusedNamingTheHolder) {
     const Bench bench;
     auto first = bench.start();
     ASSERT_TRUE(eventually([&] { return bench.rows_now() >= 50; }, 20s)) << first->err();
-    Child second({hapticd_bin(), "--no-status", "--duration", "1", "--config", bench.config,
-                  "--log", bench.log},
-                 bench.dir.file("out2.txt"), bench.dir.file("err2.txt"));
+    ChildProcess second({hapticd_bin(), "--no-status", "--duration", "1", "--config", bench.config,
+                         "--log", bench.log},
+                        bench.dir.file("out2.txt"), bench.dir.file("err2.txt"));
     ASSERT_TRUE(second.wait(30s));
     EXPECT_EQ(second.exit_code(), 2) << second.err();
     EXPECT_NE(second.err().find("--log " + bench.log + ": the file is locked by process " +
@@ -484,9 +432,9 @@ TEST(HilExit, ARunRefusedAfterTheOutputsWereCheckedLeavesNoneBehind) {
     const std::string config =
         bench.dir.write("none.toml", text.substr(0, text.find("[device.sim")));
     const std::string old_summary = bench.dir.write("old-summary.json", "{\"old\": true}\n");
-    Child child({hapticd_bin(), "--lockstep", "--duration", "1", "--config", config, "--log",
-                 bench.log, "--summary", old_summary},
-                bench.dir.file("out.txt"), bench.dir.file("err.txt"));
+    ChildProcess child({hapticd_bin(), "--lockstep", "--duration", "1", "--config", config, "--log",
+                        bench.log, "--summary", old_summary},
+                       bench.dir.file("out.txt"), bench.dir.file("err.txt"));
     ASSERT_TRUE(child.wait(30s));
     EXPECT_EQ(child.exit_code(), 2) << child.err();
     EXPECT_NE(child.err().find("hapticd-device-none.so"), std::string::npos) << child.err();
@@ -555,8 +503,8 @@ struct AutotuneBench {
     }
     /// Starts autotune and waits until its hapticd child has logged `rows` rows; the child's
     /// pid in `hapticd`.
-    std::unique_ptr<Child> start_running(pid_t& hapticd, std::size_t rows = 300) const {
-        auto autotune = std::make_unique<Child>(
+    std::unique_ptr<ChildProcess> start_running(pid_t& hapticd, std::size_t rows = 300) const {
+        auto autotune = std::make_unique<ChildProcess>(
             std::vector<std::string>{haptic_tune_bin(), "autotune", "--config", config, "--record",
                                      record},
             dir.file("out.txt"), dir.file("err.txt"));
@@ -653,7 +601,7 @@ TEST(HilExit, TheIdentificationRunStopsOnItsOwnWhenAutotuneIsKilled) {
 
 TEST(HilExit, AutotuneRefusesARecordThatIsItsConfig) {
     const AutotuneBench bench;
-    Child autotune(
+    ChildProcess autotune(
         {haptic_tune_bin(), "autotune", "--config", bench.config, "--record", bench.config},
         bench.dir.file("out.txt"), bench.dir.file("err.txt"));
     ASSERT_TRUE(autotune.wait(30s));

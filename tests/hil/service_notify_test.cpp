@@ -15,6 +15,7 @@
 #include <atomic>
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <iostream>
 #include <string>
@@ -145,6 +146,7 @@ TEST(HilServiceNotify, ReadyAfterTheFirstTickThenStatusThenStopping) {
     ASSERT_EQ(run.exit_code, 0) << run.err;
     ASSERT_GE(notes.size(), 2u);
     EXPECT_TRUE(has(notes.front(), "READY=1")) << notes.front().text;
+    // Lockstep: the rate is the device's, so no measured rate.
     EXPECT_NE(status_of(notes.front()).find(", 1000 Hz, tick "), std::string::npos)
         << notes.front().text;
     EXPECT_TRUE(has(notes.back(), "STOPPING=1")) << notes.back().text;
@@ -203,6 +205,20 @@ TEST(HilServiceNotify, TheWatchdogStopsWhileTheServoThreadIsHeld) {
     EXPECT_LE(longest_gap_s, 1.5);
     // Otherwise every half timeout (the watcher polls every 10 ms).
     EXPECT_GE(short_gaps, pings.size() - 2);
+    // A real-time run's STATUS= says the rate measured over the last second once there is one,
+    // near 1000 Hz in a second that the hold does not span.
+    const std::string measured_at = ", 1000 Hz (measured ";
+    std::size_t measured = 0;
+    std::size_t near_rate = 0;
+    for (const Notification& n : notes) {
+        const std::string status = status_of(n);
+        const std::size_t at = status.find(measured_at);
+        if (at == std::string::npos) continue;
+        ++measured;
+        near_rate += std::abs(std::stod(status.substr(at + measured_at.size())) - 1000.0) < 50.0;
+    }
+    EXPECT_GE(measured, 1u);
+    EXPECT_GE(near_rate, 1u);
 }
 
 // A service manager that stops reading (its queue of 10 datagrams full) never holds the run:

@@ -53,7 +53,7 @@ TEST(HilTwoInstances, EachKeepsItsRateOnItsOwnCpuAndWritesItsOwnSummary) {
         EXPECT_TRUE(s["faults"].empty()) << s.dump(2);
         EXPECT_EQ(s["rate_hz"], 1000.0);
         // --duration counts servo time from the first tick, and the supervising thread
-        // looks every 10 ms (supervised_run.hpp), so the run ends up to about 10 periods
+        // looks every 10 ms (run_watcher.cpp), so the run ends up to about 10 periods
         // late: every period is a tick or a period a late wake missed (a shared VM stalls),
         // whatever the other instance does, and almost all are ticks.
         const double periods = s["ticks"].get<double>() + s["missed_periods"].get<double>();

@@ -5,9 +5,9 @@
 
 #include <gtest/gtest.h>
 
-#include <cstdio>
-#include <fstream>
 #include <string>
+
+#include "scratch_dir.hpp"
 
 namespace hapticd::input {
 namespace {
@@ -60,13 +60,9 @@ TEST(TomlShape, TooLargeIsRefused) {
 }
 
 TEST(ReadTextFile, ReadsAFileAndRefusesDevicesThatNeverEnd) {
-    const std::string path = ::testing::TempDir() + "/text_input_test.toml";
-    {
-        std::ofstream out(path);
-        out << "[servo]\nrate_hz = 1000.0\n";
-    }
+    const hapticd::testing::ScratchDir dir;
+    const std::string path = dir.write("lab.toml", "[servo]\nrate_hz = 1000.0\n");
     EXPECT_EQ(read_text_file(path, "the config file"), "[servo]\nrate_hz = 1000.0\n");
-    std::remove(path.c_str());
     try {
         (void)read_text_file("/dev/zero", "the config file");
         FAIL() << "read /dev/zero to its end";

@@ -4,6 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cstdint>
+#include <ostream>
+#include <string>
 #include <thread>
 
 #include "servo_fakes.hpp"
@@ -109,25 +112,23 @@ TEST(ServoLoop, NonFiniteEnvironmentZeroesForceInTheSameTick) {
     EXPECT_EQ(loop.summary().faults[0], "non_finite");
 }
 
-TEST(ServoLoop, EncoderJumpStatusFaultsInTheSameTick) {
-    VirtualTime time;
-    FakeDevice device;
-    device.set_position_counts(-2000);
-    PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 6000.0};
-    TestLoop<PlaneWall> loop(device, wall, test_config(), nullptr, FakeClock{&time});
-    loop.tick();
-    ASSERT_GT(device.last_command.force_n[0], 2.9);
-    device.next.status = kStatusJump;
-    loop.tick();
-    EXPECT_FALSE(device.last_command.enable);
-    EXPECT_EQ(device.last_command.force_n[0], 0.0);
-    EXPECT_EQ(loop.faults(), kFaultEncoderJump);
-}
+// A sample the device flags as bad faults in the tick that reads it: its fault latches and the
+// force is zero in that tick, and stays zero after a good sample until a reset. An encoder
+// jump (kStatusJump) and, docs/architecture.md §7.1, a stale sample (the counts repeat the
+// last good ones: ignored, it once let the held force move the handle 31 mm).
+struct BadSample {
+    const char* name;
+    std::uint32_t status;  ///< what the device reports
+    std::uint32_t fault;   ///< what the loop latches
+    const char* fault_name;
+};
 
-// docs/architecture.md §7.1: a stale sample (the counts repeat the last good ones) latches
-// encoder_stale and zeroes the force in that tick (ignored, it once let the held force move
-// the handle 31 mm).
-TEST(ServoLoop, StaleSampleFaultsInTheSameTick) {
+void PrintTo(const BadSample& bad, std::ostream* os) { *os << bad.name; }
+
+class ServoLoopBadSample : public ::testing::TestWithParam<BadSample> {};
+
+TEST_P(ServoLoopBadSample, FaultsInTheSameTick) {
+    const BadSample& bad = GetParam();
     VirtualTime time;
     FakeDevice device;
     device.set_position_counts(-2000);
@@ -135,18 +136,24 @@ TEST(ServoLoop, StaleSampleFaultsInTheSameTick) {
     TestLoop<PlaneWall> loop(device, wall, test_config(), nullptr, FakeClock{&time});
     loop.tick();
     ASSERT_GT(device.last_command.force_n[0], 2.9);
-    device.next.status = kStatusStale;
+    device.next.status = bad.status;
     loop.tick();
     EXPECT_FALSE(device.last_command.enable);
     EXPECT_EQ(device.last_command.force_n[0], 0.0);
-    EXPECT_EQ(loop.faults(), kFaultEncoderStale);
+    EXPECT_EQ(loop.faults(), bad.fault);
     ASSERT_EQ(loop.summary().faults.size(), 1u);
-    EXPECT_EQ(loop.summary().faults[0], "encoder_stale");
+    EXPECT_EQ(loop.summary().faults[0], bad.fault_name);
     // Latched: a fresh sample does not bring the force back without a reset.
     device.next.status = 0;
     loop.tick();
     EXPECT_FALSE(device.last_command.enable);
 }
+
+INSTANTIATE_TEST_SUITE_P(
+    ServoLoop, ServoLoopBadSample,
+    ::testing::Values(BadSample{"EncoderJump", kStatusJump, kFaultEncoderJump, "encoder_jump"},
+                      BadSample{"StaleSample", kStatusStale, kFaultEncoderStale, "encoder_stale"}),
+    [](const auto& param_info) { return std::string(param_info.param.name); });
 
 // docs/architecture.md §3.1, §7.6: a host stalled between its wake and the read (kill -STOP)
 // once saw the handle's move over the stall as one period's and commanded max_force. The

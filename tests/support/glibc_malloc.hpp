@@ -1,6 +1,6 @@
-// glibc's own allocator entry points, which a test's replacement malloc() forwards to when it
-// counts calls (malloc_count.cpp, usb_heap_test.cpp). glibc exports them under these reserved
-// names; they are not in its headers.
+// glibc's own allocator entry points, which the malloc interposer (malloc_count.cpp) forwards
+// to when it counts calls. glibc exports them under these reserved names; they are not in its
+// headers.
 #pragma once
 
 #include <cstddef>

@@ -1,6 +1,8 @@
-// A fresh temporary directory per test run: the config, the scene, the telemetry log and
-// the summary of one hapticd run. Removed when the test passes; kept (and its path printed)
-// when it fails, so that the trajectory can be looked at, or always with HAPTICD_HIL_KEEP=1.
+// A fresh temporary directory per test (under $TMPDIR, else /tmp): every file a test writes
+// or has a program write, e.g. the config, the scene, the telemetry log and the summary of
+// one hapticd run. Removed when the test passes; kept (and its path printed) when it fails,
+// so that the files can be looked at, or always with HAPTICD_HIL_KEEP=1. The one place the
+// tests make temporary files: a test that needs one takes a ScratchDir and a file() in it.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -19,7 +21,7 @@ class ScratchDir {
     ScratchDir() {
         const char* tmp = std::getenv("TMPDIR");
         std::string pattern =
-            std::string(tmp != nullptr && *tmp != '\0' ? tmp : "/tmp") + "/hapticd-hil-XXXXXX";
+            std::string(tmp != nullptr && *tmp != '\0' ? tmp : "/tmp") + "/hapticd-test-XXXXXX";
         if (mkdtemp(pattern.data()) == nullptr) {
             throw std::runtime_error("mkdtemp failed for " + pattern);
         }
@@ -28,7 +30,7 @@ class ScratchDir {
     ~ScratchDir() {
         const char* keep = std::getenv("HAPTICD_HIL_KEEP");
         if (::testing::Test::HasFailure() || (keep != nullptr && std::string(keep) == "1")) {
-            std::cerr << "hil: kept the run's files in " << path_.string() << "\n";
+            std::cerr << "kept the test's files in " << path_.string() << "\n";
             return;
         }
         std::error_code ignored;
@@ -42,7 +44,7 @@ class ScratchDir {
 
     /// Writes `text` to the file `name` in this directory; returns its path.
     std::string write(const std::string& name, const std::string& text) const {
-        const std::string target = file(name);
+        std::string target = file(name);
         std::ofstream out(target);
         out << text;
         out.close();

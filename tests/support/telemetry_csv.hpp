@@ -27,6 +27,8 @@ class TelemetryLog {
         return *values;
     }
     std::size_t rows() const { return log_.rows(); }
+    /// The header's names, in file order.
+    const std::vector<std::string>& columns() const { return log_.columns; }
 
   private:
     tune::TelemetryLog log_;

@@ -1,40 +1,22 @@
 // haptic-tune identify end to end: a simulated run written by the daemon's CSV writer into a
 // file, identified by the real executable.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
-#include <cstdio>
-#include <filesystem>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
 
 #include "identification_sim_run.hpp"
 #include "run_command.hpp"
+#include "scratch_dir.hpp"
 
 namespace hapticd::tune {
 namespace {
 
 using hapticd::testing::run_command;
+using hapticd::testing::ScratchDir;
 using nlohmann::json;
 
 std::string tune(const std::string& args) { return std::string(HAPTIC_TUNE) + " " + args; }
-
-/// A log file that removes itself; named per process, so that two runs of the suite at once
-/// (a CI clone and a checkout on one machine) do not share it.
-class LogFile {
-  public:
-    LogFile(const std::string& name, const std::string& text)
-        : path_(std::filesystem::temp_directory_path() /
-                ("hapticd-identify-" + name + "-" + std::to_string(::getpid()) + ".csv")) {
-        std::ofstream(path_) << text;
-    }
-    ~LogFile() { std::filesystem::remove(path_); }
-    std::string path() const { return path_.string(); }
-
-  private:
-    std::filesystem::path path_;
-};
 
 std::string simulated_csv(int axes = 1) {
     testing::SimulatedRun run;
@@ -46,8 +28,9 @@ std::string simulated_csv(int axes = 1) {
     EXPECT_NE(std::string(text).find(part), std::string::npos) << "in: " << (text)
 
 TEST(HapticTuneIdentify, PrintsTheDesignNamesAsJson) {
-    const LogFile log("json", simulated_csv());
-    const auto result = run_command(tune("identify " + log.path() + " --json"));
+    const ScratchDir dir;
+    const std::string log = dir.write("json.csv", simulated_csv());
+    const auto result = run_command(tune("identify " + log + " --json"));
     ASSERT_EQ(result.exit_code, 0) << result.err;
     EXPECT_EQ(result.err, "");
     const json j = json::parse(result.out);
@@ -65,13 +48,14 @@ TEST(HapticTuneIdentify, PrintsTheDesignNamesAsJson) {
     EXPECT_EQ(j.at("segments"), 500);
     EXPECT_EQ(j.at("converged"), true);
     EXPECT_EQ(j.at("resolution_source"), "log");
-    EXPECT_EQ(j.at("log"), log.path());
+    EXPECT_EQ(j.at("log"), log);
     EXPECT_LT(j.at("solve_time_s").get<double>(), 10.0);
 }
 
 TEST(HapticTuneIdentify, TextOutputNamesEveryField) {
-    const LogFile log("text", simulated_csv());
-    const auto result = run_command(tune("identify " + log.path()));
+    const ScratchDir dir;
+    const std::string log = dir.write("text.csv", simulated_csv());
+    const auto result = run_command(tune("identify " + log));
     ASSERT_EQ(result.exit_code, 0) << result.err;
     for (const char* key :
          {"mass ", "mass_std_error", "damping ", "damping_std_error", "coulomb ",
@@ -81,42 +65,45 @@ TEST(HapticTuneIdentify, TextOutputNamesEveryField) {
 }
 
 TEST(HapticTuneIdentify, EveryAxisOrTheOneAsked) {
-    const LogFile log("axes", simulated_csv(2));
-    const auto all = run_command(tune("identify " + log.path() + " --json"));
+    const ScratchDir dir;
+    const std::string log = dir.write("axes.csv", simulated_csv(2));
+    const auto all = run_command(tune("identify " + log + " --json"));
     ASSERT_EQ(all.exit_code, 0) << all.err;
     const json j = json::parse(all.out);
     ASSERT_EQ(j.at("axes").size(), 2u);
     EXPECT_EQ(j.at("axes")[1].at("axis"), 1);
     EXPECT_NEAR(j.at("axes")[1].at("mass").get<double>(), 0.1, 0.002);
-    const auto one = run_command(tune("identify " + log.path() + " --axis 1 --json"));
+    const auto one = run_command(tune("identify " + log + " --axis 1 --json"));
     ASSERT_EQ(one.exit_code, 0) << one.err;
     EXPECT_EQ(json::parse(one.out).at("axis"), 1);
     EXPECT_EQ(json::parse(one.out).at("mass"), j.at("axes")[1].at("mass"));
 }
 
 TEST(HapticTuneIdentify, ExitsTwoWithTheReasonOnALogThatCannotIdentify) {
-    const LogFile log("one-axis", simulated_csv());
-    const auto wrong_axis = run_command(tune("identify " + log.path() + " --axis 2"));
+    const ScratchDir dir;
+    const std::string log = dir.write("one-axis.csv", simulated_csv());
+    const auto wrong_axis = run_command(tune("identify " + log + " --axis 2"));
     EXPECT_EQ(wrong_axis.exit_code, 2);
     EXPECT_CONTAINS(wrong_axis.err, "cannot identify: no x2_m/f2_n for axis 2");
     EXPECT_CONTAINS(wrong_axis.err, "[missing_column]");
     EXPECT_EQ(wrong_axis.out, "");
 
-    const LogFile idle("idle", "t_s,x0_m,f0_n\n0,0,0\n0.001,0,0\n0.002,0,0\n");
-    const auto too_short = run_command(tune("identify " + idle.path()));
+    const std::string idle = dir.write("idle.csv", "t_s,x0_m,f0_n\n0,0,0\n0.001,0,0\n0.002,0,0\n");
+    const auto too_short = run_command(tune("identify " + idle));
     EXPECT_EQ(too_short.exit_code, 2);
     EXPECT_CONTAINS(too_short.err, "[too_short]");
 
-    const auto limited = run_command(tune("identify " + log.path() + " --force-limit 1"));
+    const auto limited = run_command(tune("identify " + log + " --force-limit 1"));
     EXPECT_EQ(limited.exit_code, 2);
     EXPECT_CONTAINS(limited.err, "[saturated]");
 }
 
 TEST(HapticTuneIdentify, ExitsTwoOnABadLogOrBadOptions) {
-    const LogFile broken("broken", "t_s,x0_m,f0_n\n0,0,0\n0.001,zero,0\n");
-    const auto bad = run_command(tune("identify " + broken.path()));
+    const ScratchDir dir;
+    const std::string broken = dir.write("broken.csv", "t_s,x0_m,f0_n\n0,0,0\n0.001,zero,0\n");
+    const auto bad = run_command(tune("identify " + broken));
     EXPECT_EQ(bad.exit_code, 2);
-    EXPECT_CONTAINS(bad.err, "bad log: " + broken.path() + ":3:2 (x0_m): 'zero' is not a finite");
+    EXPECT_CONTAINS(bad.err, "bad log: " + broken + ":3:2 (x0_m): 'zero' is not a finite");
 
     const auto missing = run_command(tune("identify /nonexistent/run.csv"));
     EXPECT_EQ(missing.exit_code, 2);
@@ -126,7 +113,7 @@ TEST(HapticTuneIdentify, ExitsTwoOnABadLogOrBadOptions) {
     EXPECT_EQ(no_log.exit_code, 2);
     EXPECT_CONTAINS(no_log.err, "LOG");
 
-    const auto negative = run_command(tune("identify " + broken.path() + " --resolution -1"));
+    const auto negative = run_command(tune("identify " + broken + " --resolution -1"));
     EXPECT_EQ(negative.exit_code, 2);
     EXPECT_CONTAINS(negative.err, "--resolution");
 }

@@ -5,7 +5,6 @@
 
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <streambuf>
@@ -16,6 +15,7 @@
 #include "hapticd/tune/identification.hpp"
 #include "hapticd/tune/telemetry_log.hpp"
 #include "identification_sim_run.hpp"
+#include "scratch_dir.hpp"
 
 namespace hapticd::tune {
 namespace {
@@ -92,8 +92,8 @@ TEST(IdentificationLog, ReadsTheDaemonsWriterBitForBit) {
 }
 
 TEST(IdentificationLog, ReadsAFileFromDisk) {
-    const std::filesystem::path path =
-        std::filesystem::temp_directory_path() / "hapticd-identification-log-test.csv";
+    const hapticd::testing::ScratchDir dir;
+    const std::string path = dir.file("run.csv");
     {
         std::ofstream out(path);
         servo::write_csv_header(out, 1);
@@ -103,9 +103,8 @@ TEST(IdentificationLog, ReadsAFileFromDisk) {
         r.f_n[0] = -0.25;
         servo::write_csv_record(out, r, 1);
     }
-    const TelemetryLog log = read_telemetry_log(path.string());
-    std::filesystem::remove(path);
-    EXPECT_EQ(log.source, path.string());
+    const TelemetryLog log = read_telemetry_log(path);
+    EXPECT_EQ(log.source, path);
     EXPECT_EQ(log.axes, 1);
     EXPECT_EQ((*log.column("f0_n"))[0], -0.25);
 }

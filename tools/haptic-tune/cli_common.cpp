@@ -5,6 +5,8 @@
 #include <iostream>
 #include <sstream>
 
+#include "hapticd/daemon/device_open.hpp"
+#include "hapticd/servo/rate.hpp"
 #include "hapticd/tune/input_checks.hpp"
 #include "hapticd/tune/result_json.hpp"
 
@@ -42,6 +44,14 @@ CLI::Validator non_negative_finite(const std::string& unit) {
         "finite and >= 0", [](double v) { return std::isfinite(v) && v >= 0.0; }, unit);
 }
 
+CLI::Validator in_range(const input::Range& range) {
+    input::Range bounds = range;
+    bounds.unit = "";
+    return numeric_range(
+        bounds.describe(), [range](double v) { return range.contains(v); },
+        std::string(range.unit));
+}
+
 void add_device_options(CLI::App& command, DeviceOptions& options) {
     command
         .add_option("--config", options.config_path,
@@ -52,8 +62,8 @@ void add_device_options(CLI::App& command, DeviceOptions& options) {
         ->check(positive_finite("kg"));
     command.add_option("--damping", options.damping_n_s_per_m, "device damping b (N s/m)")
         ->check(positive_finite("N s/m"));
-    command.add_option("--rate", options.rate_hz, "servo rate 1/T (Hz)")
-        ->check(positive_finite("Hz"));
+    command.add_option("--rate", options.rate_hz, "servo rate 1/T (Hz), as [servo] rate_hz")
+        ->check(in_range(servo::kRateRange));
 }
 
 void add_delay_option(CLI::App& command, DeviceOptions& options) {
@@ -87,9 +97,34 @@ CLI::Option* add_model_option(CLI::App& command, std::string& model,
         ->check(CLI::IsMember(allowed));
 }
 
+theory::PiVelocityLoop DisplayOptions::pi_loop() const {
+    if (!kp || !ki) {
+        throw UsageError("--display admittance needs the PI velocity-loop gains --kp and --ki");
+    }
+    return {*kp, *ki};
+}
+
+void add_display_options(CLI::App& command, DisplayOptions& options) {
+    command.add_option("--display", options.display, "display causality (default impedance)")
+        ->check(CLI::IsMember({"impedance", "admittance"}));
+    command.add_option("--kp", options.kp, "admittance display: PI proportional gain (N s/m)")
+        ->check(non_negative_finite("N s/m"));
+    command.add_option("--ki", options.ki, "admittance display: PI integral gain (N/m)")
+        ->check(non_negative_finite("N/m"));
+}
+
+daemon::Config load_config_as_hapticd(const std::string& path) {
+    daemon::Config config = daemon::load_config(path);
+    // hapticd refuses a plugin it cannot load when it opens the device; haptic-tune opens
+    // none, so it refuses it here, with the same message: a verdict on a config that hapticd
+    // will not run is no verdict.
+    daemon::check_device_config(config, daemon::UnloadablePlugin::refuse);
+    return config;
+}
+
 DesignInput resolve_design_input(const DeviceOptions& options) {
     DesignInput input;
-    if (!options.config_path.empty()) input.config = daemon::load_config(options.config_path);
+    if (!options.config_path.empty()) input.config = load_config_as_hapticd(options.config_path);
     const daemon::Config* config = input.config ? &*input.config : nullptr;
     if (config && !((options.mass_kg || config->device.model_mass_kg) &&
                     (options.damping_n_s_per_m || config->device.model_damping_n_s_per_m))) {

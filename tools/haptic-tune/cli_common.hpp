@@ -13,6 +13,8 @@
 #include "hapticd/daemon/config.hpp"
 #include "hapticd/daemon/exit_code.hpp"
 #include "hapticd/daemon/startup_check.hpp"
+#include "hapticd/input/range.hpp"
+#include "hapticd/theory/admittance.hpp"
 #include "hapticd/theory/benchmark.hpp"
 
 namespace hapticd::tools {
@@ -36,6 +38,15 @@ class UsageError : public std::runtime_error {
 /// CLI11 validators that name the allowed range and reject NaN and infinities.
 CLI::Validator positive_finite(const std::string& unit);
 CLI::Validator non_negative_finite(const std::string& unit);
+/// Within `range` (servo::kRateRange for --rate): the refusal reads as the config reader's,
+/// "value 50 is out of range: allowed >= 100 and <= 20000 (Hz)".
+CLI::Validator in_range(const input::Range& range);
+
+/// A hapticd config file read exactly as hapticd reads it: daemon::load_config, then the
+/// [device] plugin's check of its own table (daemon::check_device_config), at the same point.
+/// A plugin that cannot be loaded is refused with the message hapticd gives for it. Throws
+/// daemon::ConfigError. Every command that takes --config reads it with this.
+daemon::Config load_config_as_hapticd(const std::string& path);
 
 /// The device and servo rate a design is for: from flags, or from a hapticd config file read
 /// exactly as hapticd reads it (daemon::load_config: [device.model] mass, damping, delay;
@@ -59,6 +70,19 @@ void add_velocity_filter_option(CLI::App& command, DeviceOptions& options);
 /// --model for size/check/plot: `allowed` (the first is the default, passive).
 CLI::Option* add_model_option(CLI::App& command, std::string& model,
                               const std::vector<std::string>& allowed);
+
+/// --display impedance|admittance, and the admittance display's PI velocity-loop gains
+/// --kp and --ki (size, zwidth).
+struct DisplayOptions {
+    std::string display = "impedance";
+    std::optional<double> kp;
+    std::optional<double> ki;
+
+    bool admittance() const { return display == "admittance"; }
+    /// The PI loop of --kp and --ki; throws UsageError when either is missing.
+    theory::PiVelocityLoop pi_loop() const;
+};
+void add_display_options(CLI::App& command, DisplayOptions& options);
 
 struct DesignInput {
     theory::DeviceModel device;

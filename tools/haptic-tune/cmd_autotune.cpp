@@ -17,6 +17,7 @@
 #include "autotune_error.hpp"
 #include "autotune_report.hpp"
 #include "autotune_run_log.hpp"
+#include "cli_common.hpp"
 #include "commands.hpp"
 #include "hapticd/daemon/config.hpp"
 #include "hapticd/daemon/config_editor.hpp"
@@ -158,7 +159,7 @@ int run_autotune(const AutotuneCliOptions& o) {
     // The config first: a config the daemon would refuse is refused before any run.
     daemon::Config config;
     try {
-        config = daemon::load_config(o.config_path);
+        config = load_config_as_hapticd(o.config_path);
     } catch (const daemon::ConfigError& e) {
         throw AutotuneError(std::string("the config does not load: ") + e.what());
     }
@@ -214,7 +215,7 @@ int run_autotune(const AutotuneCliOptions& o) {
     Outcome outcome;
     outcome.config_path = o.config_path;
     outcome.dry_run = o.dry_run;
-    outcome.delay = find_loop_delay(o.delay_s, !o.log_path.empty(), config, original);
+    outcome.delay = find_loop_delay(o.delay_s, !o.log_path.empty(), config);
     options.delay_periods = outcome.delay.delay_s * config.servo.rate_hz;
     try {
         tune::check_delay_periods(options.delay_periods);

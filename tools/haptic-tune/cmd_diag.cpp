@@ -6,6 +6,7 @@
 #include <iostream>
 #include <memory>
 
+#include "cli_common.hpp"
 #include "commands.hpp"
 #include "hapticd/daemon/config.hpp"
 #include "hapticd/daemon/link_diag.hpp"
@@ -23,7 +24,7 @@ struct DiagCommandOptions {
 int run_diag(const DiagCommandOptions& o) {
     daemon::Config config;
     try {
-        config = daemon::load_config(o.config_path);
+        config = load_config_as_hapticd(o.config_path);
     } catch (const daemon::ConfigError& e) {
         throw UsageError(e.what());
     }

@@ -36,17 +36,13 @@ nlohmann::ordered_json model_curve(const DesignInput& input, const ImpedanceDesi
     const double marker_hz =
         check.worst_frequency_hz > 0.0 ? check.worst_frequency_hz : frequencies.front();
     const double marker_theta = theory::normalized_frequency(marker_hz, period);
-    return {
-        {"bound", bound},
-        {"margin", margin},
-        {"unconditionally_stable", check.unconditionally_stable},
-        {"worst_margin", check.worst_margin},
-        {"worst_frequency_hz", check.worst_frequency_hz},
-        {"marker",
-         {{"frequency_hz", marker_hz},
-          {"bound", theory::conductance_bound(model, b, marker_theta)},
-          {"conductance", theory::coupling_conductance(design.coupling, marker_theta, period)}}},
-    };
+    nlohmann::ordered_json curve = {{"bound", bound}, {"margin", margin}};
+    curve.update(nlohmann::ordered_json(check));
+    curve["marker"] = {
+        {"frequency_hz", marker_hz},
+        {"bound", theory::conductance_bound(model, b, marker_theta)},
+        {"conductance", theory::coupling_conductance(design.coupling, marker_theta, period)}};
+    return curve;
 }
 
 int run_plot(const ChartOptions& o) {
@@ -72,18 +68,13 @@ int run_plot(const ChartOptions& o) {
         input.delay_s > 0.0 ? ", loop delay " + number_text(input.delay_s * 1e3, 4) + " ms" : "";
     const std::string title = "Design procedure, (21): " + describe_device(input) + delay + "\n" +
                               describe_design(design);
-    nlohmann::ordered_json chart = {
-        {"kind", "design-procedure"},
-        {"title", title},
-        {"device", input.device},
-        {"rate_hz", input.rate_hz},
-        {"delay_s", input.delay_s},
-        {"nyquist_hz", theory::nyquist_hz(period)},
-        {"design", design_json(design)},
-        {"frequency_hz", frequencies},
-        {"coupling_conductance", conductance},
-        {"models", per_model},
-    };
+    nlohmann::ordered_json chart = {{"kind", "design-procedure"}, {"title", title}};
+    add_input_fields(input, chart);
+    chart["nyquist_hz"] = theory::nyquist_hz(period);
+    chart["design"] = design_json(design);
+    chart["frequency_hz"] = frequencies;
+    chart["coupling_conductance"] = conductance;
+    chart["models"] = per_model;
     if (!o.out.empty()) render_chart(chart, o.out, chart_format(o.out));
 
     if (o.json) {
@@ -98,9 +89,8 @@ int run_plot(const ChartOptions& o) {
                                 ? "sized from (21) with the passive model (no --stiffness, "
                                   "no [coupling] stiffness)"
                                 : design.source},
-        {"device", input.device},
-        {"rate_hz", input.rate_hz},
     };
+    add_input_fields(input, summary);
     for (const auto& [name, curve] : per_model.items()) {
         summary["worst_margin[" + name + "]"] = curve["worst_margin"];
         summary["worst_frequency_hz[" + name + "]"] = curve["worst_frequency_hz"];

@@ -20,9 +20,7 @@ struct SizeOptions {
     std::optional<double> coupling_damping;
     bool optimize_damping = false;
     std::string model;
-    std::string display = "impedance";
-    std::optional<double> kp;
-    std::optional<double> ki;
+    DisplayOptions display;
     bool json = false;
     bool skip_exact_check = false;
     AssumptionOptions assumption;
@@ -179,10 +177,7 @@ void warn_exact_admittance_rejects(const tune::AdmittanceExactCheck& exact) {
 }
 
 int run_admittance(const SizeOptions& o, const DesignInput& input, const std::string& model) {
-    if (!o.kp || !o.ki) {
-        throw UsageError("--display admittance needs the PI velocity-loop gains --kp and --ki");
-    }
-    const theory::PiVelocityLoop loop{*o.kp, *o.ki};
+    const theory::PiVelocityLoop loop = o.display.pi_loop();
     const double damping = o.coupling_damping.value_or(std::numeric_limits<double>::infinity());
     const std::optional<theory::ForceSensorFilter> filter = force_filter_of(o, input.rate_hz);
     if (filter && model != "passive" && model != "exact") {
@@ -295,12 +290,7 @@ void add_size_command(CLI::App& app, Invocation& invocation) {
         ->excludes(damping);
     add_model_option(*command, options->model, {"passive", "exact", "paper", "encoder"});
     add_assumption_options(*command, options->assumption);
-    command->add_option("--display", options->display, "display causality (default impedance)")
-        ->check(CLI::IsMember({"impedance", "admittance"}));
-    command->add_option("--kp", options->kp, "admittance display: PI proportional gain (N s/m)")
-        ->check(non_negative_finite("N s/m"));
-    command->add_option("--ki", options->ki, "admittance display: PI integral gain (N/m)")
-        ->check(non_negative_finite("N/m"));
+    add_display_options(*command, options->display);
     command
         ->add_option("--force-filter", options->force_filter_hz,
                      "admittance display: cutoff f_aa (Hz) of the analog low-pass on the force "
@@ -320,7 +310,7 @@ void add_size_command(CLI::App& app, Invocation& invocation) {
             const tune::StabilityAssumption assumption =
                 resolve_assumption(options->assumption, options->model);
             const bool declared = assumption.operators || !assumption.environments.every_passive();
-            if (options->display == "admittance") {
+            if (options->display.admittance()) {
                 if (input.velocity_filter_hz != 0.0) {
                     throw UsageError(
                         "--velocity-filter is the impedance display's coupling damper; the "

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <utility>
 
 #include "chart_design.hpp"
 #include "chart_script.hpp"
@@ -21,9 +22,7 @@ namespace {
 
 struct ZwidthOptions {
     ChartOptions chart;
-    std::string display = "impedance";
-    std::optional<double> kp;
-    std::optional<double> ki;
+    DisplayOptions display;
     std::optional<double> coupling_mass;
 };
 
@@ -41,6 +40,22 @@ nlohmann::ordered_json magnitudes(const std::vector<double>& frequencies, double
         max_magnitude.push_back(std::abs(zmax(theta)));
     }
     return {{"zmin_magnitude", min_magnitude}, {"zmax_magnitude", max_magnitude}};
+}
+
+/// The chart of one display: its design and its curves, after the input they are for
+/// (add_input_fields).
+nlohmann::ordered_json chart_json(const DesignInput& input, const char* display,
+                                  const std::string& title, nlohmann::ordered_json design,
+                                  const std::vector<double>& frequencies,
+                                  nlohmann::ordered_json per_model) {
+    nlohmann::ordered_json chart = {{"kind", "zwidth"}, {"display", display}, {"title", title}};
+    add_input_fields(input, chart);
+    chart["nyquist_hz"] = theory::nyquist_hz(1.0 / input.rate_hz);
+    chart["design"] = std::move(design);
+    chart["units"] = "N s/m";
+    chart["frequency_hz"] = frequencies;
+    chart["models"] = std::move(per_model);
+    return chart;
 }
 
 int finish(const ZwidthOptions& o, nlohmann::ordered_json chart) {
@@ -68,7 +83,7 @@ int finish(const ZwidthOptions& o, nlohmann::ordered_json chart) {
 
 int run_impedance(const ZwidthOptions& o, const std::vector<theory::HoldModel>& models,
                   const DesignInput& input) {
-    if (o.kp || o.ki || o.coupling_mass) {
+    if (o.display.kp || o.display.ki || o.coupling_mass) {
         throw UsageError("--kp, --ki and --coupling-mass are for --display admittance");
     }
     const ImpedanceDesign design = resolve_impedance_design(o.chart, input);
@@ -86,26 +101,15 @@ int run_impedance(const ZwidthOptions& o, const std::vector<theory::HoldModel>& 
                                                       period);
             });
     }
-    return finish(o, {
-                         {"kind", "zwidth"},
-                         {"display", "impedance"},
-                         {"title", "Z-width of the impedance display, (24)-(25): " +
-                                       describe_device(input) + "\n" + describe_design(design)},
-                         {"device", input.device},
-                         {"rate_hz", input.rate_hz},
-                         {"nyquist_hz", theory::nyquist_hz(period)},
-                         {"design", design_json(design)},
-                         {"units", "N s/m"},
-                         {"frequency_hz", frequencies},
-                         {"models", per_model},
-                     });
+    return finish(o, chart_json(input, "impedance",
+                                "Z-width of the impedance display, (24)-(25): " +
+                                    describe_device(input) + "\n" + describe_design(design),
+                                design_json(design), frequencies, per_model));
 }
 
 int run_admittance(const ZwidthOptions& o, const std::vector<theory::HoldModel>& models,
                    const DesignInput& input) {
-    if (!o.kp || !o.ki) {
-        throw UsageError("--display admittance needs the PI velocity-loop gains --kp and --ki");
-    }
+    const theory::PiVelocityLoop loop = o.display.pi_loop();
     if (o.chart.stiffness) {
         throw UsageError(
             "--stiffness is the impedance display's coupling; the admittance "
@@ -113,7 +117,6 @@ int run_admittance(const ZwidthOptions& o, const std::vector<theory::HoldModel>&
     }
     tune::check_device(input.device);
     tune::check_rate(input.rate_hz);
-    const theory::PiVelocityLoop loop{*o.kp, *o.ki};
     theory::MassDamperCoupling coupling;
     coupling.damping_n_s_per_m =
         o.chart.coupling_damping.value_or(std::numeric_limits<double>::infinity());
@@ -168,26 +171,17 @@ int run_admittance(const ZwidthOptions& o, const std::vector<theory::HoldModel>&
         " N/m; m_c = " + number_text(coupling.mass_kg, 4) + " kg, b_c = " +
         (pure_mass ? std::string("none") : number_text(coupling.damping_n_s_per_m, 4) + " N s/m");
     if (source == "sized") described += " (sized from (37) with the encoder model)";
-    return finish(o, {
-                         {"kind", "zwidth"},
-                         {"display", "admittance"},
-                         {"title", "Z-width of the admittance display, (42)-(43): " +
-                                       describe_device(input) + "\n" + described},
-                         {"device", input.device},
-                         {"rate_hz", input.rate_hz},
-                         {"nyquist_hz", theory::nyquist_hz(period)},
-                         {"design", design},
-                         {"units", "N s/m"},
-                         {"frequency_hz", frequencies},
-                         {"models", per_model},
-                     });
+    return finish(o, chart_json(input, "admittance",
+                                "Z-width of the admittance display, (42)-(43): " +
+                                    describe_device(input) + "\n" + described,
+                                design, frequencies, per_model));
 }
 
 int run_zwidth(const ZwidthOptions& o) {
     const std::vector<theory::HoldModel> models = parse_model_list(o.chart.models);
     check_chart_output(o.chart);
     const DesignInput input = resolve_design_input(o.chart.device);
-    if (o.display == "admittance") return run_admittance(o, models, input);
+    if (o.display.admittance()) return run_admittance(o, models, input);
     return run_impedance(o, models, input);
 }
 
@@ -205,12 +199,7 @@ void add_zwidth_command(CLI::App& app, Invocation& invocation) {
             "coupling damping b_c (N s/m); impedance display: default [coupling] "
             "damping from --config, else 0; admittance display: the series damper "
             "of (32), default none (a pure mass)");
-    command->add_option("--display", options->display, "display causality (default impedance)")
-        ->check(CLI::IsMember({"impedance", "admittance"}));
-    command->add_option("--kp", options->kp, "admittance display: PI proportional gain (N s/m)")
-        ->check(non_negative_finite("N s/m"));
-    command->add_option("--ki", options->ki, "admittance display: PI integral gain (N/m)")
-        ->check(non_negative_finite("N/m"));
+    add_display_options(*command, options->display);
     command
         ->add_option("--coupling-mass", options->coupling_mass,
                      "admittance display: coupling mass m_c (kg); default sized from (37) "

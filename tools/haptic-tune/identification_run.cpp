@@ -1,7 +1,6 @@
 #include "identification_run.hpp"
 
 #include <fcntl.h>
-#include <toml++/toml.h>
 #include <unistd.h>
 
 #include <array>
@@ -13,6 +12,8 @@
 
 #include "autotune_error.hpp"
 #include "child_process.hpp"
+#include "hapticd/daemon/device_open.hpp"
+#include "hapticd/device/sim/sim_config.hpp"
 
 namespace hapticd::tools {
 namespace {
@@ -48,12 +49,12 @@ std::string default_hapticd() {
 }
 
 bool sim_lockstep(const daemon::Config& config) {
-    if (config.device.plugin != "sim" || config.device.plugin_table_toml.empty()) return false;
+    if (config.device.plugin != "sim") return false;
     try {
-        const toml::table document = toml::parse(config.device.plugin_table_toml);
-        return toml::at_path(document, config.device.plugin_table_path)["clock"].value_or(
-                   std::string()) == "lockstep";
-    } catch (const toml::parse_error&) {
+        // [device.sim] as the sim plugin reads it in open(), from what the daemon hands it.
+        return device::sim::parse_sim_config(daemon::device_config(config, /*lockstep=*/false))
+                   .clock == device::sim::SimClock::lockstep;
+    } catch (const input::ConfigError&) {
         return false;  // hapticd itself will say what is wrong with the table
     }
 }

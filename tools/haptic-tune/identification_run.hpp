@@ -11,7 +11,9 @@ namespace hapticd::tools {
 /// else "hapticd" to be found on PATH.
 std::string default_hapticd();
 
-/// The sim plugin on its lockstep clock: the run can go as fast as the CPU (--lockstep).
+/// The sim plugin on its lockstep clock ([device.sim] clock = "lockstep", read by the sim's
+/// own reader, device/sim/sim_config.hpp): the run can go as fast as the CPU (--lockstep).
+/// False for a table the sim refuses (hapticd then says why).
 bool sim_lockstep(const daemon::Config& config);
 
 /// Runs `hapticd --identify --config CONFIG --log LOG [--lockstep] [--no-status]

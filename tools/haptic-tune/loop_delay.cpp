@@ -1,7 +1,5 @@
 #include "loop_delay.hpp"
 
-#include <toml++/toml.h>
-
 #include <iostream>
 
 #include "autotune_error.hpp"
@@ -10,19 +8,6 @@
 #include "identification_run.hpp"
 
 namespace hapticd::tools {
-namespace {
-
-/// [device.model] delay is written in the config (its parsed value defaults to 0 when not).
-bool config_states_delay(const std::string& text) {
-    try {
-        const toml::table table = toml::parse(text);
-        return table["device"]["model"]["delay"].is_value();
-    } catch (const toml::parse_error&) {
-        return false;  // load_config() has read it already; not reached
-    }
-}
-
-}  // namespace
 
 const char* to_string(DelaySource source) {
     switch (source) {
@@ -44,10 +29,10 @@ std::string periods_text(double delay_s, double rate_hz) {
 }
 
 LoopDelay find_loop_delay(std::optional<double> delay_option, bool from_log,
-                          const daemon::Config& config, const std::string& original) {
+                          const daemon::Config& config) {
     LoopDelay out;
     const double rate_hz = config.servo.rate_hz;
-    const bool stated = config_states_delay(original);
+    const bool stated = config.device.model_delay_stated;
     if (delay_option) {
         out.delay_s = *delay_option;
         out.source = DelaySource::option;

@@ -33,10 +33,11 @@ struct LoopDelay {
 };
 
 /// --delay (delay_option), else the link's measurement (unless from_log), else the
-/// config's [device.model] delay. `original` is the config's text, to tell a stated delay
-/// from the default. Throws AutotuneError when the delay is unknown or the device fails.
+/// config's [device.model] delay when the file states one
+/// (daemon::DeviceSection::model_delay_stated). Throws AutotuneError when the delay is
+/// unknown or the device fails.
 LoopDelay find_loop_delay(std::optional<double> delay_option, bool from_log,
-                          const daemon::Config& config, const std::string& original);
+                          const daemon::Config& config);
 
 /// "1.5 periods".
 std::string periods_text(double delay_s, double rate_hz);

@@ -24,6 +24,20 @@
 
 namespace {
 
+/// A gain: a finite number >= 0 (CLI11's NonNegativeNumber lets inf through, and names the
+/// range up to DBL_MAX). Refused while the command line is read: exit 2, no daemon asked.
+CLI::Validator finite_non_negative() {
+    return {
+        [](const std::string& text) -> std::string {
+            double value = 0.0;
+            if (!CLI::detail::lexical_cast(text, value) || !std::isfinite(value) || value < 0.0) {
+                return "\"" + text + "\" is not a finite number >= 0";
+            }
+            return {};
+        },
+        "NUMBER >= 0"};
+}
+
 using hapticd::ctl::ConnectionError;
 using hapticd::ctl::ControlConnection;
 using hapticd::daemon::control::RequestKind;
@@ -295,10 +309,10 @@ int run_main(int argc, char** argv) {
         "coupling",
         "set the coupling's k_c [and b_c] (16): checked by the daemon's stability check first, "
         "refused with its verdict when they fail it; forces return through the soft start");
-    coupling->add_option("K", stiffness, "k_c, N/m")->required()->check(CLI::NonNegativeNumber);
+    coupling->add_option("K", stiffness, "k_c, N/m")->required()->check(finite_non_negative());
     auto* damping_option =
         coupling->add_option("B", damping, "b_c, N s/m (default: the damping in force)")
-            ->check(CLI::NonNegativeNumber);
+            ->check(finite_non_negative());
 
     double stream_rate_hz = hapticd::daemon::control::kDefaultSubscribeRateHz;
     int stream_count = 0;
@@ -373,12 +387,6 @@ int run_main(int argc, char** argv) {
                           : "\"" + app.remaining().front() + "\" is not a command")
                   << ": one of status, watch, arm, disarm, reset, coupling, stream, record, scene, "
                      "identify (hapticctl --help)\n";
-        return hapticd::daemon::kExitBadInput;
-    }
-    // Bad input is told before any daemon is asked, whether one answers or not.
-    if (coupling->parsed() && (!std::isfinite(stiffness) || !std::isfinite(damping))) {
-        std::cerr << "hapticctl: coupling " << stiffness << " " << damping
-                  << ": K and B must be finite numbers >= 0\n";
         return hapticd::daemon::kExitBadInput;
     }
     if (instance_option->count() == 0 && socket_option->count() == 0) {

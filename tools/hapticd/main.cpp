@@ -16,6 +16,7 @@
 #include <string>
 #include <thread>
 
+#include "hapticd/daemon/exit_code.hpp"
 #include "hapticd/daemon/journal.hpp"
 #include "hapticd/daemon/run.hpp"
 #include "hapticd/device/plugin_loader.hpp"
@@ -123,7 +124,7 @@ int list_plugins() {
         if (!plugin.description.empty()) std::cout << "\t" << plugin.description;
         std::cout << "\n";
     }
-    return 0;
+    return hapticd::daemon::kExitOk;
 }
 
 int run_main(int argc, char** argv) {
@@ -222,5 +223,5 @@ int main(int argc, char** argv) {
     } catch (...) {
         std::cerr << "hapticd: an unknown exception ended the run\n";
     }
-    return 1;
+    return hapticd::daemon::kExitFault;
 }

@@ -75,6 +75,9 @@ struct DeviceSection {
     std::optional<double> model_damping_n_s_per_m;
     double model_delay_s =
         *schema::kModelDelay.default_value;  ///< sample to force, beyond the hold
+    /// [device.model] delay is written in the file (model_delay_s is its value); false:
+    /// model_delay_s is the default. haptic-tune autotune tells a stated delay from none.
+    bool model_delay_stated = false;
     /// The TOML document that holds the plugin's own table (the config's own text, so that
     /// the plugin's messages carry its lines), and where in it: "device.<plugin>". The
     /// plugin reads and validates it (device/plugin_table.hpp).
@@ -98,6 +101,7 @@ struct SafetySection {
     double soft_start_ramp_s = *schema::kSoftStartRamp.default_value;
     servo::PassivityMode passivity = schema::kPassivity.default_value;
     bool reconnect = schema::kReconnect.default_value;
+    bool arm_at_start = schema::kArmAtStart.default_value;
     double reconnect_settle_s = *schema::kReconnectSettle.default_value;
     double reconnect_timeout_s = *schema::kReconnectTimeout.default_value;  ///< 0: wait for ever
     /// The overrun budget (servo::OverrunBudget): one overrun that misses more periods, or

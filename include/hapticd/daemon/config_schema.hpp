@@ -95,6 +95,8 @@ inline constexpr servo::PassivityMode kPassivityModes[] = {servo::PassivityMode:
 inline constexpr Choice<servo::PassivityMode> kPassivity{
     "passivity", kPassivityModes, &servo::to_string, servo::PassivitySettings{}.mode};
 inline constexpr Flag kReconnect{"reconnect", servo::LinkRecoverySettings{}.enabled};
+/// false: the run starts disabled, at zero force, until `hapticctl arm` (needs --socket).
+inline constexpr Flag kArmAtStart{"arm_at_start", servo::ServoConfig{}.start_armed};
 inline constexpr Number kReconnectSettle{"reconnect_settle", servo::kSettleRange,
                                          servo::LinkRecoverySettings{}.settle_s};
 /// 0, or above reconnect_settle (config.cpp checks it).

@@ -4,7 +4,7 @@
 // has run (the config, the scene, the start-up check and the device have all succeeded by
 // then); STATUS= lines with the run's state; WATCHDOG=1 only while the servo's tick counter
 // advances, so that a hung servo thread trips WatchdogSec= even though this thread lives on;
-// STOPPING=1 at the end. Every call comes from the watching thread (supervised_run.hpp), never
+// STOPPING=1 at the end. Every call comes from the watching thread (run_watcher.cpp), never
 // from the servo thread. Without NOTIFY_SOCKET (not started by systemd) nothing is sent.
 #pragma once
 

@@ -13,6 +13,7 @@
 #include <string>
 
 #include "hapticd/servo/io.hpp"
+#include "hapticd/servo/rate.hpp"
 
 namespace hapticd::device {
 
@@ -45,9 +46,9 @@ struct DeviceInfo {
 
 /// What the daemon passes to Device::open.
 struct DeviceConfig {
-    int axes = 1;             ///< [device] axes
-    double rate_hz = 1000.0;  ///< [servo] rate_hz
-    bool lockstep = false;    ///< hapticd --lockstep: virtual time, as fast as the CPU goes
+    int axes = 1;                            ///< [device] axes
+    double rate_hz = servo::kDefaultRateHz;  ///< [servo] rate_hz
+    bool lockstep = false;  ///< hapticd --lockstep: virtual time, as fast as the CPU goes
     /// The plugin's own table, [device.<plugin>]: a TOML document (the daemon hands over the
     /// config file's own text, so that the plugin's messages carry its lines) and the
     /// table's dotted path in it ("device.sim"; empty: the document is the table). The plugin

@@ -5,16 +5,19 @@
 // which returns a static descriptor. The loader (plugin_loader.hpp) checks abi_version
 // before it touches anything else, so a plugin built against another ABI is refused with
 // a clear message rather than crashing. A plugin defines the entry with one line,
-// HAPTICD_DEVICE_PLUGIN (below). Bump kDeviceAbiVersion whenever Device, Sample, Command,
-// DeviceInfo or DeviceConfig change layout or meaning: the layout asserts at the end of this
-// file fail the build on a change of layout until the version is bumped and the new layout
-// recorded.
+// HAPTICD_DEVICE_PLUGIN (below). Bump kDeviceAbiVersion whenever the descriptor, Device,
+// Sample, Command, DeviceInfo or DeviceConfig change layout or meaning: the layout asserts at
+// the end of this file fail the build on a change of layout until the version is bumped and
+// the new layout recorded.
 #pragma once
 
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
+#include <exception>
 #include <string>
+#include <string_view>
 #include <type_traits>
 
 #include "hapticd/device/device.hpp"
@@ -27,6 +30,13 @@ struct hapticd_device_plugin {
     const char* description;                    ///< one line for `hapticd --list-plugins`
     hapticd::device::Device* (*create)();       ///< a new, unopened device
     void (*destroy)(hapticd::device::Device*);  ///< deletes what create() returned
+    /// Checks `config` (its [device.<plugin>] table, axes and rate) exactly as open() reads
+    /// it, without opening anything. True: open() would accept the table. False: open()
+    /// would refuse it, and `message` (of `capacity` bytes, capacity > 0) holds open()'s
+    /// message, NUL-terminated, cut at a UTF-8 character boundary when it does not fit.
+    /// Throws nothing (ABI version 4 on).
+    bool (*check_config)(const hapticd::device::DeviceConfig* config, char* message,
+                         std::size_t capacity);
 };
 
 /// The one symbol a plugin exports.
@@ -37,27 +47,79 @@ const hapticd_device_plugin* hapticd_device_plugin_entry(void);
 
 /// Defines a plugin's entry point: the descriptor of a plugin called `name` (a string
 /// literal, e.g. "sim") with a one-line `description`, built for this kDeviceAbiVersion,
-/// whose create() returns the expression after them (a new, unopened device) and whose
-/// destroy() deletes it. Once, at file scope, in one source file of the plugin:
+/// whose check_config() runs `check` (a function `void check(const DeviceConfig&)` that
+/// reads the table as open() does and throws open()'s exception when it is bad), whose
+/// create() returns the expression after them (a new, unopened device) and whose destroy()
+/// deletes it. Once, at file scope, in one source file of the plugin:
 ///
-///     HAPTICD_DEVICE_PLUGIN("sim", "simulated device: ...",
+///     HAPTICD_DEVICE_PLUGIN("sim", "simulated device: ...", check_sim_table,
 ///                           new hapticd::device::sim::SimDevice());
-#define HAPTICD_DEVICE_PLUGIN(name, description, ...)                              \
-    extern "C" __attribute__((visibility("default"))) const hapticd_device_plugin* \
-    hapticd_device_plugin_entry(void) {                                            \
-        static constexpr hapticd_device_plugin kPlugin{                            \
-            ::hapticd::device::kDeviceAbiVersion, name, description,               \
-            []() -> ::hapticd::device::Device* { return __VA_ARGS__; },            \
-            [](::hapticd::device::Device* device) { delete device; }};             \
-        return &kPlugin;                                                           \
-    }                                                                              \
+#define HAPTICD_DEVICE_PLUGIN(name, description, check, ...)                                       \
+    extern "C" __attribute__((visibility("default"))) const hapticd_device_plugin*                 \
+    hapticd_device_plugin_entry(void) {                                                            \
+        static constexpr hapticd_device_plugin kPlugin{                                            \
+            ::hapticd::device::kDeviceAbiVersion,                                                  \
+            name,                                                                                  \
+            description,                                                                           \
+            []() -> ::hapticd::device::Device* { return __VA_ARGS__; },                            \
+            [](::hapticd::device::Device* device) { delete device; },                              \
+            [](const ::hapticd::device::DeviceConfig* config, char* message,                       \
+               std::size_t capacity) noexcept -> bool {                                            \
+                return ::hapticd::device::plugin_abi::run_check(check, config, message, capacity); \
+            }};                                                                                    \
+        return &kPlugin;                                                                           \
+    }                                                                                              \
     static_assert(true, "HAPTICD_DEVICE_PLUGIN(...) ends with a semicolon")
 
 namespace hapticd::device {
 
-inline constexpr std::uint32_t kDeviceAbiVersion = 3;
+inline constexpr std::uint32_t kDeviceAbiVersion = 4;
 
-// The layout of ABI version 3: size, alignment and offset in bytes of every type and field
+/// The plugin's side of check_config(), compiled into each plugin by HAPTICD_DEVICE_PLUGIN.
+namespace plugin_abi {
+
+/// Copies `text` into `message` (`capacity` bytes), NUL-terminated; cut, when it does not
+/// fit, before the UTF-8 character that would not fit whole. Nothing when capacity is 0.
+inline void copy_message(std::string_view text, char* message, std::size_t capacity) noexcept {
+    if (message == nullptr || capacity == 0) return;
+    std::size_t size = text.size();
+    if (size >= capacity) {
+        size = capacity - 1;
+        // Back to the first byte of the character at the cut (continuation bytes: 10xxxxxx).
+        while (size > 0 && (static_cast<unsigned char>(text[size]) & 0xC0u) == 0x80u) --size;
+    }
+    std::memcpy(message, text.data(), size);
+    message[size] = '\0';
+}
+
+/// Runs `check` on `*config`: true when it returns; false with its message when it throws.
+/// No exception leaves (what a plugin throws must not cross the C ABI).
+inline bool run_check(void (*check)(const DeviceConfig&), const DeviceConfig* config, char* message,
+                      std::size_t capacity) noexcept {
+    try {
+        if (config == nullptr) {
+            copy_message("check_config() was given no config", message, capacity);
+            return false;
+        }
+        check(*config);
+        return true;
+    } catch (const std::exception& e) {
+        copy_message(e.what(), message, capacity);
+    } catch (...) {
+        constexpr std::string_view kWhat =
+            ": the plugin's check of its table threw something that is not a std::exception";
+        try {
+            copy_message(config->source + std::string(kWhat), message, capacity);
+        } catch (...) {  // no memory for the source's name
+            copy_message(kWhat.substr(2), message, capacity);
+        }
+    }
+    return false;
+}
+
+}  // namespace plugin_abi
+
+// The layout of ABI version 4: size, alignment and offset in bytes of every type and field
 // that crosses the plugin boundary, on the LP64 Linux targets with libstdc++ that hapticd
 // builds on (x86_64, aarch64). The daemon and every plugin compile these asserts, so a
 // plugin built where a type lays out otherwise (another std::string ABI, say) fails to build.
@@ -67,8 +129,8 @@ inline constexpr std::uint32_t kDeviceAbiVersion = 3;
 // the vtable depends on, only a reviewer can see.)
 #if defined(__LP64__) && defined(__GLIBCXX__)
 
-static_assert(kDeviceAbiVersion == 3,
-              "plugin_abi.hpp: the layout figures below are device plugin ABI version 3's; "
+static_assert(kDeviceAbiVersion == 4,
+              "plugin_abi.hpp: the layout figures below are device plugin ABI version 4's; "
               "write the new version's figures and its number");
 
 #define HAPTICD_ABI_LAYOUT(expression, figure)                                           \
@@ -90,13 +152,15 @@ static_assert(kDeviceAbiVersion == 3,
 HAPTICD_ABI_LAYOUT(sizeof(std::string), 32);
 HAPTICD_ABI_LAYOUT(servo::kMaxAxes, 3);
 
-HAPTICD_ABI_LAYOUT(sizeof(hapticd_device_plugin), 40);
+HAPTICD_ABI_LAYOUT(sizeof(hapticd_device_plugin), 48);
 HAPTICD_ABI_LAYOUT(alignof(hapticd_device_plugin), 8);
 HAPTICD_ABI_FIELD(hapticd_device_plugin, abi_version, 0, std::uint32_t);
 HAPTICD_ABI_FIELD(hapticd_device_plugin, name, 8, const char*);
 HAPTICD_ABI_FIELD(hapticd_device_plugin, description, 16, const char*);
 HAPTICD_ABI_FIELD(hapticd_device_plugin, create, 24, Device* (*)());
 HAPTICD_ABI_FIELD(hapticd_device_plugin, destroy, 32, void (*)(Device*));
+HAPTICD_ABI_FIELD(hapticd_device_plugin, check_config, 40,
+                  bool (*)(const DeviceConfig*, char*, std::size_t));
 
 HAPTICD_ABI_LAYOUT(sizeof(Sample), 72);
 HAPTICD_ABI_LAYOUT(alignof(Sample), 8);

@@ -10,12 +10,15 @@
 // shared objects found the same way, so a lab's own device needs no rebuild of the daemon.
 //
 // The loader dlopen()s with RTLD_NOW | RTLD_LOCAL, looks up HAPTICD_DEVICE_PLUGIN_ENTRY_SYMBOL,
-// checks abi_version before it reads anything else of the descriptor, then calls create().
-// Every failure is a std::runtime_error that names the plugin and says why.
+// checks abi_version before it reads anything else of the descriptor, then calls create() (or,
+// for check_plugin_config, only check_config()). Every failure is a std::runtime_error that
+// names the plugin and says why.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -46,6 +49,19 @@ using DeviceHandle = std::unique_ptr<Device, PluginDeleter>;
 /// error text, missing entry symbol, null descriptor, wrong ABI version (both numbers),
 /// create() returning null or throwing.
 DeviceHandle load_device(std::string_view name_or_path);
+
+/// The buffer check_plugin_config() hands a plugin's check_config() by default, in bytes.
+inline constexpr std::size_t kCheckMessageCapacity = 16384;
+
+/// Loads the plugin `name_or_path` as load_device() does and has it check `config` as its
+/// open() would read it (hapticd_device_plugin::check_config), creating and opening nothing.
+/// Nothing when the plugin accepts the config; else the plugin's message (open()'s), copied
+/// into a buffer of ours of `capacity` bytes before the library is closed, so cut to at most
+/// capacity - 1 bytes at a UTF-8 character boundary. Throws std::runtime_error as
+/// load_device() does when the plugin cannot be loaded.
+std::optional<std::string> check_plugin_config(std::string_view name_or_path,
+                                               const DeviceConfig& config,
+                                               std::size_t capacity = kCheckMessageCapacity);
 
 /// The directories searched for a plugin name, in order (see the file comment).
 std::vector<std::string> plugin_search_path();

@@ -11,13 +11,12 @@
 #include "hapticd/servo/environment_port.hpp"
 #include "hapticd/servo/io.hpp"
 #include "hapticd/servo/link_recovery.hpp"
+#include "hapticd/servo/rate.hpp"
 #include "hapticd/servo/realtime.hpp"
 #include "hapticd/servo/safety.hpp"
 
 namespace hapticd::servo {
 
-/// The servo rate ([servo] rate_hz): 10 ms to 50 us periods.
-inline constexpr input::Range kRateRange{.lo = 100.0, .hi = 20000.0, .unit = "Hz"};
 /// The largest overrun budget, either count ([safety] max_missed_periods, ...).
 inline constexpr std::int64_t kMaxOverrunBudget = 1'000'000;
 
@@ -28,9 +27,9 @@ struct OverrunBudget {
 };
 
 struct ServoConfig {
-    double rate_hz = 1000.0;        ///< [servo] rate_hz; T = 1/rate_hz
-    int axes = 1;                   ///< [device] axes, 1..kMaxAxes
-    double counts_per_meter = 0.0;  ///< from DeviceInfo, > 0
+    double rate_hz = kDefaultRateHz;  ///< [servo] rate_hz; T = 1/rate_hz
+    int axes = 1;                     ///< [device] axes, 1..kMaxAxes
+    double counts_per_meter = 0.0;    ///< from DeviceInfo, > 0
     /// [coupling] stiffness, damping, velocity_filter: k_c, b_c of (16), f_c (< rate_hz/2)
     CouplingGains coupling{};
     /// false: no virtual coupling; an impedance environment acts on the device directly

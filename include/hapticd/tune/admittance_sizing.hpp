@@ -14,6 +14,7 @@
 #include <optional>
 #include <string>
 
+#include "hapticd/servo/rate.hpp"
 #include "hapticd/theory/admittance.hpp"
 #include "hapticd/tune/coupling_sizing.hpp"
 #include "hapticd/tune/exact_admittance.hpp"
@@ -41,7 +42,7 @@ PassiveAdmittanceVerdict passive_admittance_verdict(
 struct ExactAdmittanceSizingRequest {
     theory::DeviceModel device;
     theory::PiVelocityLoop loop;
-    double rate_hz = 1000.0;
+    double rate_hz = servo::kDefaultRateHz;
     double delay_periods = 0.0;
     double coupling_damping_n_s_per_m = std::numeric_limits<double>::infinity();  ///< b_c
     double safety_factor = 1.1;  ///< the sized m_c is this times the exact limit (>= 1)
@@ -72,7 +73,7 @@ ExactAdmittanceSizing size_admittance_coupling_exact(const ExactAdmittanceSizing
 struct PassiveAdmittanceSizingRequest {
     theory::DeviceModel device;
     theory::PiVelocityLoop loop;
-    double rate_hz = 1000.0;
+    double rate_hz = servo::kDefaultRateHz;
     double delay_periods = 0.0;
     double coupling_damping_n_s_per_m = std::numeric_limits<double>::infinity();  ///< b_c
     std::optional<theory::ForceSensorFilter> force_filter = std::nullopt;

@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "hapticd/servo/rate.hpp"
 #include "hapticd/theory/benchmark.hpp"
 #include "hapticd/tune/coupling_sizing.hpp"
 #include "hapticd/tune/exact_model.hpp"
@@ -34,7 +35,7 @@ inline constexpr double kDefaultAutotuneMargin = 0.9;
 struct AutotuneOptions {
     /// The servo rate the gains are for ([servo] rate_hz), Hz. Not the log's rate: m and b
     /// are continuous-time, so a log at any rate sizes gains for this one.
-    double rate_hz = 1000.0;
+    double rate_hz = servo::kDefaultRateHz;
     /// k_c = margin x the binding axis's bound stiffness; in (0, 1].
     double margin = kDefaultAutotuneMargin;
     /// false: b_c = 0. true: the passive model's optimised (k_c, b_c) pair of the binding

@@ -15,6 +15,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "hapticd/servo/rate.hpp"
 #include "hapticd/theory/admittance.hpp"
 #include "hapticd/theory/benchmark.hpp"
 
@@ -36,7 +37,7 @@ struct SizingReport {
 
 struct ImpedanceSizingRequest {
     theory::DeviceModel device;
-    double rate_hz = 1000.0;
+    double rate_hz = servo::kDefaultRateHz;
     theory::LoopModel model{theory::HoldModel::passive};
     /// b_c to size k_c for; nullopt asks for the best (k_c, b_c) pair.
     std::optional<double> coupling_damping_n_s_per_m = 0.0;
@@ -62,7 +63,7 @@ ImpedanceSizing size_impedance_coupling(const ImpedanceSizingRequest& request);
 struct AdmittanceSizingRequest {
     theory::DeviceModel device;
     theory::PiVelocityLoop loop;
-    double rate_hz = 1000.0;
+    double rate_hz = servo::kDefaultRateHz;
     theory::HoldModel model = theory::HoldModel::encoder;
     /// b_c to size m_c for (+inf for a pure mass); nullopt asks for the best pair.
     std::optional<double> coupling_damping_n_s_per_m;

@@ -79,6 +79,7 @@
 #include <string>
 #include <vector>
 
+#include "hapticd/servo/rate.hpp"
 #include "hapticd/theory/admittance.hpp"
 #include "hapticd/theory/force_sensor_filter.hpp"
 #include "hapticd/tune/exact_model.hpp"
@@ -115,7 +116,7 @@ struct AdmittanceDesign {
     theory::DeviceModel device;
     theory::PiVelocityLoop loop;
     theory::MassDamperCoupling coupling;  ///< m_c, b_c in (0, ∞], not both ∞
-    double rate_hz = 1000.0;
+    double rate_hz = servo::kDefaultRateHz;
     double delay_periods = 0.0;  ///< 0 <= d < kMaxDelayPeriods
     /// An analog low-pass on the force sensor (force_sensor_filter.hpp), none by default: its
     /// two states (one for order 1) are driven by F_h and sampled with the plant by the same

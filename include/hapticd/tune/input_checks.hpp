@@ -4,6 +4,7 @@
 
 #include <string_view>
 
+#include "hapticd/servo/rate.hpp"
 #include "hapticd/theory/benchmark.hpp"
 
 namespace hapticd::tune {
@@ -16,10 +17,11 @@ void check_in_range(std::string_view name, double value, double lo, double hi,
 
 // Physical ranges. Every input that reaches a solver or an eigenvalue problem is held to
 // one, not merely to "finite": outside them the numbers mean nothing for a haptic device
-// and the numerics (matrix exponentials, eigenvalues) lose their footing.
+// and the numerics (matrix exponentials, eigenvalues) lose their footing. The rate's is the
+// servo's own, servo::kRateRange (check_rate).
 inline constexpr double kMinDeviceMassKg = 1e-4, kMaxDeviceMassKg = 1e3;
 inline constexpr double kMinDeviceDamping = 1e-4, kMaxDeviceDamping = 1e4;  // N s/m
-inline constexpr double kMinRateHz = 10.0, kMaxRateHz = 1e5;
+
 inline constexpr double kMaxCouplingStiffness = 1e9;  // N/m
 inline constexpr double kMaxCouplingDamping = 1e5;    // N s/m
 inline constexpr double kMaxDelayPeriods = 10.0;      // loop delay beyond the hold, < this
@@ -27,7 +29,8 @@ inline constexpr double kMinVelocityFilterHz = 1.0;   // the damper's velocity f
 
 /// m in [1e-4, 1e3] kg, b in [1e-4, 1e4] N s/m.
 void check_device(const theory::DeviceModel& device);
-/// [10, 1e5] Hz.
+/// The servo's own range, servo::kRateRange (>= 100 and <= 20000 Hz): a design is for a
+/// rate hapticd runs.
 void check_rate(double rate_hz);
 /// k_c in [0, 1e9] N/m, b_c in [0, 1e5] N s/m.
 void check_coupling_gains(const theory::SpringDamperCoupling& coupling);

@@ -1,12 +1,14 @@
 // The JSON of the tune layer's results, for every command that prints one (haptic-tune size,
-// check, autotune): nlohmann's to_json, found by argument-dependent lookup, so that
-// `out["exact_check"] = check;` serialises a result one way everywhere. A command adds what
-// it knows beyond the result (the device, the rate, the delay: the input it sized for).
+// check, plot, autotune; hapticd's summary): nlohmann's to_json, found by argument-dependent
+// lookup, so that `out["exact_check"] = check;` serialises a result one way everywhere. A
+// command adds what it knows beyond the result (the device, the rate, the delay: the input
+// it sized for).
 #pragma once
 
 #include <nlohmann/json.hpp>
 
 #include "hapticd/theory/benchmark.hpp"
+#include "hapticd/theory/coupling_check.hpp"
 #include "hapticd/theory/force_sensor_filter.hpp"
 #include "hapticd/tune/admittance_sizing.hpp"
 #include "hapticd/tune/coupling_sizing.hpp"
@@ -21,6 +23,9 @@ namespace hapticd::theory {
 void to_json(nlohmann::ordered_json& json, const DeviceModel& device);
 /// {cutoff_hz, damping_ratio, order, description}.
 void to_json(nlohmann::ordered_json& json, const ForceSensorFilter& filter);
+/// {unconditionally_stable, worst_margin, worst_frequency_hz}: (21) checked under one hold
+/// model (haptic-tune plot's curves).
+void to_json(nlohmann::ordered_json& json, const CouplingCheck& check);
 
 }  // namespace hapticd::theory
 

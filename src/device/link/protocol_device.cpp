@@ -55,19 +55,34 @@ ProtocolDevice::ProtocolDevice(std::string plugin, MakeLink make_link)
 
 ProtocolDevice::~ProtocolDevice() { close(); }
 
-void ProtocolDevice::open(const DeviceConfig& config) {
-    close();
-    config_ = config;
+ProtocolDevice::Configured ProtocolDevice::configure(const DeviceConfig& config,
+                                                     const std::string& plugin,
+                                                     const MakeLink& make_link) {
     if (config.axes < 1 || config.axes > kMaxAxes) {
         throw input::ConfigError(
             config.source + ": " +
             input::out_of_range("device.axes", config.axes, "1.." + std::to_string(kMaxAxes)));
     }
-    PluginTable table(config, plugin_, "docs/transport-" + plugin_ + ".md");
+    PluginTable table(config, plugin, "docs/transport-" + plugin + ".md");
     TableReader& reader = table.reader();
-    settings_ = read_protocol_settings(reader, config);
-    link_ = make_link_(reader, LinkContext{config, settings_});
+    Configured configured;
+    configured.settings = read_protocol_settings(reader, config);
+    configured.link = make_link(reader, LinkContext{config, configured.settings});
     reader.finish();
+    return configured;
+}
+
+void ProtocolDevice::check_config(const DeviceConfig& config, const std::string& plugin,
+                                  const MakeLink& make_link) {
+    (void)configure(config, plugin, make_link);  // the link is made, never opened
+}
+
+void ProtocolDevice::open(const DeviceConfig& config) {
+    close();
+    config_ = config;
+    Configured configured = configure(config, plugin_, make_link_);
+    settings_ = configured.settings;
+    link_ = std::move(configured.link);
 
     const double period_ns = 1e9 / config.rate_hz;
     reply_timeout_ns_ =

@@ -5,19 +5,6 @@
 
 namespace hapticd::testing {
 
-device::protocol::EmulatorConfig pen_display_emulator() {
-    device::protocol::EmulatorConfig c;
-    c.sim.axes = 1;
-    c.sim.rate_hz = 1000.0;
-    c.sim.mass_kg = 0.1;
-    c.sim.damping_n_s_per_m = 2.0;
-    c.sim.counts_per_meter = 1e5;
-    c.sim.force_limit_n = 20.0;
-    c.sim.clock = device::sim::SimClock::lockstep;
-    c.serial_number = "EMU-0001";
-    return c;
-}
-
 EmulatedHidDevice::EmulatedHidDevice(const device::protocol::EmulatorConfig& device,
                                      const HidrawNodeSpec& node)
     : config_(device), spec_(node) {

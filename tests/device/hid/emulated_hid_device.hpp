@@ -17,13 +17,10 @@
 
 #include "hapticd/device/protocol/device_emulator.hpp"
 #include "hid_device_server.hpp"
+#include "pen_display_emulator.hpp"  // the device by default: serial EMU-0001
 #include "umockdev_hidraw.hpp"
 
 namespace hapticd::testing {
-
-/// The HIL tests' pen display (tests/support/pen_display.hpp: m = 0.1 kg, b = 2 N s/m, 1 kHz,
-/// 1e5 counts/m, 20 N) as a 1-axis protocol device, serial "EMU-0001", lockstep.
-device::protocol::EmulatorConfig pen_display_emulator();
 
 class EmulatedHidDevice {
   public:

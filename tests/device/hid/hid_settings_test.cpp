@@ -10,31 +10,24 @@
 
 #include "hapticd/device/hid/hid_enumeration.hpp"
 #include "hapticd/device/link/protocol_settings.hpp"
+#include "plugin_table_read.hpp"
 
 namespace hapticd::device::hid {
 namespace {
 
 /// read_hid_settings() on `toml` as ProtocolDevice would call it, then finish().
 HidSettings read(const std::string& toml, const std::string& serial_number = "") {
-    DeviceConfig config;
-    config.source = "cfg.toml";
-    config.plugin_table_toml = toml;
-    PluginTable table(config, "hid", "docs/transport-hid.md");
-    TableReader& reader = table.reader();
-    link::ProtocolSettings protocol;
-    protocol.serial_number = serial_number;
-    HidSettings settings = read_hid_settings(reader, link::LinkContext{config, protocol});
-    reader.finish();
-    return settings;
+    return testing::read_plugin_table(
+        {"hid", "docs/transport-hid.md", "cfg.toml"}, toml,
+        [&](TableReader& reader, const DeviceConfig& config) {
+            link::ProtocolSettings protocol;
+            protocol.serial_number = serial_number;
+            return read_hid_settings(reader, link::LinkContext{config, protocol});
+        });
 }
 
 std::string error_of(const std::string& toml) {
-    try {
-        (void)read(toml);
-    } catch (const std::runtime_error& e) {
-        return e.what();
-    }
-    return "<no error>";
+    return testing::thrown_message([&] { return read(toml); }, "<no error>");
 }
 
 TEST(HidSettings, ReadsIdsAndPath) {

@@ -4,14 +4,13 @@
 // measured and used; a version-1 firmware, with no delay stated anywhere, is refused before
 // anything runs, naming what is missing.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
-#include <cstdio>
-#include <fstream>
 #include <string>
 
 #include "pty_device.hpp"
 #include "run_command.hpp"
+#include "scratch_dir.hpp"
+#include "text_file.hpp"
 
 namespace hapticd::testing {
 namespace {
@@ -28,29 +27,24 @@ proto::EmulatorConfig emulator(double processing_delay_periods, std::uint8_t max
     return c;
 }
 
-/// A lab's config for the device on `port`, [device.model] with or without a delay.
-std::string write_config(const std::string& port, const std::string& model_extra) {
-    char path[] = "/tmp/hapticd-serial-autotune-XXXXXX.toml";
-    const int fd = mkstemps(path, 5);
-    if (fd >= 0) close(fd);
-    std::ofstream(path) << "[servo]\nrate_hz = 500\nrealtime = \"off\"\n"
-                           "[device]\nplugin = \"serial\"\n"
-                           "[device.model]\nmass = 0.1\ndamping = 2.0\n"
-                        << model_extra << "[device.serial]\nport = \"" << port
-                        << "\"\nreply_timeout_ms = 500\nreconnect = false\n"
-                           "[coupling]\nstiffness = 100\n";
-    return path;
-}
-
-std::string read(const std::string& path) {
-    std::ifstream in(path);
-    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+/// A lab's config `name` in `dir` for the device on `port`, [device.model] with or without a
+/// delay.
+std::string write_config(const ScratchDir& dir, const std::string& name, const std::string& port,
+                         const std::string& model_extra) {
+    return dir.write(name,
+                     "[servo]\nrate_hz = 500\nrealtime = \"off\"\n"
+                     "[device]\nplugin = \"serial\"\n"
+                     "[device.model]\nmass = 0.1\ndamping = 2.0\n" +
+                         model_extra + "[device.serial]\nport = \"" + port +
+                         "\"\nreply_timeout_ms = 500\nreconnect = false\n"
+                         "[coupling]\nstiffness = 100\n");
 }
 
 TEST(SerialAutotune, MeasuresTheLoopDelayBeforeTheIdentificationRun) {
+    const ScratchDir dir;
     PtyDevice device(emulator(1.5, proto::kProtocolVersion2));
-    const std::string config = write_config(device.port(), "");
-    const std::string before = read(config);
+    const std::string config = write_config(dir, "lab.toml", device.port(), "");
+    const std::string before = read_file(config);
     // No hapticd to run: autotune measures the delay, says what it found, then stops at the
     // identification run, writing nothing.
     const CommandResult r = run_command(std::string("'") + HAPTIC_TUNE + "' autotune --config '" +
@@ -63,14 +57,14 @@ TEST(SerialAutotune, MeasuresTheLoopDelayBeforeTheIdentificationRun) {
               std::string::npos)
         << r.err;
     EXPECT_NE(r.err.find("cannot run /nonexistent/hapticd"), std::string::npos) << r.err;
-    EXPECT_EQ(read(config), before);
-    std::remove(config.c_str());
+    EXPECT_EQ(read_file(config), before);
 }
 
 TEST(SerialAutotune, AVersion1FirmwareWithNoDelayStatedIsRefusedNamingWhatIsMissing) {
+    const ScratchDir dir;
     PtyDevice device(emulator(0.5, proto::kProtocolVersion1));
-    const std::string config = write_config(device.port(), "");
-    const std::string before = read(config);
+    const std::string config = write_config(dir, "lab.toml", device.port(), "");
+    const std::string before = read_file(config);
     const CommandResult r = run_command(std::string("'") + HAPTIC_TUNE + "' autotune --config '" +
                                         config + "' --hapticd /nonexistent/hapticd");
     EXPECT_EQ(r.exit_code, 2) << r.err;
@@ -81,10 +75,10 @@ TEST(SerialAutotune, AVersion1FirmwareWithNoDelayStatedIsRefusedNamingWhatIsMiss
     EXPECT_NE(r.err.find("applied_lag and applied_age_us"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("give --delay SECONDS"), std::string::npos) << r.err;
     EXPECT_EQ(r.err.find("running /nonexistent/hapticd"), std::string::npos) << r.err;
-    EXPECT_EQ(read(config), before);
+    EXPECT_EQ(read_file(config), before);
 
     // With [device.model] delay stated, autotune goes on with it, saying it was not measured.
-    const std::string stated = write_config(device.port(), "delay = 0.002\n");
+    const std::string stated = write_config(dir, "stated.toml", device.port(), "delay = 0.002\n");
     const CommandResult s = run_command(std::string("'") + HAPTIC_TUNE + "' autotune --config '" +
                                         stated + "' --hapticd /nonexistent/hapticd");
     EXPECT_EQ(s.exit_code, 2) << s.err;
@@ -93,8 +87,6 @@ TEST(SerialAutotune, AVersion1FirmwareWithNoDelayStatedIsRefusedNamingWhatIsMiss
               std::string::npos)
         << s.err;
     EXPECT_NE(s.err.find("cannot run /nonexistent/hapticd"), std::string::npos) << s.err;
-    std::remove(config.c_str());
-    std::remove(stated.c_str());
 }
 
 }  // namespace

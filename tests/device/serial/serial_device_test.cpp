@@ -9,7 +9,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdlib>
-#include <filesystem>
 #include <iostream>
 #include <stdexcept>
 #include <thread>
@@ -19,6 +18,7 @@
 #include "hapticd/device/plugin_loader.hpp"
 #include "hapticd/servo/io.hpp"
 #include "pty_device.hpp"
+#include "scratch_dir.hpp"
 #include "serial_test_util.hpp"
 
 namespace hapticd::testing {
@@ -222,9 +222,8 @@ TEST_F(SerialDeviceTest, ADeviceFaultIsReported) {
 }
 
 TEST(SerialDeviceReconnect, HangupIsDisconnectedAndTheDeviceIsAdoptedWhenItReturns) {
-    const std::string stable = (std::filesystem::temp_directory_path() /
-                                ("hapticd-serial-by-id-" + std::to_string(getpid())))
-                                   .string();
+    const ScratchDir dir;
+    const std::string stable = dir.file("by-id");
     PtyDevice device(emulator_config(), stable);
     DeviceHandle handle = device::load_device("serial");
     handle->open(device_config(serial_table(device.port())));

@@ -34,7 +34,6 @@
 // docs/reliability.md ran more. HAPTICD_PTY_CAMPAIGN_SEED=S replays sequence S alone:
 //   HAPTICD_PTY_CAMPAIGN_SEQUENCES=2000 build/release/bin/serial_fault_campaign_test
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <array>
@@ -45,7 +44,6 @@
 #include <cstdint>
 #include <cstdlib>
 #include <deque>
-#include <filesystem>
 #include <iostream>
 #include <map>
 #include <mutex>
@@ -62,6 +60,7 @@
 #include "hapticd/device/protocol/reply_tracker.hpp"
 #include "hapticd/device/protocol/stream_framer.hpp"
 #include "pty_device.hpp"
+#include "scratch_dir.hpp"
 
 namespace hapticd::testing {
 namespace {
@@ -550,10 +549,8 @@ void run_sequence(std::uint64_t seed, Counts& counts) {
     proto::EmulatorConfig emulator;
     emulator.sim = campaign::sim_config();
     emulator.serial_number = "EMU-CAMPAIGN";
-    const std::string path =
-        (std::filesystem::temp_directory_path() / ("hapticd-campaign-" + std::to_string(getpid())))
-            .string();
-    PtyDevice pty(emulator, path);
+    const ScratchDir dir;
+    PtyDevice pty(emulator, dir.file("by-id"));
     pty.set_line_tap(line.tap());
     pty.set_request_hook(line.hook());
     device::DeviceHandle handle = device::load_device("serial");

@@ -17,7 +17,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <stdexcept>
 #include <string>
 
@@ -25,6 +24,7 @@
 #include "hapticd/device/serial/serial_link.hpp"
 #include "hapticd/device/serial/serial_settings.hpp"
 #include "pty_device.hpp"
+#include "scratch_dir.hpp"
 #include "serial_test_util.hpp"
 
 namespace hapticd::testing {
@@ -226,9 +226,8 @@ TEST_F(SerialPortTest, ResetOnOpenNeedsModemControlLines) {
 }
 
 TEST(SerialPortErrors, NotFoundListsThePortsThatExist) {
-    const std::filesystem::path dir =
-        std::filesystem::temp_directory_path() / ("hapticd-by-id-" + std::to_string(getpid()));
-    std::filesystem::create_directories(dir);
+    const ScratchDir by_id;  // a /dev/serial/by-id of our own
+    const std::filesystem::path& dir = by_id.path();
     std::filesystem::create_symlink("../../ttyACM7", dir / "usb-Lab_Paddle_HX-0042-if00");
     SerialSettings settings = settings_for("/dev/ttyHAPTIC-missing");
     const std::string listed = device::serial::open_error_message(ENOENT, settings, dir.string());
@@ -241,7 +240,6 @@ TEST(SerialPortErrors, NotFoundListsThePortsThatExist) {
     std::filesystem::create_symlink("/dev/ttyHAPTIC-gone", dangling);
     EXPECT_THAT(open_error(settings_for(dangling.string())),
                 HasSubstr("not found. It is a link to /dev/ttyHAPTIC-gone, which does not exist"));
-    std::filesystem::remove_all(dir);
 
     // The real thing: the real open(), this machine's /dev/serial/by-id (none here).
     const std::string real = open_error(settings);
@@ -300,13 +298,11 @@ TEST(SerialPortErrors, PermissionDeniedSaysWhichGroupAndTheUdevRule) {
 TEST(SerialPortErrors, PermissionDeniedOnAGroupNodeSuggestsTheGroup) {
     // A node like /dev/ttyACM0 on Debian: root:dialout, mode 660.
     if (geteuid() != 0 || getgrnam("dialout") == nullptr) GTEST_SKIP() << "needs root, dialout";
-    const std::string path =
-        std::filesystem::temp_directory_path() / ("hapticd-ttyACM-" + std::to_string(getpid()));
-    { std::ofstream(path) << ""; }
+    const ScratchDir dir;
+    const std::string path = dir.write("ttyACM0", "");
     ASSERT_EQ(chown(path.c_str(), 0, getgrnam("dialout")->gr_gid), 0);
     ASSERT_EQ(chmod(path.c_str(), 0660), 0);
     const std::string message = device::serial::open_error_message(EACCES, settings_for(path));
-    std::filesystem::remove(path);
     EXPECT_THAT(message, HasSubstr("it belongs to user root, group dialout, mode 660"));
     EXPECT_THAT(message, HasSubstr("sudo usermod -aG dialout $USER"));
     EXPECT_THAT(message, HasSubstr("config/udev/70-hapticd.rules"));

@@ -8,6 +8,7 @@
 #include "hapticd/device/protocol/stream_framer.hpp"
 #include "hapticd/device/serial/serial_settings.hpp"
 #include "hapticd/servo/monotonic_clock.hpp"
+#include "pen_display_emulator.hpp"
 #include "protocol_test_util.hpp"
 
 namespace hapticd::testing {
@@ -20,18 +21,10 @@ using device::protocol::testing::Noise;
 
 inline constexpr const char* kEmulatorSerial = "EMU-SERIAL-1";
 
-/// A 1-axis device at 1 kHz: the pen display of the HIL tests (m = 0.1 kg, b = 2 N s/m,
-/// 10 um encoder, 20 N).
+/// The pen display of the HIL tests (pen_display_emulator.hpp) with `axes` axes, serial
+/// kEmulatorSerial.
 inline device::protocol::EmulatorConfig emulator_config(int axes = 1) {
-    device::protocol::EmulatorConfig c;
-    c.sim.axes = axes;
-    c.sim.rate_hz = 1000.0;
-    c.sim.mass_kg = 0.1;
-    c.sim.damping_n_s_per_m = 2.0;
-    c.sim.counts_per_meter = 1e5;
-    c.sim.force_limit_n = 20.0;
-    c.serial_number = kEmulatorSerial;
-    return c;
+    return pen_display_emulator(kEmulatorSerial, axes);
 }
 
 /// Link settings for `port` as make_serial_link() would make them, the defaults otherwise.

@@ -1,10 +1,10 @@
-// UsbHeapTest: what the heap sees per servo tick on the `usb` plugin, counted by a malloc
-// interposer on the ticking thread. Our own code allocates nothing (the AllocationGuard of
-// usb_device_test proves that for operator new); this measures what libusb does below it, for
-// docs/transport-usb.md ("Allocation"): its Linux backend calloc()s the URB of every submitted
-// transfer (linux_usbfs.c, submit_bulk_transfer) and frees it when the transfer is reaped.
-// ASan and TSan own malloc and refuse an interposer; under them the sanitizers' hooks
-// (alloc_guard.hpp) count the same calls, without telling calloc from malloc.
+// UsbHeapTest: what the heap sees per servo tick on the `usb` plugin, counted by the malloc
+// interposer (malloc_count.hpp) on the ticking thread. Our own code allocates nothing (the
+// AllocationGuard of usb_device_test proves that for operator new); this measures what libusb
+// does below it, for docs/transport-usb.md ("Allocation"): its Linux backend calloc()s the URB
+// of every submitted transfer (linux_usbfs.c, submit_bulk_transfer) and frees it when the
+// transfer is reaped. ASan and TSan own malloc and refuse an interposer; under them the
+// sanitizers' hooks (alloc_guard.hpp) count the same calls, without telling calloc from malloc.
 #include <gtest/gtest.h>
 #include <libusb.h>
 
@@ -15,45 +15,8 @@
 #include "alloc_guard.hpp"
 #include "hapticd/device/link/protocol_device.hpp"
 #include "hapticd/device/usb/make_usb_link.hpp"
+#include "malloc_count.hpp"
 #include "usb_testbed.hpp"
-
-#if !HAPTICD_ALLOC_GUARD_HOOKS
-#include "glibc_malloc.hpp"
-
-namespace {
-
-struct HeapCounts {
-    std::uint64_t malloc = 0;
-    std::uint64_t calloc = 0;
-    std::uint64_t realloc = 0;
-    std::uint64_t free = 0;
-};
-
-// Trivial types only: thread_local access must not allocate (static TLS, no init guard).
-thread_local bool t_counting = false;
-thread_local HeapCounts t_counts;
-
-}  // namespace
-
-// The executable's definitions come first in symbol lookup, so these see every call made by
-// libusb, libstdc++ and the rest, from any library.
-extern "C" void* malloc(std::size_t size) {
-    if (t_counting) ++t_counts.malloc;
-    return __libc_malloc(size);
-}
-extern "C" void* calloc(std::size_t count, std::size_t size) {
-    if (t_counting) ++t_counts.calloc;
-    return __libc_calloc(count, size);
-}
-extern "C" void* realloc(void* pointer, std::size_t size) {
-    if (t_counting) ++t_counts.realloc;
-    return __libc_realloc(pointer, size);
-}
-extern "C" void free(void* pointer) {
-    if (t_counting && pointer != nullptr) ++t_counts.free;
-    __libc_free(pointer);
-}
-#endif  // !HAPTICD_ALLOC_GUARD_HOOKS
 
 namespace hapticd::device::usb {
 namespace {
@@ -95,11 +58,9 @@ TEST(UsbHeapTest, LibusbCallocsOneUrbPerSubmittedTransfer) {
     EXPECT_EQ(allocations, 2u * kTicks);
     EXPECT_EQ(frees, 2u * kTicks);
 #else
-    t_counts = HeapCounts{};
-    t_counting = true;
+    const hapticd::testing::HeapCalls before = hapticd::testing::thread_heap_calls();
     for (int i = 0; i < kTicks; ++i) ok += tick() ? 1 : 0;
-    t_counting = false;
-    const HeapCounts counts = t_counts;
+    const hapticd::testing::HeapCalls counts = hapticd::testing::thread_heap_calls() - before;
     device.close();
     ASSERT_EQ(ok, kTicks);
 

@@ -10,6 +10,7 @@
 
 #include "hapticd/device/plugin_table.hpp"
 #include "hapticd/device/usb/usb_endpoints.hpp"
+#include "plugin_table_read.hpp"
 
 namespace hapticd::device::usb {
 namespace {
@@ -17,24 +18,15 @@ namespace {
 constexpr const char* kSource = "usb-test.toml";
 
 UsbSettings read(const std::string& toml_text, const std::string& serial = "") {
-    DeviceConfig config;
-    config.source = kSource;
-    config.plugin_table_toml = toml_text;
-    PluginTable table(config, "usb", "docs/transport-usb.md");
-    TableReader& reader = table.reader();
-    UsbSettings settings = read_usb_settings(reader, serial);
-    reader.finish();
-    return settings;
+    return testing::read_plugin_table({"usb", "docs/transport-usb.md", kSource}, toml_text,
+                                      [&](TableReader& reader, const DeviceConfig&) {
+                                          return read_usb_settings(reader, serial);
+                                      });
 }
 
 /// The message read() throws with, or "" if it does not throw.
 std::string error_of(const std::string& toml_text) {
-    try {
-        (void)read(toml_text);
-    } catch (const std::runtime_error& e) {
-        return e.what();
-    }
-    return "";
+    return testing::thrown_message([&] { return read(toml_text); }, "");
 }
 
 TEST(UsbSettingsTest, DefaultsArePidCodesTestIdsAndAutomaticTransfer) {

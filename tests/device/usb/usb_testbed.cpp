@@ -621,17 +621,4 @@ void UsbTestbed::open_to_other_users() {
     }
 }
 
-proto::EmulatorConfig pen_display_emulator(const std::string& serial) {
-    proto::EmulatorConfig config;
-    config.sim.axes = 1;
-    config.sim.rate_hz = 1000.0;
-    config.sim.mass_kg = 0.1;
-    config.sim.damping_n_s_per_m = 2.0;
-    config.sim.counts_per_meter = 1e5;
-    config.sim.force_limit_n = 20.0;
-    config.sim.clock = device::sim::SimClock::lockstep;
-    config.serial_number = serial;
-    return config;
-}
-
 }  // namespace hapticd::testing

@@ -45,6 +45,7 @@
 #include <vector>
 
 #include "hapticd/device/protocol/device_emulator.hpp"
+#include "pen_display_emulator.hpp"  // the device an EmulatedUsbDevice usually runs
 
 namespace hapticd::testing {
 
@@ -164,9 +165,5 @@ class UsbTestbed {
     std::vector<std::unique_ptr<EmulatedUsbDevice>> devices_;
     int next_address_ = 2;  ///< 1 is the root hub
 };
-
-/// The EmulatorConfig for the paper's pen display (m = 0.1 kg, b = 2 N s/m, 1e5 counts/m,
-/// 20 N, 1 kHz; tests/support/pen_display.hpp) with this serial number.
-device::protocol::EmulatorConfig pen_display_emulator(const std::string& serial = "EMU-0001");
 
 }  // namespace hapticd::testing

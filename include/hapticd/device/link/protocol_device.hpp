@@ -90,6 +90,12 @@ class ProtocolDevice final : public Device {
     ProtocolDevice(const ProtocolDevice&) = delete;
     ProtocolDevice& operator=(const ProtocolDevice&) = delete;
 
+    /// What open() reads of `config` for the plugin `plugin` ([device.<plugin>]: the shared
+    /// keys, then make_link's), with nothing opened: the plugin's check_config()
+    /// (plugin_abi.hpp). Throws input::ConfigError with open()'s message.
+    static void check_config(const DeviceConfig& config, const std::string& plugin,
+                             const MakeLink& make_link);
+
     void open(const DeviceConfig& config) override;
     DeviceInfo info() const override;
     IoResult read(Sample& sample) noexcept override;
@@ -103,6 +109,15 @@ class ProtocolDevice final : public Device {
 
   private:
     enum class LinkState : std::uint8_t { closed, connected, lost, ready };
+
+    /// The settings and the unopened link, read from config and the table: open()'s first
+    /// step and check_config()'s whole. Throws input::ConfigError.
+    struct Configured {
+        ProtocolSettings settings;
+        std::unique_ptr<FrameLink> link;
+    };
+    static Configured configure(const DeviceConfig& config, const std::string& plugin,
+                                const MakeLink& make_link);
 
     /// hello -> identity, configure -> ack, a disabled command with clear_faults -> sample.
     /// Outside the tick; throws std::runtime_error on failure.

@@ -1,7 +1,8 @@
 // Replays a libFuzzer corpus through LLVMFuzzerTestOneInput without libFuzzer, so that a plain
-// (GCC) build runs the protocol fuzzer's seeds and invariants in ctest. Each seed is also
-// replayed with a few hundred deterministic single-byte mutations, a cheap stand-in for the
-// fuzzer's first steps. Usage: protocol_fuzz_replay CORPUS_DIR...
+// (GCC) build runs every fuzzer's seeds and invariants in ctest (CMakeLists.txt here links it
+// with each of fuzz/*_fuzz.cpp). Each seed is also replayed with a few hundred deterministic
+// single-byte mutations, a cheap stand-in for the fuzzer's first steps.
+// Usage: <name>_fuzz_replay CORPUS_DIR...
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -14,7 +15,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
 
 int main(int argc, char** argv) {
     if (argc < 2) {
-        std::cerr << "usage: protocol_fuzz_replay CORPUS_DIR...\n";
+        std::cerr << "usage: " << argv[0] << " CORPUS_DIR...\n";
         return 2;
     }
     std::size_t files = 0;

@@ -1,0 +1,49 @@
+#include "flight_writer.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <iomanip>
+#include <ostream>
+#include <sstream>
+#include <vector>
+
+#include "flight_file.hpp"
+#include "hapticd/daemon/journal.hpp"
+#include "hapticd/servo/telemetry.hpp"
+#include "run_messages.hpp"
+
+namespace hapticd::daemon {
+
+FlightWriter::FlightWriter(const RunOptions& options, double rate_hz, int axes)
+    : recorder_(
+          static_cast<std::size_t>(std::clamp(std::ceil(kFlightRecordS * rate_hz), 1.0, 1e6))),
+      directory_(flight_directory(options)),
+      axes_(axes) {}
+
+void FlightWriter::write_frozen(RunContext& context, std::ostream& log) {
+    if (!recorder_.frozen()) return;
+    const std::vector<servo::TelemetryRecord> records = recorder_.frozen_records();
+    recorder_.thaw();
+    if (records.empty()) return;
+    const servo::TelemetryRecord& last = records.back();
+    std::ostringstream what;
+    what << std::fixed << std::setprecision(3) << "hapticd: flight recorder: the last "
+         << records.size() << " ticks to fault " << fault_names(last.faults) << " at t " << last.t_s
+         << " s";
+    if (!directory_) {
+        log << priority::notice << what.str()
+            << " not written: no --log, --summary FILE or LOGS_DIRECTORY to put them beside\n";
+        return;
+    }
+    const FlightFile file =
+        write_flight_file(*directory_, context.stamp.start_name, records, axes_);
+    if (file.error.empty()) {
+        context.flight_records.push_back(file.path);
+        log << priority::notice << what.str() << ": " << file.path << "\n" << std::flush;
+    } else {
+        log << priority::err << what.str() << " not written: " << file.error << "\n";
+    }
+}
+
+}  // namespace hapticd::daemon

@@ -1,0 +1,98 @@
+// The servo loop as the control socket sees it (docs/control.md; docs/architecture.md §6.1,
+// §6.2): LoopControl for the requests that touch the loop itself, and the ports of
+// scene_load, record and identify (ControlLoopPorts, run_control.hpp). Every call is one of
+// ServoLoop's lock-free ones: a seqlock read, an atomic or an atomic pointer that the tick
+// takes at its start. A template over the loop, as ServoLoop is over its environment.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <mutex>
+#include <type_traits>
+
+#include "control_requests.hpp"
+#include "hapticd/env/environment.hpp"
+#include "hapticd/env/scene.hpp"
+#include "hapticd/servo/environment_port.hpp"
+#include "hapticd/servo/status.hpp"
+#include "run_control.hpp"
+
+namespace hapticd::daemon {
+
+/// The servo loop as the control socket sees it: lock-free calls only (servo_loop.hpp).
+template <typename Loop>
+class LoopControl final : public control::ServoControl {
+  public:
+    LoopControl(Loop& loop, const servo::CouplingGains& gains) : loop_(loop), gains_(gains) {}
+    servo::StatusSnapshot status() const noexcept override { return loop_.status(); }
+    void arm() noexcept override { loop_.arm(); }
+    void disarm() noexcept override { loop_.disarm(); }
+    void reset() noexcept override {
+        resets_requested_.fetch_add(1, std::memory_order_acq_rel);
+        loop_.request_fault_reset();
+    }
+    std::uint64_t resets_requested() const noexcept override {
+        return resets_requested_.load(std::memory_order_acquire);
+    }
+    void set_coupling(const servo::CouplingGains& gains) noexcept override {
+        const std::lock_guard lock(gains_mutex_);  // two non-real-time threads; never the servo's
+        gains_ = gains;
+        loop_.request_coupling(gains);
+    }
+    servo::CouplingGains coupling() const noexcept override {
+        const std::lock_guard lock(gains_mutex_);
+        return gains_;
+    }
+
+  private:
+    Loop& loop_;
+    std::atomic<std::uint64_t> resets_requested_{0};
+    mutable std::mutex gains_mutex_;
+    servo::CouplingGains gains_;  // the last accepted: the servo may not have taken it yet
+};
+
+/// The environment of `scene` that a loop over `Environment` renders; null for the other
+/// causality.
+template <typename Environment>
+Environment* environment_of(env::Scene& scene) noexcept {
+    if constexpr (std::is_same_v<Environment, env::ImpedanceEnvironment>) {
+        return scene.impedance.get();
+    } else if constexpr (std::is_same_v<Environment, env::AdmittanceEnvironment>) {
+        return scene.admittance.get();
+    } else {
+        return nullptr;
+    }
+}
+
+/// The ports of scene_load, record and identify over `loop`, a loop over `Environment`, and
+/// `control` for the rest.
+template <typename Environment, typename Loop>
+ControlLoopPorts control_loop_ports(Loop& loop, control::ServoControl& control) {
+    return ControlLoopPorts{
+        .control = control,
+        .scenes = SceneLoopPort{.offer =
+                                    [&loop](env::Scene& next) {
+                                        Environment* const e = environment_of<Environment>(next);
+                                        return e != nullptr && loop.offer_environment(*e);
+                                    },
+                                .taken = [&loop] { return loop.offer_taken(); },
+                                .withdraw =
+                                    [&loop](env::Scene& next) {
+                                        Environment* const e = environment_of<Environment>(next);
+                                        return e != nullptr && loop.withdraw_environment(*e);
+                                    }},
+        .attach_recording =
+            [&loop](servo::TelemetryRing* recording_ring) {
+                loop.attach_recording(recording_ring);
+            },
+        .tick = [&loop] { return loop.status().tick; },
+        .identify = IdentifyLoopPort{.play =
+                                         [&loop](servo::OpenLoopSource& source) {
+                                             return loop.play_open_loop(source);
+                                         },
+                                     .idle = [&loop] { return loop.open_loop_idle(); },
+                                     .disarm = [&loop] { loop.disarm(); },
+                                     .status = [&loop] { return loop.status(); }}};
+}
+
+}  // namespace hapticd::daemon

@@ -1,0 +1,103 @@
+// The control socket's side of one run (docs/control.md; docs/architecture.md §2.8, §6.1):
+// what scene_load, record and identify hold for the run, the facts `status` reports, the
+// server started once the loop exists and stopped before it goes, and what the socket did
+// brought back: its journal lines to the watching thread, its recordings, excitations and
+// the scene in force to the summary. Everything it asks of the loop goes through
+// ControlLoopPorts (loop_control.hpp builds them), lock-free (§6.2).
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <iosfwd>
+#include <optional>
+#include <string>
+
+#include "control_requests.hpp"
+#include "hapticd/daemon/config.hpp"
+#include "hapticd/daemon/control_server.hpp"
+#include "hapticd/daemon/identify_session.hpp"
+#include "hapticd/daemon/recording.hpp"
+#include "hapticd/daemon/scene_switch.hpp"
+#include "hapticd/daemon/summary_json.hpp"
+#include "hapticd/device/device.hpp"
+#include "hapticd/env/scene.hpp"
+#include "hapticd/servo/environment_port.hpp"
+#include "hapticd/servo/telemetry_ring.hpp"
+
+namespace hapticd::daemon {
+
+/// The scene a run renders (`environment` of run_loop is one of its environments), for the
+/// control socket's scene_load; an identification run has none.
+struct RunScene {
+    const env::Scene* scene = nullptr;
+    std::string source;  ///< its file, or "<embedded demo-wall scene>"
+};
+
+/// The start-up check of `config` with the coupling `gains` in place of its own, against the
+/// scene in force (`scenes`; without, the config's): what a control socket's coupling request
+/// must pass ([coupling] check, docs/control.md).
+control::CouplingVerdict check_new_coupling(const Config& config, const SceneSwitch* scenes,
+                                            const servo::CouplingGains& gains);
+
+/// What the control socket's requests need of the servo loop.
+struct ControlLoopPorts {
+    control::ServoControl& control;  ///< status, arm, disarm, reset, coupling (LoopControl)
+    SceneLoopPort scenes;            ///< scene_load's
+    std::function<void(servo::TelemetryRing*)> attach_recording;  ///< record's
+    std::function<std::uint64_t()> tick;                          ///< record's: the last tick
+    IdentifyLoopPort identify;                                    ///< identify's
+};
+
+// One a run, on the watching thread: its members stand in the order they must be destroyed
+// in (the stopper last, so first), not the order that packs them tightest.
+class RunControl {  // NOLINT(clang-analyzer-optin.performance.Padding)
+  public:
+    /// Without `server` (no --socket), only the measured rate. With one: scene_load for a run
+    /// that renders `scene`, record, identify for a run that renders a scene (its files in
+    /// `identify_directory`), then the server started, and a line on `log` naming it.
+    RunControl(const Config& config, const device::DeviceInfo& info, const RunScene& scene,
+               const RunContext& context, const ControlLoopPorts& ports,
+               control::ControlServer* server, const std::optional<std::string>& identify_directory,
+               std::ostream& log);
+    RunControl(const RunControl&) = delete;
+    RunControl& operator=(const RunControl&) = delete;
+
+    /// The ticks per second over the last second, which the watcher measures and `status`
+    /// reports.
+    std::atomic<double>& measured_rate_hz() noexcept { return measured_rate_hz_; }
+
+    /// Each look of the watching thread: the server's journal lines onto `log`, then the
+    /// progress of an identify excitation.
+    void poll(std::ostream& log);
+
+    /// After the servo thread has joined: stops the server, writes its last lines, ends a
+    /// recording or excitation still running, and puts the recordings, the excitations and
+    /// the scene in force at the end in `context`.
+    void finish(RunContext& context, std::ostream& log);
+
+  private:
+    /// Stops the server when it goes out of scope: before the loop that its handler reaches
+    /// is destroyed, on every path.
+    struct ControlStopper {
+        control::ControlServer* server;
+        ~ControlStopper() {
+            if (server != nullptr) server->stop();
+        }
+    };
+
+    void drain_messages(std::ostream& log);
+    void finish_recording(RunContext& context, std::ostream& log);
+
+    const Config& config_;
+    control::ServoControl& control_;
+    control::ControlServer* server_;
+    std::atomic<double> measured_rate_hz_{0.0};
+    std::optional<SceneSwitch> scenes_;
+    control::RunFacts facts_;
+    std::optional<Recording> recording_;
+    std::optional<IdentifySession> identify_;
+    ControlStopper stopper_{nullptr};  // last: the server stops before the rest goes
+};
+
+}  // namespace hapticd::daemon
