@@ -21,6 +21,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <fstream>
 #include <iostream>
 #include <limits>
@@ -139,9 +140,7 @@ int segment_study(const std::string& out_path, int seeds) {
     return write_json(table, out_path) ? 0 : 2;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int sweep(int argc, char** argv) {
     std::string out_path;
     int seeds = 5;
     bool segments = false;
@@ -284,4 +283,15 @@ int main(int argc, char** argv) {
         {"cells", cells},
     };
     return write_json(table, out_path) ? 0 : 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    try {
+        return sweep(argc, argv);
+    } catch (const std::exception& e) {
+        std::cerr << "identify_sweep: " << e.what() << "\n";
+        return 1;
+    }
 }

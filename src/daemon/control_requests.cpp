@@ -179,6 +179,27 @@ nlohmann::json identify_body(const RunFacts& facts) {
     return j;
 }
 
+/// status's `link`: the loop's own counts, then the device's (zeros, counted false, for a
+/// device that keeps none). On the server's thread: link_quality() never waits for the tick.
+nlohmann::json link_body(const servo::StatusSnapshot& s, const RunFacts& facts) {
+    const device::LinkQuality q =
+        facts.link_source != nullptr ? facts.link_source->link_quality() : device::LinkQuality{};
+    return {{"read_timeouts", s.read_timeouts},
+            {"link_recoveries", s.link_recoveries},
+            {"counted", q.counted},
+            {"frames_sent", q.frames_sent},
+            {"frames_received", q.frames_received},
+            {"bad_frames", q.bad_frames},
+            {"transfer_errors", q.transfer_errors},
+            {"reply_timeouts", q.reply_timeouts},
+            {"missed_samples", q.missed_samples},
+            {"late", q.late},
+            {"duplicate", q.duplicate},
+            {"device_errors", q.device_errors},
+            {"disconnects", q.disconnects},
+            {"reconnects", q.reconnects}};
+}
+
 }  // namespace
 
 nlohmann::json status_body(const servo::StatusSnapshot& s, const RunFacts& facts) {
@@ -203,7 +224,7 @@ nlohmann::json status_body(const servo::StatusSnapshot& s, const RunFacts& facts
     j["tick_compute_us"] = {{"p50", s.tick_compute_us.p50},
                             {"p99", s.tick_compute_us.p99},
                             {"max", s.tick_compute_us.max}};
-    j["link"] = {{"read_timeouts", s.read_timeouts}, {"link_recoveries", s.link_recoveries}};
+    j["link"] = link_body(s, facts);
     j["axes"] = facts.axes;
     j["x_m"] = first_axes(s.x_m, facts.axes);
     j["xe_m"] = first_axes(s.xe_m, facts.axes);

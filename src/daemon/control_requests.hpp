@@ -2,7 +2,8 @@
 // The server (control_server.hpp) parses; this answers. It runs on the server's thread (a
 // coupling's stability check on the server's worker), and everything it asks of the loop is
 // lock-free: status() reads a seqlock, arm(), disarm() and reset() set atomics, and new gains
-// go through a seqlock, all taken by the servo thread at the start of its next tick.
+// go through a seqlock, all taken by the servo thread at the start of its next tick; the
+// device's link counts (Device::link_quality) are relaxed atomics.
 #pragma once
 
 #include <atomic>
@@ -13,6 +14,7 @@
 #include "hapticd/daemon/identify_session.hpp"
 #include "hapticd/daemon/recording.hpp"
 #include "hapticd/daemon/scene_switch.hpp"
+#include "hapticd/device/device.hpp"
 #include "hapticd/servo/environment_port.hpp"
 #include "hapticd/servo/status.hpp"
 
@@ -61,6 +63,10 @@ struct RunFacts {
     SceneSwitch* scenes = nullptr;
     /// identify's; null: this run cannot play the excitation (an identification run).
     IdentifySession* identify = nullptr;
+    /// The device, for `status`'s link counts: only its link_quality(), which any thread may
+    /// call while the servo thread reads and writes it (device.hpp). Null: no counts
+    /// (`counted` false).
+    const device::Device* link_source = nullptr;
 };
 
 /// The status reply's body: state, tick, rates, forces, positions and faults.

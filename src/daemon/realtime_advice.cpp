@@ -1,9 +1,11 @@
 #include "hapticd/daemon/realtime_advice.hpp"
 
 #include <sys/resource.h>
+#include <sys/utsname.h>
 
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <string>
 
 namespace hapticd::daemon {
@@ -53,11 +55,26 @@ RealtimeSurroundings RealtimeSurroundings::of_this_process() {
         ::getrlimit(RLIMIT_RTPRIO, &rtprio) == 0 && rtprio.rlim_cur != RLIM_INFINITY) {
         where.rtprio_limit = rtprio.rlim_cur;
     }
-    std::error_code error;
-    where.rt_group_scheduling =
-        std::filesystem::exists("/sys/fs/cgroup/cpu.rt_runtime_us", error) ||
-        std::filesystem::exists("/sys/fs/cgroup/cpu/cpu.rt_runtime_us", error);
+    utsname kernel{};
+    where.rt_group_scheduling = has_rt_group_scheduling(
+        "/sys/fs/cgroup",
+        ::uname(&kernel) == 0 ? "/boot/config-" + std::string(kernel.release) : std::string());
     return where;
+}
+
+bool has_rt_group_scheduling(const std::filesystem::path& cgroup_root,
+                             const std::filesystem::path& kernel_config) {
+    std::error_code error;
+    if (std::filesystem::exists(cgroup_root / "cpu.rt_runtime_us", error) ||
+        std::filesystem::exists(cgroup_root / "cpu" / "cpu.rt_runtime_us", error)) {
+        return true;
+    }
+    if (kernel_config.empty()) return false;
+    std::ifstream config(kernel_config);
+    for (std::string line; std::getline(config, line);) {
+        if (line == "CONFIG_RT_GROUP_SCHED=y") return true;
+    }
+    return false;
 }
 
 std::string realtime_refused_note(const servo::RealtimeRequest& request,

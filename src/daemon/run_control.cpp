@@ -29,7 +29,8 @@ control::CouplingVerdict check_new_coupling(const Config& config, const SceneSwi
 RunControl::RunControl(const Config& config, const device::DeviceInfo& info, const RunScene& scene,
                        const RunContext& context, const ControlLoopPorts& ports,
                        control::ControlServer* server,
-                       const std::optional<std::string>& identify_directory, std::ostream& log)
+                       const std::optional<std::string>& identify_directory, std::ostream& log,
+                       const device::Device* device)
     : config_(config), control_(ports.control), server_(server) {
     // scene_load (scene_switch.hpp): a scene of the run's causality, only with a control socket.
     if (server_ != nullptr && scene.scene != nullptr) {
@@ -48,7 +49,8 @@ RunControl::RunControl(const Config& config, const device::DeviceInfo& info, con
             [this](const servo::CouplingGains& gains) {
                 return check_new_coupling(config_, scenes_ ? &*scenes_ : nullptr, gains);
             },
-        .scenes = scenes_ ? &*scenes_ : nullptr};
+        .scenes = scenes_ ? &*scenes_ : nullptr,
+        .link_source = device};
     // record start/stop (recording.hpp): a ring for the run, only with a control socket.
     if (server_ != nullptr) {
         recording_.emplace(ports.attach_recording, ports.tick, info.axes, info.lockstep);

@@ -49,17 +49,19 @@ struct ControlLoopPorts {
     IdentifyLoopPort identify;                                    ///< identify's
 };
 
-// One a run, on the watching thread: its members stand in the order they must be destroyed
+// One per run, on the watching thread: its members stand in the order they must be destroyed
 // in (the stopper last, so first), not the order that packs them tightest.
 class RunControl {  // NOLINT(clang-analyzer-optin.performance.Padding)
   public:
     /// Without `server` (no --socket), only the measured rate. With one: scene_load for a run
     /// that renders `scene`, record, identify for a run that renders a scene (its files in
     /// `identify_directory`), then the server started, and a line on `log` naming it.
+    /// `device` (the run's, open, outliving this): `status` reports its link_quality(), which
+    /// the server's thread calls while the servo thread ticks; null: no device counts.
     RunControl(const Config& config, const device::DeviceInfo& info, const RunScene& scene,
                const RunContext& context, const ControlLoopPorts& ports,
                control::ControlServer* server, const std::optional<std::string>& identify_directory,
-               std::ostream& log);
+               std::ostream& log, const device::Device* device);
     RunControl(const RunControl&) = delete;
     RunControl& operator=(const RunControl&) = delete;
 

@@ -58,7 +58,7 @@ int run_loop(const RunOptions& options, const Config& config,
     LoopControl<Loop> control_port(loop, servo_config.coupling);
     RunControl control(config, info, scene, context,
                        control_loop_ports<Environment>(loop, control_port), outputs.control.get(),
-                       flight.directory(), log);
+                       flight.directory(), log, &device);
 
     // Run. The servo thread reads `stop` itself, so a signal (or the parent's death) ends the
     // run at the next tick; the watcher sets it too when the duration ends.

@@ -1,10 +1,13 @@
 // The control protocol's lines (docs/control.md, "Lines"): what parses, and that every
-// refusal names the field and the value.
+// refusal names the field and the value; and the status body's link counts.
 #include "hapticd/daemon/control_protocol.hpp"
 
 #include <gtest/gtest.h>
 
 #include <string>
+
+#include "../../src/daemon/control_requests.hpp"
+#include "hapticd/device/device.hpp"
 
 namespace hapticd::daemon::control {
 namespace {
@@ -236,6 +239,68 @@ TEST(DaemonControlProtocol, RepliesAreOneLineWithVersionIdAndOk) {
     // An error's text with a newline in it still makes one line.
     const std::string error = error_reply(nullptr, "two\nlines");
     EXPECT_EQ(error.find('\n'), error.size() - 1);
+}
+
+/// A device that reports fixed link counts and nothing else.
+class CountingDevice final : public device::Device {
+  public:
+    explicit CountingDevice(const device::LinkQuality& quality) : quality_(quality) {}
+    void open(const device::DeviceConfig& /*config*/) override {}
+    device::DeviceInfo info() const override { return {}; }
+    servo::IoResult read(servo::Sample& /*sample*/) noexcept override {
+        return servo::IoResult::ok;
+    }
+    servo::IoResult write(const servo::Command& /*command*/) noexcept override {
+        return servo::IoResult::ok;
+    }
+    void close() noexcept override {}
+    device::LinkQuality link_quality() const noexcept override { return quality_; }
+
+  private:
+    device::LinkQuality quality_;
+};
+
+TEST(DaemonControlStatus, LinkCarriesTheLoopsAndTheDevicesCounts) {
+    servo::StatusSnapshot s;
+    s.read_timeouts = 7;
+    s.link_recoveries = 2;
+    const device::LinkQuality q{.counted = true,
+                                .frames_sent = 1000,
+                                .frames_received = 990,
+                                .bad_frames = 3,
+                                .transfer_errors = 4,
+                                .reply_timeouts = 7,
+                                .missed_samples = 5,
+                                .late = 6,
+                                .duplicate = 8,
+                                .device_errors = 9,
+                                .disconnects = 1,
+                                .reconnects = 1};
+    const CountingDevice device(q);
+    RunFacts facts;
+    facts.link_source = &device;
+    const nlohmann::json link = status_body(s, facts).at("link");
+    EXPECT_EQ(link, nlohmann::json::parse(R"({"read_timeouts": 7, "link_recoveries": 2,
+        "counted": true, "frames_sent": 1000, "frames_received": 990, "bad_frames": 3,
+        "transfer_errors": 4, "reply_timeouts": 7, "missed_samples": 5, "late": 6,
+        "duplicate": 8, "device_errors": 9, "disconnects": 1, "reconnects": 1})"))
+        << link.dump();
+}
+
+TEST(DaemonControlStatus, ADeviceWithoutCountsSaysSo) {
+    servo::StatusSnapshot s;
+    s.read_timeouts = 3;
+    RunFacts facts;  // no device
+    nlohmann::json link = status_body(s, facts).at("link");
+    EXPECT_EQ(link.at("read_timeouts"), 3);
+    EXPECT_EQ(link.at("counted"), false);
+    EXPECT_EQ(link.at("bad_frames"), 0);
+    const CountingDevice device(device::LinkQuality{});  // the default: counted = false
+    facts.link_source = &device;
+    link = status_body(s, facts).at("link");
+    EXPECT_EQ(link.at("counted"), false);
+    EXPECT_EQ(link.at("reply_timeouts"), 0);
+    EXPECT_EQ(link.size(), 14u);
 }
 
 }  // namespace

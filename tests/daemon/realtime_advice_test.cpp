@@ -9,6 +9,8 @@
 #include <optional>
 #include <string>
 
+#include "scratch_dir.hpp"
+
 namespace hapticd::daemon {
 namespace {
 
@@ -108,6 +110,24 @@ TEST(RealtimeAdvice, AFailedHeapPrefaultIsTheMemlockLimitsToo) {
               std::string::npos)
         << advice;
     EXPECT_EQ(realtime_refused_note(RealtimeRequest{}, report), "realtime refused: heap prefault");
+}
+
+// RT group scheduling: cgroup v1 shows cpu.rt_runtime_us; cgroup v2 never does, so there the
+// kernel's build config says it. A kernel without either, or nothing readable: none.
+TEST(RealtimeAdvice, RtGroupSchedulingIsFoundInTheCgroupV1TreeOrTheKernelsConfig) {
+    const testing::ScratchDir dir;
+    std::filesystem::create_directories(dir.file("v1/cpu"));
+    dir.write("v1/cpu/cpu.rt_runtime_us", "0\n");
+    std::filesystem::create_directories(dir.file("v2"));
+    dir.write("v2/cgroup.controllers", "cpu io memory\n");
+    const std::string with = dir.write("config-with", "CONFIG_SMP=y\nCONFIG_RT_GROUP_SCHED=y\n");
+    const std::string without =
+        dir.write("config-without", "CONFIG_SMP=y\n# CONFIG_RT_GROUP_SCHED is not set\n");
+    EXPECT_TRUE(has_rt_group_scheduling(dir.file("v1"), ""));
+    EXPECT_TRUE(has_rt_group_scheduling(dir.file("v2"), with));
+    EXPECT_FALSE(has_rt_group_scheduling(dir.file("v2"), without));
+    EXPECT_FALSE(has_rt_group_scheduling(dir.file("v2"), dir.file("no-such-config")));
+    EXPECT_FALSE(has_rt_group_scheduling(dir.file("v2"), ""));
 }
 
 }  // namespace

@@ -73,6 +73,7 @@ void expect_working_sim(Device& device) {
     ASSERT_EQ(device.read(sample), IoResult::ok);
     EXPECT_EQ(sample.sequence, 1u);
     EXPECT_EQ(sample.encoder_counts[1], 4);  // floor(4.98): x(T) = (F/b)(T - τ(1 - e^{-T/τ}))
+    EXPECT_FALSE(device.link_quality().counted);  // across the ABI: the sim counts no link
     device.close();
 }
 

@@ -228,5 +228,21 @@ TEST(SimFaults, LateRepliesAreReallyLateOnTheRealtimeClock) {
     EXPECT_LT(monotonic_s() - t1, 0.01);
 }
 
+// The sim's injected faults are status bits of the samples, not a link's counts: it reports
+// no link quality (the control socket's status shows counted = false).
+TEST(SimFaults, KeepsNoLinkCounts) {
+    FaultConfig faults;
+    faults.drop_probability = 0.5;
+    SimDevice dev;
+    dev.open(faulty(faults));
+    (void)run(dev, 100);
+    const LinkQuality q = dev.link_quality();
+    EXPECT_FALSE(q.counted);
+    EXPECT_EQ(q.frames_sent, 0u);
+    EXPECT_EQ(q.bad_frames, 0u);
+    EXPECT_EQ(q.reply_timeouts, 0u);
+    EXPECT_EQ(q.disconnects, 0u);
+}
+
 }  // namespace
 }  // namespace hapticd::device::sim

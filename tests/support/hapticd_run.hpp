@@ -17,6 +17,7 @@
 
 namespace hapticd::testing {
 
+// NOLINTNEXTLINE(bugprone-exception-escape): nlohmann::json's noexcept move is reported as throwing
 struct DaemonRun {
     int exit_code = -1;
     std::string out;         ///< hapticd's standard output

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <optional>
 #include <string>
 
@@ -21,6 +22,13 @@ struct RealtimeSurroundings {
     /// This process's.
     static RealtimeSurroundings of_this_process();
 };
+
+/// Whether the kernel has RT group scheduling: cgroup v1's cpu controller shows
+/// cpu.rt_runtime_us under `cgroup_root` (/sys/fs/cgroup or its cpu/), which cgroup v2 never
+/// does; then the kernel's build config (`kernel_config`, /boot/config-RELEASE) says
+/// CONFIG_RT_GROUP_SCHED=y. Neither readable: false.
+bool has_rt_group_scheduling(const std::filesystem::path& cgroup_root,
+                             const std::filesystem::path& kernel_config);
 
 /// One sentence per refusal of `report` (empty when all was granted), each saying how to
 /// grant it. For SCHED_FIFO it also tells a refusal by the resource limit from one by the

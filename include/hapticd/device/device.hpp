@@ -8,8 +8,10 @@
 //
 // Real-time contract: read() and write() are called from the servo tick. They must not
 // allocate, lock, log or throw; errors are returned as IoResult and status bits.
+// link_quality() is the one function another thread may call while the tick runs.
 #pragma once
 
+#include <cstdint>
 #include <string>
 
 #include "hapticd/servo/io.hpp"
@@ -59,6 +61,26 @@ struct DeviceConfig {
     std::string source = "<config>";
 };
 
+/// How the link to the device is doing: counts since open(), for the operator (the control
+/// socket's `status`, docs/control.md). Plain data of fixed size: it crosses the plugin ABI
+/// (plugin_abi.hpp records its layout). A device that keeps no such counts (the sim) returns
+/// it with counted = false and every count 0.
+struct LinkQuality {
+    bool counted = false;               ///< the device keeps these counts
+    std::uint64_t frames_sent = 0;      ///< frames the transport sent (commands, polls)
+    std::uint64_t frames_received = 0;  ///< whole frames the transport delimited
+    std::uint64_t bad_frames = 0;       ///< frames that failed to decode (CRC, size, version,
+                                        ///< field) plus the transport's framing errors
+    std::uint64_t transfer_errors = 0;  ///< the transport's failed sends and receives
+    std::uint64_t reply_timeouts = 0;   ///< reads that ended without a valid reply
+    std::uint64_t missed_samples = 0;   ///< gaps in the device's sample sequence, summed
+    std::uint64_t late = 0;             ///< replies to an earlier request, dropped
+    std::uint64_t duplicate = 0;        ///< replies seen before, dropped
+    std::uint64_t device_errors = 0;    ///< error reports from the device
+    std::uint64_t disconnects = 0;      ///< times the device was lost
+    std::uint64_t reconnects = 0;       ///< times it came back (a new session)
+};
+
 class Device {
   public:
     virtual ~Device() = default;
@@ -73,6 +95,11 @@ class Device {
     /// Leaves the device at zero force and releases it. Safe to call more than once and
     /// after a failed open().
     virtual void close() noexcept = 0;
+    /// Any thread, also while the servo thread is in read() or write(), from open()'s return
+    /// until the device is opened again or destroyed: the link's counts, which may be a tick
+    /// old (each count is read on its own, so they need not be of the same instant). Must not
+    /// block the tick: no lock the tick takes. The default: counted = false.
+    virtual LinkQuality link_quality() const noexcept { return {}; }
 };
 
 }  // namespace hapticd::device

@@ -6,9 +6,9 @@
 // before it touches anything else, so a plugin built against another ABI is refused with
 // a clear message rather than crashing. A plugin defines the entry with one line,
 // HAPTICD_DEVICE_PLUGIN (below). Bump kDeviceAbiVersion whenever the descriptor, Device,
-// Sample, Command, DeviceInfo or DeviceConfig change layout or meaning: the layout asserts at
-// the end of this file fail the build on a change of layout until the version is bumped and
-// the new layout recorded.
+// Sample, Command, DeviceInfo, DeviceConfig or LinkQuality change layout or meaning: the layout
+// asserts at the end of this file fail the build on a change of layout until the version is bumped
+// and the new layout recorded.
 #pragma once
 
 #include <array>
@@ -126,7 +126,8 @@ inline bool run_check(void (*check)(const DeviceConfig&), const DeviceConfig* co
 // A failing assert means that a type changed: bump kDeviceAbiVersion, then write the new
 // figures here under the new number. The figures of a released version never change.
 // (Device's virtual functions cross too: their signatures are asserted; their order, which
-// the vtable depends on, only a reviewer can see.)
+// the vtable depends on, only a reviewer can see: open, info, read, write, close,
+// link_quality after the destructor's entries.)
 #if defined(__LP64__) && defined(__GLIBCXX__)
 
 static_assert(kDeviceAbiVersion == 4,
@@ -198,6 +199,22 @@ HAPTICD_ABI_FIELD(DeviceConfig, plugin_table_toml, 24, std::string);
 HAPTICD_ABI_FIELD(DeviceConfig, plugin_table_path, 56, std::string);
 HAPTICD_ABI_FIELD(DeviceConfig, source, 88, std::string);
 
+HAPTICD_ABI_LAYOUT(sizeof(LinkQuality), 96);
+HAPTICD_ABI_LAYOUT(alignof(LinkQuality), 8);
+HAPTICD_ABI_LAYOUT(std::is_trivially_copyable_v<LinkQuality>, true);
+HAPTICD_ABI_FIELD(LinkQuality, counted, 0, bool);
+HAPTICD_ABI_FIELD(LinkQuality, frames_sent, 8, std::uint64_t);
+HAPTICD_ABI_FIELD(LinkQuality, frames_received, 16, std::uint64_t);
+HAPTICD_ABI_FIELD(LinkQuality, bad_frames, 24, std::uint64_t);
+HAPTICD_ABI_FIELD(LinkQuality, transfer_errors, 32, std::uint64_t);
+HAPTICD_ABI_FIELD(LinkQuality, reply_timeouts, 40, std::uint64_t);
+HAPTICD_ABI_FIELD(LinkQuality, missed_samples, 48, std::uint64_t);
+HAPTICD_ABI_FIELD(LinkQuality, late, 56, std::uint64_t);
+HAPTICD_ABI_FIELD(LinkQuality, duplicate, 64, std::uint64_t);
+HAPTICD_ABI_FIELD(LinkQuality, device_errors, 72, std::uint64_t);
+HAPTICD_ABI_FIELD(LinkQuality, disconnects, 80, std::uint64_t);
+HAPTICD_ABI_FIELD(LinkQuality, reconnects, 88, std::uint64_t);
+
 // The enumerations: their size and the values that cross.
 HAPTICD_ABI_LAYOUT(sizeof(IoResult), 4);
 HAPTICD_ABI_LAYOUT(static_cast<int>(IoResult::ok), 0);
@@ -226,6 +243,7 @@ HAPTICD_ABI_VIRTUAL(info, DeviceInfo (Device::*)() const);
 HAPTICD_ABI_VIRTUAL(read, IoResult (Device::*)(Sample&) noexcept);
 HAPTICD_ABI_VIRTUAL(write, IoResult (Device::*)(const Command&) noexcept);
 HAPTICD_ABI_VIRTUAL(close, void (Device::*)() noexcept);
+HAPTICD_ABI_VIRTUAL(link_quality, LinkQuality (Device::*)() const noexcept);
 
 #undef HAPTICD_ABI_VIRTUAL
 #undef HAPTICD_ABI_FIELD

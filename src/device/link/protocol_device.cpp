@@ -494,4 +494,29 @@ ProtocolCounters ProtocolDevice::counters() const noexcept {
     return c;
 }
 
+// link_ is set by open() alone, before any other thread may call this, and never reset
+// after; the counts it reads are relaxed atomics (here and in every FrameLink) and a
+// seqlock whose reader retries rather than waits for the tick.
+LinkQuality ProtocolDevice::link_quality() const noexcept {
+    const ProtocolCounters p = counters();
+    LinkQuality q;
+    q.counted = true;
+    q.bad_frames = p.bad_frames;
+    q.reply_timeouts = p.reply_timeouts;
+    q.missed_samples = p.missed_samples;
+    q.late = p.late;
+    q.duplicate = p.duplicate;
+    q.device_errors = p.device_errors;
+    q.disconnects = p.disconnects;
+    q.reconnects = p.reconnects;
+    if (link_ != nullptr) {
+        const LinkCounters l = link_->counters();
+        q.frames_sent = l.frames_sent;
+        q.frames_received = l.frames_received;
+        q.bad_frames += l.framing_errors;
+        q.transfer_errors = l.send_errors + l.receive_errors;
+    }
+    return q;
+}
+
 }  // namespace hapticd::device::link

@@ -46,7 +46,7 @@ class LoopbackLink final : public device::link::FrameLink {
             push(std::span<const std::byte>(out.data() + offset, reply.frame_sizes[i]));
             offset += reply.frame_sizes[i];
         }
-        ++counters_.frames_sent;
+        frames_sent_.fetch_add(1, std::memory_order_relaxed);
         return LinkResult::ok;
     }
 
@@ -60,13 +60,22 @@ class LoopbackLink final : public device::link::FrameLink {
         size = slot.size;
         head_ = (head_ + 1) % slots_.size();
         --queued_;
-        ++counters_.frames_received;
+        frames_received_.fetch_add(1, std::memory_order_relaxed);
         return LinkResult::ok;
     }
 
     void discard_input() noexcept override { queued_ = 0; }
     std::string describe() const override { return "loopback"; }
-    device::link::LinkCounters counters() const noexcept override { return counters_; }
+    /// Any thread, as FrameLink asks: relaxed atomics.
+    device::link::LinkCounters counters() const noexcept override {
+        device::link::LinkCounters c;
+        c.frames_sent = frames_sent_.load(std::memory_order_relaxed);
+        c.frames_received = frames_received_.load(std::memory_order_relaxed);
+        c.framing_errors = framing_errors_.load(std::memory_order_relaxed);
+        return c;
+    }
+    /// The test's stand-in for transport garbage (bad COBS, a wrong report ID) dropped.
+    void count_framing_error() noexcept { framing_errors_.fetch_add(1, std::memory_order_relaxed); }
 
   private:
     struct Slot {
@@ -85,7 +94,9 @@ class LoopbackLink final : public device::link::FrameLink {
     std::array<Slot, 8> slots_{};
     std::size_t head_ = 0;
     std::size_t queued_ = 0;
-    device::link::LinkCounters counters_;
+    std::atomic<std::uint64_t> frames_sent_{0};
+    std::atomic<std::uint64_t> frames_received_{0};
+    std::atomic<std::uint64_t> framing_errors_{0};
 };
 
 }  // namespace hapticd::testing

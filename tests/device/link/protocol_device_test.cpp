@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -358,6 +359,123 @@ TEST_F(ProtocolDeviceTest, AHostAheadOfTheDevicesSequenceStartsANewSession) {
         *d, [](IoResult r, const Sample&) { return r == IoResult::ok; }, 5000);
     EXPECT_GT(reads, 0) << "never reconnected";
     EXPECT_EQ(d->counters().reconnects, 1u);
+}
+
+// Device::link_quality(): the operator's view of counters() and the link's own counts.
+TEST_F(ProtocolDeviceTest, LinkQualityReflectsTheCounters) {
+    LoopbackLink* link = nullptr;
+    ProtocolDevice d("loop", [&](device::TableReader&, const LinkContext&) {
+        auto made = std::make_unique<LoopbackLink>(bench_);
+        link = made.get();
+        return made;
+    });
+    d.open(device_config("reconnect_interval_ms = 10\n"));
+    ASSERT_NE(link, nullptr);
+    Sample s;
+    ASSERT_EQ(d.read(s), IoResult::ok);
+    const device::LinkQuality clean = d.link_quality();
+    EXPECT_TRUE(clean.counted);
+    EXPECT_EQ(clean.bad_frames, 0u);
+    EXPECT_EQ(clean.reply_timeouts, 0u);
+    EXPECT_GT(clean.frames_sent, 0u);  // the handshake's and the poll
+
+    auto tick = [&] {
+        EXPECT_EQ(d.write(Command{}), IoResult::ok);
+        return d.read(s);
+    };
+    ASSERT_EQ(tick(), IoResult::ok);
+    bench_.device->faults().corrupt_crc = 1;  // the answer to the next write
+    EXPECT_EQ(tick(), IoResult::timeout);
+    bench_.device->faults().truncate = 1;
+    EXPECT_EQ(tick(), IoResult::timeout);
+    bench_.device->faults().sequence_gap = 4;
+    ASSERT_EQ(tick(), IoResult::ok);
+    bench_.device->faults().delay = 1;
+    EXPECT_EQ(tick(), IoResult::timeout);
+    ASSERT_EQ(tick(), IoResult::ok);  // the held-back reply is late and dropped
+    link->count_framing_error();      // transport garbage counts as a bad frame too
+
+    const device::LinkQuality q = d.link_quality();
+    const device::link::ProtocolCounters c = d.counters();
+    const device::link::LinkCounters l = link->counters();
+    EXPECT_TRUE(q.counted);
+    EXPECT_EQ(q.frames_sent, l.frames_sent);
+    EXPECT_EQ(q.frames_received, l.frames_received);
+    EXPECT_EQ(q.frames_sent, clean.frames_sent + 6u);
+    EXPECT_EQ(q.bad_frames, 3u);  // CRC, truncated, one framing error
+    EXPECT_EQ(q.bad_frames, c.bad_frames + l.framing_errors);
+    EXPECT_EQ(q.transfer_errors, 0u);
+    EXPECT_EQ(q.reply_timeouts, 3u);
+    EXPECT_EQ(q.reply_timeouts, c.reply_timeouts);
+    EXPECT_GE(q.missed_samples, 6u);  // the gap's 4, and each lost reply's sample
+    EXPECT_EQ(q.missed_samples, c.missed_samples);
+    EXPECT_EQ(q.late, 1u);
+    EXPECT_EQ(q.late, c.late);
+    EXPECT_EQ(q.duplicate, c.duplicate);
+    EXPECT_EQ(q.device_errors, 0u);
+    EXPECT_EQ(q.disconnects, 0u);
+    EXPECT_EQ(q.reconnects, 0u);
+
+    // A lost device and its return.
+    bench_.present = false;
+    EXPECT_EQ(d.read(s), IoResult::disconnected);
+    bench_.device = std::make_unique<proto::DeviceEmulator>(emulator_config());
+    bench_.present = true;
+    ASSERT_GT(tick_until(
+                  d, [](IoResult r, const Sample&) { return r == IoResult::ok; }, 5000),
+              0);
+    EXPECT_EQ(d.link_quality().disconnects, 1u);
+    EXPECT_EQ(d.link_quality().reconnects, 1u);
+}
+
+// The control socket's thread reads link_quality() while the servo thread ticks through
+// reply faults, and while the reconnect thread shakes hands again: no data race (this
+// executable runs under ThreadSanitizer, label `threads`), and no count ever goes back.
+TEST_F(ProtocolDeviceTest, LinkQualityIsReadFromAnotherThreadWhileTheTickRuns) {
+    auto d = open_device();
+    std::atomic<bool> done{false};
+    std::atomic<int> looks{0};
+    std::atomic<int> went_back{0};
+    std::thread reader([&] {
+        device::LinkQuality last;
+        while (!done.load()) {
+            const device::LinkQuality q = d->link_quality();
+            if (!q.counted || q.frames_sent < last.frames_sent ||
+                q.frames_received < last.frames_received || q.bad_frames < last.bad_frames ||
+                q.reply_timeouts < last.reply_timeouts || q.late < last.late ||
+                q.missed_samples < last.missed_samples || q.disconnects < last.disconnects ||
+                q.reconnects < last.reconnects) {
+                went_back.fetch_add(1);
+            }
+            last = q;
+            looks.fetch_add(1);
+        }
+    });
+    Sample s;
+    for (int i = 0; i < 3000; ++i) {
+        if (i % 100 == 50) bench_.device->faults().corrupt_crc = 1;
+        if (i % 100 == 75) bench_.device->faults().sequence_gap = 2;
+        (void)d->read(s);
+        (void)d->write(Command{});
+    }
+    // A disconnect: the reconnect thread's handshake writes the counts meanwhile.
+    bench_.present = false;
+    EXPECT_EQ(d->read(s), IoResult::disconnected);
+    bench_.device = std::make_unique<proto::DeviceEmulator>(emulator_config());
+    bench_.present = true;
+    EXPECT_GT(tick_until(
+                  *d, [](IoResult r, const Sample&) { return r == IoResult::ok; }, 5000),
+              0);
+    while (looks.load() < 100) std::this_thread::yield();
+    done = true;
+    reader.join();
+    EXPECT_EQ(went_back.load(), 0);
+    const device::LinkQuality q = d->link_quality();
+    EXPECT_EQ(q.bad_frames, 30u);
+    EXPECT_EQ(q.reply_timeouts, 30u);
+    EXPECT_EQ(q.missed_samples, 90u);  // the gaps' 60, and each corrupted reply's sample
+    EXPECT_EQ(q.disconnects, 1u);
+    EXPECT_EQ(q.reconnects, 1u);
 }
 
 TEST_F(ProtocolDeviceTest, CloseLeavesZeroForceAndEndsTheSession) {

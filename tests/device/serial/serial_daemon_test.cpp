@@ -5,7 +5,8 @@
 // just as stably through the protocol and the serial line as against the sim plugin. Then the
 // error paths end to end: a reply corrupted, truncated, of another session or lost, a device
 // fault, and the device going away and coming back: in each case the loop zeroes the force in
-// the tick of the fault, reports the fault, and (for link faults) recovers by itself.
+// the tick of the fault, reports the fault, and (for link faults) recovers by itself. And the
+// control socket's status, which reports the link's counts that the serial plugin keeps.
 #include <gtest/gtest.h>
 #include <signal.h>
 
@@ -17,6 +18,7 @@
 #include <string>
 #include <thread>
 
+#include "control_daemon.hpp"
 #include "hapticd/device/sim/sim_config.hpp"
 #include "hapticd/servo/faults.hpp"
 #include "hapticd_run.hpp"
@@ -301,6 +303,65 @@ TEST(SerialDaemon, RecoversWhenTheDeviceComesBack) {
               << " s later (0.3 s unplugged, the reconnect, 0.5 s settle); faults seen: " << faults
               << "\n";
     EXPECT_GT(outage_s, 0.3 + 0.5 - 0.05);
+}
+
+// `status` over the control socket (docs/control.md) while hapticd runs on the serial plugin:
+// the device's link counts arrive (counted), and three corrupted replies show as bad frames
+// and reply timeouts, in the JSON and in hapticctl's text. In real time at 100 Hz, as above.
+TEST(SerialDaemon, StatusReportsTheLinksBadFramesAndReplyTimeouts) {
+    constexpr double kRate = 100.0;
+    constexpr std::uint64_t kCorruptAtCommand = 150;
+    const ScratchDir dir;
+    PtyDevice device(pen_display_device(stiff_grasp(""), kRate));
+    std::atomic<bool> corrupted{false};
+    device.set_request_hook([&corrupted](proto::DeviceEmulator& e, std::uint64_t) {
+        if (!corrupted && e.counters().commands_applied >= kCorruptAtCommand) {
+            e.faults().corrupt_crc = 3;
+            corrupted = true;
+        }
+    });
+    dir.write("scene.toml",
+              "[scene]\nname = \"serial-spring\"\naxes = 1\n[[spring]]\nanchor = [0.004]\n"
+              "stiffness = 200.0\n");
+    const std::string config =
+        "[servo]\nrate_hz = " + toml_number(kRate) + "\nrealtime = \"off\"\n" +
+        "[device]\nplugin = \"serial\"\naxes = 1\n[device.model]\nmass = " +
+        toml_number(kPenMassKg) + "\ndamping = " + toml_number(kPenDampingNsPerM) + "\n" +
+        no_coupling_table() + "[scene]\nfile = \"scene.toml\"\n" +
+        "[safety]\nmax_force = " + toml_number(kForceLimitN) + "\nmax_speed = 1.0\n" +
+        "max_missed_periods = 1000\nmax_consecutive_overruns = 1000\n" +
+        "[device.serial]\nport = \"" + device.port() + "\"\nreply_timeout_ms = 8\n";
+    Daemon d(dir, "serial", ConfigText{config});
+    ASSERT_TRUE(d.process.wait_for_socket(d.socket)) << d.process.messages();
+
+    const nlohmann::json first = status_of(d.socket);
+    ASSERT_FALSE(first.is_null());
+    const nlohmann::json& link = first.at("link");
+    EXPECT_EQ(link.at("counted"), true) << first.dump();
+    EXPECT_GT(link.at("frames_sent").get<std::uint64_t>(), 0u) << first.dump();
+    EXPECT_GT(link.at("frames_received").get<std::uint64_t>(), 0u) << first.dump();
+
+    const nlohmann::json after = status_when(
+        d.socket,
+        [](const nlohmann::json& s) {
+            return s["link"]["bad_frames"] >= 3 && s["link"]["reply_timeouts"] >= 3;
+        },
+        std::chrono::seconds(20));
+    ASSERT_FALSE(after.is_null());
+    EXPECT_TRUE(corrupted.load());
+    EXPECT_GE(after["link"]["bad_frames"].get<std::uint64_t>(), 3u) << after.dump();
+    EXPECT_GE(after["link"]["reply_timeouts"].get<std::uint64_t>(), 3u) << after.dump();
+    EXPECT_GE(after["link"]["read_timeouts"].get<std::uint64_t>(), 3u) << after.dump();
+    EXPECT_GE(after["link"]["frames_sent"].get<std::uint64_t>(), kCorruptAtCommand);
+    EXPECT_EQ(after["link"]["disconnects"], 0) << after.dump();
+
+    const CommandResult text = hapticctl(d.socket, "status");
+    EXPECT_EQ(text.exit_code, 0) << text.err;
+    EXPECT_NE(text.out.find("\nlink      "), std::string::npos) << text.out;
+    EXPECT_NE(text.out.find("\nframes    "), std::string::npos) << text.out;
+    EXPECT_NE(text.out.find(" bad, "), std::string::npos) << text.out;
+    std::cout << "[serial] status: " << after["link"].dump() << "\n";
+    (void)d.process.stop();
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 // buffer they use is allocated by open(). open(), close() and discard_input() run outside the
 // tick: in Device::open(), in Device::close(), or on ProtocolDevice's reconnect thread while
 // the tick is not using the link (ProtocolDevice guarantees that the two never overlap).
+// counters() alone may be called from any thread at any time while the link exists.
 #pragma once
 
 #include <cstddef>
@@ -69,6 +70,9 @@ class FrameLink {
     /// "serial /dev/ttyACM0 at 1000000 baud".
     virtual std::string describe() const = 0;
 
+    /// Any thread, also while the tick is in send() or receive() (ProtocolDevice::link_quality
+    /// reads it from the control socket's thread): the counts are kept in relaxed atomics,
+    /// each read on its own, and may be a transfer old. Never blocks.
     virtual LinkCounters counters() const noexcept = 0;
 };
 

@@ -101,6 +101,11 @@ class ProtocolDevice final : public Device {
     IoResult read(Sample& sample) noexcept override;
     IoResult write(const Command& command) noexcept override;
     void close() noexcept override;
+    /// Any thread, from open()'s return until the next open() or the destructor: counters()
+    /// and the link's FrameLink::counters() (relaxed atomics and a seqlock, never waiting for
+    /// the tick), summed into the operator's view. bad_frames = failed decodes + the
+    /// transport's framing errors; transfer_errors = its send and receive errors.
+    LinkQuality link_quality() const noexcept override;
 
     /// Any thread; the counts may be a tick old.
     ProtocolCounters counters() const noexcept;
