@@ -231,10 +231,14 @@ nlohmann::json status_body(const servo::StatusSnapshot& s, const RunFacts& facts
     j["f_n"] = first_axes(s.f_n, facts.axes);
     j["device"] = facts.device;
     j["config_path"] = facts.config_path;
+    // identify before the recording: an excitation that has ended has closed its recording
+    // first (IdentifySession::end), so a status that shows it ended never shows its log
+    // still open. Read the other way round, the two could straddle the end.
+    const nlohmann::json identify = identify_body(facts);
     const std::optional<std::string> recording =
         facts.recording != nullptr ? facts.recording->active_path() : std::nullopt;
     j["recording"] = recording ? nlohmann::json(*recording) : nlohmann::json(nullptr);
-    j["identify"] = identify_body(facts);
+    j["identify"] = identify;
     if (facts.scenes != nullptr) {
         const SceneInForce scene = facts.scenes->in_force();
         j["scene"] = {{"name", scene.name}, {"source", scene.source}};

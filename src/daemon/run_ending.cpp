@@ -19,7 +19,11 @@ int exit_of(const Config& config, const ServoEnd& end, const servo::Summary& sum
     if (!end.error.empty()) {
         log << priority::err << "hapticd: the servo loop could not run: " << end.error << "\n";
         context.exit = "error";
-        code = kExitFault;
+        // Real time that this host refuses and the config demands (enforce) is refused again
+        // at every start, as a bad config is: exit 2, which the unit does not restart.
+        const bool realtime_refused = config.servo.realtime == servo::RealtimeMode::enforce &&
+                                      !context.realtime.all_granted();
+        code = realtime_refused ? kExitBadInput : kExitFault;
     } else if (end.exit == servo::RunExit::fault) {
         context.exit = "fault";
         code = kExitFault;

@@ -49,13 +49,14 @@ std::string status_line(const servo::StatusSnapshot& s, int axes) {
     return out.str();
 }
 
-std::string service_status(const servo::StatusSnapshot& s, double rate_hz, double measured_rate_hz,
-                           const std::string& note) {
+std::string service_status(const servo::StatusSnapshot& s, double rate_hz,
+                           std::optional<double> measured_rate_hz, const std::string& note) {
     std::ostringstream out;
     out << servo::servo_state_name(s.state) << ", " << rate_hz << " Hz";
-    if (measured_rate_hz > 0.0) {
-        out << std::fixed << std::setprecision(1) << " (measured " << measured_rate_hz << ")"
-            << std::defaultfloat;
+    if (measured_rate_hz) {
+        std::ostringstream measured;
+        measured << std::fixed << std::setprecision(1) << *measured_rate_hz;
+        out << " (measured " << measured.str() << ")";
     }
     out << ", tick " << s.tick << ", overruns " << s.overruns << ", faults "
         << (s.faults == 0u ? std::string("none") : fault_names(s.faults));

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <iosfwd>
+#include <optional>
 #include <string>
 
 #include "hapticd/daemon/config.hpp"
@@ -26,10 +27,11 @@ std::string fault_change_line(std::uint32_t before, const servo::StatusSnapshot&
                               const Config& config);
 /// The STATUS= line systemd shows for the run (systemctl status): "running, 1000 Hz
 /// (measured 999.9), tick 12000, overruns 0, faults none", then `note` (what real time
-/// refused) when not empty. `measured_rate_hz` is the ticks of the last second of wall time;
-/// 0 leaves it out (its first second, or a lockstep run, whose rate is the device's).
-std::string service_status(const servo::StatusSnapshot& s, double rate_hz, double measured_rate_hz,
-                           const std::string& note = {});
+/// refused) when not empty. `measured_rate_hz` is the ticks of the last second of wall time,
+/// 0 when the servo stalled; none leaves it out (the first second, or a lockstep run, whose
+/// rate is the device's).
+std::string service_status(const servo::StatusSnapshot& s, double rate_hz,
+                           std::optional<double> measured_rate_hz, const std::string& note = {});
 /// "hapticd: t 60.0 s: running, tick 60000, 1000.0 Hz over the last 60.0 s, overruns 0 (+0),
 /// faults none": the run's figures since `before`, `seconds` earlier.
 std::string figures_line(const servo::StatusSnapshot& now, const servo::StatusSnapshot& before,

@@ -59,9 +59,11 @@ void RunWatcher::tell_service(Clock::time_point now) {
     const servo::StatusSnapshot status = loop_.status();
     if (status.tick < 1) return;
     if (!realtime_note_) realtime_note_ = report_realtime(realtime_, loop_.realtime_report(), log_);
-    const std::string service_line =
-        service_status(status, config_.servo.rate_hz,
-                       info_.lockstep ? 0.0 : measured_rate_hz_.load(), *realtime_note_);
+    const std::string service_line = service_status(
+        status, config_.servo.rate_hz,
+        rate_measured_ && !info_.lockstep ? std::optional<double>(measured_rate_hz_.load())
+                                          : std::nullopt,
+        *realtime_note_);
     if (status.faults == 0u) notifier_.ready(service_line);
     notifier_.watch(status.tick, now);
     if (now >= next_service_status_ || status.faults != logged_faults_) {
@@ -77,6 +79,7 @@ void RunWatcher::measure_rate(Clock::time_point now) {
                                 std::chrono::duration<double>(now - rate_since_).count());
         rate_ticks_before_ = ticks;
         rate_since_ = now;
+        rate_measured_ = true;
     }
 }
 

@@ -107,6 +107,7 @@ class RunWatcher {
     // The rate the control socket reports: ticks over the last second, from the first tick.
     Clock::time_point rate_since_;
     std::uint64_t rate_ticks_before_ = 0;
+    bool rate_measured_ = false;  ///< a whole second has been measured (0 Hz is a stall then)
 };
 
 }  // namespace hapticd::daemon

@@ -14,6 +14,7 @@ enum ExitCode : int {
                          ///< stable, size's answer fails the exact model, diag's link is
                          ///< not fit, autotune's tuned config fails its start-up check
     kExitBadInput = 2,   ///< usage, config, scene or device-table errors; gains refused;
+                         ///< real time refused in enforce mode (before the first tick);
                          ///< an output path that is empty, an input, another output, locked
                          ///< by another daemon, or cannot be created (found before the run)
     kExitOutput = 3,     ///< the run ended without a fault, but an output is not whole: the
