@@ -7,7 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "default_config.hpp"
+#include "control_daemon.hpp"
 #include "hapticd_run.hpp"
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
@@ -18,9 +18,11 @@ namespace {
 
 constexpr double kDurationS = 2.0;
 
-/// The default config, its servo thread pinned to `cpu`.
+/// The default config, its servo thread pinned to `cpu`, with an overrun budget that a
+/// stall of the shared VM (tens of ms) does not exhaust (config_with_room): what this test
+/// judges is each instance's rate, below, not whether the host stalled once.
 std::string instance_config(int cpu) {
-    return default_config("cpu = " + std::to_string(cpu) + "\n");
+    return config_with_room("", "cpu = " + std::to_string(cpu) + "\n");
 }
 
 TEST(HilTwoInstances, EachKeepsItsRateOnItsOwnCpuAndWritesItsOwnSummary) {
