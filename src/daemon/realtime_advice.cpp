@@ -34,9 +34,11 @@ std::string fifo_advice(const servo::RealtimeRequest& request, const RealtimeSur
     if (where.rt_group_scheduling) {
         text +=
             "this kernel has RT group scheduling (CONFIG_RT_GROUP_SCHED), which refuses "
-            "SCHED_FIFO in a cgroup without a real-time budget: give the service's cgroup "
-            "one (cpu.rt_runtime_us), or use a kernel without RT group scheduling, such "
-            "as Debian's own";
+            "SCHED_FIFO in a cgroup without a real-time budget: under cgroup v1 give the "
+            "service's cgroup one (cpu.rt_runtime_us); under cgroup v2, which has no such "
+            "budget, keep the cpu controller off the service's slice (no CPUWeight= or "
+            "CPUQuota= on it or its parents); or use a kernel without RT "
+            "group scheduling, such as Debian's own";
     } else {
         text +=
             "the kernel refused it (a container or cgroup without a real-time budget, "

@@ -77,6 +77,10 @@ TEST(RealtimeAdvice, ALimitThatAllowsThePriorityMeansTheKernelRefused) {
     EXPECT_NE(groups.find("RT group scheduling (CONFIG_RT_GROUP_SCHED)"), std::string::npos)
         << groups;
     EXPECT_NE(groups.find("cpu.rt_runtime_us"), std::string::npos) << groups;
+    EXPECT_NE(groups.find("under cgroup v2, which has no such budget, keep the cpu controller "
+                          "off the service's slice"),
+              std::string::npos)
+        << groups;
 }
 
 TEST(RealtimeAdvice, NothingRefusedOrNothingAskedIsNothingToSay) {
