@@ -31,10 +31,11 @@ std::string device_link_text(const nlohmann::json& link) {
     const auto count = [&link](const char* name) { return link.at(name).get<std::uint64_t>(); };
     std::ostringstream out;
     out << "frames    " << count("frames_sent") << " sent, " << count("frames_received")
-        << " received, " << count("bad_frames") << " bad, " << count("reply_timeouts")
-        << " reply timeouts, " << count("missed_samples") << " samples missed, "
-        << count("device_errors") << " device errors, " << count("disconnects") << " disconnects, "
-        << count("reconnects") << " reconnects\n";
+        << " received, " << count("bad_frames") << " bad, " << count("transfer_errors")
+        << " transfer errors, " << count("reply_timeouts") << " reply timeouts, "
+        << count("missed_samples") << " samples missed, " << count("late") << " late, "
+        << count("duplicate") << " duplicate, " << count("device_errors") << " device errors, "
+        << count("disconnects") << " disconnects, " << count("reconnects") << " reconnects\n";
     return out.str();
 }
 
