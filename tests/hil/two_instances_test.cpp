@@ -7,7 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "control_daemon.hpp"
+#include "default_config.hpp"
 #include "hapticd_run.hpp"
 #include "run_command.hpp"
 #include "scratch_dir.hpp"

@@ -18,18 +18,6 @@
 
 namespace hapticd::testing {
 
-/// The default config with an overrun budget that a shared VM's stalls (tens of ms) do not
-/// exhaust: what these tests judge is the socket, not the host's scheduling. `servo_lines` go
-/// at the top of its [servo] table (default_config).
-inline std::string config_with_room(const std::string& extra_toml,
-                                    const std::string& servo_lines = "") {
-    std::string config = default_config(servo_lines) + extra_toml;
-    const std::string safety = "[safety]\n";
-    config.replace(config.find(safety), safety.size(),
-                   safety + "max_missed_periods = 1000\nmax_consecutive_overruns = 1000\n");
-    return config;
-}
-
 /// A whole config's text, for Daemon.
 struct ConfigText {
     std::string toml;

@@ -23,4 +23,16 @@ inline std::string default_config(const std::string& servo_lines = "") {
     return config;
 }
 
+/// The default config with an overrun budget that a shared VM's stalls (tens of ms) do not
+/// exhaust, for tests that judge something else than whether the host stalled once (the
+/// control socket, each instance's rate). `servo_lines` go at the top of its [servo] table.
+inline std::string config_with_room(const std::string& extra_toml,
+                                    const std::string& servo_lines = "") {
+    std::string config = default_config(servo_lines) + extra_toml;
+    const std::string safety = "[safety]\n";
+    config.replace(config.find(safety), safety.size(),
+                   safety + "max_missed_periods = 1000\nmax_consecutive_overruns = 1000\n");
+    return config;
+}
+
 }  // namespace hapticd::testing

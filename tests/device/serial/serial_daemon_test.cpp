@@ -217,6 +217,24 @@ TEST(SerialDaemon, ADeviceFaultZeroesForceAndStopsTheRun) {
     });
 }
 
+/// The real-time serial runs below: `rate_hz`, no coupling, the spring of kSpringScene, the
+/// device on `port`; `safety_lines` end [safety], `serial_lines` end [device.serial].
+std::string serial_spring_config(double rate_hz, const std::string& port,
+                                 const std::string& safety_lines, const std::string& serial_lines) {
+    return "[servo]\nrate_hz = " + toml_number(rate_hz) + "\nrealtime = \"off\"\n" +
+           "[device]\nplugin = \"serial\"\naxes = 1\n[device.model]\nmass = " +
+           toml_number(kPenMassKg) + "\ndamping = " + toml_number(kPenDampingNsPerM) + "\n" +
+           no_coupling_table() + "[scene]\nfile = \"scene.toml\"\n" +
+           "[safety]\nmax_force = " + toml_number(kForceLimitN) + "\nmax_speed = 1.0\n" +
+           safety_lines + "[device.serial]\nport = \"" + port + "\"\nreply_timeout_ms = 8\n" +
+           serial_lines;
+}
+
+/// A spring pulling the handle toward +4 mm: the force is the point, not contact stability.
+constexpr const char* kSpringScene =
+    "[scene]\nname = \"serial-spring\"\naxes = 1\n[[spring]]\nanchor = [0.004]\n"
+    "stiffness = 200.0\n";
+
 // The device goes away (the pty's master closes: hapticd's port hangs up, as when a USB serial
 // adapter is pulled out) and comes back on a new pty behind the same path (a symlink, as
 // /dev/serial/by-id/... is).
@@ -238,16 +256,8 @@ TEST(SerialDaemon, RecoversWhenTheDeviceComesBack) {
         if (e.counters().commands_applied >= kHangUpAtCommand) reached = true;
     });
     const std::string config =
-        "[servo]\nrate_hz = " + toml_number(kRate) + "\nrealtime = \"off\"\n" +
-        "[device]\nplugin = \"serial\"\naxes = 1\n[device.model]\nmass = " +
-        toml_number(kPenMassKg) + "\ndamping = " + toml_number(kPenDampingNsPerM) + "\n" +
-        no_coupling_table() + "[scene]\nfile = \"scene.toml\"\n" +
-        "[safety]\nmax_force = " + toml_number(kForceLimitN) + "\nmax_speed = 1.0\n" +
-        "[device.serial]\nport = \"" + stable + "\"\nreply_timeout_ms = 8\n" +
-        "reconnect_interval_ms = 20\n";
-    const std::string scene =
-        "[scene]\nname = \"serial-spring\"\naxes = 1\n[[spring]]\nanchor = [0.004]\n"
-        "stiffness = 200.0\n";
+        serial_spring_config(kRate, stable, "", "reconnect_interval_ms = 20\n");
+    const std::string scene = kSpringScene;
     DaemonRun run;
     std::thread daemon([&] {
         run = run_hapticd(
@@ -320,17 +330,9 @@ TEST(SerialDaemon, StatusReportsTheLinksBadFramesAndReplyTimeouts) {
             corrupted = true;
         }
     });
-    dir.write("scene.toml",
-              "[scene]\nname = \"serial-spring\"\naxes = 1\n[[spring]]\nanchor = [0.004]\n"
-              "stiffness = 200.0\n");
-    const std::string config =
-        "[servo]\nrate_hz = " + toml_number(kRate) + "\nrealtime = \"off\"\n" +
-        "[device]\nplugin = \"serial\"\naxes = 1\n[device.model]\nmass = " +
-        toml_number(kPenMassKg) + "\ndamping = " + toml_number(kPenDampingNsPerM) + "\n" +
-        no_coupling_table() + "[scene]\nfile = \"scene.toml\"\n" +
-        "[safety]\nmax_force = " + toml_number(kForceLimitN) + "\nmax_speed = 1.0\n" +
-        "max_missed_periods = 1000\nmax_consecutive_overruns = 1000\n" +
-        "[device.serial]\nport = \"" + device.port() + "\"\nreply_timeout_ms = 8\n";
+    dir.write("scene.toml", kSpringScene);
+    const std::string config = serial_spring_config(
+        kRate, device.port(), "max_missed_periods = 1000\nmax_consecutive_overruns = 1000\n", "");
     Daemon d(dir, "serial", ConfigText{config});
     ASSERT_TRUE(d.process.wait_for_socket(d.socket)) << d.process.messages();
 
