@@ -7,22 +7,29 @@
 #   hammer  the same with socket_hammer: floods, garbage, oversized lines, connect churn,
 #           half-closes, idle clients and a polite client polling status as fast as it can
 #   other   socket_hammer on a second hapticd's socket, not this one's: the same load on the
-#           machine, none of it on this process (what is the machine's, what is hapticd's)
+#           machine, none of it on this process (what is the machine's, what is hapticd's);
+#           with SERVO_CPU, that hapticd runs unpinned on the clients' CPUs
 #   stream  the heaviest use that is meant: 15 `hapticctl stream --rate 100` subscribers and
 #           a `hapticctl record` of every tick, for the run less its last second
 # each SECONDS long, real time, the embedded default (sim device, demo wall), as root
 # (SCHED_FIFO 80, mlockall); ROUNDS rounds of the five, interleaved, so that the machine's
 # drift falls on all of them alike. Prints each run, then the medians over the rounds.
 #
-# Usage: bench/socket_abuse.sh [SECONDS] [ROUNDS] [BIN]
-#   SECONDS  length of each run (default 10)
-#   ROUNDS   rounds of quiet, cpu, cpu2, hammer, other, stream (default 3)
-#   BIN      the directory of hapticd, hapticctl and socket_hammer (default build/bench/bin)
+# Usage: [ARMS="quiet hammer ..."] [SERVO_CPU=N] bench/socket_abuse.sh [SECONDS] [ROUNDS] [BIN]
+#   SECONDS    length of each run (default 10)
+#   ROUNDS     rounds of the arms (default 3)
+#   BIN        the directory of hapticd, hapticctl and socket_hammer (default build/bench/bin)
+#   ARMS       which arms, in this order (default all six; quiet must be one of them)
+#   SERVO_CPU  pin the servo thread to this CPU ([servo] cpu = N, which keeps hapticd's other
+#              threads off it) and run the clients and stress-ng on the other CPUs, as a lab
+#              PC with an isolated servo core would (default: unpinned)
 set -euo pipefail
 
 seconds=${1:-10}
 rounds=${2:-3}
 bin=${3:-build/bench/bin}
+arms=${ARMS:-quiet cpu cpu2 hammer other stream}
+servo_cpu=${SERVO_CPU:-}
 python=/usr/bin/python3
 for tool in "$bin/hapticd" "$bin/hapticctl" "$bin/socket_hammer" stress-ng "$python"; do
     command -v "$tool" >/dev/null || {
@@ -31,36 +38,54 @@ for tool in "$bin/hapticd" "$bin/hapticctl" "$bin/socket_hammer" stress-ng "$pyt
     }
 done
 
+case " $arms " in *" quiet "*) ;; *) echo "socket_abuse.sh: ARMS must hold quiet" >&2; exit 2 ;; esac
+
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
+config=()
+clients=()
+if [ -n "$servo_cpu" ]; then
+    # The embedded default with the servo pinned; its scene path made absolute.
+    "$python" - "$PWD/config/hapticd.toml" "$servo_cpu" >"$work/pinned.toml" <<'PY'
+import pathlib, re, sys
+path, cpu = pathlib.Path(sys.argv[1]), sys.argv[2]
+text = path.read_text().replace('file = "scenes/', f'file = "{path.parent}/scenes/')
+print(re.sub(r"^\[servo\]\n", f"[servo]\ncpu = {cpu}\n", text, count=1, flags=re.M), end="")
+PY
+    config=(--config "$work/pinned.toml")
+    others=$("$python" -c "import os; print(','.join(str(c) for c in sorted(os.sched_getaffinity(0)) if c != $servo_cpu))")
+    clients=(taskset -c "$others")
+fi
+placement="servo unpinned"
+[ -n "$servo_cpu" ] && placement="servo on cpu $servo_cpu, clients on cpus $others"
 echo "socket_abuse.sh: $(date -u +%Y-%m-%dT%H:%M:%SZ), $(nproc) cpus, kernel $(uname -r)," \
-    "load $(cut -d' ' -f1-3 /proc/loadavg); $rounds rounds of $seconds s"
+    "load $(cut -d' ' -f1-3 /proc/loadavg); $rounds rounds of $seconds s; $placement"
 
 for round in $(seq "$rounds"); do
-    for arm in quiet cpu cpu2 hammer other stream; do
+    for arm in $arms; do
         socket="$work/$arm-$round.sock"
         summary="$work/$arm-$round.json"
-        "$bin/hapticd" --duration "$seconds" --no-status --socket "$socket" \
+        "$bin/hapticd" "${config[@]}" --duration "$seconds" --no-status --socket "$socket" \
             --summary "$summary" 2>"$work/$arm-$round.log" &
         daemon=$!
         for _ in $(seq 100); do [ -S "$socket" ] && break; sleep 0.05; done
         case $arm in
-            cpu) stress-ng --cpu 1 --timeout "${seconds}s" --quiet ;;
-            cpu2) stress-ng --cpu 2 --timeout "${seconds}s" --quiet ;;
-            hammer) "$bin/socket_hammer" "$socket" "$seconds" ;;
+            cpu) "${clients[@]}" stress-ng --cpu 1 --timeout "${seconds}s" --quiet ;;
+            cpu2) "${clients[@]}" stress-ng --cpu 2 --timeout "${seconds}s" --quiet ;;
+            hammer) "${clients[@]}" "$bin/socket_hammer" "$socket" "$seconds" ;;
             other)
-                "$bin/hapticd" --duration "$((seconds + 2))" --no-status \
+                "${clients[@]}" "$bin/hapticd" --duration "$((seconds + 2))" --no-status \
                     --socket "$work/other.sock" 2>/dev/null &
                 other=$!
                 for _ in $(seq 100); do [ -S "$work/other.sock" ] && break; sleep 0.05; done
-                "$bin/socket_hammer" "$work/other.sock" "$seconds"
+                "${clients[@]}" "$bin/socket_hammer" "$work/other.sock" "$seconds"
                 kill "$other" 2>/dev/null || true
                 wait "$other" 2>/dev/null || true
                 ;;
             stream)
                 streams=()
                 for _ in $(seq 15); do
-                    timeout -s INT "$((seconds - 1))" "$bin/hapticctl" --socket "$socket" \
+                    "${clients[@]}" timeout -s INT "$((seconds - 1))" "$bin/hapticctl" --socket "$socket" \
                         stream --rate 100 >/dev/null &
                     streams+=($!)
                 done
@@ -81,12 +106,11 @@ for round in $(seq "$rounds"); do
     done
 done
 
-"$python" - "$work" "$rounds" <<'PY'
+"$python" - "$work" "$rounds" "$arms" <<'PY'
 import json, statistics, sys
-work, rounds = sys.argv[1], int(sys.argv[2])
+work, rounds, arms = sys.argv[1], int(sys.argv[2]), sys.argv[3].split()
 fields = [("wake p50", "wake_latency_us", "p50"), ("wake p99", "wake_latency_us", "p99"),
           ("compute p50", "tick_compute_us", "p50"), ("compute p99", "tick_compute_us", "p99")]
-arms = ["quiet", "cpu", "cpu2", "hammer", "other", "stream"]
 runs = {arm: [json.load(open(f"{work}/{arm}-{r}.json")) for r in range(1, rounds + 1)]
         for arm in arms}
 print("run                 " + "".join(f"{name:>13}" for name, _, _ in fields)
@@ -102,10 +126,12 @@ for arm in arms:
     print(f"{arm:<20}" + "".join(
         f"{statistics.median(s[k][q] for s in runs[arm]):>10.2f} us" for _, k, q in fields))
 quiet = {f: statistics.median(s[k][q] for s in runs["quiet"]) for f, k, q in fields}
-for arm in ["cpu", "cpu2", "hammer", "other", "stream"]:
+for arm in (a for a in arms if a != "quiet"):
     print(f"{arm + ' / quiet':<20}" + "".join(
         f"{statistics.median(s[k][q] for s in runs[arm]) / quiet[f]:>13.2f}"
         for f, k, q in fields))
 PY
-echo "recordings of the stream arm (hapticctl record stop):"
-cat "$work/records.txt"
+if [ -s "$work/records.txt" ]; then
+    echo "recordings of the stream arm (hapticctl record stop):"
+    cat "$work/records.txt"
+fi

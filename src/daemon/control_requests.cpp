@@ -197,7 +197,10 @@ nlohmann::json link_body(const servo::StatusSnapshot& s, const RunFacts& facts) 
             {"duplicate", q.duplicate},
             {"device_errors", q.device_errors},
             {"disconnects", q.disconnects},
-            {"reconnects", q.reconnects}};
+            {"reconnects", q.reconnects},
+            {"wrong_session", q.wrong_session},
+            {"unexpected", q.unexpected},
+            {"out_of_step", q.out_of_step}};
 }
 
 }  // namespace

@@ -52,6 +52,7 @@ int run_identify(const RunOptions& options, const RunStamp& stamp, std::atomic<b
     }
     const Config config = load_any_config(options);
     RunContext context = begin_context(options, config, stamp);
+    keep_other_threads_off_servo_cpu(options, config, context, log);
     context.check.skipped = true;
     context.check.skipped_model = "none (identify: open loop, nothing coupled)";
     context.scene = "identify-multisine";

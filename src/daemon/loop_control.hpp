@@ -6,8 +6,10 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <mutex>
+#include <optional>
 #include <type_traits>
 
 #include "control_requests.hpp"
@@ -19,12 +21,28 @@
 
 namespace hapticd::daemon {
 
+/// How old a status the control socket may serve: the servo's status crosses to the socket's
+/// threads at most 1/kStatusMaxAge times a second, however many clients ask. Each crossing
+/// costs the servo's next tick a cache miss on each line of the status it writes (their
+/// copies on the reader's core invalidated): a client polling status as fast as it could
+/// raised the tick's median compute time by half (docs/benchmarks.md, "The servo under socket
+/// abuse"). A 100 Hz stream still gets a new status for each row.
+inline constexpr std::chrono::milliseconds kStatusMaxAge{5};
+
 /// The servo loop as the control socket sees it: lock-free calls only (servo_loop.hpp).
 template <typename Loop>
 class LoopControl final : public control::ServoControl {
   public:
     LoopControl(Loop& loop, const servo::CouplingGains& gains) : loop_(loop), gains_(gains) {}
-    servo::StatusSnapshot status() const noexcept override { return loop_.status(); }
+    servo::StatusSnapshot status() const noexcept override {
+        const std::lock_guard lock(status_mutex_);  // the socket's two threads; never the servo's
+        const auto now = std::chrono::steady_clock::now();
+        if (!status_read_ || now - *status_read_ >= kStatusMaxAge) {
+            status_ = loop_.status();
+            status_read_ = now;
+        }
+        return status_;
+    }
     void arm() noexcept override { loop_.arm(); }
     void disarm() noexcept override { loop_.disarm(); }
     void reset() noexcept override {
@@ -49,6 +67,9 @@ class LoopControl final : public control::ServoControl {
     std::atomic<std::uint64_t> resets_requested_{0};
     mutable std::mutex gains_mutex_;
     servo::CouplingGains gains_;  // the last accepted: the servo may not have taken it yet
+    mutable std::mutex status_mutex_;
+    mutable servo::StatusSnapshot status_;  // read from the loop at status_read_
+    mutable std::optional<std::chrono::steady_clock::time_point> status_read_;
 };
 
 /// The environment of `scene` that a loop over `Environment` renders; null for the other

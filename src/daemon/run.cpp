@@ -44,6 +44,7 @@ int run_daemon(const RunOptions& given, std::atomic<bool>& stop, std::ostream& o
         if (options.identify) return run_identify(options, stamp, stop, out, log);
         const Config config = load_any_config(options);
         RunContext context = begin_context(options, config, stamp);
+        keep_other_threads_off_servo_cpu(options, config, context, log);
         context.check = run_startup_check(config, log);
         env::Scene scene = load_any_scene(config);
         const std::string scene_source = config.scene_file.empty()

@@ -134,6 +134,22 @@ RunContext begin_context(const RunOptions& options, const Config& config, const 
     return context;
 }
 
+void keep_other_threads_off_servo_cpu(const RunOptions& options, const Config& config,
+                                      RunContext& context, std::ostream& log) {
+    if (!config.servo.cpu || config.servo.realtime == servo::RealtimeMode::off ||
+        options.lockstep) {
+        return;
+    }
+    context.other_threads = servo::keep_other_threads_off(*config.servo.cpu);
+    if (context.other_threads.narrowed) {
+        log << "hapticd: other threads on cpus " << context.other_threads.cpus
+            << ", off the servo's cpu " << *config.servo.cpu << "\n";
+    } else {
+        log << priority::notice << "hapticd: other threads not kept off the servo's cpu "
+            << *config.servo.cpu << ": " << context.other_threads.why_not << "\n";
+    }
+}
+
 void check_duration(const RunOptions& options, double rate_hz) {
     if (!options.duration_s) return;
     const double d = *options.duration_s;

@@ -81,6 +81,7 @@ std::string summary_json(const servo::Summary& s, const RunContext& c) {
                      {"memory_locked", c.realtime.memory_locked},
                      {"cpu", c.realtime.cpu},
                      {"affinity_set", c.realtime.affinity_set},
+                     {"other_threads_cpus", c.other_threads.narrowed ? c.other_threads.cpus : ""},
                      {"cpu_dma_latency_held", c.realtime.cpu_dma_latency_held},
                      {"refused", c.realtime.refused}};
     return j.dump(2);

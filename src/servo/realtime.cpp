@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <sstream>
 #include <stdexcept>
 
@@ -46,7 +47,66 @@ bool prefault_heap(std::size_t bytes) {
     return true;
 }
 
+// "0,2-3": the CPUs of `set` as ranges.
+std::string cpu_list(const cpu_set_t& set) {
+    std::string out;
+    for (int cpu = 0; cpu < CPU_SETSIZE; ++cpu) {
+        if (!CPU_ISSET(static_cast<std::size_t>(cpu), &set)) continue;
+        int last = cpu;
+        while (last + 1 < CPU_SETSIZE && CPU_ISSET(static_cast<std::size_t>(last + 1), &set)) {
+            ++last;
+        }
+        if (!out.empty()) out += ',';
+        out += std::to_string(cpu);
+        if (last > cpu) out += '-' + std::to_string(last);
+        cpu = last;
+    }
+    return out;
+}
+
 }  // namespace
+
+OtherThreadsCpus keep_other_threads_off(int servo_cpu) {
+    OtherThreadsCpus result;
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    if (const int error = pthread_getaffinity_np(pthread_self(), sizeof(set), &set); error != 0) {
+        result.why_not = "the CPU set could not be read: " + errno_text(error);
+        return result;
+    }
+    result.cpus = cpu_list(set);
+    if (servo_cpu < 0) return result;
+    const auto servo = static_cast<std::size_t>(servo_cpu);
+    if (servo_cpu >= CPU_SETSIZE || !CPU_ISSET(servo, &set)) {
+        result.why_not = "cpu " + std::to_string(servo_cpu) + " is not among this process's (" +
+                         result.cpus + ")";
+        return result;
+    }
+    if (CPU_COUNT(&set) == 1) {
+        result.why_not = "cpu " + std::to_string(servo_cpu) +
+                         " is the only one this process may use: the other threads share it";
+        return result;
+    }
+    CPU_CLR(servo, &set);
+    // Every thread there is now (the signal watcher started before the config was read), then
+    // this one again: threads started after inherit its set. A thread that has ended is gone.
+    std::error_code listing;
+    for (const auto& task : std::filesystem::directory_iterator("/proc/self/task", listing)) {
+        const auto tid = static_cast<pid_t>(std::atoi(task.path().filename().c_str()));
+        if (tid > 0 && sched_setaffinity(tid, sizeof(set), &set) != 0 && errno != ESRCH) {
+            result.why_not = "narrowing thread " + std::to_string(tid) + "'s CPU set to " +
+                             cpu_list(set) + ": " + errno_text(errno);
+            return result;
+        }
+    }
+    if (const int error = pthread_setaffinity_np(pthread_self(), sizeof(set), &set); error != 0) {
+        result.why_not = "narrowing the CPU set to " + cpu_list(set) + ": " + errno_text(error);
+        return result;
+    }
+    result.narrowed = true;
+    result.cpus = cpu_list(set);
+    return result;
+}
 
 RealtimeMode parse_realtime_mode(std::string_view text) {
     for (const RealtimeMode mode : kRealtimeModes) {

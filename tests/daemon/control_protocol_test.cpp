@@ -275,7 +275,10 @@ TEST(DaemonControlStatus, LinkCarriesTheLoopsAndTheDevicesCounts) {
                                 .duplicate = 8,
                                 .device_errors = 9,
                                 .disconnects = 1,
-                                .reconnects = 1};
+                                .reconnects = 1,
+                                .wrong_session = 10,
+                                .unexpected = 11,
+                                .out_of_step = 12};
     const CountingDevice device(q);
     RunFacts facts;
     facts.link_source = &device;
@@ -283,7 +286,8 @@ TEST(DaemonControlStatus, LinkCarriesTheLoopsAndTheDevicesCounts) {
     EXPECT_EQ(link, nlohmann::json::parse(R"({"read_timeouts": 7, "link_recoveries": 2,
         "counted": true, "frames_sent": 1000, "frames_received": 990, "bad_frames": 3,
         "transfer_errors": 4, "reply_timeouts": 7, "missed_samples": 5, "late": 6,
-        "duplicate": 8, "device_errors": 9, "disconnects": 1, "reconnects": 1})"))
+        "duplicate": 8, "device_errors": 9, "disconnects": 1, "reconnects": 1,
+        "wrong_session": 10, "unexpected": 11, "out_of_step": 12})"))
         << link.dump();
 }
 
@@ -300,7 +304,7 @@ TEST(DaemonControlStatus, ADeviceWithoutCountsSaysSo) {
     link = status_body(s, facts).at("link");
     EXPECT_EQ(link.at("counted"), false);
     EXPECT_EQ(link.at("reply_timeouts"), 0);
-    EXPECT_EQ(link.size(), 14u);
+    EXPECT_EQ(link.size(), 17u);
 }
 
 }  // namespace

@@ -7,7 +7,9 @@
 #include <sched.h>
 #include <sys/mman.h>
 
+#include <string>
 #include <thread>
+#include <vector>
 
 namespace hapticd::servo {
 namespace {
@@ -63,6 +65,91 @@ TEST(ServoRealtime, WarnReportsWhatWasGrantedOnTheCallingThread) {
     sched_param parameters{};
     pthread_getschedparam(pthread_self(), &main_policy, &parameters);
     EXPECT_EQ(main_policy, SCHED_OTHER);
+}
+
+// The CPUs in the calling thread's set.
+std::vector<int> own_cpus() {
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    pthread_getaffinity_np(pthread_self(), sizeof(set), &set);
+    std::vector<int> cpus;
+    for (int cpu = 0; cpu < CPU_SETSIZE; ++cpu) {
+        if (CPU_ISSET(static_cast<std::size_t>(cpu), &set)) cpus.push_back(cpu);
+    }
+    return cpus;
+}
+
+void pin_to(const std::vector<int>& cpus) {
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    for (const int cpu : cpus) CPU_SET(static_cast<std::size_t>(cpu), &set);
+    ASSERT_EQ(pthread_setaffinity_np(pthread_self(), sizeof(set), &set), 0);
+}
+
+// Each case runs on a thread of its own, which it may pin as it likes.
+template <typename Body>
+void on_own_thread(Body body) {
+    std::thread thread(body);
+    thread.join();
+}
+
+TEST(ServoRealtime, OtherThreadsLeaveTheServosCpuThoseThereAndThoseStartedAfter) {
+    const std::vector<int> all = own_cpus();
+    if (all.size() < 2) GTEST_SKIP() << "needs two CPUs";
+    const int servo_cpu = all.back();
+    std::vector<int> expected = all;
+    expected.pop_back();
+    on_own_thread([&] {
+        const OtherThreadsCpus result = keep_other_threads_off(servo_cpu);
+        EXPECT_TRUE(result.narrowed);
+        EXPECT_EQ(result.why_not, "");
+        EXPECT_EQ(own_cpus(), expected);
+        // Two CPUs here: the list is the one left; more: it starts with the first.
+        EXPECT_EQ(result.cpus.rfind(std::to_string(all.front()), 0), 0U) << result.cpus;
+        EXPECT_EQ(result.cpus.find(std::to_string(servo_cpu)), std::string::npos) << result.cpus;
+        std::vector<int> child;
+        std::thread([&] { child = own_cpus(); }).join();
+        EXPECT_EQ(child, expected);
+    });
+    // The thread that was there already (this one) too; then it gets its CPUs back.
+    EXPECT_EQ(own_cpus(), expected);
+    pin_to(all);
+    EXPECT_EQ(own_cpus(), all);
+}
+
+TEST(ServoRealtime, OtherThreadsCpusNamesAContiguousRangeAsARange) {
+    const std::vector<int> all = own_cpus();
+    if (all.size() < 2) GTEST_SKIP() << "needs two CPUs";
+    on_own_thread([&] {
+        pin_to({all[0], all[1]});
+        // Nothing to keep off: the list of the whole set.
+        const OtherThreadsCpus result = keep_other_threads_off(-1);
+        EXPECT_FALSE(result.narrowed);
+        EXPECT_EQ(result.why_not, "");
+        const std::string expected = all[1] == all[0] + 1
+                                         ? std::to_string(all[0]) + "-" + std::to_string(all[1])
+                                         : std::to_string(all[0]) + "," + std::to_string(all[1]);
+        EXPECT_EQ(result.cpus, expected);
+        EXPECT_EQ(own_cpus(), (std::vector<int>{all[0], all[1]}));
+    });
+}
+
+TEST(ServoRealtime, OtherThreadsKeepTheirCpusWhenTheServosIsNotAmongThemOrIsTheOnlyOne) {
+    const std::vector<int> all = own_cpus();
+    if (all.size() < 2) GTEST_SKIP() << "needs two CPUs";
+    on_own_thread([&] {
+        pin_to({all[0]});
+        const OtherThreadsCpus outside = keep_other_threads_off(all[1]);
+        EXPECT_FALSE(outside.narrowed);
+        EXPECT_EQ(outside.cpus, std::to_string(all[0]));
+        EXPECT_NE(outside.why_not.find("cpu " + std::to_string(all[1]) + " is not among"),
+                  std::string::npos)
+            << outside.why_not;
+        const OtherThreadsCpus only = keep_other_threads_off(all[0]);
+        EXPECT_FALSE(only.narrowed);
+        EXPECT_NE(only.why_not.find("is the only one"), std::string::npos) << only.why_not;
+        EXPECT_EQ(own_cpus(), std::vector<int>{all[0]});
+    });
 }
 
 }  // namespace

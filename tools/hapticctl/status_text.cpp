@@ -35,7 +35,9 @@ std::string device_link_text(const nlohmann::json& link) {
         << " transfer errors, " << count("reply_timeouts") << " reply timeouts, "
         << count("missed_samples") << " samples missed, " << count("late") << " late, "
         << count("duplicate") << " duplicate, " << count("device_errors") << " device errors, "
-        << count("disconnects") << " disconnects, " << count("reconnects") << " reconnects\n";
+        << count("disconnects") << " disconnects, " << count("reconnects") << " reconnects, "
+        << count("wrong_session") << " of another session, " << count("unexpected")
+        << " unexpected, " << count("out_of_step") << " out of step\n";
     return out.str();
 }
 

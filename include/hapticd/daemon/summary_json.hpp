@@ -59,6 +59,8 @@ struct RunContext {
     std::vector<IdentifiedRun> identify_runs{};
     StartupCheck check;
     servo::RealtimeReport realtime;
+    /// The CPUs of hapticd's other threads when [servo] cpu kept them off the servo's.
+    servo::OtherThreadsCpus other_threads;
 };
 
 /// The summary as one JSON object (pretty-printed, two-space indent).

@@ -79,6 +79,11 @@ struct LinkQuality {
     std::uint64_t device_errors = 0;    ///< error reports from the device
     std::uint64_t disconnects = 0;      ///< times the device was lost
     std::uint64_t reconnects = 0;       ///< times it came back (a new session)
+    std::uint64_t wrong_session = 0;    ///< replies of another session (stale, or another
+                                        ///< device's), dropped
+    std::uint64_t unexpected = 0;       ///< replies to no request outstanding, dropped
+    std::uint64_t out_of_step = 0;      ///< sessions ended because the device's samples all
+                                        ///< came from behind ours
 };
 
 class Device {

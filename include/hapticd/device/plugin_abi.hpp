@@ -73,7 +73,7 @@ const hapticd_device_plugin* hapticd_device_plugin_entry(void);
 
 namespace hapticd::device {
 
-inline constexpr std::uint32_t kDeviceAbiVersion = 4;
+inline constexpr std::uint32_t kDeviceAbiVersion = 5;
 
 /// The plugin's side of check_config(), compiled into each plugin by HAPTICD_DEVICE_PLUGIN.
 namespace plugin_abi {
@@ -119,7 +119,7 @@ inline bool run_check(void (*check)(const DeviceConfig&), const DeviceConfig* co
 
 }  // namespace plugin_abi
 
-// The layout of ABI version 4: size, alignment and offset in bytes of every type and field
+// The layout of ABI version 5: size, alignment and offset in bytes of every type and field
 // that crosses the plugin boundary, on the LP64 Linux targets with libstdc++ that hapticd
 // builds on (x86_64, aarch64). The daemon and every plugin compile these asserts, so a
 // plugin built where a type lays out otherwise (another std::string ABI, say) fails to build.
@@ -130,8 +130,8 @@ inline bool run_check(void (*check)(const DeviceConfig&), const DeviceConfig* co
 // link_quality after the destructor's entries.)
 #if defined(__LP64__) && defined(__GLIBCXX__)
 
-static_assert(kDeviceAbiVersion == 4,
-              "plugin_abi.hpp: the layout figures below are device plugin ABI version 4's; "
+static_assert(kDeviceAbiVersion == 5,
+              "plugin_abi.hpp: the layout figures below are device plugin ABI version 5's; "
               "write the new version's figures and its number");
 
 #define HAPTICD_ABI_LAYOUT(expression, figure)                                           \
@@ -199,7 +199,7 @@ HAPTICD_ABI_FIELD(DeviceConfig, plugin_table_toml, 24, std::string);
 HAPTICD_ABI_FIELD(DeviceConfig, plugin_table_path, 56, std::string);
 HAPTICD_ABI_FIELD(DeviceConfig, source, 88, std::string);
 
-HAPTICD_ABI_LAYOUT(sizeof(LinkQuality), 96);
+HAPTICD_ABI_LAYOUT(sizeof(LinkQuality), 120);
 HAPTICD_ABI_LAYOUT(alignof(LinkQuality), 8);
 HAPTICD_ABI_LAYOUT(std::is_trivially_copyable_v<LinkQuality>, true);
 HAPTICD_ABI_FIELD(LinkQuality, counted, 0, bool);
@@ -214,6 +214,9 @@ HAPTICD_ABI_FIELD(LinkQuality, duplicate, 64, std::uint64_t);
 HAPTICD_ABI_FIELD(LinkQuality, device_errors, 72, std::uint64_t);
 HAPTICD_ABI_FIELD(LinkQuality, disconnects, 80, std::uint64_t);
 HAPTICD_ABI_FIELD(LinkQuality, reconnects, 88, std::uint64_t);
+HAPTICD_ABI_FIELD(LinkQuality, wrong_session, 96, std::uint64_t);
+HAPTICD_ABI_FIELD(LinkQuality, unexpected, 104, std::uint64_t);
+HAPTICD_ABI_FIELD(LinkQuality, out_of_step, 112, std::uint64_t);
 
 // The enumerations: their size and the values that cross.
 HAPTICD_ABI_LAYOUT(sizeof(IoResult), 4);

@@ -5,7 +5,9 @@
 //     of heap touched, so that the tick takes no page faults;
 //   - CPU affinity of the calling thread to `cpu` (when >= 0);
 //   - /dev/cpu_dma_latency held open with 0 written (no deep C-states while it is open).
-// Call it on the servo thread, before the loop. In `enforce` mode anything refused is an
+// Call it on the servo thread, before the loop. keep_other_threads_off() is its counterpart for
+// the rest of the process: called on the main thread before the others start, it keeps them off
+// the servo's CPU. In `enforce` mode anything refused is an
 // error (std::runtime_error naming each refusal and errno); in `warn` mode the report lists
 // it and the caller carries on; `off` does nothing. Everything here runs outside the tick.
 #pragma once
@@ -61,6 +63,22 @@ struct RealtimeReport {
     /// One line for the log, e.g. "realtime warn: SCHED_FIFO 80, mlockall, cpu 2, ...".
     std::string brief() const;
 };
+
+/// The CPUs left to hapticd's threads other than the servo's, by keep_other_threads_off().
+struct OtherThreadsCpus {
+    bool narrowed = false;  ///< the calling thread's CPU set was narrowed to `cpus`
+    std::string cpus;       ///< the calling thread's CPUs afterwards, as a list: "0", "0,2-3"
+    std::string why_not;    ///< when servo_cpu >= 0 and nothing was narrowed: why
+};
+
+/// Narrows the CPU set of every thread of the process to the calling thread's less
+/// `servo_cpu`, so that they and every thread started afterwards (they inherit the set: the
+/// watcher, the control socket's threads, the log writer, a link's reconnect thread) leave
+/// that core to the servo thread, which pins itself there (RealtimeSession::apply). Nothing
+/// changes when servo_cpu < 0, when servo_cpu is not in the calling thread's set, or when it
+/// is the only CPU in it (why_not says which). Outside the tick: call it before the servo
+/// thread starts.
+OtherThreadsCpus keep_other_threads_off(int servo_cpu);
 
 /// Holds what must stay held for the real-time setup to last (the cpu_dma_latency file).
 /// Destroy it after the loop has stopped.

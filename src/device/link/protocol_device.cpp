@@ -509,6 +509,9 @@ LinkQuality ProtocolDevice::link_quality() const noexcept {
     q.device_errors = p.device_errors;
     q.disconnects = p.disconnects;
     q.reconnects = p.reconnects;
+    q.wrong_session = p.wrong_session;
+    q.unexpected = p.unexpected;
+    q.out_of_step = p.out_of_step;
     if (link_ != nullptr) {
         const LinkCounters l = link_->counters();
         q.frames_sent = l.frames_sent;

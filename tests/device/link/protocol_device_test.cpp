@@ -415,6 +415,19 @@ TEST_F(ProtocolDeviceTest, LinkQualityReflectsTheCounters) {
     EXPECT_EQ(q.device_errors, 0u);
     EXPECT_EQ(q.disconnects, 0u);
     EXPECT_EQ(q.reconnects, 0u);
+    EXPECT_EQ(q.wrong_session, 0u);
+    EXPECT_EQ(q.unexpected, c.unexpected);
+    EXPECT_EQ(q.out_of_step, 0u);
+
+    // A reply of another session: dropped, and counted as such.
+    bench_.device->faults().wrong_session = 1;
+    tick();
+    const device::LinkQuality w = d.link_quality();
+    EXPECT_EQ(w.wrong_session, 1u);
+    EXPECT_EQ(w.wrong_session, d.counters().wrong_session);
+    EXPECT_EQ(w.unexpected, d.counters().unexpected);
+    EXPECT_EQ(w.out_of_step, d.counters().out_of_step);
+    ASSERT_EQ(tick(), IoResult::ok);
 
     // A lost device and its return.
     bench_.present = false;
