@@ -22,17 +22,17 @@ set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "python3-matplotlib")
 # The default config is the administrator's to edit: dpkg keeps the edits on upgrade.
 file(WRITE ${PROJECT_BINARY_DIR}/debian/conffiles "/etc/hapticd/sim.toml\n")
-# The group of the control sockets (config/sysusers/hapticd.conf), made on install as
-# debhelper's dh_installsysusers would.
-file(WRITE ${PROJECT_BINARY_DIR}/debian/postinst [=[#!/bin/sh
-set -e
-if [ "$1" = configure ] && command -v systemd-sysusers >/dev/null; then
-    systemd-sysusers hapticd.conf
-fi
-]=])
-file(CHMOD ${PROJECT_BINARY_DIR}/debian/postinst
-     PERMISSIONS OWNER_READ OWNER_WRITE OWNER_EXECUTE GROUP_READ GROUP_EXECUTE WORLD_READ
-                 WORLD_EXECUTE)
-set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA ${PROJECT_BINARY_DIR}/debian/conffiles
-                                       ${PROJECT_BINARY_DIR}/debian/postinst)
+# The maintainer scripts (config/debian): the system user and group hapticd made on install,
+# systemd and udev told of the new unit and rules, the instances stopped before a removal.
+foreach(script postinst prerm postrm)
+    file(COPY ${PROJECT_SOURCE_DIR}/config/debian/${script}
+         DESTINATION ${PROJECT_BINARY_DIR}/debian
+         FILE_PERMISSIONS OWNER_READ OWNER_WRITE OWNER_EXECUTE GROUP_READ GROUP_EXECUTE
+                          WORLD_READ WORLD_EXECUTE)
+    set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS
+                                           ${PROJECT_SOURCE_DIR}/config/debian/${script})
+endforeach()
+set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA
+    ${PROJECT_BINARY_DIR}/debian/conffiles ${PROJECT_BINARY_DIR}/debian/postinst
+    ${PROJECT_BINARY_DIR}/debian/prerm ${PROJECT_BINARY_DIR}/debian/postrm)
 include(CPack)

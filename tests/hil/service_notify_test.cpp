@@ -2,7 +2,8 @@
 // NOTIFY_SOCKET (a datagram socket, as systemd's), runs the real hapticd with NOTIFY_SOCKET and
 // WATCHDOG_USEC in its environment, and reads what arrived, each message with its kernel
 // receive time (SO_TIMESTAMP). READY=1 comes after the first good tick and STOPPING=1 last;
-// STATUS= lines say the state and do not flood; WATCHDOG=1 comes every half timeout while the
+// STATUS= lines say the state, rate, tick, overruns and faults, a fault at once, and do not
+// flood; WATCHDOG=1 comes every half timeout while the
 // servo ticks, and stops while the servo thread is held (the sim's read() returning a second
 // late on the realtime clock) although the watching thread goes on.
 #include <gtest/gtest.h>
@@ -18,10 +19,12 @@
 #include <cmath>
 #include <cstring>
 #include <iostream>
+#include <regex>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "control_daemon.hpp"
 #include "hapticd_run.hpp"
 #include "pen_display.hpp"
 
@@ -219,6 +222,82 @@ TEST(HilServiceNotify, TheWatchdogStopsWhileTheServoThreadIsHeld) {
     }
     EXPECT_GE(measured, 1u);
     EXPECT_GE(near_rate, 1u);
+}
+
+/// NAME=VALUE in the test's environment, which the daemons it starts inherit, until the end of
+/// the scope.
+class ScopedEnvironment {
+  public:
+    ScopedEnvironment(const char* name, const std::string& value) : name_(name) {
+        ::setenv(name, value.c_str(), 1);
+    }
+    ScopedEnvironment(const ScopedEnvironment&) = delete;
+    ScopedEnvironment& operator=(const ScopedEnvironment&) = delete;
+    ~ScopedEnvironment() { ::unsetenv(name_); }
+
+  private:
+    const char* name_;
+};
+
+// A daemon with a control socket, as the unit runs it: an encoder jump at 1.5 s latches a
+// fault that waits for hapticctl reset. STATUS= tells the fault at once (not at the next
+// once-a-second line, which come 1 s and 2 s after READY), and its return to none.
+TEST(HilServiceNotify, StatusSaysStateRateTickOverrunsAndFaultsAndAFaultAtOnce) {
+    const ScratchDir dir;
+    const NotifySocket socket(dir.file("notify.sock"));
+    const ScopedEnvironment notify("NOTIFY_SOCKET", dir.file("notify.sock"));
+    int stopped_with = -1;
+    const std::vector<Notification> notes = collect_while(socket, [&] {
+        Daemon d(dir, "lab", "[device.sim.faults]\njump_at = 1.5\njump_counts = 20000\n");
+        if (!d.process.wait_for_socket(d.socket)) return;
+        status_when(d.socket, [](const nlohmann::json& s) { return s["state"] == "fault"; });
+        std::this_thread::sleep_for(std::chrono::milliseconds(1200));  // a periodic line
+        EXPECT_EQ(hapticctl(d.socket, "reset").exit_code, 0);
+        std::this_thread::sleep_for(std::chrono::milliseconds(300));
+        stopped_with = d.process.stop();
+    });
+    ASSERT_EQ(stopped_with, 0);
+
+    const std::regex line(
+        "(disabled|arming|running|fault), 1000 Hz( \\(measured [0-9]+\\.[0-9]\\))?, tick "
+        "([0-9]+), overruns [0-9]+, faults (none|[a-z_,]+)(, .*)?");
+    double ready_s = -1.0;
+    double fault_s = -1.0;
+    double cleared_s = -1.0;
+    std::size_t ready = 0;
+    std::uint64_t last_tick = 0;
+    for (const Notification& n : notes) {
+        const std::string status = status_of(n);
+        SCOPED_TRACE(n.text);
+        if (has(n, "READY=1")) {
+            ++ready;
+            ready_s = n.t_s;
+            EXPECT_LT(fault_s, 0.0) << "READY before the fault";
+        }
+        if (status.empty() || status.starts_with("stopping: ")) continue;
+        std::smatch m;
+        ASSERT_TRUE(std::regex_match(status, m, line)) << status;
+        const std::uint64_t tick = std::stoull(m[3].str());
+        EXPECT_GE(tick, last_tick);  // in order
+        last_tick = tick;
+        const bool faulted = m[4] != "none";
+        EXPECT_EQ(m[1] == "fault", faulted) << status;
+        if (faulted) {
+            EXPECT_NE(m[4].str().find("encoder_jump"), std::string::npos) << status;
+            if (fault_s < 0.0) fault_s = n.t_s;
+        } else if (fault_s >= 0.0 && cleared_s < 0.0) {
+            cleared_s = n.t_s;
+        }
+    }
+    EXPECT_EQ(ready, 1u);
+    ASSERT_GE(ready_s, 0.0);
+    ASSERT_GE(fault_s, 0.0) << "no STATUS= with the fault";
+    ASSERT_GE(cleared_s, 0.0) << "no STATUS= after the reset";
+    // The first tick is READY's; the jump 1.5 s of servo time after it (the watcher looks
+    // every 10 ms; a VM stall delays the servo and the watcher alike).
+    EXPECT_NEAR(fault_s - ready_s, 1.5, 0.25);
+    EXPECT_GT(cleared_s - fault_s, 1.0);  // the reset came 1.2 s after the fault was seen
+    EXPECT_TRUE(has(notes.back(), "STOPPING=1")) << notes.back().text;
 }
 
 // A service manager that stops reading (its queue of 10 datagrams full) never holds the run:

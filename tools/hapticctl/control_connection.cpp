@@ -35,9 +35,9 @@ ControlConnection::ControlConnection(std::string socket_path, std::chrono::milli
     : path_(std::move(socket_path)), timeout_(timeout) {
     sockaddr_un address{};
     address.sun_family = AF_UNIX;
-    if (path_.empty() || path_.size() >= sizeof(address.sun_path)) {
+    if (path_.empty() || path_.size() > kMaxSocketPathBytes) {
         throw ConnectionError("socket \"" + path_ + "\": a path of 1 to " +
-                              std::to_string(sizeof(address.sun_path) - 1) + " bytes is needed");
+                              std::to_string(kMaxSocketPathBytes) + " bytes is needed");
     }
     std::memcpy(address.sun_path, path_.data(), path_.size());
     fd_ = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);

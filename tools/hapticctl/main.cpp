@@ -38,6 +38,26 @@ CLI::Validator finite_non_negative() {
         "NUMBER >= 0"};
 }
 
+/// A FILE argument: not empty (an empty path is no file, and not "the default"). Refused
+/// while the command line is read: exit 2, no daemon asked.
+CLI::Validator non_empty_path(const std::string& what) {
+    return {[what](const std::string& path) {
+                return path.empty() ? "the path is empty: " + what : std::string();
+            },
+            "FILE"};
+}
+
+/// --socket PATH: what a Unix socket address holds, 1 to 107 bytes.
+CLI::Validator socket_path_length() {
+    return {[](const std::string& path) -> std::string {
+                if (!path.empty() && path.size() <= hapticd::ctl::kMaxSocketPathBytes) return {};
+                return "\"" + path.substr(0, 40) + (path.size() > 40 ? "...\"" : "\"") + " is " +
+                       std::to_string(path.size()) + " bytes: a socket path is 1 to " +
+                       std::to_string(hapticd::ctl::kMaxSocketPathBytes) + " bytes";
+            },
+            "PATH"};
+}
+
 using hapticd::ctl::ConnectionError;
 using hapticd::ctl::ControlConnection;
 using hapticd::daemon::control::RequestKind;
@@ -283,7 +303,8 @@ int run_main(int argc, char** argv) {
                                            "the instance NAME of hapticd@NAME: its socket is "
                                            "/run/hapticd/NAME.sock");
     auto* socket_option =
-        app.add_option("--socket", socket_path, "the control socket's PATH (hapticd --socket)");
+        app.add_option("--socket", socket_path, "the control socket's PATH (hapticd --socket)")
+            ->check(socket_path_length());
     instance_option->excludes(socket_option);
     app.require_subcommand(0, 1);
 
@@ -331,7 +352,9 @@ int run_main(int argc, char** argv) {
         app.add_subcommand("record", "record every tick to a file, in the hapticd --log format");
     auto* record_start = record_command->add_subcommand(
         "start", "start recording to FILE (created by the daemon; never over an existing file)");
-    record_start->add_option("FILE", record_path, "the file to create")->required();
+    record_start->add_option("FILE", record_path, "the file to create")
+        ->required()
+        ->check(non_empty_path("name the file to create"));
     auto* record_stop =
         record_command->add_subcommand("stop", "stop recording; print how many records it holds");
     record_command->allow_extras();  // a word that is neither start nor stop is named below
@@ -342,7 +365,9 @@ int run_main(int argc, char** argv) {
         "render the scene in FILE from a tick boundary on, through the soft start: the daemon "
         "refuses a scene of the other causality, or one that fails its stability check with "
         "the gains in force, and says why");
-    scene_command->add_option("FILE", scene_path, "the scene file (docs/scenes.md)")->required();
+    scene_command->add_option("FILE", scene_path, "the scene file (docs/scenes.md)")
+        ->required()
+        ->check(non_empty_path("name the scene file"));
 
     std::string identify_path;
     bool no_wait = false;
@@ -356,14 +381,7 @@ int run_main(int argc, char** argv) {
             ->add_option("FILE", identify_path,
                          "the log to create (default: identify-START-N.csv beside the daemon's "
                          "logs)")
-            ->check(CLI::Validator(
-                [](const std::string& file) {
-                    return file.empty() ? std::string(
-                                              "the path is empty: name the log to "
-                                              "create, or leave FILE out")
-                                        : std::string();
-                },
-                "FILE"));
+            ->check(non_empty_path("name the log to create, or leave FILE out"));
     identify_command->add_flag("--no-wait", no_wait,
                                "return once the excitation is handed to the servo");
 

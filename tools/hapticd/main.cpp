@@ -141,10 +141,12 @@ int run_main(int argc, char** argv) {
         "100 ms of it, and every line in it is whole.\n\nExit "
         "status: 0 stopped by a signal or at the end of --duration; 1 stopped on a fault (the "
         "force was zeroed in the same tick), the loop could not run, or (--identify) the "
-        "handle left the workspace; 2 bad usage, config, scene, device table, coupling "
-        "gains that fail the start-up stability check, or an output path that is empty, "
-        "names an input or another output, is locked by another hapticd, or cannot be "
-        "created (all found before the device is opened); 3 the run ended without a fault "
+        "handle left the workspace; 2 bad usage, config, scene or device table, a plugin "
+        "that cannot be loaded or a device that cannot be opened, coupling gains that fail "
+        "the start-up stability check, real time refused with realtime = \"enforce\", or an "
+        "output path that is empty, names an input or another output, is locked by another "
+        "hapticd, or cannot be created (all found before the first tick: the device never "
+        "pushed); 3 the run ended without a fault "
         "but the --log or --summary is incomplete (disk full, a write error, records "
         "dropped: the summary says telemetry_complete: false).",
         "hapticd"};
