@@ -7,11 +7,16 @@
 string(MD5 install_key "${CMAKE_INSTALL_PREFIX}|$ENV{DESTDIR}")
 set(HAPTICD_STAGING_DIR "${HAPTICD_STAGING_DIR}/${install_key}")
 
-# The system configuration directory as GNUInstallDirs has it: /etc for prefix /usr.
+# The system configuration directory as GNUInstallDirs has it: /etc for prefix /usr. The
+# unit's ConfigurationDirectory= names a directory below /etc only, so another prefix's unit
+# says where its configs are instead.
 if(CMAKE_INSTALL_PREFIX STREQUAL "/usr")
   set(HAPTICD_CONFIG_INSTALL_DIR "/etc/hapticd")
+  set(HAPTICD_CONFIGURATION_DIRECTORY "ConfigurationDirectory=hapticd")
 else()
   set(HAPTICD_CONFIG_INSTALL_DIR "${CMAKE_INSTALL_PREFIX}/etc/hapticd")
+  set(HAPTICD_CONFIGURATION_DIRECTORY
+      "# (no ConfigurationDirectory=, which is below /etc: the configs are in ${HAPTICD_CONFIG_INSTALL_DIR})")
 endif()
 set(HAPTICD_INSTALLED_BINDIR "${CMAKE_INSTALL_PREFIX}/${HAPTICD_BINDIR}")
 

@@ -234,6 +234,23 @@ TEST(HilControlSocket, HostileClientsGetErrorsOrDisconnectsAndTheServoNeverNotic
         EXPECT_TRUE(half.closed_by_peer());
     }
 
+    {  // A slow reader: 100 requests at once, their replies read one every 2 ms: all served.
+        UnixClient slow(d.socket);
+        std::string burst;
+        for (int i = 0; i < 100; ++i) {
+            burst += "{\"v\":1,\"id\":" + std::to_string(i) + ",\"request\":\"status\"}\n";
+        }
+        ASSERT_TRUE(slow.send(burst));
+        for (int i = 0; i < 100; ++i) {
+            std::this_thread::sleep_for(2ms);
+            const auto reply = slow.line();
+            ASSERT_TRUE(reply.has_value()) << "reply " << i;
+            const nlohmann::json answer = nlohmann::json::parse(*reply);
+            EXPECT_EQ(answer["id"], i);
+            EXPECT_EQ(answer["ok"], true);
+        }
+    }
+
     // Through all of it: no fault, the rate kept, and hapticctl still served.
     std::this_thread::sleep_until(started + 1500ms);
     const nlohmann::json s = status_of(d.socket);

@@ -300,6 +300,54 @@ TEST(HilServiceNotify, StatusSaysStateRateTickOverrunsAndFaultsAndAFaultAtOnce) 
     EXPECT_TRUE(has(notes.back(), "STOPPING=1")) << notes.back().text;
 }
 
+// No READY=1 for a start that fails (a config refused: exit 2, nothing sent at all) or a run
+// whose first tick faults (an encoder jump at t = 0: exit 1; the service never became ready,
+// so systemd reports a failed start rather than a service that ran).
+TEST(HilServiceNotify, NoReadyWhenTheStartFailsOrTheFirstTickFaults) {
+    const ScratchDir dir;
+    const NotifySocket socket(dir.file("notify.sock"));
+    const std::vector<std::pair<std::string, std::string>> environment{
+        {"NOTIFY_SOCKET", dir.file("notify.sock")}};
+    DaemonConfig refused;
+    refused.coupling = coupling_table(kHalfColgateGains, "passive");
+    std::string slow = refused.toml();
+    slow.replace(slow.find("rate_hz = "), std::string("rate_hz = ").size(), "rate_hz = 50 #");
+    DaemonRun run;
+    std::vector<Notification> notes = collect_while(socket, [&] {
+        run = run_hapticd(dir, {.config_toml = slow,
+                                .scene_toml = "[scene]\nname = \"free\"\naxes = 1\n",
+                                .duration_s = 1.0,
+                                .lockstep = true,
+                                .identify = false,
+                                .with_log = false,
+                                .environment = environment});
+    });
+    EXPECT_EQ(run.exit_code, 2) << run.err;
+    EXPECT_NE(run.err.find("rate_hz"), std::string::npos) << run.err;
+    EXPECT_TRUE(notes.empty()) << notes.front().text;
+
+    DaemonConfig faulting;
+    faulting.coupling = coupling_table(kHalfColgateGains, "passive");
+    faulting.sim_clock = "realtime";
+    faulting.faults = "jump_at = 0.0\njump_counts = 20000\n";
+    notes = collect_while(socket, [&] {
+        run = run_hapticd(dir, {.config_toml = faulting.toml(),
+                                .scene_toml = "[scene]\nname = \"free\"\naxes = 1\n",
+                                .duration_s = 1.0,
+                                .lockstep = false,
+                                .identify = false,
+                                .with_log = false,
+                                .environment = environment});
+    });
+    EXPECT_EQ(run.exit_code, 1) << run.err;
+    ASSERT_TRUE(run.summary.is_object()) << run.err;
+    EXPECT_NE(run.summary.at("faults").dump().find("encoder_jump"), std::string::npos)
+        << run.summary.dump(2);
+    for (const Notification& n : notes) EXPECT_FALSE(has(n, "READY=1")) << n.text;
+    ASSERT_FALSE(notes.empty());
+    EXPECT_TRUE(has(notes.back(), "STOPPING=1")) << notes.back().text;
+}
+
 // A service manager that stops reading (its queue of 10 datagrams full) never holds the run:
 // the messages it has no room for are dropped, and the run ends on its duration.
 TEST(HilServiceNotify, AManagerThatStopsReadingDoesNotHoldTheRun) {

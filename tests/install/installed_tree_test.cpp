@@ -120,6 +120,10 @@ TEST_F(InstalledTree, TheTemplateUnitRunsTheInstalledHapticdOnTheInstancesConfig
         EXPECT_NE(unit.find(line), std::string::npos) << line;
     }
     EXPECT_EQ(unit.find('@' + std::string("HAPTICD_")), std::string::npos) << unit;
+    // A prefix other than /usr keeps its configs there, not below /etc.
+    EXPECT_EQ(unit.find("\nConfigurationDirectory="), std::string::npos) << unit;
+    EXPECT_NE(unit.find("the configs are in " + installed("etc/hapticd")), std::string::npos)
+        << unit;
 }
 
 // udev names each device by its serial number and tags it for systemd; the installed drop-in
