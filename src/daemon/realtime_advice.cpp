@@ -119,10 +119,12 @@ std::string realtime_advice(const servo::RealtimeRequest& request,
     if (request.hold_cpu_dma_latency && !report.cpu_dma_latency_held) {
         add(std::string("/dev/cpu_dma_latency must be writable by this user: ") +
             (where.in_a_service ? "the unit allows the node (DeviceAllow=/dev/cpu_dma_latency rw); "
-                                  "give group plugdev write access with the commented "
-                                  "cpu_dma_latency line of 70-hapticd.rules."
-                                : "give the user's group write access (the commented "
-                                  "cpu_dma_latency line of 70-hapticd.rules), or run as root."));
+                                  "the cpu_dma_latency line of 70-hapticd.rules gives group "
+                                  "hapticd write access (udevadm trigger /dev/cpu_dma_latency "
+                                  "after installing it)."
+                                : "give the user's group write access (the cpu_dma_latency "
+                                  "line of 70-hapticd.rules gives it to group hapticd: adduser "
+                                  "USER hapticd), or run as root."));
     }
     return advice;
 }
