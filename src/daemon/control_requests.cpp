@@ -262,7 +262,10 @@ std::string telemetry_event(const servo::StatusSnapshot& s, const RunFacts& fact
 }
 
 Answer answer(const Request& request, const Peer& peer, ServoControl& loop, const RunFacts& facts) {
-    const servo::StatusSnapshot now = loop.status();
+    // A status reply may be a few ms old, whoever asks how often; a request that decides on
+    // the status reads the latest.
+    const servo::StatusSnapshot now =
+        request.kind == RequestKind::status ? loop.recent_status() : loop.status();
     const std::string name(request_name(request.kind));
     switch (request.kind) {
         case RequestKind::status:

@@ -1,9 +1,10 @@
 // What each control request does to a running servo loop (docs/control.md, "Requests").
 // The server (control_server.hpp) parses; this answers. It runs on the server's thread (a
-// coupling's stability check on the server's worker), and everything it asks of the loop is
-// lock-free: status() reads a seqlock, arm(), disarm() and reset() set atomics, and new gains
-// go through a seqlock, all taken by the servo thread at the start of its next tick; the
-// device's link counts (Device::link_quality) are relaxed atomics.
+// coupling's stability check on the server's worker), and nothing it asks of the loop waits
+// for the servo thread: status() reads a seqlock (recent_status() a copy of it at most 5 ms
+// old, behind a mutex of the socket's threads), arm(), disarm() and reset() set atomics, and
+// new gains go through a seqlock, all taken by the servo thread at the start of its next
+// tick; the device's link counts (Device::link_quality) are relaxed atomics.
 #pragma once
 
 #include <atomic>
@@ -25,7 +26,13 @@ namespace hapticd::daemon::control {
 class ServoControl {
   public:
     virtual ~ServoControl() = default;
+    /// The loop's status as of its latest tick: for what a request decides (arm's refusal of
+    /// a latched fault, a coupling's check).
     virtual servo::StatusSnapshot status() const noexcept = 0;
+    /// A status at most a few ms old, read from the loop at most once per that time: for
+    /// `status` replies and telemetry events, which any client may ask for as fast as it
+    /// likes (loop_control.hpp, kStatusMaxAge).
+    virtual servo::StatusSnapshot recent_status() const noexcept = 0;
     virtual void arm() noexcept = 0;
     virtual void disarm() noexcept = 0;
     virtual void reset() noexcept = 0;

@@ -52,7 +52,6 @@ int run_identify(const RunOptions& options, const RunStamp& stamp, std::atomic<b
     }
     const Config config = load_any_config(options);
     RunContext context = begin_context(options, config, stamp);
-    keep_other_threads_off_servo_cpu(options, config, context, log);
     context.check.skipped = true;
     context.check.skipped_model = "none (identify: open loop, nothing coupled)";
     context.scene = "identify-multisine";
@@ -66,6 +65,7 @@ int run_identify(const RunOptions& options, const RunStamp& stamp, std::atomic<b
     context.lockstep = info.lockstep;
     const servo::ServoConfig servo_config =
         make_identify_servo_config(config, info, options.log_path.has_value());
+    keep_other_threads_off_servo_cpu(servo_config.realtime, context, log);
     const IdentifyPlan plan = make_identify_plan(config, info);
     std::unique_ptr<env::ExcitationEnvironment> excitation;
     try {

@@ -2,7 +2,9 @@
 // §6.2): LoopControl for the requests that touch the loop itself, and the ports of
 // scene_load, record and identify (ControlLoopPorts, run_control.hpp). Every call is one of
 // ServoLoop's lock-free ones: a seqlock read, an atomic or an atomic pointer that the tick
-// takes at its start. A template over the loop, as ServoLoop is over its environment.
+// takes at its start (recent_status()'s copy and the last gains sit behind mutexes of the
+// socket's two threads, never the servo's). A template over the loop, as ServoLoop is over its
+// environment.
 #pragma once
 
 #include <atomic>
@@ -26,15 +28,18 @@ namespace hapticd::daemon {
 /// costs the servo's next tick a cache miss on each line of the status it writes (their
 /// copies on the reader's core invalidated): a client polling status as fast as it could
 /// raised the tick's median compute time by half (docs/benchmarks.md, "The servo under socket
-/// abuse"). A 100 Hz stream still gets a new status for each row.
+/// abuse"). A 100 Hz stream's rows are 10 ms apart, so each still gets a status of its own,
+/// unless an event runs late.
 inline constexpr std::chrono::milliseconds kStatusMaxAge{5};
 
-/// The servo loop as the control socket sees it: lock-free calls only (servo_loop.hpp).
+/// The servo loop as the control socket sees it: ServoLoop's lock-free calls only
+/// (servo_loop.hpp).
 template <typename Loop>
 class LoopControl final : public control::ServoControl {
   public:
     LoopControl(Loop& loop, const servo::CouplingGains& gains) : loop_(loop), gains_(gains) {}
-    servo::StatusSnapshot status() const noexcept override {
+    servo::StatusSnapshot status() const noexcept override { return loop_.status(); }
+    servo::StatusSnapshot recent_status() const noexcept override {
         const std::lock_guard lock(status_mutex_);  // the socket's two threads; never the servo's
         const auto now = std::chrono::steady_clock::now();
         if (!status_read_ || now - *status_read_ >= kStatusMaxAge) {

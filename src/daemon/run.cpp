@@ -44,7 +44,6 @@ int run_daemon(const RunOptions& given, std::atomic<bool>& stop, std::ostream& o
         if (options.identify) return run_identify(options, stamp, stop, out, log);
         const Config config = load_any_config(options);
         RunContext context = begin_context(options, config, stamp);
-        keep_other_threads_off_servo_cpu(options, config, context, log);
         context.check = run_startup_check(config, log);
         env::Scene scene = load_any_scene(config);
         const std::string scene_source = config.scene_file.empty()
@@ -76,6 +75,7 @@ int run_daemon(const RunOptions& given, std::atomic<bool>& stop, std::ostream& o
             << context.causality << "); " << config.servo.rate_hz << " Hz\n";
         servo::ServoConfig servo_config =
             make_servo_config(config, info, options.log_path.has_value());
+        keep_other_threads_off_servo_cpu(servo_config.realtime, context, log);
         // An operator on the control socket can reset a fault: it latches at zero force
         // and waits (docs/control.md, "Faults and reset"). Without one nobody can, so
         // the run ends on it.

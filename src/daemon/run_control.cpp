@@ -69,7 +69,7 @@ RunControl::RunControl(const Config& config, const device::DeviceInfo& info, con
             [this](const control::Request& request, const control::Peer& peer) {
                 return control::answer(request, peer, control_, facts_);
             },
-            [this] { return control::telemetry_event(control_.status(), facts_); });
+            [this] { return control::telemetry_event(control_.recent_status(), facts_); });
         log << priority::info << "hapticd: control socket " << server_->path() << "\n";
     }
 }

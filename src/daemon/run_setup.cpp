@@ -134,19 +134,17 @@ RunContext begin_context(const RunOptions& options, const Config& config, const 
     return context;
 }
 
-void keep_other_threads_off_servo_cpu(const RunOptions& options, const Config& config,
-                                      RunContext& context, std::ostream& log) {
-    if (!config.servo.cpu || config.servo.realtime == servo::RealtimeMode::off ||
-        options.lockstep) {
-        return;
-    }
-    context.other_threads = servo::keep_other_threads_off(*config.servo.cpu);
-    if (context.other_threads.narrowed) {
+void keep_other_threads_off_servo_cpu(const servo::RealtimeRequest& request, RunContext& context,
+                                      std::ostream& log) {
+    if (request.cpu < 0 || request.mode == servo::RealtimeMode::off) return;
+    context.other_threads = servo::keep_other_threads_off(request.cpu);
+    if (context.other_threads.off_servo_cpu) {
         log << "hapticd: other threads on cpus " << context.other_threads.cpus
-            << ", off the servo's cpu " << *config.servo.cpu << "\n";
+            << ", off the servo's cpu " << request.cpu << "\n";
     } else {
-        log << priority::notice << "hapticd: other threads not kept off the servo's cpu "
-            << *config.servo.cpu << ": " << context.other_threads.why_not << "\n";
+        log << (request.mode == servo::RealtimeMode::enforce ? priority::warning : priority::notice)
+            << "hapticd: other threads not kept off the servo's cpu " << request.cpu << ": "
+            << context.other_threads.why_not << "\n";
     }
 }
 

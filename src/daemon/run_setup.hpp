@@ -15,6 +15,7 @@
 #include "hapticd/daemon/summary_json.hpp"
 #include "hapticd/device/plugin_loader.hpp"
 #include "hapticd/env/scene.hpp"
+#include "hapticd/servo/realtime.hpp"
 
 namespace hapticd::daemon {
 
@@ -51,11 +52,12 @@ void refuse_empty_paths(const RunOptions& options);
 RunOptions with_start(RunOptions options, const RunStamp& stamp);
 /// What the summary says of every run from the start: the stamp, the config, the clock.
 RunContext begin_context(const RunOptions& options, const Config& config, const RunStamp& stamp);
-/// With [servo] cpu set and real time asked for, this thread and every thread it starts after
-/// (all of hapticd's but the servo's) leave that CPU to the servo (servo::keep_other_threads_off);
-/// the result in `context`, a line on `log`. Call it before opening the device.
-void keep_other_threads_off_servo_cpu(const RunOptions& options, const Config& config,
-                                      RunContext& context, std::ostream& log);
+/// When the servo thread will pin itself (`request`: real time asked for, a cpu), every other
+/// thread of hapticd, those there and those started after, leaves that CPU to it
+/// (servo::keep_other_threads_off); the result in `context`, a line on `log`. Call it once the
+/// servo's settings are made (they know whether the device is lockstep), before the loop.
+void keep_other_threads_off_servo_cpu(const servo::RealtimeRequest& request, RunContext& context,
+                                      std::ostream& log);
 /// --duration: finite, at least half a period (it is rounded to whole ticks: anything
 /// shorter would be zero ticks, which means no limit), at most kMaxDurationS.
 void check_duration(const RunOptions& options, double rate_hz);

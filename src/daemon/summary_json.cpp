@@ -75,15 +75,17 @@ std::string summary_json(const servo::Summary& s, const RunContext& c) {
     } else {
         j["stability_check"] = static_cast<const tune::StabilityVerdict&>(c.check);
     }
-    j["realtime"] = {{"mode", std::string(servo::to_string(c.realtime.mode))},
-                     {"sched_fifo", c.realtime.scheduler_fifo},
-                     {"priority", c.realtime.priority},
-                     {"memory_locked", c.realtime.memory_locked},
-                     {"cpu", c.realtime.cpu},
-                     {"affinity_set", c.realtime.affinity_set},
-                     {"other_threads_cpus", c.other_threads.narrowed ? c.other_threads.cpus : ""},
-                     {"cpu_dma_latency_held", c.realtime.cpu_dma_latency_held},
-                     {"refused", c.realtime.refused}};
+    j["realtime"] = {
+        {"mode", std::string(servo::to_string(c.realtime.mode))},
+        {"sched_fifo", c.realtime.scheduler_fifo},
+        {"priority", c.realtime.priority},
+        {"memory_locked", c.realtime.memory_locked},
+        {"cpu", c.realtime.cpu},
+        {"affinity_set", c.realtime.affinity_set},
+        {"other_threads_cpus", c.other_threads.off_servo_cpu ? c.other_threads.cpus : ""},
+        {"other_threads_not_off", c.other_threads.why_not},
+        {"cpu_dma_latency_held", c.realtime.cpu_dma_latency_held},
+        {"refused", c.realtime.refused}};
     return j.dump(2);
 }
 

@@ -78,8 +78,9 @@ OtherThreadsCpus keep_other_threads_off(int servo_cpu) {
     if (servo_cpu < 0) return result;
     const auto servo = static_cast<std::size_t>(servo_cpu);
     if (servo_cpu >= CPU_SETSIZE || !CPU_ISSET(servo, &set)) {
-        result.why_not = "cpu " + std::to_string(servo_cpu) + " is not among this process's (" +
-                         result.cpus + ")";
+        // Already off it (isolcpus=, the unit's CPUAffinity=): the servo thread may still pin
+        // itself there, as far as the cgroup's cpuset allows (RealtimeSession::apply says).
+        result.off_servo_cpu = true;
         return result;
     }
     if (CPU_COUNT(&set) == 1) {
@@ -88,23 +89,31 @@ OtherThreadsCpus keep_other_threads_off(int servo_cpu) {
         return result;
     }
     CPU_CLR(servo, &set);
-    // Every thread there is now (the signal watcher started before the config was read), then
-    // this one again: threads started after inherit its set. A thread that has ended is gone.
+    const std::string narrowed = cpu_list(set);
+    // This thread first (the threads started after inherit its set), then every thread there
+    // is now: the signal watcher, started before the config was read. One that has ended is
+    // gone (ESRCH).
+    if (const int error = pthread_setaffinity_np(pthread_self(), sizeof(set), &set); error != 0) {
+        result.why_not = "narrowing the CPU set to " + narrowed + ": " + errno_text(error);
+        return result;
+    }
+    result.cpus = narrowed;
     std::error_code listing;
     for (const auto& task : std::filesystem::directory_iterator("/proc/self/task", listing)) {
         const auto tid = static_cast<pid_t>(std::atoi(task.path().filename().c_str()));
-        if (tid > 0 && sched_setaffinity(tid, sizeof(set), &set) != 0 && errno != ESRCH) {
+        if (tid <= 0 || sched_setaffinity(tid, sizeof(set), &set) == 0) continue;
+        if (const int error = errno; error != ESRCH) {
             result.why_not = "narrowing thread " + std::to_string(tid) + "'s CPU set to " +
-                             cpu_list(set) + ": " + errno_text(errno);
+                             narrowed + ": " + errno_text(error);
             return result;
         }
     }
-    if (const int error = pthread_setaffinity_np(pthread_self(), sizeof(set), &set); error != 0) {
-        result.why_not = "narrowing the CPU set to " + cpu_list(set) + ": " + errno_text(error);
+    if (listing) {
+        result.why_not = "/proc/self/task could not be read (" + listing.message() +
+                         "): only the threads started from now on keep off it";
         return result;
     }
-    result.narrowed = true;
-    result.cpus = cpu_list(set);
+    result.off_servo_cpu = true;
     return result;
 }
 

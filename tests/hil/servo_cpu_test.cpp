@@ -99,22 +99,36 @@ TEST(HilServoCpu, OnlyTheServoThreadMayRunOnItsCpuAndTheSummarySaysWhereTheOther
     const nlohmann::json summary = nlohmann::json::parse(read_file(daemon.summary));
     EXPECT_EQ(parse_cpu_list(summary["realtime"]["other_threads_cpus"].get<std::string>()), others);
     EXPECT_EQ(summary["realtime"]["cpu"], servo_cpu);
+    EXPECT_EQ(summary["realtime"]["other_threads_not_off"], "");
     EXPECT_NE(daemon.process.messages().find("other threads on cpus"), std::string::npos)
         << daemon.process.messages();
 }
 
-TEST(HilServoCpu, WithoutACpuNothingIsNarrowed) {
-    const ScratchDir dir;
-    Daemon daemon(dir, "unpinned");
-    ASSERT_TRUE(daemon.process.wait_for_socket(daemon.socket)) << daemon.process.messages();
+// Without a cpu, or with real time off (the servo then pins itself nowhere), every thread
+// keeps the process's CPUs.
+TEST(HilServoCpu, WithoutACpuOrWithRealTimeOffNothingIsNarrowed) {
     const CpuSet all = own_cpus();
-    for (const auto& task : std::filesystem::directory_iterator(
-             "/proc/" + std::to_string(daemon.process.pid()) + "/task")) {
-        EXPECT_EQ(allowed_cpus(task.path()), all) << task.path();
+    std::string real_time_off =
+        config_with_room("", "cpu = " + std::to_string(*all.rbegin()) + "\n");
+    const std::string warn = "realtime = \"warn\"";
+    ASSERT_NE(real_time_off.find(warn), std::string::npos);
+    real_time_off.replace(real_time_off.find(warn), warn.size(), "realtime = \"off\"");
+    for (const std::string& config : {config_with_room(""), real_time_off}) {
+        SCOPED_TRACE(config.substr(0, config.find("[device]")));
+        const ScratchDir dir;
+        Daemon daemon(dir, "unpinned", ConfigText{config});
+        ASSERT_TRUE(daemon.process.wait_for_socket(daemon.socket)) << daemon.process.messages();
+        status_when(daemon.socket,
+                    [](const nlohmann::json& s) { return s["tick"].get<double>() > 100; });
+        for (const auto& task : std::filesystem::directory_iterator(
+                 "/proc/" + std::to_string(daemon.process.pid()) + "/task")) {
+            EXPECT_EQ(allowed_cpus(task.path()), all) << task.path();
+        }
+        ASSERT_EQ(daemon.process.stop(), 0) << daemon.process.messages();
+        const nlohmann::json summary = nlohmann::json::parse(read_file(daemon.summary));
+        EXPECT_EQ(summary["realtime"]["other_threads_cpus"], "");
+        EXPECT_EQ(summary["realtime"]["other_threads_not_off"], "");
     }
-    ASSERT_EQ(daemon.process.stop(), 0) << daemon.process.messages();
-    const nlohmann::json summary = nlohmann::json::parse(read_file(daemon.summary));
-    EXPECT_EQ(summary["realtime"]["other_threads_cpus"], "");
 }
 
 }  // namespace

@@ -25,19 +25,24 @@ std::string faults_text(const nlohmann::json& faults) {
 }
 
 /// The device's link counts, one line, when it keeps them (a daemon before them sends no
-/// `counted`): "frames    12000 sent, 11998 received, 2 bad, 1 reply timeouts, ...".
+/// `counted`): "frames    12000 sent, 11998 received, 2 bad, 1 reply timeouts, ...". The
+/// last three came with plugin ABI 5: a daemon still running an earlier release (an upgrade
+/// restarts no instance) sends none, and the line leaves them out.
 std::string device_link_text(const nlohmann::json& link) {
     if (!link.value("counted", false)) return "";
     const auto count = [&link](const char* name) { return link.at(name).get<std::uint64_t>(); };
+    const auto later = [&link, &count](const char* name, const char* what) {
+        return link.contains(name) ? ", " + std::to_string(count(name)) + what : std::string();
+    };
     std::ostringstream out;
     out << "frames    " << count("frames_sent") << " sent, " << count("frames_received")
         << " received, " << count("bad_frames") << " bad, " << count("transfer_errors")
         << " transfer errors, " << count("reply_timeouts") << " reply timeouts, "
         << count("missed_samples") << " samples missed, " << count("late") << " late, "
         << count("duplicate") << " duplicate, " << count("device_errors") << " device errors, "
-        << count("disconnects") << " disconnects, " << count("reconnects") << " reconnects, "
-        << count("wrong_session") << " of another session, " << count("unexpected")
-        << " unexpected, " << count("out_of_step") << " out of step\n";
+        << count("disconnects") << " disconnects, " << count("reconnects") << " reconnects"
+        << later("wrong_session", " of another session") << later("unexpected", " unexpected")
+        << later("out_of_step", " out of step") << "\n";
     return out.str();
 }
 

@@ -59,7 +59,8 @@ struct RunContext {
     std::vector<IdentifiedRun> identify_runs{};
     StartupCheck check;
     servo::RealtimeReport realtime;
-    /// The CPUs of hapticd's other threads when [servo] cpu kept them off the servo's.
+    /// Where hapticd's other threads run when [servo] cpu keeps them off the servo's CPU, or
+    /// why it could not.
     servo::OtherThreadsCpus other_threads;
 };
 

@@ -66,18 +66,20 @@ struct RealtimeReport {
 
 /// The CPUs left to hapticd's threads other than the servo's, by keep_other_threads_off().
 struct OtherThreadsCpus {
-    bool narrowed = false;  ///< the calling thread's CPU set was narrowed to `cpus`
-    std::string cpus;       ///< the calling thread's CPUs afterwards, as a list: "0", "0,2-3"
-    std::string why_not;    ///< when servo_cpu >= 0 and nothing was narrowed: why
+    bool off_servo_cpu = false;  ///< every thread now leaves the servo's CPU (narrowed, or was)
+    std::string cpus;            ///< the calling thread's CPUs afterwards, as a list: "0,2-3"
+    std::string why_not;         ///< when servo_cpu >= 0 and off_servo_cpu is false: why
 };
 
-/// Narrows the CPU set of every thread of the process to the calling thread's less
-/// `servo_cpu`, so that they and every thread started afterwards (they inherit the set: the
-/// watcher, the control socket's threads, the log writer, a link's reconnect thread) leave
+/// Narrows the CPU set of the calling thread and then of every other thread of the process
+/// to the calling thread's less `servo_cpu`, so that they and every thread started afterwards
+/// (they inherit the set: the watcher, the control socket's threads, the log writer) leave
 /// that core to the servo thread, which pins itself there (RealtimeSession::apply). Nothing
-/// changes when servo_cpu < 0, when servo_cpu is not in the calling thread's set, or when it
-/// is the only CPU in it (why_not says which). Outside the tick: call it before the servo
-/// thread starts.
+/// changes when servo_cpu < 0; when servo_cpu is not in the calling thread's set (isolcpus=,
+/// the unit's CPUAffinity=), nothing needs to, and off_servo_cpu is true; when it is the only
+/// CPU in it, nothing can (why_not says so). Outside the tick: call it before the servo thread
+/// starts. A later change of the cgroup's cpuset (systemctl set-property AllowedCPUs=) lets
+/// the kernel widen the sets again.
 OtherThreadsCpus keep_other_threads_off(int servo_cpu);
 
 /// Holds what must stay held for the real-time setup to last (the cpu_dma_latency file).
