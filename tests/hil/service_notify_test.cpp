@@ -323,22 +323,24 @@ TEST(HilServiceNotify, StatusSaysStateRateTickOverrunsAndFaultsAndAFaultAtOnce) 
 TEST(HilServiceNotify, NoReadyWhenTheStartFailsOrTheFirstTickFaults) {
     const ScratchDir dir;
     const NotifySocket socket(dir.file("notify.sock"));
-    const std::vector<std::pair<std::string, std::string>> environment{
-        {"NOTIFY_SOCKET", dir.file("notify.sock")}};
+    DaemonRun run;
+    // One run of `config_toml` for 1 s, free space, the service's socket: what it sent.
+    const auto notes_of = [&](const std::string& config_toml, bool lockstep) {
+        return collect_while(socket, [&] {
+            run = run_hapticd(dir, {.config_toml = config_toml,
+                                    .scene_toml = "[scene]\nname = \"free\"\naxes = 1\n",
+                                    .duration_s = 1.0,
+                                    .lockstep = lockstep,
+                                    .identify = false,
+                                    .with_log = false,
+                                    .environment = {{"NOTIFY_SOCKET", dir.file("notify.sock")}}});
+        });
+    };
     DaemonConfig refused;
     refused.coupling = coupling_table(kHalfColgateGains, "passive");
     std::string slow = refused.toml();
     slow.replace(slow.find("rate_hz = "), std::string("rate_hz = ").size(), "rate_hz = 50 #");
-    DaemonRun run;
-    std::vector<Notification> notes = collect_while(socket, [&] {
-        run = run_hapticd(dir, {.config_toml = slow,
-                                .scene_toml = "[scene]\nname = \"free\"\naxes = 1\n",
-                                .duration_s = 1.0,
-                                .lockstep = true,
-                                .identify = false,
-                                .with_log = false,
-                                .environment = environment});
-    });
+    std::vector<Notification> notes = notes_of(slow, true);
     EXPECT_EQ(run.exit_code, 2) << run.err;
     EXPECT_NE(run.err.find("rate_hz"), std::string::npos) << run.err;
     EXPECT_TRUE(notes.empty()) << notes.front().text;
@@ -347,15 +349,7 @@ TEST(HilServiceNotify, NoReadyWhenTheStartFailsOrTheFirstTickFaults) {
     faulting.coupling = coupling_table(kHalfColgateGains, "passive");
     faulting.sim_clock = "realtime";
     faulting.faults = "jump_at = 0.0\njump_counts = 20000\n";
-    notes = collect_while(socket, [&] {
-        run = run_hapticd(dir, {.config_toml = faulting.toml(),
-                                .scene_toml = "[scene]\nname = \"free\"\naxes = 1\n",
-                                .duration_s = 1.0,
-                                .lockstep = false,
-                                .identify = false,
-                                .with_log = false,
-                                .environment = environment});
-    });
+    notes = notes_of(faulting.toml(), false);
     EXPECT_EQ(run.exit_code, 1) << run.err;
     ASSERT_TRUE(run.summary.is_object()) << run.err;
     EXPECT_NE(run.summary.at("faults").dump().find("encoder_jump"), std::string::npos)
