@@ -42,9 +42,9 @@ std::string errno_text(int error) { return std::strerror(error); }
 sockaddr_un address_of(const std::string& path) {
     sockaddr_un address{};
     address.sun_family = AF_UNIX;
-    if (path.empty() || path.size() >= sizeof(address.sun_path)) {
+    if (path.empty() || path.size() > kMaxSocketPathBytes) {
         throw ControlSocketError("control socket \"" + path + "\": a path of 1 to " +
-                                 std::to_string(sizeof(address.sun_path) - 1) +
+                                 std::to_string(kMaxSocketPathBytes) +
                                  " bytes is needed (--socket)");
     }
     std::memcpy(address.sun_path, path.data(), path.size());

@@ -35,6 +35,7 @@ ControlConnection::ControlConnection(std::string socket_path, std::chrono::milli
     : path_(std::move(socket_path)), timeout_(timeout) {
     sockaddr_un address{};
     address.sun_family = AF_UNIX;
+    using daemon::control::kMaxSocketPathBytes;
     if (path_.empty() || path_.size() > kMaxSocketPathBytes) {
         throw ConnectionError("socket \"" + path_ + "\": a path of 1 to " +
                               std::to_string(kMaxSocketPathBytes) + " bytes is needed");

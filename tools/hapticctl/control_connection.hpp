@@ -2,11 +2,8 @@
 // read its reply line, with a timeout, and errors that say what to do.
 #pragma once
 
-#include <sys/un.h>
-
 #include <chrono>
 #include <csignal>
-#include <cstddef>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
@@ -26,9 +23,6 @@ class Interrupted : public ConnectionError {
   public:
     Interrupted() : ConnectionError("interrupted") {}
 };
-
-/// The longest socket path a Unix socket address holds (sun_path less its terminating 0).
-inline constexpr std::size_t kMaxSocketPathBytes = sizeof(sockaddr_un::sun_path) - 1;
 
 /// /run/hapticd/NAME.sock: where the template unit hapticd@NAME serves it.
 std::string instance_socket(const std::string& name);

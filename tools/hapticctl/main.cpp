@@ -50,10 +50,11 @@ CLI::Validator non_empty_path(const std::string& what) {
 /// --socket PATH: what a Unix socket address holds, 1 to 107 bytes.
 CLI::Validator socket_path_length() {
     return {[](const std::string& path) -> std::string {
-                if (!path.empty() && path.size() <= hapticd::ctl::kMaxSocketPathBytes) return {};
+                if (!path.empty() && path.size() <= hapticd::daemon::control::kMaxSocketPathBytes)
+                    return {};
                 return "\"" + path.substr(0, 40) + (path.size() > 40 ? "...\"" : "\"") + " is " +
                        std::to_string(path.size()) + " bytes: a socket path is 1 to " +
-                       std::to_string(hapticd::ctl::kMaxSocketPathBytes) + " bytes";
+                       std::to_string(hapticd::daemon::control::kMaxSocketPathBytes) + " bytes";
             },
             "PATH"};
 }

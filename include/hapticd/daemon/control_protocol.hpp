@@ -4,6 +4,8 @@
 // (control_server.hpp) and hapticctl both use it.
 #pragma once
 
+#include <sys/un.h>
+
 #include <cstddef>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -20,6 +22,10 @@ inline constexpr std::size_t kMaxRequestBytes = 4096;
 /// The fastest telemetry stream a client may subscribe to, and the default rate.
 inline constexpr double kMaxSubscribeRateHz = 100.0;
 inline constexpr double kDefaultSubscribeRateHz = 10.0;
+
+/// The longest control socket path (--socket, hapticd's and hapticctl's): what a Unix socket
+/// address holds, sun_path less its terminating 0 (107 bytes on Linux).
+inline constexpr std::size_t kMaxSocketPathBytes = sizeof(sockaddr_un::sun_path) - 1;
 
 /// The longest path a record_start or scene_load request may name (PATH_MAX less its
 /// terminator).
