@@ -98,11 +98,6 @@ double coupling_margin(const DeviceModel& device, const SpringDamperCoupling& co
 
 std::vector<double> conductance_bounds(const LoopModel& model, double device_damping_n_s_per_m,
                                        const std::vector<double>& thetas) {
-    if (model.hold == HoldModel::passive) {
-        std::vector<double> bounds = passive_hold_numerators(thetas, model.delay_periods);
-        for (double& bound : bounds) bound /= 2.0 * device_damping_n_s_per_m;  // (21)
-        return bounds;
-    }
     std::vector<double> bounds;
     bounds.reserve(thetas.size());
     for (double theta : thetas) {

@@ -402,6 +402,16 @@ ImpedanceSizing size_impedance_coupling(const ImpedanceSizingRequest& request) {
             throw InfeasibleCoupling(why.str());
         }
         const FixedBetaSolution s = size_fixed_beta(bound, b_c, family, scan, dense, &iterations);
+        if (!(s.alpha > 0.0)) {
+            // At the edge of the feasible b_c (b_c = b with a delay) the solve returns k_c = 0
+            // or -0: no stiffness is no design.
+            std::ostringstream why;
+            why << "coupling damping b_c = " << b_c << " N s/m leaves no stiffness for model '"
+                << theory::to_string(request.model.hold) << "': (21) holds only at k_c = 0 (at "
+                << theory::frequency_hz(s.theta, period) << " Hz); b_c must be below "
+                << 1.0 / peak.value << " N s/m";
+            throw InfeasibleCoupling(why.str());
+        }
         result.coupling = {s.alpha, b_c, request.velocity_filter_hz};
         result.binding_frequency_hz = theory::frequency_hz(s.theta, period);
         result.report.method = s.method;

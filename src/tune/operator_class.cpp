@@ -112,15 +112,13 @@ void validate(const OperatorClass& operators, const std::string& source) {
     const auto r = operators.ranges();
     for (int i = 0; i < kClassParameters; ++i) {
         const ParameterRange& limit = OperatorClass::kLimits[i];
-        const bool mass = i == 0;
         for (const double value : {r[i].min, r[i].max}) {
-            const bool ok = std::isfinite(value) && value <= limit.max &&
-                            (mass ? value > 0.0 : value >= limit.min);
+            const bool ok = std::isfinite(value) && value >= limit.min && value <= limit.max;
             if (!ok) {
                 const char* unit = OperatorClass::kUnits[i];
                 input::reject_out_of_range(
                     source + " " + OperatorClass::kKeys[i], input::format_quantity(value, unit),
-                    std::string(mass ? "> 0" : ">= 0") +
+                    ">= " + input::format_quantity(limit.min, unit) +
                         " and <= " + input::format_quantity(limit.max, unit));
             }
         }

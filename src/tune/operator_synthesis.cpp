@@ -175,11 +175,12 @@ Adversaries synthesize_adversaries(const theory::DeviceModel& device,
         std::vector<double> reactances{(-zc * rotation).imag()};  // the rigid wall's
         const double conductance = (1.0 / zc).real();
         if (conductance > 0.0 && theta < kPi * (1.0 - 1e-9)) {
-            // The worst passive environment at θ: Z = c u, u = 2 cos χ e^{jχ} on the boundary
-            // of the disk |u - 1| <= 1, c = 1/(2 Re(1/Z_c)) (passive_model.hpp).
-            const double chi = theory::passive_detail::worst_boundary_angle(
-                theta, delay.whole_periods, delay.fraction);
-            const Complex z = std::polar(2.0 * std::cos(chi) / (2.0 * conductance), chi);
+            // The worst passive environment at θ: lossless (1/Z keeps Re(1/Z_c)), with the
+            // susceptance that puts 1/Z nearest the worst operators' -Ĝ, whose disk is centred
+            // at -S/(2b), S the alias weight sum (passive_model.hpp).
+            const Complex weights = theory::passive_alias_weight_sum(theta, delay_periods);
+            const Complex z =
+                1.0 / Complex(conductance, -weights.imag() / (2.0 * device.damping_n_s_per_m));
             const double admittance = (1.0 / z - 1.0 / zc).imag();
             // Within a millionth of rigid (or of free) the rigid wall (or the coupling's own
             // spring) is the same case, and the environment's numbers would not be physical.

@@ -50,6 +50,8 @@ namespace tune {
 
 void to_json(nlohmann::ordered_json& json, const ExactCheck& check) {
     json = exact_check_json(check);
+    json["marginal"] = check.marginal();
+    json["marginal_tolerance"] = kMarginalTolerance;
 }
 
 void to_json(nlohmann::ordered_json& json, const AdmittanceExactCheck& check) {
@@ -138,13 +140,16 @@ void to_json(nlohmann::ordered_json& json, const StabilityVerdict& verdict) {
     json = {{"unconditionally_stable", verdict.passed},
             {"worst_margin", verdict.worst_margin},
             {"worst_frequency_hz", verdict.worst_frequency_hz},
-            {"model", std::string(to_string(verdict.model))}};
+            {"model", std::string(to_string(verdict.model))},
+            {"proven", verdict.proven}};
     if (verdict.exact) {
         json["worst_operator"] = verdict.exact->worst_operator.describe();
         json["worst_environment"] = verdict.exact->worst_environment.describe();
         json["worst_spectral_radius"] = verdict.exact->worst_spectral_radius;
         json["cases_checked"] = verdict.exact->cases_checked;
-    } else if (verdict.scene) {
+        json["search"] = *verdict.exact;
+    }
+    if (verdict.scene) {
         json["worst_environment"] = verdict.scene->worst_environment;
         json["damping_needed"] = verdict.scene->damping_needed;
     }

@@ -1,5 +1,6 @@
 #include "hapticd/tune/stability_check.hpp"
 
+#include <numbers>
 #include <sstream>
 #include <stdexcept>
 
@@ -43,7 +44,18 @@ std::string StabilityVerdict::describe() const {
     if (!worst_case.empty()) out << " (" << worst_case << ")";
     if (guarantee) {
         out << "; holds for " << holds_for;
-        if (model == StabilityModel::exact) out << ", as far as the exact model's search reaches";
+        if (model == StabilityModel::exact) {
+            if (proven) {
+                out << ", proven by the passive port condition";
+            } else if (passed) {
+                out << ", as far as the exact model's search of the class reaches (not a proof)";
+            }
+            if (exact && exact->marginal()) {
+                out << "; the search's worst case is marginal: |z| - 1 = "
+                    << exact->worst_spectral_radius - 1.0 << ", within the eigenvalues' "
+                    << kMarginalTolerance << " tolerance";
+            }
+        }
     } else {
         out << ". The " << to_string(model)
             << " model is NOT a guarantee: it keeps one term of the hold's alias sum and "
@@ -66,6 +78,78 @@ theory::HoldModel hold_of(StabilityModel model) {
             break;
     }
     return theory::HoldModel::passive;
+}
+
+}  // namespace
+
+namespace {
+
+std::string precise(double value) {
+    std::ostringstream out;
+    out.precision(10);
+    out << value;
+    return out.str();
+}
+
+/// The passive model's verdict on the design, against every passive environment or the
+/// scene's: the proof the exact model's verdict rests on when it claims every passive
+/// operator (a class is a subset of them, so it holds for a class too).
+void passive_proof(const StabilityDesign& design, double delay_periods, StabilityVerdict& into) {
+    const StabilityAssumption& assumption = design.assumption;
+    if (!assumption.environments.every_passive()) {
+        into.scene = check_passive_scene(design.device, design.coupling, design.rate_hz,
+                                         assumption.environments.scene, delay_periods);
+        into.passed = into.scene->stable;
+        into.worst_margin = into.scene->margin;
+        into.worst_frequency_hz = into.scene->worst_frequency_hz;
+        into.worst_case = into.scene->worst_environment;
+        return;
+    }
+    const theory::CouplingCheck check =
+        theory::check_coupling(design.device, design.coupling,
+                               {theory::HoldModel::passive, delay_periods}, design.rate_hz);
+    into.passed = check.unconditionally_stable;
+    into.worst_margin = check.worst_margin;
+    into.worst_frequency_hz = check.worst_frequency_hz;
+}
+
+/// The exact model: the proof (the passive port condition, for every passive operator; and
+/// for a declared class, the class search until its proof lands, docs/stability-models.md)
+/// and the exact model's search for an operator that breaks the design. A search that finds
+/// one overrules a proof (a contradiction is a defect, and the safe verdict is no).
+void exact_verdict(const StabilityDesign& design, double delay_periods, StabilityVerdict& into) {
+    passive_proof(design, delay_periods, into);
+    into.proven = into.passed;
+    into.exact = check_exact(design.device, design.coupling, design.rate_hz, design.assumption,
+                             delay_periods);
+    const ExactCheck& search = *into.exact;
+    if (design.assumption.operators && !into.proven) {
+        // A class the passive condition does not cover: the verdict of its search.
+        into.passed = search.stable;
+        into.worst_margin = search.worst_margin;
+        into.worst_frequency_hz = search.worst_frequency_hz;
+        into.worst_case =
+            search.worst_operator.describe() + " against " + search.worst_environment.describe();
+        return;
+    }
+    // Near z = 1 (a free hand on an almost free virtual mass, a heavy device at a high rate)
+    // the eigenvalues of an almost defective pair are only good to about sqrt(ε): a search's
+    // growth that small cannot overrule a proof, and is reported as within that error.
+    const bool near_one = search.worst_frequency_hz < kNearOneRadians * design.rate_hz /
+                                                          (2.0 * std::numbers::pi);
+    if (into.proven && !search.stable && near_one &&
+        search.worst_margin >= -kWitnessGrowthPerTick) {
+        into.worst_case = "the exact model's search: " + search.worst_operator.describe() +
+                          " against " + search.worst_environment.describe() +
+                          " at |z| - 1 = " + precise(-search.worst_margin) +
+                          ", within the eigenvalues' error near z = 1; the proof stands";
+    } else if (into.proven && !search.stable) {
+        into.passed = false;
+        into.worst_case =
+            "the exact model's search contradicts the proof: " + search.worst_operator.describe() +
+            " against " + search.worst_environment.describe() +
+            " grows by |z| = " + precise(search.worst_spectral_radius) + " per tick";
+    }
 }
 
 }  // namespace
@@ -95,22 +179,12 @@ StabilityVerdict check_stability(const StabilityDesign& design) {
     verdict.holds_for = assumption.describe();
     const double delay_periods = design.delay_s * design.rate_hz;
     if (design.model == StabilityModel::exact) {
-        verdict.exact =
-            check_exact(design.device, coupling, design.rate_hz, assumption, delay_periods);
-        verdict.passed = verdict.exact->stable;
-        verdict.worst_margin = verdict.exact->worst_margin;
-        verdict.worst_frequency_hz = verdict.exact->worst_frequency_hz;
-        verdict.worst_case = verdict.exact->worst_operator.describe() + " against " +
-                             verdict.exact->worst_environment.describe();
+        exact_verdict(design, delay_periods, verdict);
         return verdict;
     }
-    if (!assumption.environments.every_passive()) {
-        verdict.scene = check_passive_scene(design.device, coupling, design.rate_hz,
-                                            assumption.environments.scene, delay_periods);
-        verdict.passed = verdict.scene->stable;
-        verdict.worst_margin = verdict.scene->margin;
-        verdict.worst_frequency_hz = verdict.scene->worst_frequency_hz;
-        verdict.worst_case = verdict.scene->worst_environment;
+    if (design.model == StabilityModel::passive) {
+        passive_proof(design, delay_periods, verdict);
+        verdict.proven = verdict.passed;
         return verdict;
     }
     const theory::CouplingCheck check = theory::check_coupling(

@@ -203,6 +203,51 @@ INSTANTIATE_TEST_SUITE_P(
             "--optimize-damping sizes under the passive model against every passive"}),
     bad_input_name);
 
+// Issue 27, item 6: every size answer is a design or an error naming why. A b_c that leaves
+// no stiffness gave "stiffness -0" or 0 with exit 0; a PI loop of zero ran 18 s and returned a
+// 4.2e-7 kg coupling mass.
+INSTANTIATE_TEST_SUITE_P(
+    Issue27, HapticTuneBadInput,
+    ::testing::Values(
+        BadInput{"size --mass 0.1 --damping 2 --rate 1000 --delay 0.001 --coupling-damping 2",
+                 "b_c = 2 N s/m leaves no stiffness"},
+        BadInput{"size --mass 0.1 --damping 2 --rate 1000 --model exact --coupling-damping 3",
+                 "b_c must be below 2 N s/m"},
+        BadInput{"size --mass 0.1 --damping 2 --rate 1000 --model exact --coupling-damping 1e5",
+                 "b_c must be below 2 N s/m"},
+        BadInput{"size --mass 2 --damping 5 --rate 1000 --display admittance --kp 0 --ki 0 "
+                 "--model exact",
+                 "--kp 0 with --ki 0"}),
+    bad_input_name);
+
+TEST(HapticTuneConfig, AClassWithAVanishingHandNamesTheFileAndTheKey) {
+    const ScratchDir dir;
+    const std::string path =
+        dir.write("hands.toml",
+                  "[operator]\nhand_mass = 1e-300\ngrip_stiffness = [0, 3000]\ngrip_damping = "
+                  "[2, 30]\narm_stiffness = [0, 1000]\narm_damping = [0, 20]\n");
+    const auto result =
+        run_command(tune("check " + kPen + "--model exact --operator-class " + path));
+    EXPECT_EQ(result.exit_code, 2);
+    EXPECT_NE(result.err.find(path + ": [operator] hand_mass = 1e-300 kg is out of range: "
+                                     "allowed >= 1e-06 kg and <= 1000 kg"),
+              std::string::npos)
+        << result.err;
+}
+
+// Issue 27, item 3: at half a period of delay the exact model sized 1777 N/m; it now gives the
+// proven passive limit, 1600 N/m (k_c <= 2b/(τ² T), τ² = 2.5), and says what proves it.
+TEST(HapticTuneSize, TheExactModelSizesNoFurtherThanThePassiveProof) {
+    const auto result = run_command(
+        tune("size --mass 0.1 --damping 2 --rate 1000 --delay 0.0005 --model exact --json"));
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    const json out = json::parse(result.out);
+    EXPECT_LE(out.at("stiffness").get<double>(), 1600.0);
+    EXPECT_GE(out.at("stiffness").get<double>(), 1599.0);
+    EXPECT_EQ(out.at("proof").get<std::string>(), "the passive port condition");
+    EXPECT_TRUE(out.at("witness").contains("found"));
+}
+
 TEST(HapticTuneCheck, AClassAndASceneAreStatedInTheVerdict) {
     const auto result =
         run_command(tune("check " + kPen + "--coupling-damping 1 --model exact --operator-class " +

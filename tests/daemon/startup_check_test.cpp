@@ -109,9 +109,30 @@ TEST(StartupCheck, AClassVerdictNamesTheClass) {
                                     "m_h 0.1..2 kg, k_s 0..3000 N/m, b_s 2..30 N s/m, k_a "
                                     "0..1000 N/m, b_a 0..20 N s/m, and hands-off) and every "
                                     "passive environment, as far as the exact model's search "
-                                    "reaches"),
+                                    "of the class reaches"),
               std::string::npos)
         << check.describe();
+}
+
+}  // namespace
+}  // namespace hapticd::daemon
+
+namespace hapticd::daemon {
+namespace {
+
+// Issue 27, item 3: hapticd with half a period of delay and check = "exact" armed 1750 N/m,
+// above the proven passive bound (1600 N/m); it refuses it now, and arms 1580 N/m with the
+// proof named.
+TEST(StartupCheck, TheExactCheckArmsNothingPastThePassiveProof) {
+    const std::string pen = "[device.model]\nmass = 0.1\ndamping = 2\ndelay = 0.0005\n";
+    const StartupCheck past = check_coupling_at_startup(parse_config(
+        pen + "[coupling]\nstiffness = 1750\ndamping = 0\ncheck = \"exact\"\n", "lab.toml", ""));
+    EXPECT_FALSE(past.passed) << past.describe();
+    const StartupCheck inside = check_coupling_at_startup(parse_config(
+        pen + "[coupling]\nstiffness = 1580\ndamping = 0\ncheck = \"exact\"\n", "lab.toml", ""));
+    EXPECT_TRUE(inside.passed) << inside.describe();
+    EXPECT_NE(inside.describe().find("proven by the passive port condition"), std::string::npos)
+        << inside.describe();
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <iostream>
 #include <memory>
+#include <sstream>
 
 #include "assumption_options.hpp"
 #include "commands.hpp"
@@ -91,9 +92,98 @@ int run_impedance(const SizeOptions& o, const DesignInput& input, theory::HoldMo
     return stable ? kExitOk : kExitVerdictNo;
 }
 
+/// The passive model's largest k_c at the coupling's b_c: (21) by tune::size_impedance_coupling
+/// against every passive environment, a bisection on tune::check_passive_scene (b >= λ is
+/// monotone enough in k_c) against a scene's. A b_c that leaves no stiffness is no design.
+struct PassiveLimit {
+    double stiffness_n_per_m = 0.0;
+    double rejected_n_per_m = 0.0;  ///< the bisection's rejected end; the sizing's own k_c
+    int checks = 0;
+};
+PassiveLimit passive_stiffness_limit(const DesignInput& input,
+                                     const theory::SpringDamperCoupling& coupling,
+                                     const tune::StabilityAssumption& assumption) {
+    PassiveLimit limit;
+    if (assumption.environments.every_passive()) {
+        tune::ImpedanceSizingRequest request;
+        request.device = input.device;
+        request.rate_hz = input.rate_hz;
+        request.model = {theory::HoldModel::passive, input.delay_periods()};
+        request.velocity_filter_hz = coupling.velocity_filter_hz;
+        request.coupling_damping_n_s_per_m = coupling.damping_n_s_per_m;
+        const tune::ImpedanceSizing sizing = tune::size_impedance_coupling(request);
+        limit.stiffness_n_per_m = sizing.coupling.stiffness_n_per_m;
+        limit.rejected_n_per_m = sizing.coupling.stiffness_n_per_m;
+        limit.checks = 1;
+        return limit;
+    }
+    const auto stable = [&](double k) {
+        ++limit.checks;
+        theory::SpringDamperCoupling trial = coupling;
+        trial.stiffness_n_per_m = k;
+        return tune::check_passive_scene(input.device, trial, input.rate_hz,
+                                         assumption.environments.scene, input.delay_periods())
+            .stable;
+    };
+    double lo = 0.0, hi = 2.0 * input.device.damping_n_s_per_m * input.rate_hz;
+    if (stable(0.0)) {
+        while (stable(hi) && hi < tune::kMaxCouplingStiffness) {
+            lo = hi;
+            hi = std::min(2.0 * hi, tune::kMaxCouplingStiffness);
+        }
+        while (hi - lo > 1e-4 * hi) (stable(0.5 * (lo + hi)) ? lo : hi) = 0.5 * (lo + hi);
+    } else {
+        hi = 0.0;
+    }
+    limit.stiffness_n_per_m = lo;
+    limit.rejected_n_per_m = hi;
+    return limit;
+}
+
+/// Throws InfeasibleCoupling when a limit is no design: no stiffness at all at this b_c.
+void require_stiffness(double stiffness_n_per_m, double damping_n_s_per_m,
+                       const tune::StabilityAssumption& assumption, const DesignInput& input) {
+    if (stiffness_n_per_m > 0.0) return;
+    std::ostringstream why;
+    why << "coupling damping b_c = " << damping_n_s_per_m
+        << " N s/m leaves no stiffness: no k_c > 0 is stable for " << assumption.describe()
+        << " with the device's b = " << input.device.damping_n_s_per_m << " N s/m";
+    if (input.delay_periods() > 0.0) why << " and " << input.delay_periods() << " periods of delay";
+    why << " (docs/stability-models.md); lower --coupling-damping";
+    throw tune::InfeasibleCoupling(why.str());
+}
+
+/// How far past the proven limit the exact model looks for the operator that reaches it.
+constexpr double kWitnessFactor = 1.03;
+
+/// The exact model's job where the limit is proven: name an operator (and environment) that
+/// is unstable just past it, kWitnessFactor times the limit. A search that finds none says so:
+/// the proof may be conservative there, or the search does not reach its operators yet.
+nlohmann::ordered_json witness_past(const DesignInput& input,
+                                    const theory::SpringDamperCoupling& at_limit,
+                                    const tune::StabilityAssumption& assumption) {
+    theory::SpringDamperCoupling past = at_limit;
+    past.stiffness_n_per_m *= kWitnessFactor;
+    const tune::ExactCheck search =
+        tune::check_exact(input.device, past, input.rate_hz, assumption, input.delay_periods());
+    nlohmann::ordered_json out = {{"stiffness", past.stiffness_n_per_m},
+                                  {"factor", kWitnessFactor},
+                                  {"found", !search.stable}};
+    if (search.stable) {
+        out["note"] =
+            "the exact model's search finds no unstable operator here: the proof may be "
+            "conservative at this design, or the operators that reach it are beyond the "
+            "search (docs/stability-models.md)";
+    }
+    out["search"] = search;
+    return out;
+}
+
 /// The largest k_c at b_c for a stated assumption (an operator class, a scene), or by the
-/// exact model: a bisection on the verdict (tune::exact_stiffness_limit; for the passive
-/// model with a scene, on tune::check_passive_scene), not a closed form.
+/// exact model. Every passive operator: the passive model's proven limit, and with --model
+/// exact the operator the exact model finds unstable just past it. A class: a bisection on
+/// the exact model's verdict for the class (tune::exact_stiffness_limit), never below the
+/// passive limit (the class is a subset of every passive operator).
 int run_assumed(const SizeOptions& o, const DesignInput& input,
                 const tune::StabilityAssumption& assumption) {
     if (o.optimize_damping) {
@@ -109,50 +199,44 @@ int run_assumed(const SizeOptions& o, const DesignInput& input,
     nlohmann::ordered_json out = {{"display", "impedance"}};
     theory::SpringDamperCoupling coupling{0.0, damping};
     coupling.velocity_filter_hz = input.velocity_filter_hz;
-    double rejected = 0.0;
-    int checks = 0;
-    if (o.model == "exact") {
+    const bool exact = o.model == "exact";
+    PassiveLimit passive;
+    try {
+        passive = passive_stiffness_limit(input, coupling, assumption);
+    } catch (const tune::InfeasibleCoupling&) {
+        if (!assumption.operators) throw;  // a class may still hold where the passive bound cannot
+    }
+    double rejected = passive.rejected_n_per_m;
+    int checks = passive.checks;
+    coupling.stiffness_n_per_m = passive.stiffness_n_per_m;
+    std::string proof = "the passive port condition";
+    if (exact && assumption.operators) {
         const tune::StiffnessLimit limit = tune::exact_stiffness_limit(
             input.device, coupling, input.rate_hz, assumption, input.delay_periods());
-        coupling.stiffness_n_per_m = limit.stiffness_n_per_m;
-        rejected = limit.rejected_n_per_m;
-        checks = limit.checks;
+        checks += limit.checks;
+        if (limit.stiffness_n_per_m > passive.stiffness_n_per_m) {
+            coupling.stiffness_n_per_m = limit.stiffness_n_per_m;
+            rejected = limit.rejected_n_per_m;
+            proof = "none: the exact model's search of the class (not a proof)";
+        }
         out["worst_operator"] = limit.at_limit.worst_operator.describe();
         out["worst_environment"] = limit.at_limit.worst_environment.describe();
-    } else {
-        // The passive model with a scene: b >= λ is monotone enough in k_c for a bisection
-        // from an accepted 0 to a rejected upper end.
-        const auto stable = [&](double k) {
-            ++checks;
-            theory::SpringDamperCoupling trial = coupling;
-            trial.stiffness_n_per_m = k;
-            return tune::check_passive_scene(input.device, trial, input.rate_hz,
-                                             assumption.environments.scene, input.delay_periods())
-                .stable;
-        };
-        double lo = 0.0, hi = 2.0 * input.device.damping_n_s_per_m * input.rate_hz;
-        if (stable(0.0)) {
-            while (stable(hi) && hi < tune::kMaxCouplingStiffness) {
-                lo = hi;
-                hi = std::min(2.0 * hi, tune::kMaxCouplingStiffness);
-            }
-            while (hi - lo > 1e-4 * hi) (stable(0.5 * (lo + hi)) ? lo : hi) = 0.5 * (lo + hi);
-        } else {
-            hi = 0.0;
-        }
-        coupling.stiffness_n_per_m = lo;
-        rejected = hi;
     }
+    require_stiffness(coupling.stiffness_n_per_m, damping, assumption, input);
     out["stiffness"] = coupling.stiffness_n_per_m;
     out["damping"] = damping;
     out["rejected_stiffness"] = rejected;
     out["model"] = o.model;
     out["holds_for"] = assumption.describe();
+    out["proof"] = proof;
     out["checks"] = checks;
     add_input_fields(input, out);
     bool stable = true;
-    if (o.model != "exact" && !o.skip_exact_check) {
+    if (!o.skip_exact_check) {
         out["exact_check"] = exact_cross_check(input, coupling, assumption, &stable);
+        if (exact && !assumption.operators) {
+            out["witness"] = witness_past(input, coupling, assumption);
+        }
     }
     print_result(out, o.json);
     return stable ? kExitOk : kExitVerdictNo;
@@ -178,6 +262,12 @@ void warn_exact_admittance_rejects(const tune::AdmittanceExactCheck& exact) {
 
 int run_admittance(const SizeOptions& o, const DesignInput& input, const std::string& model) {
     const theory::PiVelocityLoop loop = o.display.pi_loop();
+    if (loop.proportional_gain_n_s_per_m == 0.0 && loop.integral_gain_n_per_m == 0.0) {
+        throw UsageError(
+            "--kp 0 with --ki 0: the admittance display's velocity loop (27) has no gain, so "
+            "the device renders nothing and there is no coupling to size; give --kp > 0 "
+            "(N s/m) or --ki > 0 (N/m)");
+    }
     const double damping = o.coupling_damping.value_or(std::numeric_limits<double>::infinity());
     const std::optional<theory::ForceSensorFilter> filter = force_filter_of(o, input.rate_hz);
     if (filter && model != "passive" && model != "exact") {

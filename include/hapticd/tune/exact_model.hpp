@@ -193,6 +193,9 @@ inline constexpr double kMarginalTolerance = 1e-8;
 /// growing mode (ρ per tick, its frequency).
 struct ExactCheck {
     bool stable = false;  ///< worst_margin >= -kMarginalTolerance
+    /// Stable only within the tolerance: -kMarginalTolerance <= worst_margin < 0. Said so
+    /// wherever the check is reported; never called a margin.
+    bool marginal() const { return stable && worst_margin < 0.0; }
     double worst_spectral_radius = 0.0;
     double worst_margin = 0.0;        ///< 1 - worst_spectral_radius; >= 0 stable
     double worst_frequency_hz = 0.0;  ///< dominant frequency of the worst case

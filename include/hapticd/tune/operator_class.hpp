@@ -37,7 +37,7 @@ inline constexpr int kClassParameters = 5;
 using ClassPoint = std::array<double, kClassParameters>;  ///< each coordinate in [0, 1]
 
 struct OperatorClass {
-    ParameterRange hand_mass_kg;            ///< m_h, within (0, 1e3] kg
+    ParameterRange hand_mass_kg;            ///< m_h, within [1e-6, 1e3] kg (a milligram up)
     ParameterRange grip_stiffness_n_per_m;  ///< k_s, within [0, 1e7] N/m
     ParameterRange grip_damping_n_s_per_m;  ///< b_s, within [0, 1e4] N s/m
     ParameterRange arm_stiffness_n_per_m;   ///< k_a, within [0, 1e7] N/m
@@ -51,7 +51,7 @@ struct OperatorClass {
                                                                          "N/m", "N s/m"};
     /// The allowed values of each key.
     static constexpr std::array<ParameterRange, kClassParameters> kLimits = {
-        ParameterRange{0.0, 1e3}, ParameterRange{0.0, 1e7}, ParameterRange{0.0, 1e4},
+        ParameterRange{1e-6, 1e3}, ParameterRange{0.0, 1e7}, ParameterRange{0.0, 1e4},
         ParameterRange{0.0, 1e7}, ParameterRange{0.0, 1e4}};
     static constexpr double kMaxResonanceLimitHz = 1e5;
 

@@ -31,6 +31,14 @@ std::string_view to_string(StabilityModel model) noexcept;
 std::optional<StabilityModel> parse_stability_model(std::string_view name) noexcept;
 bool is_guarantee(StabilityModel model) noexcept;
 
+/// Near z = 1 (|arg z| below kNearOneRadians) the eigenvalues of an almost defective pair (a
+/// free hand on an almost free virtual mass) are good to about sqrt(machine ε), 1.5e-8, and a
+/// search's growth there must pass kWitnessGrowthPerTick (|z| - 1) to overrule a proof.
+/// Elsewhere any growth past kMarginalTolerance does (witnesses at 1.03 x the passive bound
+/// grow by 3e-7 to 3e-4 per tick).
+inline constexpr double kNearOneRadians = 0.01;
+inline constexpr double kWitnessGrowthPerTick = 1e-6;
+
 /// What is checked.
 struct StabilityDesign {
     theory::DeviceModel device;
@@ -45,6 +53,10 @@ struct StabilityDesign {
 struct StabilityVerdict {
     StabilityModel model = StabilityModel::passive;
     bool passed = false;
+    /// The verdict is a proof over the class it names (the passive port condition, for the
+    /// exact model too when the condition holds); false for a search's verdict and for the
+    /// paper and encoder models.
+    bool proven = false;
     bool guarantee = true;  ///< passive and exact; paper and encoder are not
     double delay_s = 0.0;
     double velocity_filter_hz = 0.0;
