@@ -135,8 +135,8 @@ void exact_verdict(const StabilityDesign& design, double delay_periods, Stabilit
     // Near z = 1 (a free hand on an almost free virtual mass, a heavy device at a high rate)
     // the eigenvalues of an almost defective pair are only good to about sqrt(ε): a search's
     // growth that small cannot overrule a proof, and is reported as within that error.
-    const bool near_one = search.worst_frequency_hz < kNearOneRadians * design.rate_hz /
-                                                          (2.0 * std::numbers::pi);
+    const bool near_one =
+        search.worst_frequency_hz < kNearOneRadians * design.rate_hz / (2.0 * std::numbers::pi);
     if (into.proven && !search.stable && near_one &&
         search.worst_margin >= -kWitnessGrowthPerTick) {
         into.worst_case = "the exact model's search: " + search.worst_operator.describe() +
