@@ -5,6 +5,7 @@
 #include <cmath>
 #include <initializer_list>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 
 #include "hapticd/tune/input_checks.hpp"
@@ -104,6 +105,22 @@ class ClassSearch {
                 }
             }
         }
+        // Two modes on two aliases at once, against every environment.
+        for (const auto& [tuned, theta] : two_mode_members()) {
+            std::vector<EnvironmentModel> paired = environments;
+            if (every_passive) {
+                if (const auto e = worst_lossless_for(tuned, theta)) paired.push_back(*e);
+            }
+            const ExactCheck c =
+                check_exact(device_, coupling_, rate_hz_, {tuned}, paired, delay_periods_);
+            merge(best_, c);
+            const ClosedLoopPoles tp = closed_loop_poles(device_, coupling_, rate_hz_, tuned,
+                                                         c.worst_environment, delay_periods_);
+            for (std::size_t band = 0; band < kBands.size(); ++band) {
+                seeds[band].push_back(
+                    {band_radius(tp, kBands[band]), cls_.point_of(tuned), c.worst_environment});
+            }
+        }
         // Stage 2: compass searches from the worst seeds of each band (the whole circle, and
         // the low, middle and high bands of arg z: a lightly damped slow mode must not hide a
         // fast one that the climb could push out of the circle, nor the reverse).
@@ -141,6 +158,7 @@ class ClassSearch {
 
   private:
     static constexpr std::size_t kClimbs = 6, kBandClimbs = 3;
+    static constexpr int kAliasTerms = 100;
     // Down to 2^-16 of each range: a resonance tuned to an alias is a sharp peak.
     static constexpr double kFirstStep = 0.25, kLastStep = 1.0 / 65536.0;
 
@@ -215,6 +233,90 @@ class ClassSearch {
             }
         }
         return out;
+    }
+
+    /// Members with two undamped free-handle modes put on two aliases at once, Ω_1 and Ω_2 of
+    /// a frequency of the spread (a search that moves one parameter at a time never lands
+    /// there: issue 27's grasp with modes at 500 and 1500 Hz). For each hand mass of the
+    /// class's grid, k_s and k_a solve the two roots of det(K - ω² M) = 0:
+    ///   Ω_1² + Ω_2² = k_s/m + (k_s + k_a)/m_h,   Ω_1² Ω_2² = k_s k_a/(m m_h),
+    /// so (1/m + 1/m_h) k_s² - (Ω_1² + Ω_2²) k_s + m Ω_1² Ω_2² = 0 and k_a = m m_h Ω_1² Ω_2²/k_s.
+    /// The dampings are the class's least (lossless modes are the sharpest).
+    struct TunedMember {
+        OperatorModel member;
+        double theta;  ///< the frequency whose aliases hold its two modes
+    };
+    std::vector<TunedMember> two_mode_members() const {
+        std::vector<TunedMember> out;
+        const double m = device_.mass_kg;
+        const double t = 1.0 / rate_hz_;
+        const double pi = std::numbers::pi;
+        const auto r = cls_.ranges();
+        for (const double mh : {r[0].min, std::sqrt(r[0].min * r[0].max), r[0].max}) {
+            for (const double theta : {pi, 2.0 * pi / 3.0, pi / 2.0, 0.3, 0.1}) {
+                std::vector<double> aliases;
+                for (int k = 0; k < 3; ++k) {
+                    aliases.push_back((2.0 * pi * k + theta) / t);
+                    if (theta < pi) aliases.push_back((2.0 * pi * (k + 1) - theta) / t);
+                }
+                for (std::size_t i = 0; i < aliases.size(); ++i) {
+                    for (std::size_t j = i + 1; j < aliases.size(); ++j) {
+                        const double w1 = aliases[i] * aliases[i], w2 = aliases[j] * aliases[j];
+                        const double a = 1.0 / m + 1.0 / mh, b = w1 + w2, c = m * w1 * w2;
+                        const double disc = b * b - 4.0 * a * c;
+                        if (!(disc >= 0.0)) continue;
+                        for (const double sign : {-1.0, 1.0}) {
+                            const double ks = (b + sign * std::sqrt(disc)) / (2.0 * a);
+                            if (!(ks > 0.0)) continue;
+                            const OperatorModel h = OperatorModel::two_mass_grasp(
+                                ks, r[2].min, mh, m * mh * w1 * w2 / ks, r[4].min);
+                            if (cls_.contains(h)) out.push_back({h, theta});
+                        }
+                    }
+                }
+            }
+        }
+        return out;
+    }
+
+    /// Ĝ(θ) = Σ_k c_k Y(jω_k): the backward-difference velocity per unit force of the device
+    /// with member h, through the hold and the delay (docs/stability-models.md, "Every passive
+    /// environment"). The sum is cut at kAliasTerms each side (its terms fall as 1/k³): a
+    /// search's objective, not a bound.
+    theory::Complex sampled_velocity(const OperatorModel& h, double theta) const {
+        const double t = 1.0 / rate_hz_;
+        const theory::LoopDelay delay = theory::split_delay(delay_periods_);
+        const double half = std::sin(theta / 2.0);
+        theory::Complex sum{0.0, 0.0};
+        for (int k = -kAliasTerms; k <= kAliasTerms; ++k) {
+            const double alias = theta + 2.0 * std::numbers::pi * k;
+            const theory::Complex s{0.0, alias / t};
+            const theory::Complex grip = h.skin_damping_n_s_per_m + h.skin_stiffness_n_per_m / s;
+            const theory::Complex hand =
+                h.arm_damping_n_s_per_m + h.hand_mass_kg * s + h.arm_stiffness_n_per_m / s;
+            const theory::Complex handle = h.family == OperatorFamily::hands_off
+                                               ? theory::Complex{}
+                                               : grip * hand / (grip + hand);
+            const theory::Complex y =
+                1.0 / (device_.damping_n_s_per_m + device_.mass_kg * s + handle);
+            sum += 4.0 * half * half / (alias * alias) *
+                   std::polar(1.0, -(1.0 + delay.whole_periods) * theta - delay.fraction * alias) *
+                   y;
+        }
+        return sum;
+    }
+
+    /// The lossless environment worst for member h at θ (0 < θ < π): the loop has a pole at
+    /// e^{jθ} iff 1/Z_c + 1/Z_e = -Ĝ, so the worst lossless 1/Z_e is the susceptance
+    /// Im(-Ĝ - 1/Z_c), and Re(1/Z_c) + Re Ĝ < 0 says that one is unstable: the
+    /// member-plus-environment pair (issue 27, item 2).
+    std::optional<EnvironmentModel> worst_lossless_for(const OperatorModel& h, double theta) const {
+        if (!(theta > 0.0 && theta < std::numbers::pi * (1.0 - 1e-9))) return std::nullopt;
+        const theory::Complex coupling =
+            1.0 / theory::coupling_impedance(coupling_, theta, 1.0 / rate_hz_);
+        const double susceptance = (-sampled_velocity(h, theta) - coupling).imag();
+        if (!(std::abs(susceptance) > 1e-12 * std::abs(coupling))) return std::nullopt;
+        return lossless_environment_with_admittance(theta, rate_hz_, susceptance);
     }
 
     /// Compass search over the operator's coordinates, then (for every passive environment)

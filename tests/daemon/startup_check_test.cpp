@@ -135,5 +135,18 @@ TEST(StartupCheck, TheExactCheckArmsNothingPastThePassiveProof) {
         << inside.describe();
 }
 
+// Issue 27, item 1: hapticd with check = "exact" and this [operator] table armed 3929.69 N/m,
+// where a member with modes at 500 and 1500 Hz grows by 1.000658 per tick; it refuses it now.
+TEST(StartupCheck, TheClassCheckRefusesGainsTwoTunedModesBreak) {
+    const StartupCheck check = check_coupling_at_startup(parse_config(
+        "[device.model]\nmass = 0.1\ndamping = 2\n[coupling]\nstiffness = 3929.69\n"
+        "damping = 0.5\ncheck = \"exact\"\n[operator]\nhand_mass = [0.05, 0.5]\n"
+        "grip_stiffness = [1e5, 1e7]\ngrip_damping = [0, 1]\narm_stiffness = [1e5, 1e7]\n"
+        "arm_damping = [0, 1]\n",
+        "lab.toml", ""));
+    EXPECT_FALSE(check.passed) << check.describe();
+    EXPECT_NE(check.describe().find("two-mass grasp"), std::string::npos) << check.describe();
+}
+
 }  // namespace
 }  // namespace hapticd::daemon

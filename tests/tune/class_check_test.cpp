@@ -254,3 +254,40 @@ TEST(SceneCheck, ASceneIsNeverWorseThanEveryPassiveEnvironment) {
 
 }  // namespace
 }  // namespace hapticd::tune
+
+namespace hapticd::tune {
+namespace {
+
+// Issue 27, item 1: a class whose members reach two aliases of Nyquist at once. The search that
+// moved one parameter at a time certified 3929.69 N/m at b_c = 0.5; a member (hand 0.1 kg, grip
+// 3,773,027 N/m, arm 2,323,550 N/m, lossless: free-handle modes at 500 and 1500 Hz) grows by
+// 1.000658 per tick there. The search now places two modes on two aliases at once (solving
+// det(K - ω² M) = 0 for k_s and k_a) and stops at the two-mode limit
+// b_c + k_c T/2 < (π²/8) b / S_2, 3441 N/m.
+TEST(ClassSearch, FindsTwoModesTunedTogether) {
+    OperatorClass wide;
+    wide.hand_mass_kg = {0.05, 0.5};
+    wide.grip_stiffness_n_per_m = {1e5, 1e7};
+    wide.grip_damping_n_s_per_m = {0.0, 1.0};
+    wide.arm_stiffness_n_per_m = {1e5, 1e7};
+    wide.arm_damping_n_s_per_m = {0.0, 1.0};
+    const StabilityAssumption a = for_class(wide);
+    const OperatorModel member = OperatorModel::two_mass_grasp(3773027.0, 0.0, 0.1, 2323550.0, 0.0);
+    ASSERT_TRUE(wide.contains(member));
+    const SpringDamperCoupling old_answer{3929.69, 0.5};
+    ExactCheck alone =
+        check_exact(kPen, old_answer, kRateHz, {member}, default_environment_sweep(kPen), 0.0);
+    EXPECT_GT(alone.worst_spectral_radius, 1.0005);
+    const ExactCheck search = check_exact(kPen, old_answer, kRateHz, a, 0.0);
+    EXPECT_FALSE(search.stable) << search.worst_operator.describe();
+    EXPECT_EQ(search.worst_operator.family, OperatorFamily::two_mass_grasp);
+    const double two_modes = std::numbers::pi * std::numbers::pi / 8.0 * 2.0 / (1.0 + 1.0 / 9.0);
+    const double limit = (two_modes - 0.5) * 2.0 * kRateHz;  // 3441 N/m
+    EXPECT_NEAR(limit, 3441.0, 1.0);
+    const StiffnessLimit sized = exact_stiffness_limit(kPen, {0.0, 0.5}, kRateHz, a, 0.0);
+    EXPECT_LE(sized.stiffness_n_per_m, limit * 1.002);
+    EXPECT_GE(sized.stiffness_n_per_m, 0.97 * limit);
+}
+
+}  // namespace
+}  // namespace hapticd::tune

@@ -8,7 +8,9 @@
 //                                      (the passive bound with that environment is reached
 //                                      by them, as it is for the rigid wall).
 //   a class:                           a search of the class. Its 3^5 grid (corners, edge
-//                                      midpoints, centre) and hands-off meet the
+//                                      midpoints, centre), hands-off, and members with two
+//                                      modes on two aliases at once (each with the lossless
+//                                      environment worst for it) meet the
 //                                      environments; from the six worst pairs a compass
 //                                      search climbs the spectral radius over the five
 //                                      parameters (and, against every passive environment,
