@@ -75,15 +75,12 @@ class ClassSearch {
             EnvironmentModel environment;
         };
         std::array<std::vector<Seed>, kBands.size()> seeds;
-        ClassPoint point{};
-        for (int index = 0; index < 243; ++index) {
-            int rest = index;
-            for (double& u : point) u = 0.5 * (rest % 3), rest /= 3;
-            const OperatorModel h = cls_.member(point);
-            if (!cls_.contains(h)) continue;
-            // One sampling of the plant for all environments; the seed is its worst one.
+        // One sampling of the plant for all the environments; the seed in each band is its
+        // worst one.
+        const auto seed = [&](const OperatorModel& h, const ClassPoint& point,
+                              const std::vector<EnvironmentModel>& with) {
             const ExactCheck c =
-                check_exact(device_, coupling_, rate_hz_, {h}, environments, delay_periods_);
+                check_exact(device_, coupling_, rate_hz_, {h}, with, delay_periods_);
             merge(best_, c);
             const ClosedLoopPoles poles = closed_loop_poles(device_, coupling_, rate_hz_, h,
                                                             c.worst_environment, delay_periods_);
@@ -91,6 +88,15 @@ class ClassSearch {
                 seeds[band].push_back(
                     {band_radius(poles, kBands[band]), point, c.worst_environment});
             }
+            return c;
+        };
+        ClassPoint point{};
+        for (int index = 0; index < 243; ++index) {
+            int rest = index;
+            for (double& u : point) u = 0.5 * (rest % 3), rest /= 3;
+            const OperatorModel h = cls_.member(point);
+            if (!cls_.contains(h)) continue;
+            const ExactCheck c = seed(h, point, environments);
             // Synthesis inside the class: the members that put a free-handle mode on an
             // alias of a frequency of the spread (a grid never lands on such a resonance).
             for (const OperatorModel& tuned : tuned_members(h)) {
@@ -111,15 +117,7 @@ class ClassSearch {
             if (every_passive) {
                 if (const auto e = worst_lossless_for(tuned, theta)) paired.push_back(*e);
             }
-            const ExactCheck c =
-                check_exact(device_, coupling_, rate_hz_, {tuned}, paired, delay_periods_);
-            merge(best_, c);
-            const ClosedLoopPoles tp = closed_loop_poles(device_, coupling_, rate_hz_, tuned,
-                                                         c.worst_environment, delay_periods_);
-            for (std::size_t band = 0; band < kBands.size(); ++band) {
-                seeds[band].push_back(
-                    {band_radius(tp, kBands[band]), cls_.point_of(tuned), c.worst_environment});
-            }
+            (void)seed(tuned, cls_.point_of(tuned), paired);
         }
         // Stage 2: compass searches from the worst seeds of each band (the whole circle, and
         // the low, middle and high bands of arg z: a lightly damped slow mode must not hide a
