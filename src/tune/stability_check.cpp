@@ -80,10 +80,6 @@ theory::HoldModel hold_of(StabilityModel model) {
     return theory::HoldModel::passive;
 }
 
-}  // namespace
-
-namespace {
-
 std::string precise(double value) {
     std::ostringstream out;
     out.precision(10);
