@@ -9,6 +9,7 @@
 #include "hapticd/theory/coupling_check.hpp"
 #include "hapticd/tune/admittance_sizing.hpp"
 #include "hapticd/tune/class_check.hpp"
+#include "hapticd/tune/class_proof.hpp"
 #include "hapticd/tune/coupling_sizing.hpp"
 #include "hapticd/tune/exact_admittance.hpp"
 #include "hapticd/tune/exact_model.hpp"
@@ -128,6 +129,28 @@ void BM_SizeClass(benchmark::State& state) {
     }
 }
 BENCHMARK(BM_SizeClass)->Unit(benchmark::kMillisecond)->Iterations(1);
+
+// The class's proof (tune/class_proof.hpp) for the pen-grip class, b_c = 1 N s/m, with a delay
+// in tenths of a period: the prover's coupling-independent bound (arg 1 = 0) and the bisection
+// on k_c that size runs (arg 1 = 1).
+void BM_ClassProof(benchmark::State& state) {
+    const double delay = state.range(0) / 10.0;
+    for (auto _ : state) {
+        const hapticd::tune::ClassProver prover(kPenDisplay, pen_grip(), 1000.0, delay);
+        if (state.range(1) == 1) {
+            auto l = prover.stiffness_limit({0.0, 1.0}, 0.0);
+            benchmark::DoNotOptimize(l);
+        }
+        benchmark::DoNotOptimize(prover);
+    }
+}
+BENCHMARK(BM_ClassProof)
+    ->Args({0, 0})
+    ->Args({0, 1})
+    ->Args({10, 1})
+    ->Args({99, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(3);
 
 // The passive model against a scene (a rigid wall, one period of delay).
 void BM_CheckPassiveScene(benchmark::State& state) {

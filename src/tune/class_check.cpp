@@ -79,8 +79,7 @@ class ClassSearch {
         // worst one.
         const auto seed = [&](const OperatorModel& h, const ClassPoint& point,
                               const std::vector<EnvironmentModel>& with) {
-            const ExactCheck c =
-                check_exact(device_, coupling_, rate_hz_, {h}, with, delay_periods_);
+            ExactCheck c = check_exact(device_, coupling_, rate_hz_, {h}, with, delay_periods_);
             merge(best_, c);
             const ClosedLoopPoles poles = closed_loop_poles(device_, coupling_, rate_hz_, h,
                                                             c.worst_environment, delay_periods_);

@@ -142,6 +142,7 @@ void to_json(nlohmann::ordered_json& json, const StabilityVerdict& verdict) {
             {"worst_frequency_hz", verdict.worst_frequency_hz},
             {"model", std::string(to_string(verdict.model))},
             {"proven", verdict.proven}};
+    if (verdict.proven) json["proof"] = verdict.proof;
     if (verdict.exact) {
         json["worst_operator"] = verdict.exact->worst_operator.describe();
         json["worst_environment"] = verdict.exact->worst_environment.describe();

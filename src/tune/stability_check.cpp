@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "hapticd/theory/coupling_check.hpp"
+#include "hapticd/tune/class_proof.hpp"
 #include "hapticd/tune/input_checks.hpp"
 
 namespace hapticd::tune {
@@ -45,11 +46,7 @@ std::string StabilityVerdict::describe() const {
     if (guarantee) {
         out << "; holds for " << holds_for;
         if (model == StabilityModel::exact) {
-            if (proven) {
-                out << ", proven by the passive port condition";
-            } else if (passed) {
-                out << ", as far as the exact model's search of the class reaches (not a proof)";
-            }
+            if (proven) out << ", proven by " << proof;
             if (exact && exact->marginal()) {
                 out << "; the search's worst case is marginal: |z| - 1 = "
                     << exact->worst_spectral_radius - 1.0 << ", within the eigenvalues' "
@@ -109,23 +106,49 @@ void passive_proof(const StabilityDesign& design, double delay_periods, Stabilit
     into.worst_frequency_hz = check.worst_frequency_hz;
 }
 
-/// The exact model: the proof (the passive port condition, for every passive operator; and
-/// for a declared class, the class search until its proof lands, docs/stability-models.md)
-/// and the exact model's search for an operator that breaks the design. A search that finds
-/// one overrules a proof (a contradiction is a defect, and the safe verdict is no).
+/// The class's port condition against every passive environment (tune/class_proof.hpp), which
+/// holds against a scene's environments too.
+void class_proof(const StabilityDesign& design, double delay_periods, StabilityVerdict& into) {
+    const ClassProof proof =
+        ClassProver(design.device, *design.assumption.operators, design.rate_hz, delay_periods)
+            .prove(design.coupling);
+    into.worst_margin = proof.worst_margin;
+    into.worst_frequency_hz = proof.worst_frequency_hz;
+    into.worst_case.clear();
+    if (proof.holds) {
+        into.passed = true;
+        into.proven = true;
+        into.proof = "the class's port condition";
+    }
+}
+
+/// The exact model: a proof (the passive port condition, for every passive operator; for a
+/// declared class also the class's port condition, docs/stability-models.md) and the exact
+/// model's search for an operator that breaks the design. A search that finds one overrules
+/// a proof (a contradiction is a defect, and the safe verdict is no); a class no proof covers
+/// fails, whatever its search finds.
 void exact_verdict(const StabilityDesign& design, double delay_periods, StabilityVerdict& into) {
     passive_proof(design, delay_periods, into);
     into.proven = into.passed;
+    if (into.proven) into.proof = "the passive port condition";
+    if (!into.proven && design.assumption.operators) class_proof(design, delay_periods, into);
     into.exact = check_exact(design.device, design.coupling, design.rate_hz, design.assumption,
                              delay_periods);
     const ExactCheck& search = *into.exact;
-    if (design.assumption.operators && !into.proven) {
-        // A class the passive condition does not cover: the verdict of its search.
-        into.passed = search.stable;
-        into.worst_margin = search.worst_margin;
-        into.worst_frequency_hz = search.worst_frequency_hz;
-        into.worst_case =
-            search.worst_operator.describe() + " against " + search.worst_environment.describe();
+    if (!into.proven) {
+        into.passed = false;
+        if (!search.stable) {
+            into.worst_case = search.worst_operator.describe() + " against " +
+                              search.worst_environment.describe() +
+                              " grows by |z| = " + precise(search.worst_spectral_radius) +
+                              " per tick";
+        } else {
+            const std::string against = into.worst_case.empty() ? "" : ", " + into.worst_case;
+            into.worst_case = "no proof covers it: the port condition's bound is below 0 at " +
+                              precise(into.worst_frequency_hz) + " Hz" + against +
+                              "; the exact model's search finds no unstable operator, which is "
+                              "no proof (docs/stability-models.md)";
+        }
         return;
     }
     // Near z = 1 (a free hand on an almost free virtual mass, a heavy device at a high rate)
@@ -181,6 +204,7 @@ StabilityVerdict check_stability(const StabilityDesign& design) {
     if (design.model == StabilityModel::passive) {
         passive_proof(design, delay_periods, verdict);
         verdict.proven = verdict.passed;
+        if (verdict.proven) verdict.proof = "the passive port condition";
         return verdict;
     }
     const theory::CouplingCheck check = theory::check_coupling(

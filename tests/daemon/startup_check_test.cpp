@@ -108,8 +108,8 @@ TEST(StartupCheck, AClassVerdictNamesTheClass) {
     EXPECT_NE(check.describe().find("holds for the declared operator class (two-mass grasps with "
                                     "m_h 0.1..2 kg, k_s 0..3000 N/m, b_s 2..30 N s/m, k_a "
                                     "0..1000 N/m, b_a 0..20 N s/m, and hands-off) and every "
-                                    "passive environment, as far as the exact model's search "
-                                    "of the class reaches"),
+                                    "passive environment, proven by the class's port "
+                                    "condition"),
               std::string::npos)
         << check.describe();
 }
@@ -146,6 +146,31 @@ TEST(StartupCheck, TheClassCheckRefusesGainsTwoTunedModesBreak) {
         "lab.toml", ""));
     EXPECT_FALSE(check.passed) << check.describe();
     EXPECT_NE(check.describe().find("two-mass grasp"), std::string::npos) << check.describe();
+}
+
+// A class's gains are armed only where its proof reaches: 3300 N/m is below the class's true
+// limit (about 3441) and its search finds no unstable member there, but the class's port
+// condition proves 3100 and no more, so hapticd refuses 3300 and says why.
+TEST(StartupCheck, AClassIsArmedOnlyWhereItsProofReaches) {
+    const auto check = [](const std::string& stiffness) {
+        return check_coupling_at_startup(parse_config(
+            "[device.model]\nmass = 0.1\ndamping = 2\n[coupling]\nstiffness = " + stiffness +
+                "\ndamping = 0.5\ncheck = \"exact\"\n[operator]\nhand_mass = [0.05, 0.5]\n"
+                "grip_stiffness = [1e5, 1e7]\ngrip_damping = [0, 1]\narm_stiffness = [1e5, 1e7]\n"
+                "arm_damping = [0, 1]\n",
+            "lab.toml", ""));
+    };
+    const StartupCheck proven = check("3100");
+    EXPECT_TRUE(proven.passed) << proven.describe();
+    EXPECT_NE(proven.describe().find("proven by the class's port condition"), std::string::npos)
+        << proven.describe();
+    const StartupCheck searched = check("3300");
+    EXPECT_FALSE(searched.passed) << searched.describe();
+    EXPECT_FALSE(searched.proven);
+    EXPECT_NE(searched.describe().find("no proof covers it"), std::string::npos)
+        << searched.describe();
+    EXPECT_NE(searched.describe().find("which is no proof"), std::string::npos)
+        << searched.describe();
 }
 
 }  // namespace

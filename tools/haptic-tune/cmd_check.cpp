@@ -31,10 +31,11 @@ std::string holds_for(const tune::StabilityVerdict& verdict, const tune::Stabili
     }
     if (verdict.model == tune::StabilityModel::exact) {
         return verdict.holds_for +
-               ", as far as the exact model's search reaches (its sweep, its synthesised "
-               "adversaries: multi-mode operators on the aliases and worst lossless "
-               "environments" +
-               (design.assumption.operators ? std::string(", and the search of the class)") : ")");
+               (verdict.proven ? ", proven by " + verdict.proof : std::string(", not proven")) +
+               "; the exact model's search (its sweep, its synthesised adversaries: multi-mode "
+               "operators on the aliases and worst lossless environments" +
+               (design.assumption.operators ? std::string(", and the search of the class") : "") +
+               ") looks for an operator that breaks it";
     }
     return "no class: the " + std::string(tune::to_string(verdict.model)) +
            " model keeps one term of the hold's alias sum and is not a guarantee "

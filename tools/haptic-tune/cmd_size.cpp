@@ -10,6 +10,7 @@
 #include "commands.hpp"
 #include "hapticd/theory/force_sensor_filter.hpp"
 #include "hapticd/tune/admittance_sizing.hpp"
+#include "hapticd/tune/class_proof.hpp"
 #include "hapticd/tune/coupling_sizing.hpp"
 #include "hapticd/tune/input_checks.hpp"
 #include "hapticd/tune/result_json.hpp"
@@ -55,11 +56,10 @@ nlohmann::ordered_json filter_fields(const std::optional<theory::ForceSensorFilt
 /// on this design). Warns on stderr when it disagrees.
 nlohmann::ordered_json exact_cross_check(const DesignInput& input,
                                          const theory::SpringDamperCoupling& coupling,
-                                         const tune::StabilityAssumption& assumption, bool* stable,
-                                         const std::optional<tune::ExactCheck>& known = {}) {
-    const tune::ExactCheck exact = known ? *known
-                                         : tune::check_exact(input.device, coupling, input.rate_hz,
-                                                             assumption, input.delay_periods());
+                                         const tune::StabilityAssumption& assumption,
+                                         bool* stable) {
+    const tune::ExactCheck exact =
+        tune::check_exact(input.device, coupling, input.rate_hz, assumption, input.delay_periods());
     *stable = exact.stable;
     if (!exact.stable) {
         std::cerr << "haptic-tune: the exact sampled-data model finds this design unstable: "
@@ -183,10 +183,10 @@ nlohmann::ordered_json witness_past(const DesignInput& input,
 }
 
 /// The largest k_c at b_c for a stated assumption (an operator class, a scene), or by the
-/// exact model. Every passive operator: the passive model's proven limit, and with --model
-/// exact the operator the exact model finds unstable just past it. A class: a bisection on
-/// the exact model's verdict for the class (tune::exact_stiffness_limit), never below the
-/// passive limit (the class is a subset of every passive operator).
+/// exact model. The passive model's proven limit; for a class, the class's port condition's
+/// (tune/class_proof.hpp), never below the passive one (the class is a subset of every
+/// passive operator). With --model exact, the operator the exact model finds unstable just
+/// past the answer.
 int run_assumed(const SizeOptions& o, const DesignInput& input,
                 const tune::StabilityAssumption& assumption) {
     if (o.optimize_damping) {
@@ -213,19 +213,17 @@ int run_assumed(const SizeOptions& o, const DesignInput& input,
     int checks = passive.checks;
     coupling.stiffness_n_per_m = passive.stiffness_n_per_m;
     std::string proof = "the passive port condition";
-    std::optional<tune::ExactCheck> checked;  // the class search's own check of its answer
-    if (exact && assumption.operators) {
-        const tune::StiffnessLimit limit = tune::exact_stiffness_limit(
-            input.device, coupling, input.rate_hz, assumption, input.delay_periods());
-        checks += limit.checks;
+    if (assumption.operators) {
+        const tune::ClassProver prover(input.device, *assumption.operators, input.rate_hz,
+                                       input.delay_periods());
+        const tune::ClassProver::Limit limit =
+            prover.stiffness_limit(coupling, passive.stiffness_n_per_m);
+        checks += limit.proofs;
         if (limit.stiffness_n_per_m > passive.stiffness_n_per_m) {
             coupling.stiffness_n_per_m = limit.stiffness_n_per_m;
             rejected = limit.rejected_n_per_m;
-            proof = "none: the exact model's search of the class (not a proof)";
-            checked = limit.at_limit;
+            proof = "the class's port condition";
         }
-        out["worst_operator"] = limit.at_limit.worst_operator.describe();
-        out["worst_environment"] = limit.at_limit.worst_environment.describe();
     }
     require_stiffness(coupling.stiffness_n_per_m, damping, assumption, input);
     out["stiffness"] = coupling.stiffness_n_per_m;
@@ -238,10 +236,8 @@ int run_assumed(const SizeOptions& o, const DesignInput& input,
     add_input_fields(input, out);
     bool stable = true;
     if (!o.skip_exact_check) {
-        out["exact_check"] = exact_cross_check(input, coupling, assumption, &stable, checked);
-        if (exact && !assumption.operators) {
-            out["witness"] = witness_past(input, coupling, assumption);
-        }
+        out["exact_check"] = exact_cross_check(input, coupling, assumption, &stable);
+        if (exact) out["witness"] = witness_past(input, coupling, assumption);
     }
     print_result(out, o.json);
     return stable ? kExitOk : kExitVerdictNo;

@@ -14,9 +14,10 @@
 // every class. A rigid hold is the limit k_s -> inf; a class reaches it as closely as its
 // upper grip stiffness.
 //
-// The exact model checks a design against a class by search (tune/class_check.hpp): the
-// class's corners and a grid, then a pattern search from the worst of them. A search is
-// not a proof; the class verdict says what it rests on.
+// A design is proven for a class by tune/class_proof.hpp (the passive condition bounded over
+// the class's box, alias by alias) and searched for a member that breaks it by
+// tune/class_check.hpp (the class's grid, members with modes tuned to the aliases, and
+// pattern searches from the worst of them); the verdict says which proof it rests on.
 #pragma once
 
 #include <array>

@@ -3,7 +3,10 @@
 // check_stability(), so a config gets the same verdict, and the same line describing it,
 // from each.
 //
-//   exact:            check_exact() under the assumption (an operator class, a scene);
+//   exact:            the passive port condition (against every passive environment or the
+//                     scene's), or for a class the class's port condition
+//                     (tune/class_proof.hpp); and check_exact() under the assumption, whose
+//                     witness overrules a proof. A class the proofs do not cover fails.
 //   passive, a scene: check_passive_scene() against the scene's linearised objects;
 //   otherwise:        theory::check_coupling() with the model's hold (paper, encoder,
 //                     passive against every passive environment).
@@ -57,6 +60,9 @@ struct StabilityVerdict {
     /// exact model too when the condition holds); false for a search's verdict and for the
     /// paper and encoder models.
     bool proven = false;
+    /// What proves it: "the passive port condition" or "the class's port condition"
+    /// (tune/class_proof.hpp); empty when not proven.
+    std::string proof;
     bool guarantee = true;  ///< passive and exact; paper and encoder are not
     double delay_s = 0.0;
     double velocity_filter_hz = 0.0;
