@@ -120,18 +120,22 @@ class ClassSearch {
         }
         // Stage 2: compass searches from the worst seeds of each band (the whole circle, and
         // the low, middle and high bands of arg z: a lightly damped slow mode must not hide a
-        // fast one that the climb could push out of the circle, nor the reverse).
-        for (std::size_t band = 0; band < kBands.size(); ++band) {
+        // fast one that the climb could push out of the circle, nor the reverse). A witness
+        // that grows by kDecisiveGrowthPerTick ends the search: the verdict is no, and climbing
+        // further would only name a worse member (9.4 s instead of 0.7 s for the pen-grip
+        // class at 5 periods of delay, 3 % past its proof).
+        for (std::size_t band = 0; band < kBands.size() && !decided(); ++band) {
             std::vector<Seed>& s = seeds[band];
             std::sort(s.begin(), s.end(),
                       [](const Seed& a, const Seed& b) { return a.radius > b.radius; });
             const std::size_t climbs = band == 0 ? kClimbs : kBandClimbs;
-            for (std::size_t i = 0; i < s.size() && i < climbs && s[i].radius >= 0.0; ++i) {
+            for (std::size_t i = 0; i < s.size() && i < climbs && s[i].radius >= 0.0 && !decided();
+                 ++i) {
                 climb(s[i].point, s[i].environment, every_passive, kBands[band]);
             }
             // Hands-off belongs to every class: the device alone against the lossless
             // environment worst for it.
-            if (every_passive) {
+            if (every_passive && !decided()) {
                 const OperatorModel alone = OperatorModel::hands_off();
                 (void)climb_environment(alone, kBands[band]);
                 // and from the best almost free virtual mass (k_e at the search's floor), the
@@ -154,6 +158,8 @@ class ClassSearch {
     }
 
   private:
+    bool decided() const { return best_.worst_spectral_radius > 1.0 + kDecisiveGrowthPerTick; }
+
     static constexpr std::size_t kClimbs = 6, kBandClimbs = 3;
     static constexpr int kAliasTerms = 100;
     // Down to 2^-16 of each range: a resonance tuned to an alias is a sharp peak.

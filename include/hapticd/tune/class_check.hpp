@@ -16,7 +16,8 @@
 //                                      parameters (and, against every passive environment,
 //                                      over the lossless environment's frequency and
 //                                      admittance too), halving its step to 1/256 of each
-//                                      range. The verdict names the worst member found.
+//                                      range. The verdict names the worst member found,
+//                                      or the first that grows by kDecisiveGrowthPerTick.
 #pragma once
 
 #include <optional>
@@ -35,6 +36,10 @@ struct StabilityAssumption {
     /// "every passive operator and every passive environment", or the class and the scene.
     std::string describe() const;
 };
+
+/// A member that grows by this much per tick (|z| - 1) ends a class search: the verdict is
+/// no, and it is named as the witness (not necessarily the worst member).
+inline constexpr double kDecisiveGrowthPerTick = 1e-6;
 
 /// The exact model's verdict under `assumption` (the file comment says what is searched).
 /// Throws std::invalid_argument naming the value for non-physical input.
