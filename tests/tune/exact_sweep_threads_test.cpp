@@ -1,0 +1,43 @@
+// check_exact checks its sweep on two threads (tune/exact_model.cpp): the verdict, the worst
+// case and the count are those of one pass in order, and under ThreadSanitizer (this test is
+// in HAPTICD_THREADED_TESTS) the shares touch nothing in common.
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "hapticd/tune/exact_model.hpp"
+
+namespace hapticd::tune {
+namespace {
+
+TEST(ExactSweepThreads, TheWorstCaseIsTheOneOfAPassInOrder) {
+    const theory::DeviceModel pen{0.1, 2.0};
+    const double rate_hz = 1000.0;
+    for (const double stiffness : {1500.0, 4200.0}) {
+        const theory::SpringDamperCoupling coupling{stiffness, 0.5};
+        const std::vector<OperatorModel> operators = default_operator_sweep(pen, rate_hz);
+        std::vector<EnvironmentModel> environments = default_environment_sweep(pen);
+        environments.resize(12);
+        const ExactCheck check = check_exact(pen, coupling, rate_hz, operators, environments, 0.0);
+        ASSERT_GE(operators.size() * environments.size(), 2000U);  // worth the second thread
+        // One pass in order, as the check did before it had threads.
+        double worst = -1.0;
+        const OperatorModel* worst_operator = nullptr;
+        const EnvironmentModel* worst_environment = nullptr;
+        for (const OperatorModel& h : operators) {
+            for (const EnvironmentModel& e : environments) {
+                const double r =
+                    closed_loop_poles(pen, coupling, rate_hz, h, e, 0.0).spectral_radius;
+                if (r > worst) worst = r, worst_operator = &h, worst_environment = &e;
+            }
+        }
+        EXPECT_EQ(check.cases_checked, static_cast<int>(operators.size() * environments.size()));
+        EXPECT_DOUBLE_EQ(check.worst_spectral_radius, worst);
+        EXPECT_EQ(check.worst_operator.describe(), worst_operator->describe());
+        EXPECT_EQ(check.worst_environment.describe(), worst_environment->describe());
+        EXPECT_EQ(check.stable, stiffness < 3000.0) << check.worst_spectral_radius;
+    }
+}
+
+}  // namespace
+}  // namespace hapticd::tune
