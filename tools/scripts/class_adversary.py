@@ -34,6 +34,10 @@ Usage (run from the worktree root, /usr/bin/python3, numpy + scipy):
         search the class box x environments at factor x each limit; every find > 1 + 1e-8
         is written to a single-point class file (build/class-adversary/) and re-checked
         with `haptic-tune check --model exact --operator-class FILE`
+    tools/scripts/class_adversary.py quick [--tool BIN] [--cls FILE] [--factor 0.999] [--budget S]
+        CI's quick mode (a ctest): the tool's proven class limits for b_c 0.5 and no delay, b_c 1
+        and one period, and b_c 0.5 with the rigid-wall scene, each attacked just below the
+        limit for S CPU seconds; exit 1 if any mpmath-confirmed find
     tools/scripts/class_adversary.py point --kc K --bc B [--delay-periods D] --op ... --env ...
         radius of one configuration (for hand checks)
     tools/scripts/class_adversary.py mylimits [--budget S]
@@ -1062,6 +1066,43 @@ def cmd_point(a):
     print(spectral(a.kc, a.bc, op, env, a.delay_periods))
 
 
+# CI's quick mode: (b_c, delay in periods, scene) per class file, every verdict kind a class
+# can certify (every passive environment, a scene with it, no delay and one period).
+QUICK_CASES = [(0.5, 0, None), (1.0, 1, None), (0.5, 0, "wall")]
+
+
+def cmd_quick(a):
+    """Attack the tool's proven class limits just below them (--factor, 0.999 by default) for
+    a few CPU seconds each; exit 1 when any find survives the mpmath re-check. What was
+    tried, and the closest it came, is printed per case."""
+    cls = parse_class(a.cls)
+    for k in OP_KEYS:
+        if k not in cls:
+            raise SystemExit("%s: [operator] %s missing" % (a.cls, k))
+    log = lambda s: (print(s), sys.stdout.flush())
+    failures = 0
+    t_all = time.process_time()
+    for bc, dp, scene in QUICK_CASES:
+        js = tool_size(a.tool, bc, dp * T, a.cls, WALL_SCENE if scene else None)
+        kc = a.factor * js["stiffness"]
+        envs = ["wall"] if scene else ["wall", "implicit", "lossless"]
+        log("case %s, b_c = %.2f, delay %d T, %s: the tool proves %.4f N/m (%s); attacking "
+            "%.4f (x%.4f) over the class x %s for %.1f s CPU" % (
+                a.cls, bc, dp, "the rigid-wall scene" if scene else "every passive environment",
+                js["stiffness"], js.get("proof", "?"), kc, a.factor, "/".join(envs), a.budget))
+        r = attack_case(kc, bc, dp, cls, envs, a.budget, a.seed, log)
+        best = r["best"]
+        log("  -> %d configurations, closest: radius %.12f at %s, %s; %d confirmed finds" % (
+            r["evals"], best[0], fmt_op(best[1]), fmt_env(best[2]), len(r["finds"])))
+        for rr, op, env in r["finds"]:
+            failures += 1
+            log("  BROKEN: %s, %s grows by %.12f per tick at %.4f x the proven limit" % (
+                fmt_op(op), fmt_env(env), rr, a.factor))
+    log("quick attack: %d cases, %d broken, %.1f s CPU" % (
+        len(QUICK_CASES), failures, time.process_time() - t_all))
+    sys.exit(1 if failures else 0)
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--tool", default=TOOL)
@@ -1087,6 +1128,10 @@ def main():
                     help="also a two-mode lossless environment (mass-spring + resonator) and "
                          "a lossy trapezoidal mass-spring-damper (beyond the brief)")
     at.add_argument("--out", default=None)
+    qk = sp.add_parser("quick")
+    qk.add_argument("--factor", type=float, default=0.999)
+    qk.add_argument("--budget", type=float, default=2.0, help="CPU seconds per case")
+    qk.add_argument("--seed", type=int, default=0)
     pt = sp.add_parser("point")
     pt.add_argument("--kc", type=float, required=True)
     pt.add_argument("--bc", type=float, default=0.0)
@@ -1095,7 +1140,8 @@ def main():
     pt.add_argument("--env", default="wall", help="wall | implicit,me,ke,be | lossless,me,ke")
     a = p.parse_args()
     {"validate": cmd_validate, "limits": cmd_limits, "attack": cmd_attack,
-     "mylimits": cmd_mylimits, "point": cmd_point, "window": cmd_window}[a.cmd](a)
+     "mylimits": cmd_mylimits, "point": cmd_point, "window": cmd_window,
+     "quick": cmd_quick}[a.cmd](a)
 
 
 if __name__ == "__main__":
