@@ -13,7 +13,14 @@
 //    half the predicted rate (or to the encoder's dither) within the run, and the exact model
 //    with the penalty wall in series (the massless tool is its implicit-Euler mass-spring with
 //    m_e = 0, k_e = K + 100 N/m) predicts a spectral radius below 1 for each.
-// 3. An operator outside the class: the lossless steel grip tuned to Nyquist (k_h = m (π/T)²,
+// 3. The proof's witness (issue 27's acceptance). With one period of delay (the sim's and
+//    [device.model]'s) at b_c = 1 the class's port condition proves the pen-grip class to
+//    1947 N/m, bound by hands-off in a rigid wall. 3 % past the proof hands-off in the stiffest
+//    penalty wall a scene allows (1e7 N/m, within 1 % of the rigid wall) grows at the exact
+//    model's rate, and the daemon with check = "exact" and the class refuses those gains; 3 %
+//    inside the proof it arms them, "proven by the class's port condition", and the contact
+//    decays.
+// 4. An operator outside the class: the lossless steel grip tuned to Nyquist (k_h = m (π/T)²,
 //    no mass, no damping; docs/stability-models.md), which no hand is. The daemon, told the
 //    class, arms; the loop grows at Nyquist at the exact model's rate. The class is an
 //    assumption the lab makes, and the verdict says so.
@@ -24,6 +31,7 @@
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "hapticd/tune/class_check.hpp"
@@ -213,6 +221,97 @@ TEST(HilOperatorClass, AGripOutsideTheClassGrowsAtNyquist) {
               << growth_per_s << " /s over " << mid_s.size() << " windows; exact "
               << predicted_growth_per_s << " /s\n";
     EXPECT_NEAR(growth_per_s, predicted_growth_per_s, 0.02 * predicted_growth_per_s);
+}
+
+constexpr double kStiffestWallNPerM = 1e7;
+constexpr double kDelayS = 0.001;  ///< one period
+constexpr double kFineCountsPerMeter = 1e9;
+
+/// haptic-tune size --model exact --operator-class pen-grip.toml at b_c = 1 with one period
+/// of delay: the proven limit, and what proves it.
+std::pair<double, std::string> delayed_class_limit() {
+    const std::string command =
+        shell_quote(HAPTIC_TUNE_BIN) + " size --mass " + toml_number(kPenMassKg) + " --damping " +
+        toml_number(kPenDampingNsPerM) + " --rate " + toml_number(kRateHz) +
+        " --coupling-damping " + toml_number(kCouplingDampingNsPerM) + " --delay " +
+        toml_number(kDelayS) + " --model exact --operator-class " + shell_quote(kClassFile) +
+        " --json";
+    const CommandResult result = run_command(command);
+    EXPECT_EQ(result.exit_code, 0) << command << "\n" << result.err;
+    if (result.exit_code != 0) return {0.0, ""};
+    const nlohmann::json sized = nlohmann::json::parse(result.out);
+    return {sized.at("stiffness").get<double>(), sized.at("proof").get<std::string>()};
+}
+
+struct HandsOffContact {
+    DaemonRun run;
+    tune::ClosedLoopPoles predicted;
+    double growth_per_s = 0.0;
+    std::size_t windows = 0;
+};
+
+/// Hands-off in the stiffest wall on the delayed device, kicked 3 um into it.
+HandsOffContact hands_off_in_the_wall(double stiffness_n_per_m, std::string_view check) {
+    const CouplingGains gains{.stiffness_n_per_m = stiffness_n_per_m,
+                              .damping_n_s_per_m = kCouplingDampingNsPerM};
+    HandsOffContact out;
+    out.predicted = tune::closed_loop_poles(
+        {kPenMassKg, kPenDampingNsPerM}, {stiffness_n_per_m, kCouplingDampingNsPerM}, kRateHz,
+        OperatorModel::hands_off(),
+        EnvironmentModel::mass_spring(0.0, kStiffestWallNPerM + kPreloadStiffnessNPerM, 0.0),
+        kDelayS * kRateHz);
+    DaemonConfig config;
+    config.coupling = coupling_table(gains, check);
+    config.model_keys = "delay = " + toml_number(kDelayS) + "\n";
+    config.sim_keys = config.model_keys;
+    config.counts_per_meter = kFineCountsPerMeter;
+    const double rest_depth_m = 0.5 / (kStiffestWallNPerM + kPreloadStiffnessNPerM);
+    config.initial_position = toml_number(rest_depth_m + 3e-6);
+    config.soft_start_ramp_s = 0.0;
+    const ScratchDir dir;
+    out.run =
+        run_hapticd(dir, {.config_toml = config.toml() + (check == "exact" ? kOperatorTable : ""),
+                          .scene_toml = wall_contact_scene(kStiffestWallNPerM),
+                          .duration_s = 10.0});
+    if (out.run.exit_code != 0 || out.run.log.rows() == 0) return out;
+    const auto window =
+        static_cast<std::size_t>(std::lround(2.0 * kRateHz / out.predicted.dominant_frequency_hz));
+    const OscillationTrend trend =
+        oscillation_trend(out.run.log.column("x0_m"), kPeriodS, 300, window, 3e-9);
+    out.growth_per_s =
+        linear_phase_growth_per_s(trend, 30e-9, 2.0 * 0.5 / stiffness_n_per_m * 0.8, out.windows);
+    std::cout << "[hil] hands-off in a 1e7 N/m wall, one period of delay, k_c = "
+              << stiffness_n_per_m << " N/m: growth " << out.growth_per_s << " /s over "
+              << out.windows << " windows; exact "
+              << std::log(out.predicted.spectral_radius) * kRateHz << " /s at "
+              << out.predicted.dominant_frequency_hz << " Hz\n";
+    return out;
+}
+
+TEST(HilOperatorClass, TheProofsWitnessGrowsThreePercentPastIt) {
+    const auto [proven_n_per_m, proof] = delayed_class_limit();
+    ASSERT_GT(proven_n_per_m, 0.0);
+    EXPECT_EQ(proof, "the class's port condition");
+    // Past the proof: the daemon told of the class refuses, and the loop grows as predicted.
+    const HandsOffContact refused = hands_off_in_the_wall(1.03 * proven_n_per_m, "exact");
+    EXPECT_EQ(refused.run.exit_code, 2) << refused.run.err;
+    EXPECT_NE(refused.run.err.find("NOT unconditionally stable"), std::string::npos)
+        << refused.run.err;
+    const HandsOffContact past = hands_off_in_the_wall(1.03 * proven_n_per_m, "off");
+    ASSERT_EQ(past.run.exit_code, 0) << past.run.err;
+    const double predicted_past = std::log(past.predicted.spectral_radius) * kRateHz;
+    ASSERT_GT(predicted_past, 0.05);
+    EXPECT_GE(past.windows, 8u);
+    EXPECT_NEAR(past.growth_per_s, predicted_past, 0.1 * predicted_past);
+    // Inside it: armed on the class's proof, and it decays.
+    const HandsOffContact inside = hands_off_in_the_wall(0.97 * proven_n_per_m, "exact");
+    ASSERT_EQ(inside.run.exit_code, 0) << inside.run.err;
+    EXPECT_NE(inside.run.err.find("proven by the class's port condition"), std::string::npos)
+        << inside.run.err;
+    EXPECT_LT(std::log(inside.predicted.spectral_radius) * kRateHz, 0.0);
+    EXPECT_LT(inside.growth_per_s, 0.0);
+    EXPECT_NEAR(inside.growth_per_s, std::log(inside.predicted.spectral_radius) * kRateHz,
+                0.05 * std::abs(std::log(inside.predicted.spectral_radius) * kRateHz));
 }
 
 }  // namespace
