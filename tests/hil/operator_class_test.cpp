@@ -243,6 +243,7 @@ std::pair<double, std::string> delayed_class_limit() {
     return {sized.at("stiffness").get<double>(), sized.at("proof").get<std::string>()};
 }
 
+// NOLINTNEXTLINE(bugprone-exception-escape): nlohmann::json's noexcept move is reported as throwing
 struct HandsOffContact {
     DaemonRun run;
     tune::ClosedLoopPoles predicted;
