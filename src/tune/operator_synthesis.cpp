@@ -1,8 +1,10 @@
 #include "hapticd/tune/operator_synthesis.hpp"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -103,6 +105,61 @@ OperatorModel alias_tuned_operator(const theory::DeviceModel& device, double the
                                      origin.str());
 }
 
+std::optional<OperatorModel> alias_shaped_operator(const theory::DeviceModel& device, double theta,
+                                                   double rate_hz, double delay_periods,
+                                                   int aliases) {
+    if (!(theta > 0.0 && theta < kPi) || aliases < 2) {
+        throw std::invalid_argument("alias_shaped_operator: need 0 < θ < π and >= 2 aliases");
+    }
+    const double period = 1.0 / rate_hz;
+    const theory::LoopDelay delay = theory::split_delay(delay_periods);
+    const std::vector<double> zeros = alias_frequencies_rad_per_s(theta, rate_hz, aliases);
+    const auto n = static_cast<Eigen::Index>(zeros.size());
+    // The reactance of W = b + jX that puts the alias on its disk's worst point.
+    Eigen::VectorXd target(n);
+    for (Eigen::Index i = 0; i < n; ++i) {
+        const double o = zeros[static_cast<std::size_t>(i)] * period;  // |θ + 2πk|
+        const double k = std::round((o - theta) / (2.0 * kPi));
+        const bool positive = std::abs(o - theta - 2.0 * kPi * k) < 1e-9 * o;
+        const double a = (1.0 + delay.whole_periods) * theta + delay.fraction * (positive ? o : -o);
+        const double t = std::tan(a / 2.0);
+        if (!std::isfinite(t) || std::abs(t) < 1e-12) return std::nullopt;
+        // X(-ω) = -X(ω): a mirror alias takes the opposite sign at |ω|.
+        target(i) = (positive ? 1.0 : -1.0) * device.damping_n_s_per_m / t;
+    }
+    // Foster: -k_0/ω (a spring to ground) or m_∞ ω (a rigid mass), and absorbers a_i ω/(p_i² -
+    // ω²) with poles between the aliases; the coefficients must come out >= 0.
+    std::vector<double> poles;
+    for (std::size_t i = 0; i + 1 < zeros.size(); ++i) {
+        poles.push_back(std::sqrt(zeros[i] * zeros[i + 1]));
+    }
+    for (const bool grounded : {true, false}) {
+        Eigen::MatrixXd basis(n, n);
+        for (Eigen::Index i = 0; i < n; ++i) {
+            const double w = zeros[static_cast<std::size_t>(i)];
+            basis(i, 0) = grounded ? -1.0 / w : w;
+            for (Eigen::Index j = 1; j < n; ++j) {
+                const double p = poles[static_cast<std::size_t>(j - 1)];
+                basis(i, j) = w / (p * p - w * w);
+            }
+        }
+        const Eigen::VectorXd c = basis.colPivHouseholderQr().solve(target);
+        if (!c.allFinite() || c.minCoeff() < 0.0) continue;
+        std::vector<OperatorMode> modes;
+        add_free_handle_modes(device.mass_kg, zeros, modes);
+        for (Eigen::Index j = 1; j < n; ++j) {
+            const double p = poles[static_cast<std::size_t>(j - 1)];
+            if (c(j) > 0.0) modes.push_back({c(j) / (p * p), c(j), 0.0});
+        }
+        std::ostringstream origin;
+        origin << "each of " << aliases << " aliases of " << theory::frequency_hz(theta, period)
+               << " Hz on its worst point for " << delay_periods << " periods of delay";
+        return OperatorModel::multi_mode(grounded ? 0.0 : c(0), grounded ? c(0) : 0.0, 0.0,
+                                         std::move(modes), origin.str());
+    }
+    return std::nullopt;
+}
+
 EnvironmentModel lossless_environment_with_admittance(double theta, double rate_hz,
                                                       double admittance_imag) {
     if (!(theta > 0.0 && theta < kPi) || admittance_imag == 0.0 ||
@@ -192,6 +249,15 @@ Adversaries synthesize_adversaries(const theory::DeviceModel& device,
             reactances.push_back((-z * rotation).imag());
         }
         for (const double x : reactances) add_alias_tuned(out.operators, device, theta, rate_hz, x);
+        // With a fraction of a period of delay each alias has its own worst reactance.
+        if (delay.fraction > 0.0 && theta < kPi * (1.0 - 1e-9)) {
+            for (const int aliases : {2, 3, 4, 6, 8}) {
+                if (const auto h =
+                        alias_shaped_operator(device, theta, rate_hz, delay_periods, aliases)) {
+                    out.operators.push_back(*h);
+                }
+            }
+        }
     }
     return out;
 }

@@ -245,7 +245,28 @@ TEST(HapticTuneSize, TheExactModelSizesNoFurtherThanThePassiveProof) {
     EXPECT_LE(out.at("stiffness").get<double>(), 1600.0);
     EXPECT_GE(out.at("stiffness").get<double>(), 1599.0);
     EXPECT_EQ(out.at("proof").get<std::string>(), "the passive port condition");
-    EXPECT_TRUE(out.at("witness").contains("found"));
+}
+
+// Issue 27, item 3's other half: at a fraction of a period of delay the exact model found no
+// operator that reaches the passive bound; each alias now gets its own worst reactance
+// (alias_shaped_operator), and 3 % past the bound such an operator grows.
+TEST(HapticTuneSize, AFractionalDelaysWitnessIsFoundThreePercentPastTheBound) {
+    for (const std::string delay : {"0.00025", "0.0005", "0.0015"}) {
+        SCOPED_TRACE("delay " + delay);
+        const auto result = run_command(tune("size --mass 0.1 --damping 2 --rate 1000 --delay " +
+                                             delay + " --model exact --json"));
+        ASSERT_EQ(result.exit_code, 0) << result.err;
+        const json witness = json::parse(result.out).at("witness");
+        EXPECT_DOUBLE_EQ(witness.at("factor").get<double>(), 1.03);
+        EXPECT_TRUE(witness.at("found").get<bool>()) << witness.dump();
+        EXPECT_GT(witness.at("search").at("worst_spectral_radius").get<double>(), 1.0 + 1e-7);
+        EXPECT_NE(witness.at("search")
+                      .at("worst_operator")
+                      .get<std::string>()
+                      .find("on its worst point for"),
+                  std::string::npos)
+            << witness.dump();
+    }
 }
 
 TEST(HapticTuneCheck, AClassAndASceneAreStatedInTheVerdict) {

@@ -23,6 +23,7 @@
 //     kept as the rigid mass it is at the low aliases.
 #pragma once
 
+#include <optional>
 #include <vector>
 
 #include "hapticd/theory/benchmark.hpp"
@@ -38,6 +39,16 @@ std::vector<double> alias_frequencies_rad_per_s(double theta, double rate_hz, in
 /// +X on the aliases θ + 2πk and -X on 2πk - θ, for the first `aliases` of them.
 OperatorModel alias_tuned_operator(const theory::DeviceModel& device, double theta, double rate_hz,
                                    int aliases, double reactance_n_s_per_m);
+
+/// With a fraction φ of a period of delay each alias k has its own worst point on the passive
+/// disk: W = b + j b cot(a_k/2), a_k = (1 + q)θ + φ(θ + 2πk) (docs/stability-models.md, "Every
+/// passive environment"). A lossless multi-mode grasp that puts the first `aliases` (>= 2) of
+/// θ there: free-handle modes on the aliases, and a Foster reactance through the targets
+/// (a spring to ground or a rigid mass, and absorbers with poles between the aliases);
+/// nullopt when its coefficients would not all be >= 0 (no such operator of this form).
+std::optional<OperatorModel> alias_shaped_operator(const theory::DeviceModel& device, double theta,
+                                                   double rate_hz, double delay_periods,
+                                                   int aliases);
 
 /// The lossless (trapezoidal) mass-spring whose admittance at θ is j·admittance_imag (m/(N s)).
 /// θ in (0, π); admittance_imag != 0.
