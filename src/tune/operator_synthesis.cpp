@@ -3,8 +3,8 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
-#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -105,11 +105,11 @@ OperatorModel alias_tuned_operator(const theory::DeviceModel& device, double the
                                      origin.str());
 }
 
-std::optional<OperatorModel> alias_shaped_operator(const theory::DeviceModel& device, double theta,
-                                                   double rate_hz, double delay_periods,
-                                                   int aliases) {
+std::vector<OperatorModel> alias_shaped_operators(const theory::DeviceModel& device, double theta,
+                                                  double rate_hz, double delay_periods,
+                                                  int aliases) {
     if (!(theta > 0.0 && theta < kPi) || aliases < 2) {
-        throw std::invalid_argument("alias_shaped_operator: need 0 < θ < π and >= 2 aliases");
+        throw std::invalid_argument("alias_shaped_operators: need 0 < θ < π and >= 2 aliases");
     }
     const double period = 1.0 / rate_hz;
     const theory::LoopDelay delay = theory::split_delay(delay_periods);
@@ -123,41 +123,69 @@ std::optional<OperatorModel> alias_shaped_operator(const theory::DeviceModel& de
         const bool positive = std::abs(o - theta - 2.0 * kPi * k) < 1e-9 * o;
         const double a = (1.0 + delay.whole_periods) * theta + delay.fraction * (positive ? o : -o);
         const double t = std::tan(a / 2.0);
-        if (!std::isfinite(t) || std::abs(t) < 1e-12) return std::nullopt;
+        if (!std::isfinite(t) || std::abs(t) < 1e-12) return {};
         // X(-ω) = -X(ω): a mirror alias takes the opposite sign at |ω|.
         target(i) = (positive ? 1.0 : -1.0) * device.damping_n_s_per_m / t;
     }
     // Foster: -k_0/ω (a spring to ground) or m_∞ ω (a rigid mass), and absorbers a_i ω/(p_i² -
-    // ω²) with poles between the aliases; the coefficients must come out >= 0.
-    std::vector<double> poles;
-    for (std::size_t i = 0; i + 1 < zeros.size(); ++i) {
-        poles.push_back(std::sqrt(zeros[i] * zeros[i + 1]));
-    }
-    for (const bool grounded : {true, false}) {
+    // ω²), one pole between each two aliases at p_i = ω_i (ω_{i+1}/ω_i)^λ_i; the coefficients
+    // must come out >= 0. A compass search over the λ_i (from the geometric means) raises the
+    // least coefficient, relative to the largest, until it is >= 0.
+    const auto fit = [&](const std::vector<double>& lambda, bool grounded) {
         Eigen::MatrixXd basis(n, n);
         for (Eigen::Index i = 0; i < n; ++i) {
             const double w = zeros[static_cast<std::size_t>(i)];
             basis(i, 0) = grounded ? -1.0 / w : w;
             for (Eigen::Index j = 1; j < n; ++j) {
-                const double p = poles[static_cast<std::size_t>(j - 1)];
+                const auto l = static_cast<std::size_t>(j - 1);
+                const double p = zeros[l] * std::pow(zeros[l + 1] / zeros[l], lambda[l]);
                 basis(i, j) = w / (p * p - w * w);
             }
         }
-        const Eigen::VectorXd c = basis.colPivHouseholderQr().solve(target);
-        if (!c.allFinite() || c.minCoeff() < 0.0) continue;
+        return Eigen::VectorXd(basis.colPivHouseholderQr().solve(target));
+    };
+    const auto least = [](const Eigen::VectorXd& c) {
+        if (!c.allFinite()) return -std::numeric_limits<double>::infinity();
+        return c.minCoeff() / std::max(c.cwiseAbs().maxCoeff(), 1e-300);
+    };
+    std::vector<OperatorModel> out;
+    for (const bool grounded : {true, false}) {
+        std::vector<double> lambda(static_cast<std::size_t>(n - 1), 0.5);
+        Eigen::VectorXd c = fit(lambda, grounded);
+        double value = least(c);
+        for (double step = 0.25; step >= 1e-3 && value < 0.0;) {
+            bool improved = false;
+            for (double& l : lambda) {
+                for (const double sign : {-1.0, 1.0}) {
+                    const double saved = l;
+                    l = std::clamp(saved + sign * step, 1e-3, 1.0 - 1e-3);
+                    const Eigen::VectorXd trial = fit(lambda, grounded);
+                    if (least(trial) > value) {
+                        c = trial;
+                        value = least(trial);
+                        improved = true;
+                    } else {
+                        l = saved;
+                    }
+                }
+            }
+            if (!improved) step /= 2.0;
+        }
+        if (value < 0.0) continue;
         std::vector<OperatorMode> modes;
         add_free_handle_modes(device.mass_kg, zeros, modes);
         for (Eigen::Index j = 1; j < n; ++j) {
-            const double p = poles[static_cast<std::size_t>(j - 1)];
+            const auto l = static_cast<std::size_t>(j - 1);
+            const double p = zeros[l] * std::pow(zeros[l + 1] / zeros[l], lambda[l]);
             if (c(j) > 0.0) modes.push_back({c(j) / (p * p), c(j), 0.0});
         }
         std::ostringstream origin;
         origin << "each of " << aliases << " aliases of " << theory::frequency_hz(theta, period)
                << " Hz on its worst point for " << delay_periods << " periods of delay";
-        return OperatorModel::multi_mode(grounded ? 0.0 : c(0), grounded ? c(0) : 0.0, 0.0,
-                                         std::move(modes), origin.str());
+        out.push_back(OperatorModel::multi_mode(grounded ? 0.0 : c(0), grounded ? c(0) : 0.0, 0.0,
+                                                std::move(modes), origin.str()));
     }
-    return std::nullopt;
+    return out;
 }
 
 EnvironmentModel lossless_environment_with_admittance(double theta, double rate_hz,
@@ -252,9 +280,9 @@ Adversaries synthesize_adversaries(const theory::DeviceModel& device,
         // With a fraction of a period of delay each alias has its own worst reactance.
         if (delay.fraction > 0.0 && theta < kPi * (1.0 - 1e-9)) {
             for (const int aliases : {2, 3, 4, 6, 8}) {
-                if (const auto h =
-                        alias_shaped_operator(device, theta, rate_hz, delay_periods, aliases)) {
-                    out.operators.push_back(*h);
+                for (OperatorModel& h :
+                     alias_shaped_operators(device, theta, rate_hz, delay_periods, aliases)) {
+                    out.operators.push_back(std::move(h));
                 }
             }
         }

@@ -5,6 +5,8 @@
 #include <nlohmann/json.hpp>
 #include <ostream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "run_command.hpp"
 #include "scratch_dir.hpp"

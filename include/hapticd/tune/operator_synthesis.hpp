@@ -23,7 +23,6 @@
 //     kept as the rigid mass it is at the low aliases.
 #pragma once
 
-#include <optional>
 #include <vector>
 
 #include "hapticd/theory/benchmark.hpp"
@@ -42,13 +41,14 @@ OperatorModel alias_tuned_operator(const theory::DeviceModel& device, double the
 
 /// With a fraction φ of a period of delay each alias k has its own worst point on the passive
 /// disk: W = b + j b cot(a_k/2), a_k = (1 + q)θ + φ(θ + 2πk) (docs/stability-models.md, "Every
-/// passive environment"). A lossless multi-mode grasp that puts the first `aliases` (>= 2) of
+/// passive environment"). Lossless multi-mode grasps that put the first `aliases` (>= 2) of
 /// θ there: free-handle modes on the aliases, and a Foster reactance through the targets
-/// (a spring to ground or a rigid mass, and absorbers with poles between the aliases);
-/// nullopt when its coefficients would not all be >= 0 (no such operator of this form).
-std::optional<OperatorModel> alias_shaped_operator(const theory::DeviceModel& device, double theta,
-                                                   double rate_hz, double delay_periods,
-                                                   int aliases);
+/// (a spring to ground or a rigid mass, and absorbers with a pole between each two aliases,
+/// placed by a compass search): one with the spring and one with the mass, each where a
+/// placement makes every coefficient >= 0 (none where neither does).
+std::vector<OperatorModel> alias_shaped_operators(const theory::DeviceModel& device, double theta,
+                                                  double rate_hz, double delay_periods,
+                                                  int aliases);
 
 /// The lossless (trapezoidal) mass-spring whose admittance at θ is j·admittance_imag (m/(N s)).
 /// θ in (0, π); admittance_imag != 0.
