@@ -52,7 +52,7 @@ OperatorClass stiff_grips() {
 }
 
 /// Σ_k (2/o_k²) Re(e^{-j a_k} Y(jω_k)) for one member (hands-off when `member` is null),
-/// |k| <= 20000, and the most the aliases past it can add, 1/(π² 20000 b).
+/// |k| <= 5000, and the most the aliases past it can add, 1/(π² 5000 b).
 struct AliasSum {
     double value;
     double tail;
@@ -61,7 +61,7 @@ AliasSum alias_sum(const DeviceModel& device, const OperatorModel* member, doubl
                    double delay_periods) {
     const int q = static_cast<int>(std::floor(delay_periods));
     const double phi = delay_periods - q;
-    constexpr int kTerms = 20000;
+    constexpr int kTerms = 5000;
     double sum = 0.0;
     for (int k = -kTerms; k <= kTerms; ++k) {
         const double o = theta + 2.0 * kPi * k;
@@ -161,16 +161,18 @@ TEST(ClassProof, WithDelayNoProofReachesPastTheSearch) {
     // Issue 27, item 2: one period of delay; the stiff grips have a member unstable from
     // 1517 N/m at b_c = 1.
     for (const auto& [delay, damping] : {std::pair{0.5, 0.5}, {1.0, 0.5}, {1.0, 1.0}}) {
-        {
-            SCOPED_TRACE(testing::Message() << "delay " << delay << ", b_c " << damping);
-            for (const OperatorClass& c : {pen_grip(), stiff_grips()}) {
-                const double proven = ClassProver(kPen, c, kRateHz, delay)
-                                          .stiffness_limit({0.0, damping}, 0.0)
-                                          .stiffness_n_per_m;
-                EXPECT_GE(proven, 0.999 * passive_limit(damping, delay));
-                EXPECT_LE(proven, search_limit(c, damping, delay) * 1.002);
-            }
-        }
+        SCOPED_TRACE(testing::Message() << "delay " << delay << ", b_c " << damping);
+        // The pen-grip class buys stiffness here, and its search bounds the proof from above.
+        const double proven = ClassProver(kPen, pen_grip(), kRateHz, delay)
+                                  .stiffness_limit({0.0, damping}, 0.0)
+                                  .stiffness_n_per_m;
+        EXPECT_GE(proven, 0.999 * passive_limit(damping, delay));
+        EXPECT_LE(proven, search_limit(pen_grip(), damping, delay) * 1.002);
+        // The stiff grips' proof falls back on the passive one with a delay.
+        EXPECT_NEAR(ClassProver(kPen, stiff_grips(), kRateHz, delay)
+                        .stiffness_limit({0.0, damping}, 0.0)
+                        .stiffness_n_per_m,
+                    passive_limit(damping, delay), 1e-3 * passive_limit(damping, delay));
     }
     EXPECT_LT(ClassProver(kPen, stiff_grips(), kRateHz, 1.0)
                   .stiffness_limit({0.0, 1.0}, 0.0)
