@@ -36,6 +36,7 @@
 
 #include "hapticd/tune/class_check.hpp"
 #include "hapticd_run.hpp"
+#include "operator_classes.hpp"
 #include "operators.hpp"
 #include "oscillation.hpp"
 #include "pen_display.hpp"
@@ -52,17 +53,7 @@ constexpr double kWallStiffnessNPerM = 1e5;
 constexpr double kCouplingDampingNsPerM = 1.0;
 const std::string kClassFile = std::string(HAPTICD_SOURCE_DIR) + "/config/operators/pen-grip.toml";
 
-/// config/operators/pen-grip.toml, as tune sees it (the test below reads the file through
-/// the daemon and haptic-tune; this copy predicts).
-tune::OperatorClass pen_grip() {
-    tune::OperatorClass c;
-    c.hand_mass_kg = {0.1, 2.0};
-    c.grip_stiffness_n_per_m = {0.0, 3000.0};
-    c.grip_damping_n_s_per_m = {2.0, 30.0};
-    c.arm_stiffness_n_per_m = {0.0, 1000.0};
-    c.arm_damping_n_s_per_m = {0.0, 20.0};
-    return c;
-}
+tune::OperatorClass pen_grip() { return pen_grip_class(); }
 
 const std::string kOperatorTable =
     "[operator]\nhand_mass = [0.1, 2.0]\ngrip_stiffness = [0.0, 3000.0]\n"

@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "hapticd/theory/coupling_check.hpp"
+#include "operator_classes.hpp"
 
 namespace hapticd::tune {
 namespace {
@@ -24,16 +25,7 @@ const DeviceModel kPen{0.1, 2.0};  // m = 0.1 kg, b = 2 N s/m
 constexpr double kRateHz = 1000.0;
 constexpr double kPeriodS = 1.0 / kRateHz;
 
-/// config/operators/pen-grip.toml.
-OperatorClass pen_grip() {
-    OperatorClass c;
-    c.hand_mass_kg = {0.1, 2.0};
-    c.grip_stiffness_n_per_m = {0.0, 3000.0};
-    c.grip_damping_n_s_per_m = {2.0, 30.0};
-    c.arm_stiffness_n_per_m = {0.0, 1000.0};
-    c.arm_damping_n_s_per_m = {0.0, 20.0};
-    return c;
-}
+OperatorClass pen_grip() { return testing::pen_grip_class(); }
 
 StabilityAssumption for_class(const OperatorClass& c) { return {c, {}}; }
 

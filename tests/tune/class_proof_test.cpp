@@ -15,6 +15,7 @@
 
 #include "hapticd/tune/class_check.hpp"
 #include "hapticd/tune/coupling_sizing.hpp"
+#include "operator_classes.hpp"
 
 namespace hapticd::tune {
 namespace {
@@ -28,28 +29,9 @@ constexpr double kRateHz = 1000.0;
 constexpr double kPeriodS = 1.0 / kRateHz;
 constexpr double kPi = std::numbers::pi;
 
-/// config/operators/pen-grip.toml: no member resonates near the aliases of Nyquist.
-OperatorClass pen_grip() {
-    OperatorClass c;
-    c.hand_mass_kg = {0.1, 2.0};
-    c.grip_stiffness_n_per_m = {0.0, 3000.0};
-    c.grip_damping_n_s_per_m = {2.0, 30.0};
-    c.arm_stiffness_n_per_m = {0.0, 1000.0};
-    c.arm_damping_n_s_per_m = {0.0, 20.0};
-    return c;
-}
+OperatorClass pen_grip() { return testing::pen_grip_class(); }
 
-/// Issue 27's class: stiff, lightly damped grips and arms, members with two modes on two
-/// aliases at once.
-OperatorClass stiff_grips() {
-    OperatorClass c;
-    c.hand_mass_kg = {0.05, 0.5};
-    c.grip_stiffness_n_per_m = {1e5, 1e7};
-    c.grip_damping_n_s_per_m = {0.0, 1.0};
-    c.arm_stiffness_n_per_m = {1e5, 1e7};
-    c.arm_damping_n_s_per_m = {0.0, 1.0};
-    return c;
-}
+OperatorClass stiff_grips() { return testing::stiff_grips_class(); }
 
 /// Σ_k (2/o_k²) Re(e^{-j a_k} Y(jω_k)) for one member (hands-off when `member` is null),
 /// |k| <= 5000, and the most the aliases past it can add, 1/(π² 5000 b).
@@ -161,7 +143,7 @@ TEST(ClassProof, WithDelayNoProofReachesPastTheSearch) {
     // Issue 27, item 2: one period of delay; the stiff grips have a member unstable from
     // 1517 N/m at b_c = 1.
     for (const auto& [delay, damping] : {std::pair{0.5, 0.5}, {1.0, 0.5}, {1.0, 1.0}}) {
-        SCOPED_TRACE(testing::Message() << "delay " << delay << ", b_c " << damping);
+        SCOPED_TRACE(::testing::Message() << "delay " << delay << ", b_c " << damping);
         // The pen-grip class buys stiffness here, and its search bounds the proof from above.
         const double proven = ClassProver(kPen, pen_grip(), kRateHz, delay)
                                   .stiffness_limit({0.0, damping}, 0.0)
