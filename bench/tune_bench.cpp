@@ -13,6 +13,7 @@
 #include "hapticd/tune/coupling_sizing.hpp"
 #include "hapticd/tune/exact_admittance.hpp"
 #include "hapticd/tune/exact_model.hpp"
+#include "operator_classes.hpp"
 
 namespace {
 
@@ -90,15 +91,7 @@ void BM_CheckExact(benchmark::State& state) {
 BENCHMARK(BM_CheckExact)->Arg(0)->Arg(50)->Arg(100)->Unit(benchmark::kMillisecond)->Iterations(3);
 
 /// config/operators/pen-grip.toml.
-hapticd::tune::OperatorClass pen_grip() {
-    hapticd::tune::OperatorClass c;
-    c.hand_mass_kg = {0.1, 2.0};
-    c.grip_stiffness_n_per_m = {0.0, 3000.0};
-    c.grip_damping_n_s_per_m = {2.0, 30.0};
-    c.arm_stiffness_n_per_m = {0.0, 1000.0};
-    c.arm_damping_n_s_per_m = {0.0, 20.0};
-    return c;
-}
+hapticd::tune::OperatorClass pen_grip() { return hapticd::testing::pen_grip_class(); }
 
 hapticd::tune::StabilityAssumption rigid_wall_scene() {
     hapticd::tune::StabilityAssumption a;
