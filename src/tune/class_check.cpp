@@ -24,13 +24,6 @@ std::vector<EnvironmentModel> models_of(const std::vector<SceneEnvironment>& sce
     return out;
 }
 
-/// Keeps the larger of two checks and adds up their cases.
-void merge(ExactCheck& into, const ExactCheck& other) {
-    const int cases = into.cases_checked + other.cases_checked;
-    if (other.worst_spectral_radius > into.worst_spectral_radius) into = other;
-    into.cases_checked = cases;
-}
-
 /// A lossless environment on two coordinates in [0, 1]: the frequency θ at which it takes
 /// the admittance jY, and Y, signed and logarithmic over 12 decades around 1/|Z_c|.
 struct LosslessCoordinates {

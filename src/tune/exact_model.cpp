@@ -565,6 +565,12 @@ std::vector<EnvironmentModel> default_environment_sweep(const DeviceModel& devic
     return sweep;
 }
 
+void merge(ExactCheck& into, const ExactCheck& other) {
+    const int cases = into.cases_checked + other.cases_checked;
+    if (other.worst_spectral_radius > into.worst_spectral_radius) into = other;
+    into.cases_checked = cases;
+}
+
 ExactCheck check_exact(const DeviceModel& device, const SpringDamperCoupling& coupling,
                        double rate_hz, const std::vector<OperatorModel>& operators,
                        const std::vector<EnvironmentModel>& environments, double delay_periods) {
@@ -613,17 +619,8 @@ ExactCheck check_exact(const DeviceModel& device, const SpringDamperCoupling& co
                                    (k + 1) * operators.size() / shares));
     }
     ExactCheck check = share(0, operators.size() / shares);
+    for (std::future<ExactCheck>& part : parts) merge(check, part.get());
     check.delay_periods = delay_periods;
-    for (std::future<ExactCheck>& part : parts) {
-        const ExactCheck p = part.get();
-        check.cases_checked += p.cases_checked;
-        if (p.worst_spectral_radius > check.worst_spectral_radius) {
-            check.worst_spectral_radius = p.worst_spectral_radius;
-            check.worst_frequency_hz = p.worst_frequency_hz;
-            check.worst_operator = p.worst_operator;
-            check.worst_environment = p.worst_environment;
-        }
-    }
     if (check.cases_checked == 0) {
         throw std::invalid_argument("check_exact: the operator or environment sweep is empty");
     }
@@ -650,9 +647,7 @@ ExactCheck check_exact(const DeviceModel& device, const SpringDamperCoupling& co
                               adversaries.environments.end());
     const ExactCheck tuned = check_exact(device, coupling, rate_hz, adversaries.operators,
                                          tuned_environments, delay_periods);
-    const int cases = check.cases_checked + tuned.cases_checked;
-    if (tuned.worst_spectral_radius > check.worst_spectral_radius) check = tuned;
-    check.cases_checked = cases;
+    merge(check, tuned);
     return check;
 }
 

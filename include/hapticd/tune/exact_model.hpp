@@ -205,6 +205,10 @@ struct ExactCheck {
     double delay_periods = 0.0;  ///< the loop delay the check assumed
 };
 
+/// Keeps the larger of two checks (`into` on a tie: the first case found stays the worst) and
+/// adds up their cases.
+void merge(ExactCheck& into, const ExactCheck& other);
+
 /// The tuned steel grips depend on the device mass and the rate (see the file comment).
 std::vector<OperatorModel> default_operator_sweep(const theory::DeviceModel& device,
                                                   double rate_hz);
