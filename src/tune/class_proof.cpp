@@ -282,7 +282,6 @@ double ClassProver::frequency_hz(const Interval& interval) const {
 
 bool ClassProver::prove_interval(const SpringDamperCoupling& coupling, double lo, double hi,
                                  double bound, int depth, ClassProof& worst) const {
-    ++worst.intervals;
     const double margin = interval_margin(coupling, lo, hi, bound);
     if (margin > 0.0 || depth >= kMaxHalvings || hi - lo <= kNarrowest) {
         if (margin < worst.worst_margin) {

@@ -131,14 +131,17 @@ std::vector<OperatorModel> alias_shaped_operators(const theory::DeviceModel& dev
     // ω²), one pole between each two aliases at p_i = ω_i (ω_{i+1}/ω_i)^λ_i; the coefficients
     // must come out >= 0. A compass search over the λ_i (from the geometric means) raises the
     // least coefficient, relative to the largest, until it is >= 0.
+    const auto pole = [&](const std::vector<double>& lambda, Eigen::Index j) {
+        const auto l = static_cast<std::size_t>(j - 1);
+        return zeros[l] * std::pow(zeros[l + 1] / zeros[l], lambda[l]);
+    };
     const auto fit = [&](const std::vector<double>& lambda, bool grounded) {
         Eigen::MatrixXd basis(n, n);
         for (Eigen::Index i = 0; i < n; ++i) {
             const double w = zeros[static_cast<std::size_t>(i)];
             basis(i, 0) = grounded ? -1.0 / w : w;
             for (Eigen::Index j = 1; j < n; ++j) {
-                const auto l = static_cast<std::size_t>(j - 1);
-                const double p = zeros[l] * std::pow(zeros[l + 1] / zeros[l], lambda[l]);
+                const double p = pole(lambda, j);
                 basis(i, j) = w / (p * p - w * w);
             }
         }
@@ -160,9 +163,10 @@ std::vector<OperatorModel> alias_shaped_operators(const theory::DeviceModel& dev
                     const double saved = l;
                     l = std::clamp(saved + sign * step, 1e-3, 1.0 - 1e-3);
                     const Eigen::VectorXd trial = fit(lambda, grounded);
-                    if (least(trial) > value) {
+                    const double trial_value = least(trial);
+                    if (trial_value > value) {
                         c = trial;
-                        value = least(trial);
+                        value = trial_value;
                         improved = true;
                     } else {
                         l = saved;
@@ -175,8 +179,7 @@ std::vector<OperatorModel> alias_shaped_operators(const theory::DeviceModel& dev
         std::vector<OperatorMode> modes;
         add_free_handle_modes(device.mass_kg, zeros, modes);
         for (Eigen::Index j = 1; j < n; ++j) {
-            const auto l = static_cast<std::size_t>(j - 1);
-            const double p = zeros[l] * std::pow(zeros[l + 1] / zeros[l], lambda[l]);
+            const double p = pole(lambda, j);
             if (c(j) > 0.0) modes.push_back({c(j) / (p * p), c(j), 0.0});
         }
         std::ostringstream origin;

@@ -118,7 +118,7 @@ void class_proof(const StabilityDesign& design, double delay_periods, StabilityV
     if (proof.holds) {
         into.passed = true;
         into.proven = true;
-        into.proof = "the class's port condition";
+        into.proof = kClassPortCondition;
     }
 }
 
@@ -130,7 +130,7 @@ void class_proof(const StabilityDesign& design, double delay_periods, StabilityV
 void exact_verdict(const StabilityDesign& design, double delay_periods, StabilityVerdict& into) {
     passive_proof(design, delay_periods, into);
     into.proven = into.passed;
-    if (into.proven) into.proof = "the passive port condition";
+    if (into.proven) into.proof = kPassivePortCondition;
     if (!into.proven && design.assumption.operators) class_proof(design, delay_periods, into);
     into.exact = check_exact(design.device, design.coupling, design.rate_hz, design.assumption,
                              delay_periods);
@@ -204,7 +204,7 @@ StabilityVerdict check_stability(const StabilityDesign& design) {
     if (design.model == StabilityModel::passive) {
         passive_proof(design, delay_periods, verdict);
         verdict.proven = verdict.passed;
-        if (verdict.proven) verdict.proof = "the passive port condition";
+        if (verdict.proven) verdict.proof = kPassivePortCondition;
         return verdict;
     }
     const theory::CouplingCheck check = theory::check_coupling(

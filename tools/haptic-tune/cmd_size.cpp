@@ -14,6 +14,7 @@
 #include "hapticd/tune/coupling_sizing.hpp"
 #include "hapticd/tune/input_checks.hpp"
 #include "hapticd/tune/result_json.hpp"
+#include "hapticd/tune/stability_check.hpp"
 
 namespace hapticd::tools {
 namespace {
@@ -52,8 +53,7 @@ nlohmann::ordered_json filter_fields(const std::optional<theory::ForceSensorFilt
 }
 
 /// The sized design held against the exact sampled-data model, the ground truth the
-/// frequency-domain models approximate (`known`: that check, when the sizing already ran it
-/// on this design). Warns on stderr when it disagrees.
+/// frequency-domain models approximate. Warns on stderr when it disagrees.
 nlohmann::ordered_json exact_cross_check(const DesignInput& input,
                                          const theory::SpringDamperCoupling& coupling,
                                          const tune::StabilityAssumption& assumption,
@@ -212,7 +212,7 @@ int run_assumed(const SizeOptions& o, const DesignInput& input,
     double rejected = passive.rejected_n_per_m;
     int checks = passive.checks;
     coupling.stiffness_n_per_m = passive.stiffness_n_per_m;
-    std::string proof = "the passive port condition";
+    std::string proof(tune::kPassivePortCondition);
     if (assumption.operators) {
         const tune::ClassProver prover(input.device, *assumption.operators, input.rate_hz,
                                        input.delay_periods());
@@ -222,7 +222,7 @@ int run_assumed(const SizeOptions& o, const DesignInput& input,
         if (limit.stiffness_n_per_m > passive.stiffness_n_per_m) {
             coupling.stiffness_n_per_m = limit.stiffness_n_per_m;
             rejected = limit.rejected_n_per_m;
-            proof = "the class's port condition";
+            proof = tune::kClassPortCondition;
         }
     }
     require_stiffness(coupling.stiffness_n_per_m, damping, assumption, input);

@@ -50,7 +50,6 @@ struct ClassProof {
     /// intervals it used (> 0); where it fails, the least over the partition before halving.
     double worst_margin = 0.0;
     double worst_frequency_hz = 0.0;  ///< the middle of the interval where it is least
-    int intervals = 0;                ///< intervals bounded, halvings included
 };
 
 /// The class's alias-sum bound for one device, rate, delay and class, for any coupling.

@@ -42,6 +42,12 @@ bool is_guarantee(StabilityModel model) noexcept;
 inline constexpr double kNearOneRadians = 0.01;
 inline constexpr double kWitnessGrowthPerTick = 1e-6;
 
+/// The proofs a verdict rests on (StabilityVerdict::proof, `haptic-tune size`'s "proof"):
+/// Colgate and Schenkel's passive port condition, and the same condition bounded over a
+/// declared class (tune/class_proof.hpp).
+inline constexpr std::string_view kPassivePortCondition = "the passive port condition";
+inline constexpr std::string_view kClassPortCondition = "the class's port condition";
+
 /// What is checked.
 struct StabilityDesign {
     theory::DeviceModel device;
@@ -60,8 +66,7 @@ struct StabilityVerdict {
     /// exact model too when the condition holds); false for a search's verdict and for the
     /// paper and encoder models.
     bool proven = false;
-    /// What proves it: "the passive port condition" or "the class's port condition"
-    /// (tune/class_proof.hpp); empty when not proven.
+    /// What proves it: kPassivePortCondition or kClassPortCondition; empty when not proven.
     std::string proof;
     bool guarantee = true;  ///< passive and exact; paper and encoder are not
     double delay_s = 0.0;
