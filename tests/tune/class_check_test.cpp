@@ -257,12 +257,7 @@ namespace {
 // det(K - ω² M) = 0 for k_s and k_a) and stops at the two-mode limit
 // b_c + k_c T/2 < (π²/8) b / S_2, 3441 N/m.
 TEST(ClassSearch, FindsTwoModesTunedTogether) {
-    OperatorClass wide;
-    wide.hand_mass_kg = {0.05, 0.5};
-    wide.grip_stiffness_n_per_m = {1e5, 1e7};
-    wide.grip_damping_n_s_per_m = {0.0, 1.0};
-    wide.arm_stiffness_n_per_m = {1e5, 1e7};
-    wide.arm_damping_n_s_per_m = {0.0, 1.0};
+    const OperatorClass wide = testing::stiff_grips_class();
     const StabilityAssumption a = for_class(wide);
     const OperatorModel member = OperatorModel::two_mass_grasp(3773027.0, 0.0, 0.1, 2323550.0, 0.0);
     ASSERT_TRUE(wide.contains(member));

@@ -10,6 +10,7 @@
 #include "hapticd/tune/coupling_sizing.hpp"
 #include "hapticd/tune/environment_assumption.hpp"
 #include "hapticd/tune/stability_check.hpp"
+#include "operator_classes.hpp"
 
 namespace hapticd::tune {
 namespace {
@@ -147,13 +148,7 @@ TEST(ExactVerdict, HeavyLightlyDampedFastDevicesGetThePassiveBound) {
     }
     // The class version: k_c = 10, b_c = 0.29 is passive (0.29 + 10 T/2 < 0.3).
     StabilityDesign d = design({6.0, 0.3}, {10.0, 0.29}, 10000.0, 0.0);
-    OperatorClass pen_grip;
-    pen_grip.hand_mass_kg = {0.1, 2.0};
-    pen_grip.grip_stiffness_n_per_m = {0.0, 3000.0};
-    pen_grip.grip_damping_n_s_per_m = {2.0, 30.0};
-    pen_grip.arm_stiffness_n_per_m = {0.0, 1000.0};
-    pen_grip.arm_damping_n_s_per_m = {0.0, 20.0};
-    d.assumption.operators = pen_grip;
+    d.assumption.operators = testing::pen_grip_class();
     const StabilityVerdict v = check_stability(d);
     EXPECT_TRUE(v.passed) << v.describe();
     EXPECT_TRUE(v.proven);
