@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <future>
 #include <initializer_list>
 #include <numbers>
 #include <optional>
 #include <stdexcept>
+#include <thread>
 
 #include "hapticd/tune/input_checks.hpp"
 #include "hapticd/tune/operator_synthesis.hpp"
@@ -57,93 +59,59 @@ class ClassSearch {
           delay_periods_(delay_periods) {}
 
     ExactCheck run(const std::vector<EnvironmentModel>& environments, bool every_passive) {
+        best_ = {};
         best_.worst_spectral_radius = -1.0;
         best_.delay_periods = delay_periods_;
-        // Stage 1: hands-off and the 3^5 grid meet every environment.
+        // Stage 1: hands-off, the 3^5 grid (corners, edge midpoints, centre) with the members
+        // tuned from each, and the members with two modes on two aliases at once, each
+        // against every environment. The probes go in two contiguous shares, so the seeds
+        // keep the order of one pass.
         merge(best_, check_exact(device_, coupling_, rate_hz_, {OperatorModel::hands_off()},
                                  environments, delay_periods_));
-        struct Seed {
-            double radius;
-            ClassPoint point;
-            EnvironmentModel environment;
-        };
-        std::array<std::vector<Seed>, kBands.size()> seeds;
-        // One sampling of the plant for all the environments; the seed in each band is its
-        // worst one.
-        const auto seed = [&](const OperatorModel& h, const ClassPoint& point,
-                              const std::vector<EnvironmentModel>& with) {
-            ExactCheck c = check_exact(device_, coupling_, rate_hz_, {h}, with, delay_periods_);
-            merge(best_, c);
-            const ClosedLoopPoles poles = closed_loop_poles(device_, coupling_, rate_hz_, h,
-                                                            c.worst_environment, delay_periods_);
-            for (std::size_t band = 0; band < kBands.size(); ++band) {
-                seeds[band].push_back(
-                    {band_radius(poles, kBands[band]), point, c.worst_environment});
+        const std::vector<TunedMember> two_modes = two_mode_members();
+        const std::size_t probes = kGridPoints + two_modes.size();
+        on_two_threads(probes, Split::contiguous, [&](ClassSearch& search, std::size_t i) {
+            if (search.decided()) return;
+            if (i < kGridPoints) {
+                search.probe_grid_point(i, environments);
+            } else {
+                search.probe_two_modes(two_modes[i - kGridPoints], environments, every_passive);
             }
-            return c;
-        };
-        ClassPoint point{};
-        for (int index = 0; index < 243; ++index) {
-            int rest = index;
-            for (double& u : point) u = 0.5 * (rest % 3), rest /= 3;
-            const OperatorModel h = cls_.member(point);
-            if (!cls_.contains(h)) continue;
-            const ExactCheck c = seed(h, point, environments);
-            // Synthesis inside the class: the members that put a free-handle mode on an
-            // alias of a frequency of the spread (a grid never lands on such a resonance).
-            for (const OperatorModel& tuned : tuned_members(h)) {
-                const ClassPoint tuned_point = cls_.point_of(tuned);
-                for (const EnvironmentModel& e : {c.worst_environment, environments.front()}) {
-                    const ClosedLoopPoles tp =
-                        closed_loop_poles(device_, coupling_, rate_hz_, tuned, e, delay_periods_);
-                    record(tp, tuned, e);
-                    for (std::size_t band = 0; band < kBands.size(); ++band) {
-                        seeds[band].push_back({band_radius(tp, kBands[band]), tuned_point, e});
-                    }
-                }
-            }
-        }
-        // Two modes on two aliases at once, against every environment.
-        for (const auto& [tuned, theta] : two_mode_members()) {
-            std::vector<EnvironmentModel> paired = environments;
-            if (every_passive) {
-                if (const auto e = worst_lossless_for(tuned, theta)) paired.push_back(*e);
-            }
-            (void)seed(tuned, cls_.point_of(tuned), paired);
-        }
+        });
         // Stage 2: compass searches from the worst seeds of each band (the whole circle, and
         // the low, middle and high bands of arg z: a lightly damped slow mode must not hide a
-        // fast one that the climb could push out of the circle, nor the reverse). A witness
-        // that grows by kDecisiveGrowthPerTick ends the search: the verdict is no, and climbing
-        // further would only name a worse member (9.4 s instead of 0.7 s for the pen-grip
-        // class at 5 periods of delay, 3 % past its proof).
-        for (std::size_t band = 0; band < kBands.size() && !decided(); ++band) {
-            std::vector<Seed>& s = seeds[band];
-            std::sort(s.begin(), s.end(),
-                      [](const Seed& a, const Seed& b) { return a.radius > b.radius; });
-            const std::size_t climbs = band == 0 ? kClimbs : kBandClimbs;
-            for (std::size_t i = 0; i < s.size() && i < climbs && s[i].radius >= 0.0 && !decided();
-                 ++i) {
-                climb(s[i].point, s[i].environment, every_passive, kBands[band]);
+        // fast one that the climb could push out of the circle, nor the reverse), and in each
+        // band from hands-off. A witness that grows by kDecisiveGrowthPerTick ends a share's
+        // climbs: the verdict is no, and climbing further would only name a worse member (9.4
+        // s instead of 0.7 s for the pen-grip class at 5 periods of delay, 3 % past its
+        // proof). The climbs alternate between the two shares.
+        struct Climb {
+            std::size_t band;
+            std::optional<Seed> from;  ///< none: hands-off
+        };
+        std::vector<Climb> climbs;
+        for (std::size_t band = 0; band < kBands.size(); ++band) {
+            std::vector<Seed>& s = seeds_[band];
+            std::stable_sort(s.begin(), s.end(),
+                             [](const Seed& a, const Seed& b) { return a.radius > b.radius; });
+            const std::size_t count = band == 0 ? kClimbs : kBandClimbs;
+            for (std::size_t i = 0; i < s.size() && i < count && s[i].radius >= 0.0; ++i) {
+                climbs.push_back({band, s[i]});
             }
-            // Hands-off belongs to every class: the device alone against the lossless
-            // environment worst for it.
-            if (every_passive && !decided()) {
-                const OperatorModel alone = OperatorModel::hands_off();
-                (void)climb_environment(alone, kBands[band]);
-                // and from the best almost free virtual mass (k_e at the search's floor), the
-                // worst lossless environment for a delayed loop at low frequency: a tester's
-                // independent search found it 0.05 % inside the limits the climb above gave.
-                EnvironmentModel free_mass;
-                double radius = -2.0;
-                for (int i = 0; i <= 36; ++i) {
-                    const EnvironmentModel e = EnvironmentModel::lossless_mass_spring(
-                        1e-3 * device_.mass_kg * std::pow(10.0, i / 6.0), 1e-4);
-                    const double r = evaluate(alone, e, kBands[band]);
-                    if (r > radius) radius = r, free_mass = e;
-                }
-                (void)climb_masses(alone, free_mass, kBands[band]);
-            }
+            if (every_passive) climbs.push_back({band, std::nullopt});
+        }
+        if (!decided()) {
+            on_two_threads(climbs.size(), Split::alternate,
+                           [&](ClassSearch& search, std::size_t i) {
+                               if (search.decided()) return;
+                               const Band& band = kBands[climbs[i].band];
+                               if (climbs[i].from) {
+                                   search.climb(climbs[i].from->point, climbs[i].from->environment,
+                                                every_passive, band);
+                               } else {
+                                   search.climb_hands_off(band);
+                               }
+                           });
         }
         best_.worst_margin = 1.0 - best_.worst_spectral_radius;
         best_.stable = best_.worst_margin >= -kMarginalTolerance;
@@ -151,7 +119,7 @@ class ClassSearch {
     }
 
   private:
-    bool decided() const { return best_.worst_spectral_radius > 1.0 + kDecisiveGrowthPerTick; }
+    bool decided() const { return decisive(best_); }
 
     static constexpr std::size_t kClimbs = 6, kBandClimbs = 3;
     static constexpr int kAliasTerms = 100;
@@ -403,12 +371,120 @@ class ClassSearch {
         return best;
     }
 
+    static constexpr std::size_t kGridPoints = 243;  // 3^5
+
+    struct Seed {
+        double radius;
+        ClassPoint point;
+        EnvironmentModel environment;
+    };
+
+    enum class Split { contiguous, alternate };
+
+    /// work(search, i) for every i in [0, n): this search takes one share and a fresh copy
+    /// of it (its findings and seeds empty) the other on a second thread, where the machine
+    /// has two cores. The copy's worst case and seeds are merged after this one's: with
+    /// Split::contiguous the result is that of one pass in order.
+    template <typename Work>
+    void on_two_threads(std::size_t n, Split split, Work work) {
+        if (std::thread::hardware_concurrency() < 2 || n < 2) {
+            for (std::size_t i = 0; i < n; ++i) work(*this, i);
+            return;
+        }
+        const auto mine = [&](std::size_t i) {
+            return split == Split::alternate ? i % 2 == 0 : i < (n + 1) / 2;
+        };
+        ClassSearch other(device_, coupling_, rate_hz_, cls_, delay_periods_);
+        other.best_.worst_spectral_radius = -1.0;
+        auto second = std::async(std::launch::async, [&] {
+            for (std::size_t i = 0; i < n; ++i) {
+                if (!mine(i)) work(other, i);
+            }
+        });
+        for (std::size_t i = 0; i < n; ++i) {
+            if (mine(i)) work(*this, i);
+        }
+        second.get();
+        merge(best_, other.best_);
+        for (std::size_t band = 0; band < kBands.size(); ++band) {
+            seeds_[band].insert(seeds_[band].end(), other.seeds_[band].begin(),
+                                other.seeds_[band].end());
+        }
+    }
+
+    /// One sampling of the plant for all the environments; the seed in each band is the
+    /// worst environment's.
+    ExactCheck seed(const OperatorModel& h, const ClassPoint& point,
+                    const std::vector<EnvironmentModel>& with) {
+        ExactCheck c = check_exact(device_, coupling_, rate_hz_, {h}, with, delay_periods_);
+        merge(best_, c);
+        const ClosedLoopPoles poles =
+            closed_loop_poles(device_, coupling_, rate_hz_, h, c.worst_environment, delay_periods_);
+        for (std::size_t band = 0; band < kBands.size(); ++band) {
+            seeds_[band].push_back({band_radius(poles, kBands[band]), point, c.worst_environment});
+        }
+        return c;
+    }
+
+    /// Grid point `index` of the 3^5 grid, and the members tuned from it.
+    void probe_grid_point(std::size_t index, const std::vector<EnvironmentModel>& environments) {
+        ClassPoint point{};
+        std::size_t rest = index;
+        for (double& u : point) u = 0.5 * static_cast<double>(rest % 3), rest /= 3;
+        const OperatorModel h = cls_.member(point);
+        if (!cls_.contains(h)) return;
+        const ExactCheck c = seed(h, point, environments);
+        // Synthesis inside the class: the members that put a free-handle mode on an alias of
+        // a frequency of the spread (a grid never lands on such a resonance).
+        for (const OperatorModel& tuned : tuned_members(h)) {
+            const ClassPoint tuned_point = cls_.point_of(tuned);
+            for (const EnvironmentModel& e : {c.worst_environment, environments.front()}) {
+                const ClosedLoopPoles tp =
+                    closed_loop_poles(device_, coupling_, rate_hz_, tuned, e, delay_periods_);
+                record(tp, tuned, e);
+                for (std::size_t band = 0; band < kBands.size(); ++band) {
+                    seeds_[band].push_back({band_radius(tp, kBands[band]), tuned_point, e});
+                }
+            }
+        }
+    }
+
+    /// A member with two modes on two aliases, against every environment and (for every
+    /// passive environment) the lossless one worst for it.
+    void probe_two_modes(const TunedMember& tuned,
+                         const std::vector<EnvironmentModel>& environments, bool every_passive) {
+        std::vector<EnvironmentModel> paired = environments;
+        if (every_passive) {
+            if (const auto e = worst_lossless_for(tuned.member, tuned.theta)) paired.push_back(*e);
+        }
+        (void)seed(tuned.member, cls_.point_of(tuned.member), paired);
+    }
+
+    /// Hands-off belongs to every class: the device alone against the lossless environment
+    /// worst for it, and from the best almost free virtual mass (k_e at the search's floor),
+    /// the worst lossless environment for a delayed loop at low frequency (a tester's
+    /// independent search found it 0.05 % inside the limits the first climb gave).
+    void climb_hands_off(const Band& band) {
+        const OperatorModel alone = OperatorModel::hands_off();
+        (void)climb_environment(alone, band);
+        EnvironmentModel free_mass;
+        double radius = -2.0;
+        for (int i = 0; i <= 36; ++i) {
+            const EnvironmentModel e = EnvironmentModel::lossless_mass_spring(
+                1e-3 * device_.mass_kg * std::pow(10.0, i / 6.0), 1e-4);
+            const double r = evaluate(alone, e, band);
+            if (r > radius) radius = r, free_mass = e;
+        }
+        (void)climb_masses(alone, free_mass, band);
+    }
+
     DeviceModel device_;
     SpringDamperCoupling coupling_;
     double rate_hz_;
     OperatorClass cls_;
     double delay_periods_;
     ExactCheck best_;
+    std::array<std::vector<Seed>, kBands.size()> seeds_;
 };
 
 }  // namespace
@@ -421,11 +497,11 @@ std::string StabilityAssumption::describe() const {
 }
 
 ExactCheck check_exact(const DeviceModel& device, const SpringDamperCoupling& coupling,
-                       double rate_hz, const StabilityAssumption& assumption,
-                       double delay_periods) {
+                       double rate_hz, const StabilityAssumption& assumption, double delay_periods,
+                       SearchFor search) {
     const bool every_environment = assumption.environments.every_passive();
     if (!assumption.operators && every_environment) {
-        return check_exact(device, coupling, rate_hz, delay_periods);
+        return check_exact(device, coupling, rate_hz, delay_periods, search);
     }
     check_device(device);
     check_rate(rate_hz);
@@ -433,16 +509,18 @@ ExactCheck check_exact(const DeviceModel& device, const SpringDamperCoupling& co
     check_delay_periods(delay_periods);
     const std::vector<EnvironmentModel> scene = models_of(assumption.environments.scene);
     if (!assumption.operators) {
-        // Every passive operator against the scene: the default operators, and the
-        // alias-tuned ones built for each of the scene's environments.
+        // Every passive operator against the scene: the alias-tuned operators built for each
+        // of the scene's environments, and the default operators.
+        ExactCheck tuned =
+            check_exact(device, coupling, rate_hz,
+                        synthesize_scene_adversaries(device, coupling, rate_hz,
+                                                     assumption.environments.scene, delay_periods),
+                        scene, delay_periods);
+        if (search == SearchFor::witness && decisive(tuned)) return tuned;
         ExactCheck check =
             check_exact(device, coupling, rate_hz, default_operator_sweep(device, rate_hz), scene,
                         delay_periods);
-        merge(check, check_exact(
-                         device, coupling, rate_hz,
-                         synthesize_scene_adversaries(device, coupling, rate_hz,
-                                                      assumption.environments.scene, delay_periods),
-                         scene, delay_periods));
+        merge(check, tuned);
         return check;
     }
     std::vector<EnvironmentModel> environments = scene;
@@ -455,8 +533,8 @@ ExactCheck check_exact(const DeviceModel& device, const SpringDamperCoupling& co
         environments.insert(environments.end(), adversaries.environments.begin(),
                             adversaries.environments.end());
     }
-    ClassSearch search(device, coupling, rate_hz, *assumption.operators, delay_periods);
-    return search.run(environments, every_environment);
+    ClassSearch class_search(device, coupling, rate_hz, *assumption.operators, delay_periods);
+    return class_search.run(environments, every_environment);
 }
 
 StiffnessLimit exact_stiffness_limit(const DeviceModel& device, const SpringDamperCoupling& shape,
@@ -479,7 +557,8 @@ StiffnessLimit exact_stiffness_limit(const DeviceModel& device, const SpringDamp
             if (!quick.stable) return quick;
         }
         ++limit.checks;
-        ExactCheck full = check_exact(device, coupling, rate_hz, assumption, delay_periods);
+        ExactCheck full =
+            check_exact(device, coupling, rate_hz, assumption, delay_periods, SearchFor::witness);
         if (!full.stable) witnesses.emplace_back(full.worst_operator, full.worst_environment);
         return full;
     };

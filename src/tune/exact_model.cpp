@@ -630,23 +630,24 @@ ExactCheck check_exact(const DeviceModel& device, const SpringDamperCoupling& co
 }
 
 ExactCheck check_exact(const DeviceModel& device, const SpringDamperCoupling& coupling,
-                       double rate_hz, double delay_periods) {
+                       double rate_hz, double delay_periods, SearchFor search) {
     check_loop(device, coupling, rate_hz, delay_periods);
     // The adversaries built for this design: the default operators meet the worst lossless
     // environments too, and the alias-tuned operators meet the rigid wall and those.
     const Adversaries adversaries =
         synthesize_adversaries(device, coupling, rate_hz, delay_periods);
+    std::vector<EnvironmentModel> tuned_environments{EnvironmentModel::rigid_wall()};
+    tuned_environments.insert(tuned_environments.end(), adversaries.environments.begin(),
+                              adversaries.environments.end());
+    ExactCheck tuned = check_exact(device, coupling, rate_hz, adversaries.operators,
+                                   tuned_environments, delay_periods);
+    if (search == SearchFor::witness && decisive(tuned)) return tuned;
     std::vector<EnvironmentModel> environments = default_environment_sweep(device);
     environments.insert(environments.end(), adversaries.environments.begin(),
                         adversaries.environments.end());
     ExactCheck check =
         check_exact(device, coupling, rate_hz, default_operator_sweep(device, rate_hz),
                     environments, delay_periods);
-    std::vector<EnvironmentModel> tuned_environments{EnvironmentModel::rigid_wall()};
-    tuned_environments.insert(tuned_environments.end(), adversaries.environments.begin(),
-                              adversaries.environments.end());
-    const ExactCheck tuned = check_exact(device, coupling, rate_hz, adversaries.operators,
-                                         tuned_environments, delay_periods);
     merge(check, tuned);
     return check;
 }

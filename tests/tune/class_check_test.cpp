@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "hapticd/theory/coupling_check.hpp"
+#include "hapticd/tune/coupling_sizing.hpp"
 #include "operator_classes.hpp"
 
 namespace hapticd::tune {
@@ -274,6 +275,42 @@ TEST(ClassSearch, FindsTwoModesTunedTogether) {
     const StiffnessLimit sized = exact_stiffness_limit(kPen, {0.0, 0.5}, kRateHz, a, 0.0);
     EXPECT_LE(sized.stiffness_n_per_m, limit * 1.002);
     EXPECT_GE(sized.stiffness_n_per_m, 0.97 * limit);
+}
+
+/// SearchFor::witness checks the cases built for the design first and ends at the first
+/// that grows by kDecisiveGrowthPerTick; where nothing grows it is the worst-case search.
+TEST(WitnessSearch, AgreesWithTheWorstCaseSearchAndStopsAtTheFirstGrowth) {
+    const theory::DeviceModel pen{0.1, 2.0};
+    const double rate_hz = 1000.0;
+    for (const double delay_periods : {0.0, 2.0}) {
+        // At the passive bound (proven: nothing grows) and 3 % past it.
+        ImpedanceSizingRequest request;
+        request.device = pen;
+        request.rate_hz = rate_hz;
+        request.model = {theory::HoldModel::passive, delay_periods};
+        request.coupling_damping_n_s_per_m = 0.5;
+        const theory::SpringDamperCoupling limit = size_impedance_coupling(request).coupling;
+        const ExactCheck worst = check_exact(pen, limit, rate_hz, delay_periods);
+        const ExactCheck witness =
+            check_exact(pen, limit, rate_hz, delay_periods, SearchFor::witness);
+        EXPECT_TRUE(worst.stable) << delay_periods;
+        EXPECT_EQ(witness.cases_checked, worst.cases_checked) << delay_periods;
+        EXPECT_EQ(witness.worst_spectral_radius, worst.worst_spectral_radius) << delay_periods;
+
+        theory::SpringDamperCoupling past = limit;
+        past.stiffness_n_per_m *= 1.03;
+        const ExactCheck all = check_exact(pen, past, rate_hz, delay_periods);
+        const ExactCheck first = check_exact(pen, past, rate_hz, delay_periods, SearchFor::witness);
+        EXPECT_FALSE(all.stable) << delay_periods;
+        EXPECT_FALSE(first.stable) << delay_periods;
+        EXPECT_TRUE(decisive(first)) << first.worst_spectral_radius;
+        EXPECT_LE(first.worst_spectral_radius, all.worst_spectral_radius) << delay_periods;
+        EXPECT_LT(first.cases_checked * 10, all.cases_checked) << delay_periods;
+        // The witness named is a case that grows: checked again on its own.
+        const ClosedLoopPoles again = closed_loop_poles(pen, past, rate_hz, first.worst_operator,
+                                                        first.worst_environment, delay_periods);
+        EXPECT_DOUBLE_EQ(again.spectral_radius, first.worst_spectral_radius);
+    }
 }
 
 }  // namespace

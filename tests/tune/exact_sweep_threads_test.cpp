@@ -1,11 +1,15 @@
 // check_exact checks its sweep on two threads (tune/exact_model.cpp): the verdict, the worst
-// case and the count are those of one pass in order, and under ThreadSanitizer (this test is
-// in HAPTICD_THREADED_TESTS) the shares touch nothing in common.
+// case and the count are those of one pass in order. A class search (tune/class_check.cpp)
+// probes and climbs in two shares: its verdict is the same every run. Under ThreadSanitizer
+// (this test is in HAPTICD_THREADED_TESTS) the shares touch nothing in common.
 #include <gtest/gtest.h>
 
 #include <vector>
 
+#include "hapticd/tune/class_check.hpp"
+#include "hapticd/tune/class_proof.hpp"
 #include "hapticd/tune/exact_model.hpp"
+#include "operator_classes.hpp"
 
 namespace hapticd::tune {
 namespace {
@@ -37,6 +41,29 @@ TEST(ExactSweepThreads, TheWorstCaseIsTheOneOfAPassInOrder) {
         EXPECT_EQ(check.worst_environment.describe(), worst_environment->describe());
         EXPECT_EQ(check.stable, stiffness < 3000.0) << check.worst_spectral_radius;
     }
+}
+
+TEST(ClassSearchThreads, TheVerdictIsTheSameEveryRunAndAgreesWithTheProof) {
+    // The pen-grip class at its proven limit (b_c 0.5, no delay): stable, so every probe and
+    // every climb runs in both shares; 3 % past it the search finds a member that grows.
+    const theory::DeviceModel pen{0.1, 2.0};
+    const double rate_hz = 1000.0;
+    StabilityAssumption assumption;
+    assumption.operators = testing::pen_grip_class();
+    const ClassProver prover(pen, *assumption.operators, rate_hz, 0.0);
+    theory::SpringDamperCoupling coupling{0.0, 0.5};
+    coupling.stiffness_n_per_m = prover.stiffness_limit(coupling, 0.0).stiffness_n_per_m;
+    const ExactCheck first = check_exact(pen, coupling, rate_hz, assumption, 0.0);
+    const ExactCheck second = check_exact(pen, coupling, rate_hz, assumption, 0.0);
+    EXPECT_TRUE(first.stable) << first.worst_spectral_radius;
+    EXPECT_EQ(first.cases_checked, second.cases_checked);
+    EXPECT_EQ(first.worst_spectral_radius, second.worst_spectral_radius);
+    EXPECT_EQ(first.worst_operator.describe(), second.worst_operator.describe());
+    EXPECT_EQ(first.worst_environment.describe(), second.worst_environment.describe());
+    coupling.stiffness_n_per_m *= 1.03;
+    const ExactCheck past = check_exact(pen, coupling, rate_hz, assumption, 0.0);
+    EXPECT_FALSE(past.stable);
+    EXPECT_GT(past.worst_spectral_radius, 1.0 + kDecisiveGrowthPerTick);
 }
 
 }  // namespace

@@ -168,7 +168,8 @@ nlohmann::ordered_json witness_past(const DesignInput& input,
     theory::SpringDamperCoupling past = at_limit;
     past.stiffness_n_per_m *= kWitnessFactor;
     const tune::ExactCheck search =
-        tune::check_exact(input.device, past, input.rate_hz, assumption, input.delay_periods());
+        tune::check_exact(input.device, past, input.rate_hz, assumption, input.delay_periods(),
+                          tune::SearchFor::witness);
     nlohmann::ordered_json out = {{"stiffness", past.stiffness_n_per_m},
                                   {"factor", kWitnessFactor},
                                   {"found", !search.stable}};

@@ -18,6 +18,7 @@
 //                                      admittance too), halving its step to 1/256 of each
 //                                      range. The verdict names the worst member found,
 //                                      or the first that grows by kDecisiveGrowthPerTick.
+//                                      Probes and climbs run in two shares, one per core.
 #pragma once
 
 #include <optional>
@@ -37,15 +38,14 @@ struct StabilityAssumption {
     std::string describe() const;
 };
 
-/// A member that grows by this much per tick (|z| - 1) ends a class search: the verdict is
-/// no, and it is named as the witness (not necessarily the worst member).
-inline constexpr double kDecisiveGrowthPerTick = 1e-6;
-
 /// The exact model's verdict under `assumption` (the file comment says what is searched).
-/// Throws std::invalid_argument naming the value for non-physical input.
+/// A class search always ends at a witness (kDecisiveGrowthPerTick); a search of every
+/// operator does when `search` asks for one (SearchFor). Throws std::invalid_argument naming
+/// the value for non-physical input.
 ExactCheck check_exact(const theory::DeviceModel& device,
                        const theory::SpringDamperCoupling& coupling, double rate_hz,
-                       const StabilityAssumption& assumption, double delay_periods);
+                       const StabilityAssumption& assumption, double delay_periods,
+                       SearchFor search = SearchFor::worst_case);
 
 /// The largest coupling stiffness k_c (N/m) at the given b_c that check_exact accepts under
 /// `assumption`, by bisection to a relative `tolerance`: [lo, hi] brackets the limit with lo

@@ -223,6 +223,17 @@ ExactCheck check_exact(const theory::DeviceModel& device,
                        const std::vector<EnvironmentModel>& environments,
                        double delay_periods = 0.0);
 
+/// A case that grows by this much per tick (|z| - 1) ends a search for a witness: the
+/// verdict is no, and it names that case (not necessarily the worst).
+inline constexpr double kDecisiveGrowthPerTick = 1e-6;
+
+/// What a search is for. The worst case: every case is checked and the worst is named (a
+/// verdict). A witness: whether the design fails at all (size's operator past a proven
+/// limit, a bisection's rejection); the cases built for this design go first and the first
+/// that grows by kDecisiveGrowthPerTick ends the search. Where nothing grows decisively both
+/// check the same cases and agree.
+enum class SearchFor { worst_case, witness };
+
 /// check_exact over the default sweep, plus the adversaries synthesised for this design
 /// (operator_synthesis.hpp): the worst lossless environment at each frequency where the
 /// passive bound binds (and a spread of others), met by the default operators, and
@@ -230,6 +241,11 @@ ExactCheck check_exact(const theory::DeviceModel& device,
 /// wall and those environments.
 ExactCheck check_exact(const theory::DeviceModel& device,
                        const theory::SpringDamperCoupling& coupling, double rate_hz,
-                       double delay_periods = 0.0);
+                       double delay_periods = 0.0, SearchFor search = SearchFor::worst_case);
+
+/// Whether a check has found a case that grows by kDecisiveGrowthPerTick.
+inline bool decisive(const ExactCheck& check) {
+    return check.worst_spectral_radius > 1.0 + kDecisiveGrowthPerTick;
+}
 
 }  // namespace hapticd::tune
