@@ -47,7 +47,7 @@ def main():
     parser.add_argument("--operator-class", required=True)
     parser.add_argument("--scene", required=True)
     parser.add_argument("--dampings", default="0,0.25,0.5,0.75,1,1.25,1.5")
-    parser.add_argument("--delays", default="0,1", help="in periods")
+    parser.add_argument("--delays", default="0,0.5,1", help="in periods")
     parser.add_argument("--out", required=True)
     args = parser.parse_args()
     dampings = [float(v) for v in args.dampings.split(",")]
