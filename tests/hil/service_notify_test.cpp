@@ -182,7 +182,10 @@ TEST(HilServiceNotify, TheWatchdogStopsWhileTheServoThreadIsHeld) {
             dir,
             {.config_toml = config.toml(),
              .scene_toml = "[scene]\nname = \"free\"\naxes = 1\n",
-             .duration_s = 3.0,
+             // Four seconds: the hold spans [1, 2) s, and the last two leave whole seconds
+             // it does not span for the measured rate below (with three, only the second
+             // just before the hold and the very end did, and a loaded machine missed both).
+             .duration_s = 4.0,
              .lockstep = false,
              .identify = false,
              .with_log = true,
