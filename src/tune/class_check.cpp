@@ -56,28 +56,34 @@ class ClassSearch {
           coupling_(coupling),
           rate_hz_(rate_hz),
           cls_(cls),
-          delay_periods_(delay_periods) {}
-
-    ExactCheck run(const std::vector<EnvironmentModel>& environments, bool every_passive) {
-        best_ = {};
+          delay_periods_(delay_periods) {
+        // Nothing found yet, under this search's delay: every share starts from this, so a
+        // share's worst case keeps the delay when it is merged.
         best_.worst_spectral_radius = -1.0;
-        best_.delay_periods = delay_periods_;
+        best_.delay_periods = delay_periods;
+    }
+
+    /// Once per search.
+    ExactCheck run(const std::vector<EnvironmentModel>& environments, bool every_passive) {
         // Stage 1: hands-off, the 3^5 grid (corners, edge midpoints, centre) with the members
         // tuned from each, and the members with two modes on two aliases at once, each
         // against every environment. The probes go in two contiguous shares, so the seeds
         // keep the order of one pass.
         merge(best_, check_exact(device_, coupling_, rate_hz_, {OperatorModel::hands_off()},
                                  environments, delay_periods_));
-        const std::vector<TunedMember> two_modes = two_mode_members();
-        const std::size_t probes = kGridPoints + two_modes.size();
-        on_two_threads(probes, Split::contiguous, [&](ClassSearch& search, std::size_t i) {
-            if (search.decided()) return;
-            if (i < kGridPoints) {
-                search.probe_grid_point(i, environments);
-            } else {
-                search.probe_two_modes(two_modes[i - kGridPoints], environments, every_passive);
-            }
-        });
+        if (!decided()) {
+            const std::vector<TunedMember> two_modes = two_mode_members();
+            on_two_threads(kGridPoints + two_modes.size(), Split::contiguous,
+                           [&](ClassSearch& search, std::size_t i) {
+                               if (search.decided()) return;
+                               if (i < kGridPoints) {
+                                   search.probe_grid_point(i, environments);
+                               } else {
+                                   search.probe_two_modes(two_modes[i - kGridPoints], environments,
+                                                          every_passive);
+                               }
+                           });
+        }
         // Stage 2: compass searches from the worst seeds of each band (the whole circle, and
         // the low, middle and high bands of arg z: a lightly damped slow mode must not hide a
         // fast one that the climb could push out of the circle, nor the reverse), and in each
@@ -401,7 +407,6 @@ class ClassSearch {
             return split == Split::alternate ? i % 2 == 0 : i < (n + 1) / 2;
         };
         ClassSearch other(device_, coupling_, rate_hz_, cls_, delay_periods_);
-        other.best_.worst_spectral_radius = -1.0;
         auto second = std::async(std::launch::async, [&] {
             for (std::size_t i = 0; i < n; ++i) {
                 if (!mine(i)) work(other, i);

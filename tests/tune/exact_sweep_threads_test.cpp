@@ -4,6 +4,7 @@
 // (this test is in HAPTICD_THREADED_TESTS) the shares touch nothing in common.
 #include <gtest/gtest.h>
 
+#include <utility>
 #include <vector>
 
 #include "hapticd/tune/class_check.hpp"
@@ -64,6 +65,26 @@ TEST(ClassSearchThreads, TheVerdictIsTheSameEveryRunAndAgreesWithTheProof) {
     const ExactCheck past = check_exact(pen, coupling, rate_hz, assumption, 0.0);
     EXPECT_FALSE(past.stable);
     EXPECT_GT(past.worst_spectral_radius, 1.0 + kDecisiveGrowthPerTick);
+}
+
+TEST(ClassSearchThreads, TheVerdictKeepsItsDelayWhicheverShareFoundTheWorst) {
+    // The merged verdict states the delay it assumed, also where the second share's climb
+    // found the worst case: the pen-grip class at b_c 0.5, half its proof with one period of
+    // delay and at its proof with one and a half (both stable: every climb runs). A second
+    // share that started from an empty check once lost it there (0 periods).
+    const theory::DeviceModel pen{0.1, 2.0};
+    const double rate_hz = 1000.0;
+    StabilityAssumption assumption;
+    assumption.operators = testing::pen_grip_class();
+    for (const auto& [delay_periods, factor] : {std::pair{1.0, 0.5}, std::pair{1.5, 1.0}}) {
+        const ClassProver prover(pen, *assumption.operators, rate_hz, delay_periods);
+        theory::SpringDamperCoupling coupling{0.0, 0.5};
+        coupling.stiffness_n_per_m =
+            factor * prover.stiffness_limit(coupling, 0.0).stiffness_n_per_m;
+        const ExactCheck check = check_exact(pen, coupling, rate_hz, assumption, delay_periods);
+        EXPECT_TRUE(check.stable) << delay_periods;
+        EXPECT_EQ(check.delay_periods, delay_periods) << factor << " x the proof";
+    }
 }
 
 }  // namespace
