@@ -90,9 +90,6 @@ void BM_CheckExact(benchmark::State& state) {
 }
 BENCHMARK(BM_CheckExact)->Arg(0)->Arg(50)->Arg(100)->Unit(benchmark::kMillisecond)->Iterations(3);
 
-/// config/operators/pen-grip.toml.
-hapticd::tune::OperatorClass pen_grip() { return hapticd::testing::pen_grip_class(); }
-
 hapticd::tune::StabilityAssumption rigid_wall_scene() {
     hapticd::tune::StabilityAssumption a;
     a.environments.scene = {{hapticd::tune::EnvironmentModel::rigid_wall(), "proxy plane"}};
@@ -104,7 +101,7 @@ hapticd::tune::StabilityAssumption rigid_wall_scene() {
 void BM_CheckClass(benchmark::State& state) {
     hapticd::tune::StabilityAssumption a =
         state.range(0) == 0 ? hapticd::tune::StabilityAssumption{} : rigid_wall_scene();
-    a.operators = pen_grip();
+    a.operators = hapticd::testing::pen_grip_class();
     for (auto _ : state) {
         auto c = hapticd::tune::check_exact(kPenDisplay, {5000.0, 1.0}, 1000.0, a, 0.0);
         benchmark::DoNotOptimize(c);
@@ -115,7 +112,7 @@ BENCHMARK(BM_CheckClass)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterati
 // Sizing for the class: a bisection on the class check (b_c = 1 N s/m, no delay).
 void BM_SizeClass(benchmark::State& state) {
     hapticd::tune::StabilityAssumption a;
-    a.operators = pen_grip();
+    a.operators = hapticd::testing::pen_grip_class();
     for (auto _ : state) {
         auto l = hapticd::tune::exact_stiffness_limit(kPenDisplay, {0.0, 1.0}, 1000.0, a, 0.0);
         benchmark::DoNotOptimize(l);
@@ -129,7 +126,8 @@ BENCHMARK(BM_SizeClass)->Unit(benchmark::kMillisecond)->Iterations(1);
 void BM_ClassProof(benchmark::State& state) {
     const double delay = state.range(0) / 10.0;
     for (auto _ : state) {
-        const hapticd::tune::ClassProver prover(kPenDisplay, pen_grip(), 1000.0, delay);
+        const hapticd::tune::ClassProver prover(kPenDisplay, hapticd::testing::pen_grip_class(),
+                                                1000.0, delay);
         if (state.range(1) == 1) {
             auto l = prover.stiffness_limit({0.0, 1.0}, 0.0);
             benchmark::DoNotOptimize(l);
