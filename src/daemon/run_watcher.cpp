@@ -66,9 +66,10 @@ void RunWatcher::tell_service(Clock::time_point now) {
         *realtime_note_);
     if (status.faults == 0u) notifier_.ready(service_line);
     notifier_.watch(status.tick, now);
-    if (now >= next_service_status_ || status.faults != logged_faults_) {
+    if (now >= next_service_status_ || status.faults != told_faults_) {
         notifier_.status(service_line);
         next_service_status_ = now + std::chrono::seconds(1);
+        told_faults_ = status.faults;
     }
 }
 

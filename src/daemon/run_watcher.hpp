@@ -97,6 +97,9 @@ class RunWatcher {
     // second and on a change of faults, WATCHDOG=1 while the tick counter advances.
     ServiceNotifier notifier_;
     Clock::time_point next_service_status_;
+    // The faults the last STATUS= told: its own record, not the journal's (logged_faults_),
+    // since the control socket (each look) can clear a fault between the two looks at status.
+    std::uint32_t told_faults_ = 0;
     // What real time refused, reported once the servo thread has asked (before its first
     // tick, whose status this thread then sees): a warning with the remedy, and in STATUS=.
     std::optional<std::string> realtime_note_;
