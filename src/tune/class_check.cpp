@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <future>
 #include <initializer_list>
@@ -57,8 +58,8 @@ class ClassSearch {
           rate_hz_(rate_hz),
           cls_(cls),
           delay_periods_(delay_periods) {
-        // Nothing found yet, under this search's delay: every share starts from this, so a
-        // share's worst case keeps the delay when it is merged.
+        // Nothing found yet, under this search's delay: every job starts from this, so a
+        // job's worst case keeps the delay when it is merged.
         best_.worst_spectral_radius = -1.0;
         best_.delay_periods = delay_periods;
     }
@@ -67,30 +68,26 @@ class ClassSearch {
     ExactCheck run(const std::vector<EnvironmentModel>& environments, bool every_passive) {
         // Stage 1: hands-off, the 3^5 grid (corners, edge midpoints, centre) with the members
         // tuned from each, and the members with two modes on two aliases at once, each
-        // against every environment. The probes go in two contiguous shares, so the seeds
-        // keep the order of one pass.
+        // against every environment: one job a probe.
         merge(best_, check_exact(device_, coupling_, rate_hz_, {OperatorModel::hands_off()},
                                  environments, delay_periods_));
         if (!decided()) {
             const std::vector<TunedMember> two_modes = two_mode_members();
-            on_two_threads(kGridPoints + two_modes.size(), Split::contiguous,
-                           [&](ClassSearch& search, std::size_t i) {
-                               if (search.decided()) return;
-                               if (i < kGridPoints) {
-                                   search.probe_grid_point(i, environments);
-                               } else {
-                                   search.probe_two_modes(two_modes[i - kGridPoints], environments,
-                                                          every_passive);
-                               }
-                           });
+            in_parallel(kGridPoints + two_modes.size(), [&](ClassSearch& job, std::size_t i) {
+                if (i < kGridPoints) {
+                    job.probe_grid_point(i, environments);
+                } else {
+                    job.probe_two_modes(two_modes[i - kGridPoints], environments, every_passive);
+                }
+            });
         }
         // Stage 2: compass searches from the worst seeds of each band (the whole circle, and
         // the low, middle and high bands of arg z: a lightly damped slow mode must not hide a
         // fast one that the climb could push out of the circle, nor the reverse), and in each
-        // band from hands-off. A witness that grows by kDecisiveGrowthPerTick ends a share's
+        // band from hands-off. A witness that grows by kDecisiveGrowthPerTick ends the
         // climbs: the verdict is no, and climbing further would only name a worse member (9.4
         // s instead of 0.7 s for the pen-grip class at 5 periods of delay, 3 % past its
-        // proof). The climbs alternate between the two shares.
+        // proof). One job a climb.
         struct Climb {
             std::size_t band;
             std::optional<Seed> from;  ///< none: hands-off
@@ -107,17 +104,15 @@ class ClassSearch {
             if (every_passive) climbs.push_back({band, std::nullopt});
         }
         if (!decided()) {
-            on_two_threads(climbs.size(), Split::alternate,
-                           [&](ClassSearch& search, std::size_t i) {
-                               if (search.decided()) return;
-                               const Band& band = kBands[climbs[i].band];
-                               if (climbs[i].from) {
-                                   search.climb(climbs[i].from->point, climbs[i].from->environment,
-                                                every_passive, band);
-                               } else {
-                                   search.climb_hands_off(band);
-                               }
-                           });
+            in_parallel(climbs.size(), [&](ClassSearch& job, std::size_t i) {
+                const Band& band = kBands[climbs[i].band];
+                if (climbs[i].from) {
+                    job.climb(climbs[i].from->point, climbs[i].from->environment, every_passive,
+                              band);
+                } else {
+                    job.climb_hands_off(band);
+                }
+            });
         }
         best_.worst_margin = 1.0 - best_.worst_spectral_radius;
         best_.stable = best_.worst_margin >= -kMarginalTolerance;
@@ -391,35 +386,46 @@ class ClassSearch {
         EnvironmentModel environment;
     };
 
-    enum class Split { contiguous, alternate };
-
-    /// work(search, i) for every i in [0, n): this search takes one share and a fresh copy
-    /// of it (its findings and seeds empty) the other on a second thread, where the machine
-    /// has two cores. The copy's worst case and seeds are merged after this one's: with
-    /// Split::contiguous the result is that of one pass in order.
+    /// work(job, i) for every i in [0, n), each on a fresh search of its own (nothing found,
+    /// no seeds), taken in turn from one queue by as many threads as the machine has cores
+    /// (a long climb does not leave the other core idle). The jobs' worst cases and seeds are
+    /// merged into this search in job order, up to the first job that decided the search
+    /// (kDecisiveGrowthPerTick): no job after it is started, and every job before it runs, so
+    /// the result is that of one pass in order, however the threads interleave.
     template <typename Work>
-    void on_two_threads(std::size_t n, Split split, Work work) {
-        if (std::thread::hardware_concurrency() < 2 || n < 2) {
-            for (std::size_t i = 0; i < n; ++i) work(*this, i);
-            return;
-        }
-        const auto mine = [&](std::size_t i) {
-            return split == Split::alternate ? i % 2 == 0 : i < (n + 1) / 2;
-        };
-        ClassSearch other(device_, coupling_, rate_hz_, cls_, delay_periods_);
-        auto second = std::async(std::launch::async, [&] {
-            for (std::size_t i = 0; i < n; ++i) {
-                if (!mine(i)) work(other, i);
-            }
-        });
+    void in_parallel(std::size_t n, Work work) {
+        std::vector<ClassSearch> jobs;
+        jobs.reserve(n);
         for (std::size_t i = 0; i < n; ++i) {
-            if (mine(i)) work(*this, i);
+            jobs.emplace_back(device_, coupling_, rate_hz_, cls_, delay_periods_);
         }
-        second.get();
-        merge(best_, other.best_);
-        for (std::size_t band = 0; band < kBands.size(); ++band) {
-            seeds_[band].insert(seeds_[band].end(), other.seeds_[band].begin(),
-                                other.seeds_[band].end());
+        std::atomic<std::size_t> next{0};
+        std::atomic<std::size_t> first_decided{n};
+        const auto take_jobs = [&] {
+            for (std::size_t i = next.fetch_add(1); i < n && i < first_decided.load();
+                 i = next.fetch_add(1)) {
+                work(jobs[i], i);
+                if (!jobs[i].decided()) continue;
+                std::size_t seen = first_decided.load();
+                while (i < seen && !first_decided.compare_exchange_weak(seen, i)) {
+                }
+            }
+        };
+        const std::size_t helpers =
+            std::min<std::size_t>(std::max(1u, std::thread::hardware_concurrency()), n) - 1;
+        std::vector<std::future<void>> running;
+        for (std::size_t t = 0; t < helpers; ++t) {
+            running.push_back(std::async(std::launch::async, take_jobs));
+        }
+        take_jobs();
+        for (std::future<void>& f : running) f.get();
+        const std::size_t merged = std::min(n, first_decided.load() + 1);
+        for (std::size_t i = 0; i < merged; ++i) {
+            merge(best_, jobs[i].best_);
+            for (std::size_t band = 0; band < kBands.size(); ++band) {
+                seeds_[band].insert(seeds_[band].end(), jobs[i].seeds_[band].begin(),
+                                    jobs[i].seeds_[band].end());
+            }
         }
     }
 

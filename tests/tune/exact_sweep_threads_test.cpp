@@ -1,7 +1,8 @@
 // check_exact checks its sweep on two threads (tune/exact_model.cpp): the verdict, the worst
 // case and the count are those of one pass in order. A class search (tune/class_check.cpp)
-// probes and climbs in two shares: its verdict is the same every run. Under ThreadSanitizer
-// (this test is in HAPTICD_THREADED_TESTS) the shares touch nothing in common.
+// probes and climbs as jobs that one thread per core takes from a queue: its verdict is the
+// same every run. Under ThreadSanitizer (this test is in HAPTICD_THREADED_TESTS) the threads
+// share nothing but the queue.
 #include <gtest/gtest.h>
 
 #include <utility>
@@ -46,7 +47,8 @@ TEST(ExactSweepThreads, TheWorstCaseIsTheOneOfAPassInOrder) {
 
 TEST(ClassSearchThreads, TheVerdictIsTheSameEveryRunAndAgreesWithTheProof) {
     // The pen-grip class at its proven limit (b_c 0.5, no delay): stable, so every probe and
-    // every climb runs in both shares; 3 % past it the search finds a member that grows.
+    // every climb runs; 3 % past it the search finds a member that grows, and stops at the
+    // first job in order that decided it, however the threads took the jobs.
     const theory::DeviceModel pen{0.1, 2.0};
     const double rate_hz = 1000.0;
     StabilityAssumption assumption;
@@ -63,15 +65,19 @@ TEST(ClassSearchThreads, TheVerdictIsTheSameEveryRunAndAgreesWithTheProof) {
     EXPECT_EQ(first.worst_environment.describe(), second.worst_environment.describe());
     coupling.stiffness_n_per_m *= 1.03;
     const ExactCheck past = check_exact(pen, coupling, rate_hz, assumption, 0.0);
+    const ExactCheck again = check_exact(pen, coupling, rate_hz, assumption, 0.0);
     EXPECT_FALSE(past.stable);
     EXPECT_GT(past.worst_spectral_radius, 1.0 + kDecisiveGrowthPerTick);
+    EXPECT_EQ(past.cases_checked, again.cases_checked);
+    EXPECT_EQ(past.worst_spectral_radius, again.worst_spectral_radius);
+    EXPECT_EQ(past.worst_operator.describe(), again.worst_operator.describe());
 }
 
-TEST(ClassSearchThreads, TheVerdictKeepsItsDelayWhicheverShareFoundTheWorst) {
-    // The merged verdict states the delay it assumed, also where the second share's climb
-    // found the worst case: the pen-grip class at b_c 0.5, half its proof with one period of
-    // delay and at its proof with one and a half (both stable: every climb runs). A second
-    // share that started from an empty check once lost it there (0 periods).
+TEST(ClassSearchThreads, TheVerdictKeepsItsDelayWhicheverJobFoundTheWorst) {
+    // The merged verdict states the delay it assumed, whichever job's climb found the worst
+    // case: the pen-grip class at b_c 0.5, half its proof with one period of delay and at its
+    // proof with one and a half (both stable: every climb runs). A share of the search that
+    // started from an empty check once lost it there (0 periods).
     const theory::DeviceModel pen{0.1, 2.0};
     const double rate_hz = 1000.0;
     StabilityAssumption assumption;

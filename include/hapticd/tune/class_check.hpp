@@ -11,14 +11,16 @@
 //                                      midpoints, centre), hands-off, and members with two
 //                                      modes on two aliases at once (each with the lossless
 //                                      environment worst for it) meet the
-//                                      environments; from the six worst pairs a compass
+//                                      environments; from the six worst pairs, and the
+//                                      three worst in each band of arg z, a compass
 //                                      search climbs the spectral radius over the five
 //                                      parameters (and, against every passive environment,
 //                                      over the lossless environment's frequency and
-//                                      admittance too), halving its step to 1/256 of each
+//                                      admittance too), halving its step to 2^-16 of each
 //                                      range. The verdict names the worst member found,
 //                                      or the first that grows by kDecisiveGrowthPerTick.
-//                                      Probes and climbs run in two shares, one per core.
+//                                      Probes and climbs are jobs that one thread per core
+//                                      takes from a queue, merged in job order.
 #pragma once
 
 #include <optional>
