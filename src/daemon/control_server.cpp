@@ -28,6 +28,7 @@ struct ControlServer::Client {
     bool gone = false;         // the connection broke: close now
     bool waiting = false;      // its request is on the worker; its next ones wait
     bool registered = true;    // with epoll (a hung-up client waiting for its job is not)
+    bool stop_only = false;    // came over max_clients: one line, served only if `disarm`
     std::uint32_t watched = EPOLLIN | EPOLLRDHUP;           // the events registered with epoll
     std::chrono::steady_clock::time_point last_request{};   // or the connect
     std::chrono::steady_clock::time_point last_progress{};  // a byte of `out` taken, or new
@@ -124,7 +125,11 @@ ControlServer::ControlServer(std::string path, Limits limits, const std::string&
         ::bind(listen_fd_, reinterpret_cast<const sockaddr*>(&address), sizeof(address));
     const int bind_error = errno;
     ::umask(old_mask);
-    const int listening = bound == 0 ? ::listen(listen_fd_, limits_.max_clients) : -1;
+    // A short queue: a connect storm that fills it is refused by the kernel (EAGAIN) while a
+    // disarm's blocking connect() waits for room, behind at most this many; with the kernel's
+    // 4096 a disarm waited behind the whole storm (about 0.1 s here).
+    constexpr int kListenQueue = 64;
+    const int listening = bound == 0 ? ::listen(listen_fd_, kListenQueue) : -1;
     const int listen_error = errno;
     if (bound != 0 || listening != 0) {
         if (bound == 0) ::unlink(path_.c_str());
@@ -225,12 +230,13 @@ void ControlServer::serve() noexcept {
                  "; the socket no longer answers");
             return;
         }
+        bool connecting = false;
         for (int i = 0; i < n; ++i) {
             const int fd = events[static_cast<std::size_t>(i)].data.fd;
             const std::uint32_t what = events[static_cast<std::size_t>(i)].events;
             if (fd == stop_fd_) return;
             if (fd == listen_fd_) {
-                accept_clients();
+                connecting = true;
                 continue;
             }
             if (fd == done_fd_) {
@@ -255,6 +261,9 @@ void ControlServer::serve() noexcept {
                 client->registered = false;
             }
         }
+        // The connected clients' lines first, then the newcomers: a disarm heard over the
+        // limit is read before a storm of connects can take its place (accept_clients).
+        if (connecting) accept_clients();
         const Clock::time_point now = Clock::now();
         send_events(now);
         enforce_deadlines(now);
@@ -309,6 +318,11 @@ void ControlServer::enforce_deadlines(Clock::time_point now) {
     if (!accepting_ && now >= accept_again_) watch_listener(true);
     for (Client& client : clients_) {
         if (client.gone) continue;
+        if (client.stop_only && !client.closing &&
+            now - client.last_request > limits_.stop_only_grace) {
+            refuse_too_many(client);
+            continue;
+        }
         if (!client.out.empty() && now - client.last_progress > limits_.stalled_reader) {
             note("control: disconnected " + client.peer.describe() + ": it took none of its " +
                  std::to_string(client.out.size()) + " bytes of replies for " +
@@ -344,8 +358,8 @@ void ControlServer::watch_listener(bool on) {
 }
 
 void ControlServer::accept_clients() {
-    // At most 16 a wake: a flood of connects (each refused once max_clients are in) cannot keep
-    // this thread from the clients it serves; epoll comes back for the rest.
+    // At most 16 a wake: a flood of connects (over max_clients each heard for one line only)
+    // cannot keep this thread from the clients it serves; epoll comes back for the rest.
     for (int accepted = 0; accepted < 16; ++accepted) {
         const int fd = ::accept4(listen_fd_, nullptr, nullptr, SOCK_CLOEXEC | SOCK_NONBLOCK);
         if (fd < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return;  // none left
@@ -368,16 +382,7 @@ void ControlServer::accept_clients() {
             client.peer =
                 Peer{.pid = credentials.pid, .uid = credentials.uid, .gid = credentials.gid};
         }
-        if (static_cast<int>(clients_.size()) >= limits_.max_clients) {
-            const std::string refusal = error_reply(
-                nullptr, "too many clients: this hapticd serves " +
-                             std::to_string(limits_.max_clients) + " at once; try again later");
-            (void)!::send(fd, refusal.data(), refusal.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
-            ::close(fd);
-            note("control: refused " + client.peer.describe() + ": " +
-                 std::to_string(limits_.max_clients) + " clients already connected");
-            continue;
-        }
+        client.stop_only = static_cast<int>(served_clients()) >= limits_.max_clients;
         epoll_event event{};
         event.events = EPOLLIN | EPOLLRDHUP;
         event.data.fd = fd;
@@ -387,9 +392,53 @@ void ControlServer::accept_clients() {
             ::close(fd);
             continue;
         }
+        if (client.stop_only) {
+            admit_stop_only(std::move(client));
+            continue;
+        }
         note("control: client connected: " + client.peer.describe());
         clients_.push_back(std::move(client));
     }
+}
+
+std::size_t ControlServer::served_clients() const {
+    return static_cast<std::size_t>(std::count_if(clients_.begin(), clients_.end(),
+                                                  [](const Client& c) { return !c.stop_only; }));
+}
+
+// A newcomer over max_clients is heard for one line: its request may be the disarm that must
+// get through. Read at once (hapticctl writes its line right after connect(), so it is usually
+// there already); otherwise it waits, among at most stop_only_clients. To make room, the
+// process that holds the most of those places loses its longest waiting one: a storm of
+// connects from one process takes its own places, never another's disarm.
+void ControlServer::admit_stop_only(Client client) {
+    const auto heard = [](const Client& c) { return c.stop_only && !c.closing && !c.gone; };
+    if (std::count_if(clients_.begin(), clients_.end(), heard) >= limits_.stop_only_clients) {
+        Client* oldest_of_most = nullptr;
+        std::ptrdiff_t most = 0;
+        for (Client& c : clients_) {  // in order of arrival
+            if (!heard(c)) continue;
+            const std::ptrdiff_t held = std::count_if(
+                clients_.begin(), clients_.end(),
+                [&](const Client& other) { return heard(other) && other.peer.pid == c.peer.pid; });
+            if (held > most) most = held, oldest_of_most = &c;
+        }
+        if (oldest_of_most != nullptr) refuse_too_many(*oldest_of_most);
+    }
+    clients_.push_back(std::move(client));
+    read_from(clients_.back());
+}
+
+void ControlServer::refuse_too_many(Client& client) {
+    client.out += error_reply(nullptr, "too many clients: this hapticd serves " +
+                                           std::to_string(limits_.max_clients) +
+                                           " at once, and over that only disarm; try again later");
+    client.last_progress = Clock::now();
+    client.closing = true;
+    client.in.clear();
+    note("control: refused " + client.peer.describe() + ": " + std::to_string(limits_.max_clients) +
+         " clients already connected");
+    flush(client);
 }
 
 void ControlServer::read_from(Client& client) {
@@ -436,6 +485,11 @@ void ControlServer::answer_lines(Client& client) {
         if (line.empty()) continue;
         client.last_request = Clock::now();
         const ParsedRequest parsed = parse_request(line);
+        if (client.stop_only && !(parsed.request && parsed.request->kind == RequestKind::disarm)) {
+            refuse_too_many(client);
+            break;
+        }
+        if (client.stop_only) client.closing = true;  // its one request, then the disconnect
         if (!parsed.request) {
             client.out += error_reply(parsed.id, parsed.error);
         } else if (Answer answer = handler_(*parsed.request, client.peer); answer.later) {

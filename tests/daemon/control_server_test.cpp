@@ -5,10 +5,16 @@
 #include <gtest/gtest.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
+#include <sys/un.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
+#include <csignal>
+#include <cstring>
 #include <fstream>
 #include <functional>
 #include <memory>
@@ -197,6 +203,110 @@ TEST(DaemonControlServer, OneClientTooManyIsToldSoAndTheOthersStay) {
         ::usleep(10'000);  // the server may not have seen the close yet
     }
     ADD_FAILURE() << "no place came free after a client left";
+}
+
+// Over max_clients a newcomer is heard for one line: a disarm is served, anything else is
+// refused, and one that says nothing is refused after stop_only_grace.
+TEST(DaemonControlServer, OverTheLimitOnlyADisarmIsServed) {
+    const ScratchDir dir;
+    Served served(dir.file("c.sock"),
+                  Limits{.max_clients = 2, .stop_only_grace = std::chrono::milliseconds{300}});
+    std::vector<std::unique_ptr<UnixClient>> holders;
+    for (int i = 0; i < 2; ++i) {
+        holders.push_back(std::make_unique<UnixClient>(dir.file("c.sock")));
+        holders.back()->send(kStatus);
+        ASSERT_EQ(reply_of(*holders.back())["ok"], true);
+    }
+    const int before = served.requests.load();
+    {
+        UnixClient stop(dir.file("c.sock"));
+        stop.send(R"({"v":1,"id":7,"request":"disarm"})"
+                  "\n");
+        const nlohmann::json reply = reply_of(stop);
+        EXPECT_EQ(reply["ok"], true) << reply;
+        EXPECT_EQ(reply["id"], 7);
+        EXPECT_TRUE(stop.closed_by_peer());  // one request over the limit, then the close
+    }
+    EXPECT_EQ(served.requests.load(), before + 1);
+    {
+        UnixClient other(dir.file("c.sock"));
+        other.send(kStatus);
+        const nlohmann::json refusal = reply_of(other);
+        EXPECT_EQ(refusal["ok"], false);
+        EXPECT_NE(refusal["error"].get<std::string>().find("only disarm"), std::string::npos);
+        EXPECT_TRUE(other.closed_by_peer());
+    }
+    {
+        UnixClient silent(dir.file("c.sock"));
+        const nlohmann::json refusal = reply_of(silent);  // after the grace
+        EXPECT_EQ(refusal["ok"], false);
+        EXPECT_TRUE(silent.closed_by_peer());
+    }
+    EXPECT_EQ(served.requests.load(), before + 1);  // neither reached the handler
+    EXPECT_TRUE(any_message_has(served.server->take_messages(), "refused"));
+}
+
+/// A process of its own that connects to `path` and keeps its first `kept` connections, then
+/// connects as fast as it can, keeping its last `churned`, until it is killed; it never sends.
+class ConnectStorm {
+  public:
+    ConnectStorm(const std::string& path, int kept, std::size_t churned) {
+        pid_ = ::fork();
+        if (pid_ != 0) return;
+        // The child: system calls only, no allocation after fork().
+        sockaddr_un address{};
+        address.sun_family = AF_UNIX;
+        std::strncpy(address.sun_path, path.c_str(), sizeof(address.sun_path) - 1);
+        for (int i = 0; i < kept; ++i) {
+            const int fd = ::socket(AF_UNIX, SOCK_STREAM, 0);
+            (void)::connect(fd, reinterpret_cast<const sockaddr*>(&address), sizeof(address));
+        }
+        std::array<int, 256> open{};
+        open.fill(-1);
+        for (std::size_t i = 0;; i = (i + 1) % std::min(churned, open.size())) {
+            if (open[i] >= 0) ::close(open[i]);
+            open[i] = ::socket(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK, 0);
+            (void)::connect(open[i], reinterpret_cast<const sockaddr*>(&address), sizeof(address));
+        }
+    }
+    ConnectStorm(const ConnectStorm&) = delete;
+    ConnectStorm& operator=(const ConnectStorm&) = delete;
+    ~ConnectStorm() {
+        if (pid_ <= 0) return;
+        ::kill(pid_, SIGKILL);
+        ::waitpid(pid_, nullptr, 0);
+    }
+    bool started() const { return pid_ > 0; }
+
+  private:
+    pid_t pid_ = -1;
+};
+
+// The stop always gets through (issue 28): while another process holds every place and
+// connects without pause, keeping its last 64 connections too, each of 20 disarms from this
+// one is served.
+TEST(DaemonControlServer, EveryDisarmGetsThroughAConnectStormThatHoldsEveryPlace) {
+    const ScratchDir dir;
+    Served served(dir.file("c.sock"), Limits{.max_clients = 4, .stop_only_clients = 4});
+    const ConnectStorm storm(dir.file("c.sock"), 4, 64);
+    ASSERT_TRUE(storm.started());
+    std::this_thread::sleep_for(std::chrono::milliseconds{200});  // the storm holds every place
+    {
+        UnixClient asks(dir.file("c.sock"));
+        asks.send(kStatus);
+        const nlohmann::json refusal = reply_of(asks);
+        EXPECT_EQ(refusal["ok"], false) << "the storm did not take every place: " << refusal;
+    }
+    int served_disarms = 0;
+    for (int i = 0; i < 20; ++i) {
+        UnixClient stop(dir.file("c.sock"));
+        stop.send(R"({"v":1,"request":"disarm"})"
+                  "\n");
+        const nlohmann::json reply = reply_of(stop);
+        served_disarms += reply.is_object() && reply["ok"] == true;
+        EXPECT_EQ(reply["ok"], true) << "disarm " << i << ": " << reply;
+    }
+    EXPECT_EQ(served_disarms, 20);
 }
 
 TEST(DaemonControlServer, AHalfClosedClientGetsItsRepliesThenTheClose) {

@@ -8,8 +8,12 @@
 //     takes nothing of for Limits::stalled_reader: the disconnect;
 //   - no request for Limits::idle: an error reply, then the disconnect (a place among
 //     Limits::max_clients is not held by a client that says nothing);
-//   - more than Limits::max_clients at once: an error reply to the newcomer, then its
-//     disconnect; out of file descriptors: accepting pauses for a second, no busy loop;
+//   - more than Limits::max_clients at once: the newcomer is heard for one line, which is
+//     served if it is `disarm` (the stop always gets through, whoever holds the places) and
+//     otherwise refused ("too many clients"), then the disconnect. Such newcomers are at most
+//     Limits::stop_only_clients (to make room, the process holding the most of those places
+//     loses its longest waiting one) and wait at most Limits::stop_only_grace for their line;
+//     out of file descriptors: accepting pauses for a second, no busy loop;
 //   - a client that shuts its side down: its complete requests are answered, then it is
 //     closed.
 //
@@ -66,6 +70,10 @@ struct Peer {
 
 struct Limits {
     int max_clients = 16;
+    /// Over max_clients: newcomers heard for one line, served only if it is `disarm`.
+    int stop_only_clients = 16;
+    /// How long such a newcomer may take to send its line.
+    std::chrono::milliseconds stop_only_grace{std::chrono::seconds{1}};
     std::size_t max_unread_reply_bytes = std::size_t{64} * 1024;
     /// A client that sends no request for this long is told and closed.
     std::chrono::milliseconds idle{std::chrono::seconds{60}};
@@ -117,6 +125,9 @@ class ControlServer {
     using Clock = std::chrono::steady_clock;
     void serve() noexcept;
     void accept_clients();
+    void admit_stop_only(Client client);
+    void refuse_too_many(Client& client);
+    std::size_t served_clients() const;
     void read_from(Client& client);
     void answer_lines(Client& client);
     void flush(Client& client);
