@@ -278,12 +278,13 @@ void ControlServer::serve() noexcept {
 }
 
 // How long epoll may sleep: until the next subscriber's event, and while anyone is connected
-// (or accepting is paused) a few times per the shorter deadline, at least once a second;
-// otherwise until an event.
+// (or accepting is paused) a few times per the shorter deadline (a newcomer's grace over the
+// limit among them), at least once a second; otherwise until an event.
 int ControlServer::wait_ms(Clock::time_point now) const {
     if (clients_.empty() && accepting_) return -1;
-    auto wait = std::clamp(std::min(limits_.idle, limits_.stalled_reader) / 4,
-                           std::chrono::milliseconds{10}, std::chrono::milliseconds{1000});
+    auto wait =
+        std::clamp(std::min({limits_.idle, limits_.stalled_reader, limits_.stop_only_grace}) / 4,
+                   std::chrono::milliseconds{10}, std::chrono::milliseconds{1000});
     for (const Client& client : clients_) {
         // send_events() passes over these: their next event is not due while they are so.
         if (client.event_period.count() == 0 || client.waiting || client.closing || client.gone) {

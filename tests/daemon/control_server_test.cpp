@@ -178,7 +178,8 @@ TEST(DaemonControlServer, ABurstFromAClientThatReadsIsAnsweredWhole) {
 
 TEST(DaemonControlServer, OneClientTooManyIsToldSoAndTheOthersStay) {
     const ScratchDir dir;
-    Served served(dir.file("c.sock"), Limits{.max_clients = 3});
+    Served served(dir.file("c.sock"),
+                  Limits{.max_clients = 3, .stop_only_grace = std::chrono::milliseconds{300}});
     std::vector<std::unique_ptr<UnixClient>> clients;
     for (int i = 0; i < 3; ++i) {
         clients.push_back(std::make_unique<UnixClient>(dir.file("c.sock")));

@@ -209,8 +209,8 @@ TEST(HilControlSocket, HostileClientsGetErrorsOrDisconnectsAndTheServoNeverNotic
     idle.reserve(16);
     for (int i = 0; i < 16; ++i) idle.push_back(std::make_unique<UnixClient>(d.socket));
     {
-        UnixClient one_too_many(d.socket);
-        const auto refusal = one_too_many.line();
+        UnixClient one_too_many(d.socket);  // heard for a line for 1 s, then refused
+        const auto refusal = one_too_many.line(std::chrono::seconds(5));
         ASSERT_TRUE(refusal.has_value());
         EXPECT_NE(refusal->find("too many clients"), std::string::npos) << *refusal;
     }
