@@ -176,16 +176,23 @@ TEST(DaemonControlServer, ABurstFromAClientThatReadsIsAnsweredWhole) {
     EXPECT_FALSE(any_message_has(served.server->take_messages(), "unread"));
 }
 
+/// `count` clients of the server at `path`, each accepted and served a status (the test
+/// fails where one is not).
+std::vector<std::unique_ptr<UnixClient>> served_clients(const std::string& path, int count) {
+    std::vector<std::unique_ptr<UnixClient>> clients;
+    for (int i = 0; i < count; ++i) {
+        clients.push_back(std::make_unique<UnixClient>(path));
+        clients.back()->send(kStatus);
+        EXPECT_EQ(reply_of(*clients.back())["ok"], true) << "client " << i;
+    }
+    return clients;
+}
+
 TEST(DaemonControlServer, OneClientTooManyIsToldSoAndTheOthersStay) {
     const ScratchDir dir;
     Served served(dir.file("c.sock"),
                   Limits{.max_clients = 3, .stop_only_grace = std::chrono::milliseconds{300}});
-    std::vector<std::unique_ptr<UnixClient>> clients;
-    for (int i = 0; i < 3; ++i) {
-        clients.push_back(std::make_unique<UnixClient>(dir.file("c.sock")));
-        clients.back()->send(kStatus);
-        ASSERT_EQ(reply_of(*clients.back())["ok"], true);  // accepted and served
-    }
+    std::vector<std::unique_ptr<UnixClient>> clients = served_clients(dir.file("c.sock"), 3);
     UnixClient extra(dir.file("c.sock"));
     const nlohmann::json refusal = reply_of(extra);
     ASSERT_FALSE(refusal.is_null());
@@ -212,12 +219,7 @@ TEST(DaemonControlServer, OverTheLimitOnlyADisarmIsServed) {
     const ScratchDir dir;
     Served served(dir.file("c.sock"),
                   Limits{.max_clients = 2, .stop_only_grace = std::chrono::milliseconds{300}});
-    std::vector<std::unique_ptr<UnixClient>> holders;
-    for (int i = 0; i < 2; ++i) {
-        holders.push_back(std::make_unique<UnixClient>(dir.file("c.sock")));
-        holders.back()->send(kStatus);
-        ASSERT_EQ(reply_of(*holders.back())["ok"], true);
-    }
+    const std::vector<std::unique_ptr<UnixClient>> holders = served_clients(dir.file("c.sock"), 2);
     const int before = served.requests.load();
     {
         UnixClient stop(dir.file("c.sock"));
