@@ -86,6 +86,13 @@ std::string_view request_name(RequestKind kind) noexcept {
 
 ParsedRequest parse_request(std::string_view line) {
     ParsedRequest parsed;
+    // nlohmann's reader ends its input at a NUL byte, so "disarm\0arm" would be read as a
+    // disarm: a line that holds one is refused whole.
+    if (const std::size_t nul = line.find('\0'); nul != std::string_view::npos) {
+        parsed.error = "the request holds a NUL byte (byte " + std::to_string(nul + 1) +
+                       " of the line): one JSON object per line, docs/control.md";
+        return parsed;
+    }
     const nlohmann::json j = nlohmann::json::parse(line, nullptr, /*allow_exceptions=*/false);
     if (j.is_discarded()) {
         parsed.error = "the request is not JSON (one JSON object per line, docs/control.md)";
@@ -155,9 +162,10 @@ ParsedRequest parse_request(std::string_view line) {
         if (const auto rate = j.find("rate_hz"); rate != j.end()) {
             request.rate_hz = finite_number(*rate, "rate_hz", parsed.error);
             if (!request.rate_hz) return parsed;
-            if (*request.rate_hz <= 0.0 || *request.rate_hz > kMaxSubscribeRateHz) {
-                parsed.error =
-                    "\"rate_hz\" = " + shown(*rate) + ": allowed > 0 and <= 100 (events a second)";
+            if (!(*request.rate_hz >= kMinSubscribeRateHz) ||
+                *request.rate_hz > kMaxSubscribeRateHz) {
+                parsed.error = "\"rate_hz\" = " + shown(*rate) +
+                               ": allowed >= 0.001 and <= 100 (events a second)";
                 return parsed;
             }
         }

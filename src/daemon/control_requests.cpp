@@ -54,6 +54,12 @@ Answer set_coupling(const Request& request, const Peer& peer, ServoControl& loop
     if (!b_range.contains(gains.damping_n_s_per_m)) {
         return refusal(input::out_of_range("damping", gains.damping_n_s_per_m, b_range));
     }
+    // Refused whatever [coupling] check says, as the servo's config refuses it at the start.
+    if (gains.renders_nothing()) {
+        return refusal(
+            "stiffness and damping are both 0: a coupling of zero renders nothing "
+            "(hapticctl disarm renders no force)");
+    }
     if (!facts.check_coupling) return refusal("this run has no stability check to pass");
     return {.later = [&loop, &facts, gains, refusal, id = request.id, peer,
                       state_before = state_of(now)]() -> Answer {

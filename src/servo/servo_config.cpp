@@ -44,7 +44,7 @@ bool ServoConfig::is_valid(std::string* error) const {
         return invalid(error, out_of_range(field("coupling.velocity_filter_hz"), f_c,
                                            "0 (none) or > 0 and below rate_hz/2"));
     }
-    if (coupling_enabled && k_c == 0.0 && b_c == 0.0) {
+    if (coupling_enabled && coupling.renders_nothing()) {
         return invalid(error, out_of_range(field("coupling.stiffness_n_per_m"), k_c,
                                            "> 0 or damping > 0 (a coupling of zero renders "
                                            "nothing)"));

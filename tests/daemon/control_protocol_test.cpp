@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <utility>
 
 #include "../../src/daemon/control_requests.hpp"
 #include "hapticd/device/device.hpp"
@@ -62,6 +63,9 @@ TEST(DaemonControlProtocol, EveryBadLineIsRefusedNamingWhatIsWrong) {
         {R"({"v":1,"request":"status","rate":5})", "unknown field \"rate\" in a \"status\""},
         {R"({"v":1,"id":[1],"request":"status"})", "\"id\" = [1]: must be an integer, a string"},
         {R"({"v":1,"id":1.5,"request":"status"})", "\"id\" = 1.5"},
+        // nlohmann's reader stops at a NUL: the line would be read as a disarm.
+        {std::string(R"({"v":1,"request":"disarm"})") + '\0' + R"({"v":1,"request":"arm"})",
+         "the request holds a NUL byte (byte 27 of the line)"},
     };
     expect_refused(refusals);
 }
@@ -114,7 +118,10 @@ TEST(DaemonControlProtocol, ASubscriptionCarriesItsRateWithinItsRange) {
 
     const Refusal refusals[] = {
         {R"({"v":1,"request":"subscribe","rate_hz":0})",
-         "\"rate_hz\" = 0: allowed > 0 and <= 100 (events a second)"},
+         "\"rate_hz\" = 0: allowed >= 0.001 and <= 100 (events a second)"},
+        // Its period (1 / rate_hz) overflowed the server's clock below about 1e-10.
+        {R"({"v":1,"request":"subscribe","rate_hz":1e-12})", "\"rate_hz\" = 1e-12: allowed"},
+        {R"({"v":1,"request":"subscribe","rate_hz":0.0009})", "\"rate_hz\" = 0.0009: allowed"},
         {R"({"v":1,"request":"subscribe","rate_hz":100.5})", "\"rate_hz\" = 100.5: allowed"},
         {R"({"v":1,"request":"subscribe","rate_hz":-3})", "\"rate_hz\" = -3: allowed"},
         {R"({"v":1,"request":"subscribe","rate_hz":"fast"})",
@@ -305,6 +312,69 @@ TEST(DaemonControlStatus, ADeviceWithoutCountsSaysSo) {
     EXPECT_EQ(link.at("counted"), false);
     EXPECT_EQ(link.at("reply_timeouts"), 0);
     EXPECT_EQ(link.size(), 17u);
+}
+
+// A loop that keeps the gains it is given, for what a coupling request does.
+class GainsLoop final : public ServoControl {
+  public:
+    servo::StatusSnapshot status() const noexcept override { return {}; }
+    servo::StatusSnapshot recent_status() const noexcept override { return {}; }
+    void arm() noexcept override {}
+    void disarm() noexcept override {}
+    void reset() noexcept override {}
+    std::uint64_t resets_requested() const noexcept override { return 0; }
+    void set_coupling(const servo::CouplingGains& gains) noexcept override {
+        gains_ = gains;
+        ++sets;
+    }
+    servo::CouplingGains coupling() const noexcept override { return gains_; }
+    int sets = 0;
+
+  private:
+    servo::CouplingGains gains_{.stiffness_n_per_m = 2000.0, .damping_n_s_per_m = 0.5};
+};
+
+// The carried-out answer to a request: the worker's, when the request has one.
+Answer carried_out(const Request& request, ServoControl& loop, const RunFacts& facts) {
+    const Answer first = answer(request, Peer{.pid = 7, .uid = 1000, .gid = 1000}, loop, facts);
+    return first.later ? first.later() : first;
+}
+
+// With [coupling] check = "off" every gains pass the check, but k_c = b_c = 0 is still
+// refused: the daemon's servo config refuses it at the start ("a coupling of zero renders
+// nothing"), so the socket must not set what a restart would refuse.
+TEST(DaemonControlCoupling, ZeroGainsAreRefusedEvenWithTheCheckOff) {
+    GainsLoop loop;
+    RunFacts facts;
+    facts.check_coupling = [](const servo::CouplingGains&) {
+        return CouplingVerdict{.accepted = true, .verdict = "stability check OFF"};
+    };
+    const Answer zero = carried_out(Request{.kind = RequestKind::coupling,
+                                            .id = 1,
+                                            .stiffness_n_per_m = 0.0,
+                                            .damping_n_s_per_m = 0.0},
+                                    loop, facts);
+    const nlohmann::json refused = nlohmann::json::parse(zero.reply);
+    EXPECT_EQ(refused["ok"], false);
+    EXPECT_NE(refused["error"].get<std::string>().find(
+                  "coupling refused: stiffness and damping are both 0"),
+              std::string::npos)
+        << zero.reply;
+    EXPECT_EQ(loop.sets, 0);
+    EXPECT_EQ(loop.coupling().stiffness_n_per_m, 2000.0);
+
+    // Either gain alone renders something, and passes.
+    for (const auto& [k, b] : {std::pair{0.0, 0.5}, std::pair{100.0, 0.0}}) {
+        const Answer one = carried_out(Request{.kind = RequestKind::coupling,
+                                               .id = 2,
+                                               .stiffness_n_per_m = k,
+                                               .damping_n_s_per_m = b},
+                                       loop, facts);
+        EXPECT_EQ(nlohmann::json::parse(one.reply)["ok"], true) << one.reply;
+        EXPECT_EQ(loop.coupling().stiffness_n_per_m, k);
+        EXPECT_EQ(loop.coupling().damping_n_s_per_m, b);
+    }
+    EXPECT_EQ(loop.sets, 2);
 }
 
 }  // namespace

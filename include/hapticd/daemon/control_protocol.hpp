@@ -19,7 +19,9 @@ inline constexpr int kProtocolVersion = 1;
 /// The longest request line, its newline included.
 inline constexpr std::size_t kMaxRequestBytes = 4096;
 
-/// The fastest telemetry stream a client may subscribe to, and the default rate.
+/// The slowest and fastest telemetry stream a client may subscribe to, and the default rate.
+/// The slowest is one event in about 17 minutes; its period still fits the server's clock.
+inline constexpr double kMinSubscribeRateHz = 0.001;
 inline constexpr double kMaxSubscribeRateHz = 100.0;
 inline constexpr double kDefaultSubscribeRateHz = 10.0;
 
@@ -57,7 +59,7 @@ struct Request {
     /// coupling: "damping" (optional: the damping in force stays), b_c, N s/m; finite.
     std::optional<double> damping_n_s_per_m{};
     /// subscribe: "rate_hz" (optional, kDefaultSubscribeRateHz), the telemetry events a
-    /// second; 0 < rate_hz <= kMaxSubscribeRateHz.
+    /// second; kMinSubscribeRateHz <= rate_hz <= kMaxSubscribeRateHz.
     std::optional<double> rate_hz{};
     /// record_start: "path" (required), the file the recording goes to; scene_load: "path"
     /// (required), the scene file to render; identify: "path" (optional: the daemon names

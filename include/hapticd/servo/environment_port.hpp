@@ -41,6 +41,11 @@ struct CouplingGains {
     /// f_c of the first-order low-pass on the damper's velocity (theory/velocity_filter.hpp),
     /// Hz, 0 <= f_c < rate/2; 0: none, the damper acts on v_d - v_e itself.
     double velocity_filter_hz = 0.0;
+
+    /// k_c = b_c = 0: the coupling carries no force, whatever the tool and the device do.
+    bool renders_nothing() const noexcept {
+        return stiffness_n_per_m == 0.0 && damping_n_s_per_m == 0.0;
+    }
 };
 
 /// A penalty force on the tool and its linearisation at the evaluated state.

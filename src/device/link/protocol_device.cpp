@@ -169,10 +169,18 @@ void ProtocolDevice::handshake() {
             }
             if (result != LinkResult::ok) continue;
             proto::Message message;
-            if (proto::decode(std::span<const std::byte>(rx_.data(), size), message) !=
-                proto::Error::none) {
-                continue;
+            const proto::Error decoded =
+                proto::decode(std::span<const std::byte>(rx_.data(), size), message);
+            // An identity of this session that does not decode is the device's answer, with
+            // a field its maker must fix: say which, rather than wait for one that decodes.
+            if (const auto* identity = std::get_if<proto::Identity>(&message);
+                decoded == proto::Error::bad_field && identity != nullptr &&
+                identity->session == session) {
+                throw std::runtime_error(where + " sent an identity whose " +
+                                         proto::out_of_range_field(*identity) +
+                                         " (docs/protocol.md 4.2)");
             }
+            if (decoded != proto::Error::none) continue;
             if (accept(message)) return message;
             if (const auto* error = std::get_if<proto::ErrorReport>(&message);
                 error != nullptr && error->session == session) {

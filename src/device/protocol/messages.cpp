@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <sstream>
 #include <type_traits>
 #include <utility>
 #include <variant>
@@ -72,13 +73,22 @@ Error read(Payload p, Hello& m) noexcept {
 }
 
 // ---- 4.2 identity ----
-Error check(const Identity& m) noexcept {
-    if (!valid_axes(m.axes) || m.force_limit_un <= 0 || !std::isfinite(m.counts_per_meter) ||
-        !(m.counts_per_meter > 0.0) || m.period_us == 0 || m.watchdog_timeout_us == 0 ||
-        !valid_serial(m.serial)) {
-        return Error::bad_field;
+enum class IdentityField { none, axes, force_limit, counts_per_meter, period, watchdog, serial };
+
+IdentityField first_out_of_range(const Identity& m) noexcept {
+    if (!valid_axes(m.axes)) return IdentityField::axes;
+    if (m.force_limit_un <= 0) return IdentityField::force_limit;
+    if (!std::isfinite(m.counts_per_meter) || !(m.counts_per_meter > 0.0)) {
+        return IdentityField::counts_per_meter;
     }
-    return Error::none;
+    if (m.period_us == 0) return IdentityField::period;
+    if (m.watchdog_timeout_us == 0) return IdentityField::watchdog;
+    if (!valid_serial(m.serial)) return IdentityField::serial;
+    return IdentityField::none;
+}
+
+Error check(const Identity& m) noexcept {
+    return first_out_of_range(m) == IdentityField::none ? Error::none : Error::bad_field;
 }
 std::size_t payload_size(const Identity&) noexcept { return kIdentityPayloadSize; }
 void write(const Identity& m, PayloadOut p) noexcept {
@@ -371,6 +381,33 @@ auto visit_message(const Message& message, Visitor&& visitor) noexcept {
 }
 
 }  // namespace
+
+std::string out_of_range_field(const Identity& m) {
+    switch (first_out_of_range(m)) {
+        case IdentityField::none:
+            return {};
+        case IdentityField::axes:
+            return "axes = " + std::to_string(m.axes) + ": allowed 1.." +
+                   std::to_string(kMaxProtocolAxes);
+        case IdentityField::force_limit:
+            return "force_limit_un = " + std::to_string(m.force_limit_un) +
+                   ": allowed > 0 (micronewtons)";
+        case IdentityField::counts_per_meter: {
+            std::ostringstream value;
+            value << m.counts_per_meter;
+            return "counts_per_meter = " + value.str() +
+                   ": allowed finite and > 0 (encoder counts per metre)";
+        }
+        case IdentityField::period:
+            return "period_us = 0: allowed > 0 (the device's servo period, us)";
+        case IdentityField::watchdog:
+            return "watchdog_timeout_us = 0: allowed > 0 (us)";
+        case IdentityField::serial:
+            return "serial: allowed 1 to " + std::to_string(kSerialSize) +
+                   " printable ASCII characters, then NUL padding";
+    }
+    return {};
+}
 
 std::string_view Identity::serial_number() const noexcept {
     std::size_t length = 0;

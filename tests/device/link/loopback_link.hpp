@@ -7,6 +7,7 @@
 #include <array>
 #include <atomic>
 #include <cstring>
+#include <functional>
 #include <memory>
 #include <stdexcept>
 
@@ -22,6 +23,8 @@ struct LoopbackBench {
     std::unique_ptr<proto::DeviceEmulator> device;
     std::atomic<bool> present{true};
     std::atomic<int> opens{0};
+    /// Rewrites each reply frame before the host sees it (a device's bytes no emulator sends).
+    std::function<void(std::span<std::byte>)> tamper;
 };
 
 class LoopbackLink final : public device::link::FrameLink {
@@ -43,6 +46,7 @@ class LoopbackLink final : public device::link::FrameLink {
         const proto::DeviceEmulator::Reply reply = bench_.device->handle(frame, out);
         std::size_t offset = 0;
         for (std::size_t i = 0; i < reply.frames; ++i) {
+            if (bench_.tamper) bench_.tamper(std::span(out.data() + offset, reply.frame_sizes[i]));
             push(std::span<const std::byte>(out.data() + offset, reply.frame_sizes[i]));
             offset += reply.frame_sizes[i];
         }

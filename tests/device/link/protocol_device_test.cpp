@@ -13,6 +13,8 @@
 #include <thread>
 
 #include "alloc_guard.hpp"
+#include "hapticd/device/protocol/crc32c.hpp"
+#include "hapticd/device/protocol/wire.hpp"
 #include "loopback_link.hpp"
 
 namespace hapticd::testing {
@@ -166,6 +168,32 @@ TEST_F(ProtocolDeviceTest, RefusesAxesAndRateThatDoNotMatchTheDevice) {
     } catch (const std::runtime_error& e) {
         EXPECT_NE(std::string(e.what()).find("servo.rate_hz = 500"), std::string::npos) << e.what();
         EXPECT_NE(std::string(e.what()).find("1000 us"), std::string::npos) << e.what();
+    }
+}
+
+// A device whose identity holds a field out of range is named with that field, at once,
+// not taken for a device that never answered ("no identity ... the right baud rate?").
+TEST_F(ProtocolDeviceTest, AnIdentityOutOfRangeIsRefusedNamingItsField) {
+    bench_.tamper = [](std::span<std::byte> frame) {
+        if (frame[proto::kOffsetType] != static_cast<std::byte>(proto::MessageType::identity)) {
+            return;
+        }
+        constexpr std::size_t kCountsPerMeter = proto::kHeaderSize + 8;
+        proto::wire::store_f64(frame, kCountsPerMeter, std::nan(""));
+        const std::size_t crc_offset = frame.size() - proto::kCrcSize;
+        proto::wire::store_u32(frame, crc_offset, proto::crc32c(frame.first(crc_offset)));
+    };
+    auto d = make_device();
+    try {
+        d->open(device_config());
+        FAIL() << "opened a device whose counts_per_meter is NaN";
+    } catch (const std::runtime_error& e) {
+        const std::string message = e.what();
+        EXPECT_NE(message.find("loopback sent an identity whose counts_per_meter = nan: allowed "
+                               "finite and > 0 (encoder counts per metre) (docs/protocol.md 4.2)"),
+                  std::string::npos)
+            << message;
+        EXPECT_EQ(message.find("baud"), std::string::npos) << message;
     }
 }
 

@@ -545,6 +545,38 @@ TEST(ProtocolMessages, BadFieldForEveryFieldRule) {
     EXPECT_EQ(decode(edited(error, 11, 1), m), Error::bad_field);  // reserved
 }
 
+// Each identity field out of range is named with its value and range (the host's message),
+// and one in range names nothing.
+TEST(ProtocolMessages, AnIdentityOutOfRangeNamesItsFirstBadField) {
+    EXPECT_EQ(out_of_range_field(an_identity()), "");
+    const auto named = [](auto edit) {
+        Identity m = an_identity();
+        edit(m);
+        std::array<std::byte, kMaxFrameSize> frame{};
+        EXPECT_EQ(encode(m, frame).error, Error::bad_field);  // the codec refuses it too
+        return out_of_range_field(m);
+    };
+    EXPECT_EQ(named([](Identity& m) { m.axes = 4; }), "axes = 4: allowed 1..3");
+    EXPECT_EQ(named([](Identity& m) { m.force_limit_un = -5; }),
+              "force_limit_un = -5: allowed > 0 (micronewtons)");
+    EXPECT_EQ(named([](Identity& m) { m.counts_per_meter = std::nan(""); }),
+              "counts_per_meter = nan: allowed finite and > 0 (encoder counts per metre)");
+    EXPECT_EQ(named([](Identity& m) { m.counts_per_meter = -2.5; }),
+              "counts_per_meter = -2.5: allowed finite and > 0 (encoder counts per metre)");
+    EXPECT_EQ(named([](Identity& m) { m.period_us = 0; }),
+              "period_us = 0: allowed > 0 (the device's servo period, us)");
+    EXPECT_EQ(named([](Identity& m) { m.watchdog_timeout_us = 0; }),
+              "watchdog_timeout_us = 0: allowed > 0 (us)");
+    EXPECT_EQ(named([](Identity& m) { m.serial[0] = '\0'; }),
+              "serial: allowed 1 to 16 printable ASCII characters, then NUL padding");
+    // The first in the frame's order is named.
+    EXPECT_EQ(named([](Identity& m) {
+                  m.axes = 0;
+                  m.period_us = 0;
+              }),
+              "axes = 0: allowed 1..3");
+}
+
 TEST(ProtocolMessages, TypedDecodeRejectsOtherTypes) {
     const Bytes sample = encoded(a_sample(1));
     ForceCommand command;

@@ -23,6 +23,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <string_view>
 #include <variant>
 
@@ -298,5 +299,11 @@ Error decode(std::span<const std::byte> bytes, Poll& message) noexcept;
 Error decode(std::span<const std::byte> bytes, Bye& message) noexcept;
 Error decode(std::span<const std::byte> bytes, ByeAck& message) noexcept;
 Error decode(std::span<const std::byte> bytes, ErrorReport& message) noexcept;
+
+/// Why an identity does not decode (Error::bad_field; decode() still fills the struct): its
+/// first field out of range, with the value and the range, as "counts_per_meter = nan:
+/// allowed finite and > 0 (encoder counts per metre)"; empty when every field is in range.
+/// For the host's message, which names the field a device's maker must fix.
+std::string out_of_range_field(const Identity& identity);
 
 }  // namespace hapticd::device::protocol
