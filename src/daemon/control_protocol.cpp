@@ -7,6 +7,8 @@
 #include <utility>
 #include <vector>
 
+#include "hapticd/input/printable.hpp"
+
 namespace hapticd::daemon::control {
 namespace {
 
@@ -184,8 +186,12 @@ ParsedRequest parse_request(std::string_view line) {
             return parsed;
         }
         const std::string& text = path->get_ref<const std::string&>();
-        if (text.empty() || text.front() != '/' || text.size() > kMaxRequestPathBytes ||
-            text.find('\0') != std::string::npos) {
+        if (input::find_control(text) != std::string::npos) {
+            parsed.error = "\"path\" = " + shown(*path) +
+                           ": holds a control character: allowed a path without them";
+            return parsed;
+        }
+        if (text.empty() || text.front() != '/' || text.size() > kMaxRequestPathBytes) {
             parsed.error = "\"path\" = " + shown(*path) +
                            ": an absolute path of at most 4095 bytes is needed (the daemon's "
                            "working directory is not the client's)";

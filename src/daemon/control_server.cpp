@@ -15,6 +15,8 @@
 #include <cstring>
 #include <utility>
 
+#include "hapticd/input/printable.hpp"
+
 namespace hapticd::daemon::control {
 
 struct ControlServer::Client {
@@ -201,11 +203,12 @@ std::vector<std::string> ControlServer::take_messages() {
     return taken;
 }
 
-void ControlServer::note(std::string message) {
+void ControlServer::note(const std::string& message) {
     const std::lock_guard lock(messages_mutex_);
     constexpr std::size_t kMostMessages = 256;  // a flood of connects does not grow this
     if (messages_.size() < kMostMessages) {
-        messages_.push_back(std::move(message));
+        // A client's string in it (an id, a path, a scene's name) makes no line of its own.
+        messages_.push_back(input::printable(message));
     } else {
         ++dropped_messages_;
     }
@@ -502,7 +505,7 @@ void ControlServer::answer_lines(Client& client) {
             job_ready_.notify_one();
             client.waiting = true;
         } else {
-            if (!answer.journal.empty()) note(std::move(answer.journal));
+            if (!answer.journal.empty()) note(answer.journal);
             client.out += answer.reply;
             if (answer.subscribe_hz) subscribe(client, *answer.subscribe_hz);
         }
@@ -571,7 +574,7 @@ void ControlServer::take_finished_job() {
         done.swap(done_);
     }
     for (Job& job : done) {
-        if (!job.answer.journal.empty()) note(std::move(job.answer.journal));
+        if (!job.answer.journal.empty()) note(job.answer.journal);
         const auto it = std::find_if(clients_.begin(), clients_.end(),
                                      [&](const Client& c) { return c.id == job.client_id; });
         if (it == clients_.end()) continue;  // it left while its request was worked on

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "hapticd/input/printable.hpp"
 #include "hapticd/input/text_input.hpp"
 
 namespace hapticd::input {
@@ -32,9 +33,7 @@ std::string format_value(const toml::node& node) {
     } else {
         node.visit([&out](const auto& value) { out << value; });  // a date or a time
     }
-    std::string text = out.str();
-    std::replace(text.begin(), text.end(), '\n', ' ');
-    return text;
+    return printable(out.str());
 }
 
 std::string where(std::string_view source, const toml::node* node) {
@@ -96,9 +95,9 @@ double TableReader::read_periods(std::string_view key, double max_periods, doubl
 double TableReader::number(const toml::node& node, std::string_view key, const Range& range) const {
     const std::optional<double> value = as_number(node);
     if (!value || !range.contains(*value)) {
-        throw ConfigError(prefix(&node) + name(key) + " = " + format_value(node) +
-                          (value ? " is out of range" : " is not a number") + ": allowed " +
-                          range.describe());
+        throw ConfigError(printable(prefix(&node) + name(key) + " = " + format_value(node) +
+                                    (value ? " is out of range" : " is not a number") +
+                                    ": allowed " + range.describe()));
     }
     return *value;
 }
@@ -141,6 +140,11 @@ std::optional<std::string> TableReader::read_optional(const Text& field) {
     const auto* text = node->as_string();
     if (text == nullptr) fail(field.key, "is not a string", field.allowed);
     if (text->get().empty() && !field.allow_empty) fail(field.key, "is empty", field.allowed);
+    // No name, path or label needs one, and each is shown in the journal and on terminals.
+    if (const std::size_t at = find_control(text->get()); at != std::string::npos) {
+        fail(field.key, "holds a control character at byte " + std::to_string(at + 1),
+             std::string(field.allowed) + " without control characters");
+    }
     return text->get();
 }
 
@@ -207,18 +211,19 @@ void TableReader::fail(std::string_view key, std::string_view problem,
     text += problem;
     text += ": allowed ";
     text += allowed;
-    throw ConfigError(text);
+    throw ConfigError(printable(text));
 }
 
 void TableReader::fail(std::string_view key, std::string_view message) const {
     const toml::node* node = table_.get(key);
-    throw ConfigError(prefix(node != nullptr ? node : &table_) + name(key) + " " +
-                      std::string(message));
+    throw ConfigError(printable(prefix(node != nullptr ? node : &table_) + name(key) + " " +
+                                std::string(message)));
 }
 
 void TableReader::fail_table(std::string_view message) const {
     const std::string table = name();
-    throw ConfigError(prefix(&table_) + table + (table.empty() ? "" : " ") + std::string(message));
+    throw ConfigError(
+        printable(prefix(&table_) + table + (table.empty() ? "" : " ") + std::string(message)));
 }
 
 void TableReader::finish() const {
@@ -237,15 +242,15 @@ void TableReader::finish() const {
         if (allowed.empty()) allowed = "no keys";
         if (!doc_.empty()) allowed += " (" + doc_ + ")";
         if (node.is_table()) {
-            throw ConfigError(prefix(&node) + "[" + path(key.str()) +
-                              "] is not a known table: allowed " + allowed);
+            throw ConfigError(printable(prefix(&node) + "[" + path(key.str()) +
+                                        "] is not a known table: allowed " + allowed));
         }
         if (const auto* array = node.as_array(); array != nullptr && array->is_array_of_tables()) {
-            throw ConfigError(prefix(&node) + "[[" + path(key.str()) +
-                              "]] is not a known table: allowed " + allowed);
+            throw ConfigError(printable(prefix(&node) + "[[" + path(key.str()) +
+                                        "]] is not a known table: allowed " + allowed));
         }
-        throw ConfigError(prefix(&node) + name(key.str()) + " = " + format_value(node) +
-                          " is not a known key: allowed " + allowed);
+        throw ConfigError(printable(prefix(&node) + name(key.str()) + " = " + format_value(node) +
+                                    " is not a known key: allowed " + allowed));
     }
 }
 
@@ -261,13 +266,14 @@ void TableReader::only(std::initializer_list<std::string_view> keys) {
 }
 
 toml::table parse_document(std::string_view text, const std::string& source) {
-    if (const std::string e = toml_shape_error(text, source); !e.empty()) throw ConfigError(e);
+    if (const std::string e = toml_shape_error(text, source); !e.empty())
+        throw ConfigError(printable(e));
     try {
         return toml::parse(text, source);
     } catch (const toml::parse_error& error) {
-        throw ConfigError(source + ":" + std::to_string(error.source().begin.line) + ":" +
-                          std::to_string(error.source().begin.column) +
-                          ": TOML syntax error: " + std::string(error.description()));
+        throw ConfigError(printable(source + ":" + std::to_string(error.source().begin.line) + ":" +
+                                    std::to_string(error.source().begin.column) +
+                                    ": TOML syntax error: " + std::string(error.description())));
     }
 }
 
@@ -283,8 +289,8 @@ const toml::table* table_at(const toml::table& document, std::string_view path,
         if (node == nullptr) return nullptr;
         table = node->as_table();
         if (table == nullptr) {
-            throw ConfigError(where(source, node) + walked + " = " + format_value(*node) +
-                              " is not a table: allowed a table [" + walked + "]");
+            throw ConfigError(printable(where(source, node) + walked + " = " + format_value(*node) +
+                                        " is not a table: allowed a table [" + walked + "]"));
         }
         path = dot == std::string_view::npos ? std::string_view() : path.substr(dot + 1);
     }

@@ -46,7 +46,10 @@ struct Served {
             return Answer{.reply = ok_reply(request.id, {{"seen", n}}),
                           .journal = request.kind == RequestKind::status
                                          ? std::string()
-                                         : "changed by pid " + std::to_string(peer.pid)};
+                                         : "changed by pid " + std::to_string(peer.pid) +
+                                               (request.id.is_string()
+                                                    ? " for " + request.id.get<std::string>()
+                                                    : std::string())};
         });
     }
     std::atomic<int> requests{0};
@@ -90,6 +93,22 @@ TEST(DaemonControlServer, AnswersEachRequestInOrderAndKnowsWhoAsked) {
                                               " uid " + std::to_string(::getuid())));
     EXPECT_TRUE(any_message_has(messages, "changed by pid " + std::to_string(::getpid())));
     EXPECT_TRUE(served.server->take_messages().empty());  // taken once
+}
+
+// A client's string in a journal line (here its id; in the daemon a path or a scene's name)
+// makes no line of its own: a newline would let it write lines at a priority it chose.
+TEST(DaemonControlServer, AClientsStringInTheJournalIsOneLineWithItsControlsWrittenOut) {
+    const ScratchDir dir;
+    Served served(dir.file("c.sock"));
+    UnixClient client(dir.file("c.sock"));
+    ASSERT_TRUE(client.send(R"({"v":1,"id":"x\n<0>hapticd: EMERGENCY\u001b[2J","request":"arm"})"
+                            "\n"));
+    EXPECT_EQ(reply_of(client)["seen"], 1);
+    const std::vector<std::string> messages = served.server->take_messages();
+    EXPECT_TRUE(any_message_has(messages, "for x\\x0a<0>hapticd: EMERGENCY\\x1b[2J"));
+    for (const std::string& m : messages) {
+        EXPECT_EQ(m.find_first_of("\n\x1b"), std::string::npos) << m;
+    }
 }
 
 TEST(DaemonControlServer, ABadLineGetsAnErrorAndTheConnectionStays) {

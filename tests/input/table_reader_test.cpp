@@ -77,6 +77,22 @@ TEST(InputTableReader, EveryMessageNamesTheFileLineTableKeyValueAndRange) {
               "lab.toml:2: [t] name = \"\" is empty: allowed a non-empty name");
 }
 
+// A string with a control character is refused (a scene's name goes to the journal and to
+// other operators' terminals: an escape sequence there cleared their screens), and no
+// message carries one: the value and the key are shown written out.
+TEST(InputTableReader, ControlCharactersAreRefusedAndNeverEchoed) {
+    EXPECT_EQ(error_of("[t]\nname = \"wall\\u001b[2Jstate disabled\"\n",
+                       [](TableReader& t) { (void)t.read(kName); }),
+              "lab.toml:2: [t] name = \"wall\\x1b[2Jstate disabled\" holds a control character at "
+              "byte 5: allowed a non-empty name without control characters");
+    EXPECT_EQ(error_of("[t]\nname = \"a\\n<0>b\"\n", [](TableReader& t) { (void)t.read(kName); }),
+              "lab.toml:2: [t] name = \"a\\x0a<0>b\" holds a control character at byte 2: allowed "
+              "a non-empty name without control characters");
+    // A key of the file's own with one, unknown: written out too.
+    EXPECT_EQ(error_of("[t]\n\"k\\u001b]0;x\\u0007\" = 1\n", [](TableReader&) {}).substr(0, 33),
+              "lab.toml:2: [t] k\\x1b]0;x\\x07 = 1");
+}
+
 TEST(InputTableReader, UnknownKeysAndTablesAreRefusedListingTheKnownOnes) {
     EXPECT_EQ(error_of("[t]\nrate_hz = 1000\nrate = 1000\n",
                        [](TableReader& t) {

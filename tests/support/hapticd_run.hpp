@@ -38,12 +38,6 @@ struct RunRequest {
     std::vector<std::pair<std::string, std::string>> environment{};
 };
 
-inline std::string shell_quote(const std::string& word) {
-    std::string quoted = "'";
-    for (const char c : word) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return quoted + "'";
-}
-
 inline DaemonRun run_hapticd(const ScratchDir& dir, const RunRequest& request) {
     const std::string config = dir.write("cfg.toml", request.config_toml);
     if (!request.scene_toml.empty()) dir.write("scene.toml", request.scene_toml);

@@ -14,6 +14,13 @@ struct CommandResult {
     std::string err;  ///< standard error
 };
 
+/// `word` as one word of a /bin/sh command line.
+inline std::string shell_quote(const std::string& word) {
+    std::string quoted = "'";
+    for (const char c : word) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return quoted + "'";
+}
+
 /// Runs `command` through /bin/sh with stdout and stderr captured separately; exit_code is
 /// -1 when it did not exit (a signal ended it).
 inline CommandResult run_command(const std::string& command) {

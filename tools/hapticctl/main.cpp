@@ -18,6 +18,7 @@
 
 #include "control_connection.hpp"
 #include "hapticd/daemon/exit_code.hpp"
+#include "hapticd/input/printable.hpp"
 #include "hapticd/install/version.hpp"
 #include "parse_command_line.hpp"
 #include "status_text.hpp"
@@ -469,7 +470,33 @@ int run_main(int argc, char** argv) {
 
 }  // namespace
 
+// What hapticctl prints carries the daemon's strings (a scene's name, a path, a refusal that
+// quotes a file): every control character in them is written out, so that none can clear the
+// operator's screen or fake a state (docs/control.md, "What a client supplies").
+class PrintableOutput {
+  public:
+    PrintableOutput()
+        : out_(std::cout.rdbuf()),
+          err_(std::cerr.rdbuf()),
+          out_before_(std::cout.rdbuf(&out_)),
+          err_before_(std::cerr.rdbuf(&err_)) {}
+    ~PrintableOutput() {
+        std::cout.flush();
+        std::cout.rdbuf(out_before_);
+        std::cerr.rdbuf(err_before_);
+    }
+    PrintableOutput(const PrintableOutput&) = delete;
+    PrintableOutput& operator=(const PrintableOutput&) = delete;
+
+  private:
+    hapticd::input::PrintableFilter out_;
+    hapticd::input::PrintableFilter err_;
+    std::streambuf* out_before_;
+    std::streambuf* err_before_;
+};
+
 int main(int argc, char** argv) {
+    const PrintableOutput printable_output;
     try {
         return run_main(argc, argv);
     } catch (const std::exception& error) {

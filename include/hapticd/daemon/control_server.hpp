@@ -142,7 +142,7 @@ class ControlServer {
     void take_finished_job();
     void work() noexcept;
     Client* find_client(int fd);
-    void note(std::string message);
+    void note(const std::string& message);
 
     std::string path_;
     Handler handler_;
