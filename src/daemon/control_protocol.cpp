@@ -191,10 +191,17 @@ ParsedRequest parse_request(std::string_view line) {
                            ": holds a control character: allowed a path without them";
             return parsed;
         }
-        if (text.empty() || text.front() != '/' || text.size() > kMaxRequestPathBytes) {
+        // A recording or a log may be a name alone: the daemon makes it in its outputs
+        // directory (docs/control.md, "Paths and strings"), which decides what else it accepts.
+        const bool name_alone_allowed = *kind != RequestKind::scene_load;
+        if (text.empty() || text.size() > kMaxRequestPathBytes ||
+            (text.front() != '/' && !name_alone_allowed)) {
             parsed.error = "\"path\" = " + shown(*path) +
-                           ": an absolute path of at most 4095 bytes is needed (the daemon's "
-                           "working directory is not the client's)";
+                           (name_alone_allowed
+                                ? ": a file name, or an absolute path of at most 4095 bytes, is "
+                                  "needed"
+                                : ": an absolute path of at most 4095 bytes is needed (the "
+                                  "daemon's working directory is not the client's)");
             return parsed;
         }
         request.path = text;

@@ -1,16 +1,27 @@
 #include "control_requests.hpp"
 
+#include <sys/stat.h>
+
 #include <sstream>
 #include <string_view>
 #include <vector>
 
 #include "hapticd/daemon/config_schema.hpp"
 #include "hapticd/input/range.hpp"
+#include "hapticd/input/text_input.hpp"
 #include "hapticd/servo/faults.hpp"
 #include "hapticd/servo/servo_state.hpp"
 
 namespace hapticd::daemon::control {
 namespace {
+
+// "mode 0640, owner uid 0, group gid 0": what decided a file's reading.
+std::string mode_text(const struct stat& status) {
+    std::ostringstream text;
+    text << "mode 0" << std::oct << (status.st_mode & 0777U) << std::dec << ", owner uid "
+         << status.st_uid << ", group gid " << status.st_gid;
+    return text.str();
+}
 
 nlohmann::json first_axes(const std::array<double, servo::kMaxAxes>& v, int axes) {
     return std::vector<double>(v.begin(), v.begin() + axes);
@@ -130,7 +141,16 @@ Answer load_scene(const Request& request, const Peer& peer, ServoControl& loop,
     }
     return {.later = [scenes = facts.scenes, &loop, path = request.path.value_or(std::string()),
                       id = request.id, peer, state_before = state_of(now)]() -> Answer {
-        const SceneLoadResult result = scenes->load(path, loop.coupling());
+        // A client loads only a regular file it could read itself: the daemon may read more
+        // than its clients, and a refusal quotes the file (docs/control.md, "Paths and strings").
+        const SceneLoadResult result =
+            scenes->load(path, loop.coupling(), [&peer](const struct stat& status) {
+                if (std::string why = input::regular_file_only(status); !why.empty()) return why;
+                if (peer.may_read(status)) return std::string();
+                return "the client (uid " + std::to_string(peer.uid) +
+                       ") may not read it itself (" + mode_text(status) +
+                       "): a client loads only a scene it could read";
+            });
         if (!result.ok) {
             return {.reply = error_reply(id, "scene_load refused: " + result.message),
                     .journal = "control: scene_load from " + peer.describe() +

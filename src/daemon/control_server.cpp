@@ -42,6 +42,22 @@ namespace {
 
 std::string errno_text(int error) { return std::strerror(error); }
 
+// The peer's supplementary groups (SO_PEERGROUPS, Linux 4.13): what it may read through them.
+// None when the kernel does not say: the peer is then judged by its primary group alone.
+std::vector<gid_t> peer_groups(int fd) {
+    std::vector<gid_t> groups(64);
+    for (int attempt = 0; attempt < 2; ++attempt) {
+        auto size = static_cast<socklen_t>(groups.size() * sizeof(gid_t));
+        if (::getsockopt(fd, SOL_SOCKET, SO_PEERGROUPS, groups.data(), &size) == 0) {
+            groups.resize(size / sizeof(gid_t));
+            return groups;
+        }
+        if (errno != ERANGE) break;
+        groups.resize(size / sizeof(gid_t));  // the size the kernel asked for
+    }
+    return {};
+}
+
 sockaddr_un address_of(const std::string& path) {
     sockaddr_un address{};
     address.sun_family = AF_UNIX;
@@ -111,6 +127,17 @@ void give_group(const std::string& path, const std::string& group_name, std::str
 std::string Peer::describe() const {
     return "pid " + std::to_string(pid) + " uid " + std::to_string(uid) + " gid " +
            std::to_string(gid);
+}
+
+bool Peer::may_read(const struct stat& status) const noexcept {
+    if (uid == 0) return true;
+    if (uid == kUnknownUid) return false;
+    if (status.st_uid == uid) return (status.st_mode & S_IRUSR) != 0;
+    if (status.st_gid == gid ||
+        std::find(groups.begin(), groups.end(), status.st_gid) != groups.end()) {
+        return (status.st_mode & S_IRGRP) != 0;
+    }
+    return (status.st_mode & S_IROTH) != 0;
 }
 
 ControlServer::ControlServer(std::string path, Limits limits, const std::string& group)
@@ -385,6 +412,7 @@ void ControlServer::accept_clients() {
         if (::getsockopt(fd, SOL_SOCKET, SO_PEERCRED, &credentials, &size) == 0) {
             client.peer =
                 Peer{.pid = credentials.pid, .uid = credentials.uid, .gid = credentials.gid};
+            client.peer.groups = peer_groups(fd);
         }
         client.stop_only = static_cast<int>(served_clients()) >= limits_.max_clients;
         epoll_event event{};

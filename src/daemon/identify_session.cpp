@@ -109,12 +109,11 @@ std::string describe_excitation(const IdentifyPlan& plan, const env::Multisine& 
 
 IdentifySession::IdentifySession(const Config& config, device::DeviceInfo device,
                                  Recording& recording, IdentifyLoopPort loop,
-                                 std::optional<std::string> directory, std::string start_name)
+                                 std::string start_name)
     : config_(config),
       device_(std::move(device)),
       recording_(recording),
       loop_(std::move(loop)),
-      directory_(std::move(directory)),
       start_name_(std::move(start_name)) {}
 
 IdentifySession::~IdentifySession() = default;
@@ -148,18 +147,8 @@ IdentifyStart IdentifySession::start(const std::optional<std::string>& path) {
     } catch (const std::exception& e) {  // ConfigError: the message names the key
         return refused(e.what());
     }
-    std::string log_path;
-    if (path) {
-        log_path = *path;
-    } else if (directory_) {
-        log_path = (std::filesystem::path(*directory_) /
-                    ("identify-" + start_name_ + "-" + std::to_string(runs_ + 1) + ".csv"))
-                       .string();
-    } else {
-        return refused(
-            "name the log FILE: this daemon has no --log, --summary or LOGS_DIRECTORY to put "
-            "it beside");
-    }
+    const std::string log_path =
+        path.value_or("identify-" + start_name_ + "-" + std::to_string(runs_ + 1) + ".csv");
     const RecordingResult recording = recording_.start(log_path);
     if (!recording.ok) return refused(recording.message);
     if (!loop_.play(*source)) {  // only one session plays, so only a bug gets here

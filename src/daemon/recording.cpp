@@ -1,13 +1,11 @@
 #include "hapticd/daemon/recording.hpp"
 
-#include <fcntl.h>
-#include <unistd.h>
-
-#include <cerrno>
 #include <chrono>
 #include <cstring>
 #include <stdexcept>
 #include <thread>
+
+#include "outputs_directory.hpp"
 
 namespace hapticd::daemon {
 namespace {
@@ -18,34 +16,36 @@ constexpr std::size_t kRecordingRingRecords = std::size_t{1} << 16;
 }  // namespace
 
 Recording::Recording(std::function<void(servo::TelemetryRing*)> attach,
-                     std::function<std::uint64_t()> tick, int axes, bool lockstep)
+                     std::function<std::uint64_t()> tick, int axes, bool lockstep,
+                     const OutputsDirectory* directory)
     : ring_(kRecordingRingRecords),
       attach_(std::move(attach)),
       tick_(std::move(tick)),
       axes_(axes),
-      lockstep_(lockstep) {}
+      lockstep_(lockstep),
+      directory_(directory) {}
 
 Recording::~Recording() { attach_(nullptr); }
 
-RecordingResult Recording::start(const std::string& path) {
+RecordingResult Recording::start(const std::string& requested) {
     const std::lock_guard lock(mutex_);
     if (writer_) {
         return {.ok = false,
                 .message = "already recording to " + writer_->path() + " (record stop first)",
                 .path = writer_->path()};
     }
-    const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0640);
-    if (fd < 0) {
-        const int error = errno;
-        std::string why = std::strerror(error);
-        if (error == EEXIST) why = "it exists, and a recording never overwrites a file";
-        if (error == EACCES || error == EROFS || error == EPERM) {
-            why +=
-                " (as a service, hapticd may write only under its LogsDirectory, "
-                "/var/log/hapticd/NAME)";
-        }
-        return {.ok = false, .message = "cannot create " + path + ": " + why, .path = path};
+    if (directory_ == nullptr) {
+        return {.ok = false, .message = kNoOutputsDirectory, .path = requested};
     }
+    const OutputsDirectory::ClientFile file = directory_->client_file(requested);
+    if (file.name.empty()) return {.ok = false, .message = file.refusal, .path = requested};
+    const OutputsDirectory::NewFile created = directory_->create(file.name);
+    const std::string& path = created.path;
+    if (created.fd < 0) {
+        return {
+            .ok = false, .message = "cannot create " + path + ": " + created.error, .path = path};
+    }
+    const int fd = created.fd;
     servo::TelemetryRecord stale;
     while (ring_.try_pop(stale)) {
     }  // a tick that pushed after the last stop's wait gave up
@@ -64,7 +64,7 @@ RecordingResult Recording::start(const std::string& path) {
     } catch (const std::exception& e) {
         attach_(nullptr);
         writer_.reset();
-        ::unlink(path.c_str());
+        (void)directory_->remove(file.name);
         return {.ok = false, .message = std::string("cannot record: ") + e.what(), .path = path};
     }
     {

@@ -28,9 +28,8 @@ control::CouplingVerdict check_new_coupling(const Config& config, const SceneSwi
 
 RunControl::RunControl(const Config& config, const device::DeviceInfo& info, const RunScene& scene,
                        const RunContext& context, const ControlLoopPorts& ports,
-                       control::ControlServer* server,
-                       const std::optional<std::string>& identify_directory, std::ostream& log,
-                       const device::Device* device)
+                       control::ControlServer* server, const OutputsDirectory* outputs,
+                       std::ostream& log, const device::Device* device)
     : config_(config), control_(ports.control), server_(server) {
     // scene_load (scene_switch.hpp): a scene of the run's causality, only with a control socket.
     if (server_ != nullptr && scene.scene != nullptr) {
@@ -53,14 +52,13 @@ RunControl::RunControl(const Config& config, const device::DeviceInfo& info, con
         .link_source = device};
     // record start/stop (recording.hpp): a ring for the run, only with a control socket.
     if (server_ != nullptr) {
-        recording_.emplace(ports.attach_recording, ports.tick, info.axes, info.lockstep);
+        recording_.emplace(ports.attach_recording, ports.tick, info.axes, info.lockstep, outputs);
         facts_.recording = &*recording_;
     }
     // identify (identify_session.hpp): the excitation played open loop on a disarmed run that
     // renders a scene, only with a control socket.
     if (recording_ && scene.scene != nullptr) {
-        identify_.emplace(config_, info, *recording_, ports.identify, identify_directory,
-                          context.stamp.start_name);
+        identify_.emplace(config_, info, *recording_, ports.identify, context.stamp.start_name);
         facts_.identify = &*identify_;
     }
     stopper_.server = server_;

@@ -24,6 +24,7 @@
 #include "hapticd/env/scene.hpp"
 #include "hapticd/servo/environment_port.hpp"
 #include "hapticd/servo/telemetry_ring.hpp"
+#include "outputs_directory.hpp"
 
 namespace hapticd::daemon {
 
@@ -54,14 +55,15 @@ struct ControlLoopPorts {
 class RunControl {  // NOLINT(clang-analyzer-optin.performance.Padding)
   public:
     /// Without `server` (no --socket), only the measured rate. With one: scene_load for a run
-    /// that renders `scene`, record, identify for a run that renders a scene (its files in
-    /// `identify_directory`), then the server started, and a line on `log` naming it.
+    /// that renders `scene`, record, identify for a run that renders a scene (their files in
+    /// `outputs`, the run's outputs directory; null: none), then the server started, and a
+    /// line on `log` naming it.
     /// `device` (the run's, open, outliving this): `status` reports its link_quality(), which
     /// the server's thread calls while the servo thread ticks; null: no device counts.
     RunControl(const Config& config, const device::DeviceInfo& info, const RunScene& scene,
                const RunContext& context, const ControlLoopPorts& ports,
-               control::ControlServer* server, const std::optional<std::string>& identify_directory,
-               std::ostream& log, const device::Device* device);
+               control::ControlServer* server, const OutputsDirectory* outputs, std::ostream& log,
+               const device::Device* device);
     RunControl(const RunControl&) = delete;
     RunControl& operator=(const RunControl&) = delete;
 

@@ -33,13 +33,16 @@ SceneSwitch::SceneSwitch(const Config& config, const env::Scene& initial,
       current_(&initial),
       in_force_{.name = initial.name, .source = std::move(initial_source)} {}
 
-SceneLoadResult SceneSwitch::load(const std::string& path, const servo::CouplingGains& gains) {
+SceneLoadResult SceneSwitch::load(const std::string& path, const servo::CouplingGains& gains,
+                                  const input::FileCheck& may_load) {
     const std::lock_guard lock(mutex_);
     auto scene = std::make_unique<env::Scene>();
     const Config candidate = with_gains(config_, gains);
     StartupCheck check;
     try {
-        *scene = env::load_scene(path, config_.device.axes);
+        *scene = env::parse_scene(
+            input::read_text_file(path, "the scene file", input::kMaxTomlBytes, may_load), path,
+            config_.device.axes);
         if (scene->causality != current_->causality) {
             return refused(path, path + " (scene \"" + scene->name + "\") is an " +
                                      env::to_string(scene->causality) +

@@ -47,6 +47,7 @@ std::string summary_json(const servo::Summary& s, const RunContext& c) {
     j["saturated_ticks"] = s.saturated_ticks;
     j["passivity_energy_j"] = s.passivity_energy_j;
     j["flight_records"] = c.flight_records;
+    j["flight_records_not_written"] = c.flight_records_not_written;
     j["recordings"] = nlohmann::ordered_json::array();
     for (const RecordedFile& file : c.recordings) {
         j["recordings"].push_back(

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <atomic>
+#include <memory>
 #include <ostream>
 #include <string>
 
@@ -52,13 +53,16 @@ int run_loop(const RunOptions& options, const Config& config,
     outputs.summary.begin();
     RunTelemetry telemetry(options, info, outputs);
     Loop loop(device, environment, servo_config, telemetry.ring());
-    FlightWriter flight(options, config.servo.rate_hz, info.axes);
+    // The directory of the flight records and a client's recordings, opened once.
+    const std::unique_ptr<OutputsDirectory> outputs_directory =
+        open_outputs_directory(options, log);
+    FlightWriter flight(outputs_directory.get(), config.servo.rate_hz, info.axes);
     loop.attach_flight_recorder(&flight.recorder());
     // The control socket, on its own thread from here to the servo thread's end.
     LoopControl<Loop> control_port(loop, servo_config.coupling);
     RunControl control(config, info, scene, context,
                        control_loop_ports<Environment>(loop, control_port), outputs.control.get(),
-                       flight.directory(), log, &device);
+                       outputs_directory.get(), log, &device);
 
     // Run. The servo thread reads `stop` itself, so a signal (or the parent's death) ends the
     // run at the next tick; the watcher sets it too when the duration ends.

@@ -1,11 +1,12 @@
 #include "hapticd/input/text_input.hpp"
 
+#include <fcntl.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <array>
 #include <cerrno>
 #include <cstring>
-#include <fstream>
 #include <vector>
 
 namespace hapticd::input {
@@ -137,31 +138,57 @@ class TomlShape {
 
 }  // namespace
 
-std::string read_text_file(const std::string& path, std::string_view what, std::size_t max_bytes) {
+std::string read_text_file(const std::string& path, std::string_view what, std::size_t max_bytes,
+                           const FileCheck& check) {
     if (path.empty()) throw ConfigError(std::string(what) + ": the path is empty");
+    const auto cannot = [&](const std::string& why) {
+        return ConfigError(path + ": cannot read " + std::string(what) + ": " + why);
+    };
+    const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) throw cannot(std::strerror(errno));
+    const auto close_fd = [fd] { ::close(fd); };
     struct stat st {};
-    if (::stat(path.c_str(), &st) != 0) {
-        throw ConfigError(path + ": cannot read " + std::string(what) + ": " +
-                          std::strerror(errno));
-    }
-    if (S_ISDIR(st.st_mode)) {
-        throw ConfigError(path + ": cannot read " + std::string(what) + ": it is a directory");
-    }
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw ConfigError(path + ": cannot read " + std::string(what));
-    std::string text;
-    std::array<char, 65536> chunk{};
-    while (in) {
-        in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
-        text.append(chunk.data(), static_cast<std::size_t>(in.gcount()));
-        if (text.size() > max_bytes) {
-            throw ConfigError(path + ": " + std::string(what) + " is larger than " +
-                              mib(max_bytes) + " (allowed at most " + mib(max_bytes) +
-                              "): not a hapticd file");
+    try {
+        if (::fstat(fd, &st) != 0) throw cannot(std::strerror(errno));
+        if (S_ISDIR(st.st_mode)) throw cannot("it is a directory");
+        if (check) {
+            if (const std::string why = check(st); !why.empty()) throw cannot(why);
         }
+        // Read as usual from here on: a pipe's writer is given the time it takes.
+        const int flags = ::fcntl(fd, F_GETFL);
+        if (flags < 0 || ::fcntl(fd, F_SETFL, flags & ~O_NONBLOCK) != 0) {
+            throw cannot(std::strerror(errno));
+        }
+        std::string text;
+        std::array<char, 65536> chunk{};
+        for (;;) {
+            const ssize_t n = ::read(fd, chunk.data(), chunk.size());
+            if (n < 0 && errno == EINTR) continue;
+            if (n < 0) throw cannot(std::strerror(errno));
+            if (n == 0) break;
+            text.append(chunk.data(), static_cast<std::size_t>(n));
+            if (text.size() > max_bytes) {
+                throw ConfigError(path + ": " + std::string(what) + " is larger than " +
+                                  mib(max_bytes) + " (allowed at most " + mib(max_bytes) +
+                                  "): not a hapticd file");
+            }
+        }
+        close_fd();
+        return text;
+    } catch (...) {
+        close_fd();
+        throw;
     }
-    if (in.bad()) throw ConfigError(path + ": cannot read " + std::string(what));
-    return text;
+}
+
+std::string regular_file_only(const struct stat& status) {
+    if (S_ISREG(status.st_mode)) return {};
+    const char* kind = S_ISFIFO(status.st_mode)   ? "a FIFO"
+                       : S_ISCHR(status.st_mode)  ? "a character device"
+                       : S_ISBLK(status.st_mode)  ? "a block device"
+                       : S_ISSOCK(status.st_mode) ? "a socket"
+                                                  : "not a regular file";
+    return std::string("it is ") + kind + ": allowed a regular file";
 }
 
 std::string toml_shape_error(std::string_view text, std::string_view source,

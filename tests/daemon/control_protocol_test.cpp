@@ -146,6 +146,11 @@ TEST(DaemonControlProtocol, ARecordingNamesAnAbsolutePath) {
     ASSERT_TRUE(parsed.request.has_value()) << parsed.error;
     EXPECT_EQ(parsed.request->kind, RequestKind::record_start);
     EXPECT_EQ(parsed.request->path, "/var/log/run 1.csv");
+    // A name alone: the daemon makes it in its outputs directory (docs/control.md, "Paths and
+    // strings").
+    const ParsedRequest name = parse_request(R"({"v":1,"request":"record_start","path":"a.csv"})");
+    ASSERT_TRUE(name.request.has_value()) << name.error;
+    EXPECT_EQ(name.request->path, "a.csv");
     const ParsedRequest stop = parse_request(R"({"v":1,"request":"record_stop"})");
     ASSERT_TRUE(stop.request.has_value()) << stop.error;
     EXPECT_EQ(stop.request->kind, RequestKind::record_stop);
@@ -154,13 +159,12 @@ TEST(DaemonControlProtocol, ARecordingNamesAnAbsolutePath) {
     const Refusal refusals[] = {
         {R"({"v":1,"request":"record_start"})", "\"path\" is missing"},
         {R"({"v":1,"request":"record_start","path":7})", "\"path\" = 7: must be a string"},
-        {R"({"v":1,"request":"record_start","path":"run.csv"})",
-         "\"path\" = \"run.csv\": an absolute path of at most 4095 bytes is needed"},
-        {R"({"v":1,"request":"record_start","path":""})", "an absolute path"},
+        {R"({"v":1,"request":"record_start","path":""})",
+         "\"path\" = \"\": a file name, or an absolute path of at most 4095 bytes, is needed"},
         {R"({"v":1,"request":"record_start","path":"/a\u0000b"})",
          "\"path\" = \"/a\\u0000b\": holds a control character: allowed a path without them"},
         {R"({"v":1,"request":"record_start","path":"/a\n<0>b"})", "holds a control character"},
-        {R"({"v":1,"request":"record_start","path":")" + too_long + R"("})", "an absolute path"},
+        {R"({"v":1,"request":"record_start","path":")" + too_long + R"("})", "a file name, or"},
         {R"({"v":1,"request":"record_stop","path":"/x"})",
          "unknown field \"path\" in a \"record_stop\" request"},
     };
@@ -191,9 +195,9 @@ TEST(DaemonControlProtocol, ASceneLoadNamesAnAbsolutePath) {
     expect_refused(refusals);
 }
 
-// identify's log is optional (the daemon names one beside its files); when given it is
-// absolute, as a recording's.
-TEST(DaemonControlProtocol, AnIdentifyMayNameAnAbsoluteLog) {
+// identify's log is optional (the daemon names one beside its files); when given it is a name
+// or an absolute path, as a recording's.
+TEST(DaemonControlProtocol, AnIdentifyMayNameItsLog) {
     const ParsedRequest bare = parse_request(R"({"v":1,"request":"identify"})");
     ASSERT_TRUE(bare.request.has_value()) << bare.error;
     EXPECT_EQ(bare.request->kind, RequestKind::identify);
@@ -207,10 +211,8 @@ TEST(DaemonControlProtocol, AnIdentifyMayNameAnAbsoluteLog) {
     const std::string too_long = "/" + std::string(kMaxRequestPathBytes, 'a');
     const Refusal refusals[] = {
         {R"({"v":1,"request":"identify","path":true})", "\"path\" = true: must be a string"},
-        {R"({"v":1,"request":"identify","path":"pen.csv"})",
-         "\"path\" = \"pen.csv\": an absolute path of at most 4095 bytes is needed"},
-        {R"({"v":1,"request":"identify","path":""})", "an absolute path"},
-        {R"({"v":1,"request":"identify","path":")" + too_long + R"("})", "an absolute path"},
+        {R"({"v":1,"request":"identify","path":""})", "a file name, or an absolute path"},
+        {R"({"v":1,"request":"identify","path":")" + too_long + R"("})", "a file name, or"},
         {R"({"v":1,"request":"identify","periods":2})",
          "unknown field \"periods\" in a \"identify\" request: it takes only v, id, request, "
          "path"},

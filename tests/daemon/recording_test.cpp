@@ -14,6 +14,7 @@
 #include <string>
 #include <thread>
 
+#include "../../src/daemon/outputs_directory.hpp"
 #include "scratch_dir.hpp"
 #include "telemetry_csv.hpp"
 #include "text_file.hpp"
@@ -57,15 +58,16 @@ class FakeServo {
     std::thread thread_;
 };
 
-Recording recording_of(FakeServo& servo) {
+Recording recording_of(FakeServo& servo, const OutputsDirectory* directory) {
     return Recording([&servo](servo::TelemetryRing* ring) { servo.attach(ring); },
-                     [&servo] { return servo.tick(); }, /*axes=*/1, /*lockstep=*/false);
+                     [&servo] { return servo.tick(); }, /*axes=*/1, /*lockstep=*/false, directory);
 }
 
 TEST(DaemonRecording, EveryTickFromTheStartToTheStopIsInTheFileOnce) {
     const ScratchDir dir;
+    const OutputsDirectory outputs(dir.path().string());
     FakeServo servo;
-    Recording recording = recording_of(servo);
+    Recording recording = recording_of(servo, &outputs);
     const std::string path = dir.file("first.csv");
     for (int round = 0; round < 2; ++round) {  // the ring serves one recording after another
         const std::string file = round == 0 ? path : dir.file("second.csv");
@@ -93,8 +95,9 @@ TEST(DaemonRecording, EveryTickFromTheStartToTheStopIsInTheFileOnce) {
 
 TEST(DaemonRecording, EachRefusalSaysWhyAndNothingIsOverwritten) {
     const ScratchDir dir;
+    const OutputsDirectory outputs(dir.path().string());
     FakeServo servo;
-    Recording recording = recording_of(servo);
+    Recording recording = recording_of(servo, &outputs);
     const RecordingResult idle_stop = recording.stop();
     EXPECT_FALSE(idle_stop.ok);
     EXPECT_NE(idle_stop.message.find("not recording"), std::string::npos) << idle_stop.message;
@@ -103,14 +106,15 @@ TEST(DaemonRecording, EachRefusalSaysWhyAndNothingIsOverwritten) {
     const RecordingResult over = recording.start(existing);
     EXPECT_FALSE(over.ok);
     EXPECT_NE(over.message.find("cannot create " + existing +
-                                ": it exists, and a recording never overwrites a file"),
+                                ": it exists, and no file is ever overwritten"),
               std::string::npos)
         << over.message;
     EXPECT_EQ(hapticd::testing::read_file(existing), "precious\n");
 
     const RecordingResult nowhere = recording.start(dir.file("no/such/dir/run.csv"));
     EXPECT_FALSE(nowhere.ok);
-    EXPECT_NE(nowhere.message.find("No such file or directory"), std::string::npos)
+    EXPECT_NE(nowhere.message.find("is outside this daemon's directory for a client's files"),
+              std::string::npos)
         << nowhere.message;
 
     ASSERT_TRUE(recording.start(dir.file("a.csv")).ok);
@@ -125,8 +129,9 @@ TEST(DaemonRecording, EachRefusalSaysWhyAndNothingIsOverwritten) {
 // The run ends while recording: the file is closed with every tick the servo ran.
 TEST(DaemonRecording, ARecordingStillRunningAtTheEndIsClosedWhole) {
     const ScratchDir dir;
+    const OutputsDirectory outputs(dir.path().string());
     FakeServo servo;
-    Recording recording = recording_of(servo);
+    Recording recording = recording_of(servo, &outputs);
     EXPECT_FALSE(recording.finish_at_exit().has_value());
     ASSERT_TRUE(recording.start(dir.file("end.csv")).ok);
     std::this_thread::sleep_for(100ms);
@@ -140,6 +145,100 @@ TEST(DaemonRecording, ARecordingStillRunningAtTheEndIsClosedWhole) {
         hapticd::testing::read_telemetry(dir.file("end.csv"));
     ASSERT_EQ(log.rows(), ended->records);
     EXPECT_EQ(log.column("tick").back(), static_cast<double>(last));
+}
+
+// The path policy (docs/control.md, "Paths and strings"): a client's file is a new file directly in
+// the run's outputs directory, named alone or by an absolute path to that directory however it is
+// spelled; nothing else, whatever '..' or links the path holds, and never through a link
+// planted there (issue 28: a non-root client made the root daemon create a root-owned file in
+// a 0700 directory through '..'; a planted link made the flight recorder overwrite a file).
+TEST(DaemonRecording, AClientsFileIsANewFileInTheOutputsDirectoryAndNowhereElse) {
+    const ScratchDir dir;
+    std::filesystem::create_directory(dir.file("out"));
+    std::filesystem::create_directory(dir.file("private"));
+    std::filesystem::permissions(dir.file("private"), std::filesystem::perms::owner_all);
+    const std::string victim = dir.write("private/victim.csv", "precious\n");
+    const OutputsDirectory outputs(dir.file("out"));
+    FakeServo servo;
+    Recording recording = recording_of(servo, &outputs);
+
+    // Refused, and nothing made anywhere.
+    std::filesystem::create_directory_symlink(dir.file("private"), dir.file("out/into"));
+    std::filesystem::create_symlink(victim, dir.file("out/planted.csv"));
+    struct Case {
+        std::string path;
+        std::string says;
+    };
+    const Case refused[] = {
+        {dir.file("out/../private/x.csv"), "is not in normal form"},
+        {dir.file("out/./x.csv"), "is not in normal form"},
+        {dir.file("out") + "//x.csv", "is not in normal form"},
+        {dir.file("private/x.csv"), "is outside this daemon's directory for a client's files"},
+        {dir.file("out/into/x.csv"), "is outside this daemon's directory"},
+        {"into/x.csv", "is a relative path"},
+        {"../x.csv", "is a relative path"},
+        {".hidden.csv", "is no file name a client may have"},
+        {"..", "is no file name a client may have"},
+        {std::string(256, 'a'), "has a name longer than 255 bytes"},
+        {"planted.csv", "it exists, and no file is ever overwritten"},
+        {dir.file("out/planted.csv"), "it exists, and no file is ever overwritten"},
+    };
+    for (const Case& c : refused) {
+        SCOPED_TRACE(c.path);
+        const RecordingResult r = recording.start(c.path);
+        EXPECT_FALSE(r.ok);
+        EXPECT_NE(r.message.find(c.says), std::string::npos) << r.message;
+        if (c.says.find("exists") == std::string::npos) {
+            EXPECT_NE(r.message.find("allowed a file name alone (take1.csv), or an absolute path "
+                                     "to a file directly in " +
+                                     dir.file("out")),
+                      std::string::npos)
+                << r.message;
+        }
+    }
+    EXPECT_EQ(hapticd::testing::read_file(victim), "precious\n");
+    EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.file("private")),
+                            std::filesystem::directory_iterator{}),
+              1);
+
+    // A name alone, and the directory by another spelling (a link to it): made in it.
+    const RecordingResult bare = recording.start("take1.csv");
+    ASSERT_TRUE(bare.ok) << bare.message;
+    EXPECT_EQ(bare.path, dir.file("out/take1.csv"));
+    ASSERT_TRUE(recording.stop().ok);
+    std::filesystem::create_directory_symlink(dir.file("out"), dir.file("elsewhere"));
+    const RecordingResult spelled = recording.start(dir.file("elsewhere/take2.csv"));
+    ASSERT_TRUE(spelled.ok) << spelled.message;
+    EXPECT_EQ(spelled.path, dir.file("out/take2.csv"));
+    ASSERT_TRUE(recording.stop().ok);
+    EXPECT_TRUE(std::filesystem::is_regular_file(dir.file("out/take2.csv")));
+    struct stat st {};
+    ASSERT_EQ(::stat(dir.file("out/take2.csv").c_str(), &st), 0);
+    EXPECT_EQ(st.st_mode & 0777U, 0640U);
+}
+
+TEST(DaemonRecording, ARunWithoutAnOutputsDirectoryRecordsNowhere) {
+    FakeServo servo;
+    Recording recording = recording_of(servo, nullptr);
+    const RecordingResult r = recording.start("take1.csv");
+    EXPECT_FALSE(r.ok);
+    EXPECT_EQ(r.message, kNoOutputsDirectory);
+}
+
+// --log or --summary that is no regular file names no directory for the run's files
+// (issue 28: --summary /dev/null put the flight records in /dev).
+TEST(DaemonOutputsDirectory, OnlyARegularOutputFileNamesItsDirectory) {
+    const ScratchDir dir;
+    RunOptions options;
+    options.summary_path = "/dev/null";
+    EXPECT_EQ(outputs_directory_path(options), std::nullopt);
+    options.log_path = "/dev/null";
+    EXPECT_EQ(outputs_directory_path(options), std::nullopt);
+    options.summary_path = dir.file("summary.json");  // not made yet: its directory counts
+    EXPECT_EQ(outputs_directory_path(options), dir.path().string());
+    options.log_path = dir.write("run.csv", "");
+    options.summary_path = "-";
+    EXPECT_EQ(outputs_directory_path(options), dir.path().string());
 }
 
 }  // namespace

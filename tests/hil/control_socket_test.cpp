@@ -472,7 +472,8 @@ TEST(HilControlSocket, HapticctlRecordsEveryTickLosslessly) {
     EXPECT_NE(not_recording.err.find("not recording"), std::string::npos) << not_recording.err;
     const CommandResult over = hapticctl(daemon.socket, "record start " + shell_quote(file));
     EXPECT_EQ(over.exit_code, 1);
-    EXPECT_NE(over.err.find("a recording never overwrites a file"), std::string::npos) << over.err;
+    EXPECT_NE(over.err.find("it exists, and no file is ever overwritten"), std::string::npos)
+        << over.err;
     // A relative FILE is hapticctl's working directory's, as a shell user means it.
     const CommandResult relative =
         run_command("cd " + shell_quote(dir.path().string()) + " && " + shell_quote(HAPTICCTL_BIN) +

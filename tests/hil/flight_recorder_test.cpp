@@ -82,6 +82,30 @@ TEST(HilFlightRecorder, ARunWithNowhereToPutItSaysSoAndWritesNothing) {
     EXPECT_EQ(nlohmann::json::parse(r.out)["flight_records"], nlohmann::json::array());
 }
 
+// --summary /dev/null names no directory for the run's files (issue 28: the flight records
+// went to /dev).
+TEST(HilFlightRecorder, ASummaryToDevNullPutsNothingInDev) {
+    const ScratchDir dir;
+    const std::string config = dir.write("cfg.toml", default_config() + kJump);
+    const auto flights_in_dev = [] {
+        int n = 0;
+        for (const auto& entry : std::filesystem::directory_iterator("/dev")) {
+            n += entry.path().filename().string().starts_with("flight-") ? 1 : 0;
+        }
+        return n;
+    };
+    const int before = flights_in_dev();
+    const CommandResult r = run_command(shell_quote(HAPTICD_BIN) +
+                                        " --lockstep --no-status --duration 10 --summary "
+                                        "/dev/null --config " +
+                                        shell_quote(config));
+    EXPECT_EQ(r.exit_code, 1) << r.err;
+    EXPECT_NE(r.err.find("not written: no --log, --summary FILE or LOGS_DIRECTORY"),
+              std::string::npos)
+        << r.err;
+    EXPECT_EQ(flights_in_dev(), before);
+}
+
 TEST(HilFlightRecorder, AServiceWritesItToItsLogsDirectory) {
     const ScratchDir dir;
     std::filesystem::create_directory(dir.file("logs"));

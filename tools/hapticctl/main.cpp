@@ -5,11 +5,14 @@
 //             record start FILE | record stop | scene FILE | identify [FILE] [--no-wait]
 //
 // Exit status: 0 done; 1 the daemon refused, or could not be reached; 2 bad usage.
+#include <sys/stat.h>
+
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <csignal>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <optional>
@@ -168,12 +171,35 @@ int watch(ControlConnection& daemon, int count) {
     return hapticd::daemon::kExitOk;
 }
 
-// record start FILE (made absolute here: the daemon's working directory is not ours), record
-// stop: the daemon creates and closes the file; hapticctl says what it holds.
+// FILE as the user means it in their shell: relative to the working directory as the shell
+// names it ($PWD, when that is this process's working directory), with '.' and '..' taken
+// lexically as `cd` takes them, so that `link/../x` is x beside link, not beside its target.
+std::string shell_absolute(const std::string& file) {
+    std::filesystem::path base = std::filesystem::current_path();
+    if (const char* pwd = std::getenv("PWD"); pwd != nullptr && pwd[0] == '/') {
+        struct stat named {};
+        struct stat here {};
+        if (::stat(pwd, &named) == 0 && ::stat(".", &here) == 0 && named.st_dev == here.st_dev &&
+            named.st_ino == here.st_ino) {
+            base = pwd;
+        }
+    }
+    return (base / file).lexically_normal().string();
+}
+
+// A recording's or a log's FILE: a name alone goes as it is (the daemon makes it in its
+// outputs directory, and its reply says where); a path is made absolute as the user means it.
+// docs/control.md, "Paths and strings".
+std::string client_file(const std::string& file) {
+    return file.find('/') == std::string::npos ? file : shell_absolute(file);
+}
+
+// record start FILE, record stop: the daemon creates and closes the file; hapticctl says
+// where it is and what it holds.
 int record(ControlConnection& daemon, const std::optional<std::string>& path) {
     hapticd::daemon::control::Request request{
         .kind = path ? RequestKind::record_start : RequestKind::record_stop, .id = nullptr};
-    if (path) request.path = std::filesystem::absolute(*path).lexically_normal().string();
+    if (path) request.path = client_file(*path);
     const nlohmann::json reply = daemon.request(request);
     if (!reply.at("ok").get<bool>()) {
         std::cerr << "hapticctl: " << reply.value("error", std::string("refused")) << "\n";
@@ -196,7 +222,7 @@ int record(ControlConnection& daemon, const std::optional<std::string>& path) {
 // it at the start of a tick, through the soft start.
 int load_scene(ControlConnection& daemon, const std::string& path) {
     hapticd::daemon::control::Request request{.kind = RequestKind::scene_load, .id = nullptr};
-    request.path = std::filesystem::absolute(path).lexically_normal().string();
+    request.path = shell_absolute(path);
     const nlohmann::json reply = daemon.request(request);
     if (!reply.at("ok").get<bool>()) {
         std::cerr << "hapticctl: " << reply.value("error", std::string("refused")) << "\n";
@@ -209,13 +235,13 @@ int load_scene(ControlConnection& daemon, const std::string& path) {
     return hapticd::daemon::kExitOk;
 }
 
-// identify [FILE] (made absolute here; without, the daemon names one beside its logs): the
-// daemon plays the excitation of hapticd --identify open loop and records it. hapticctl waits
+// identify [FILE] (as for record start; without, the daemon names one in its outputs directory):
+// the daemon plays the excitation of hapticd --identify open loop and records it. hapticctl waits
 // for its end and prints how it ended: exit 0 only when it ran to its end. Interrupting
 // hapticctl stops the waiting, not the excitation (hapticctl disarm does that).
 int identify(ControlConnection& daemon, const std::optional<std::string>& path, bool wait) {
     hapticd::daemon::control::Request request{.kind = RequestKind::identify, .id = nullptr};
-    if (path) request.path = std::filesystem::absolute(*path).lexically_normal().string();
+    if (path) request.path = client_file(*path);
     const nlohmann::json reply = daemon.request(request);
     if (!reply.at("ok").get<bool>()) {
         std::cerr << "hapticctl: " << reply.value("error", std::string("refused")) << "\n";
@@ -353,8 +379,13 @@ int run_main(int argc, char** argv) {
     auto* record_command =
         app.add_subcommand("record", "record every tick to a file, in the hapticd --log format");
     auto* record_start = record_command->add_subcommand(
-        "start", "start recording to FILE (created by the daemon; never over an existing file)");
-    record_start->add_option("FILE", record_path, "the file to create")
+        "start",
+        "start recording to FILE, a new file the daemon creates in its directory for a client's "
+        "files (LOGS_DIRECTORY as a service; docs/control.md, \"Paths and strings\"), and say "
+        "where");
+    record_start
+        ->add_option("FILE", record_path,
+                     "the file to create: a name alone, or a path to that directory")
         ->required()
         ->check(non_empty_path("name the file to create"));
     auto* record_stop =
@@ -378,12 +409,11 @@ int run_main(int argc, char** argv) {
         "play the excitation of hapticd --identify ([identify] of the daemon's config) open "
         "loop on the disarmed daemon and record it for haptic-tune identify; wait for its end "
         "and say how it ended (hapticctl disarm stops it)");
-    auto* identify_file =
-        identify_command
-            ->add_option("FILE", identify_path,
-                         "the log to create (default: identify-START-N.csv beside the daemon's "
-                         "logs)")
-            ->check(non_empty_path("name the log to create, or leave FILE out"));
+    auto* identify_file = identify_command
+                              ->add_option("FILE", identify_path,
+                                           "the log to create, as for record start (default: "
+                                           "identify-START-N.csv)")
+                              ->check(non_empty_path("name the log to create, or leave FILE out"));
     identify_command->add_flag("--no-wait", no_wait,
                                "return once the excitation is handed to the servo");
 

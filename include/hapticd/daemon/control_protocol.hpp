@@ -61,11 +61,11 @@ struct Request {
     /// subscribe: "rate_hz" (optional, kDefaultSubscribeRateHz), the telemetry events a
     /// second; kMinSubscribeRateHz <= rate_hz <= kMaxSubscribeRateHz.
     std::optional<double> rate_hz{};
-    /// record_start: "path" (required), the file the recording goes to; scene_load: "path"
-    /// (required), the scene file to render; identify: "path" (optional: the daemon names
-    /// one beside its logs), the excitation's log. Absolute, at most kMaxRequestPathBytes, no
-    /// NUL.
-    /// Whether the daemon may create or read it is the daemon's to say.
+    /// record_start: "path" (required), the file the recording goes to; identify: "path"
+    /// (optional: the daemon names one), the excitation's log; each a file name alone or an
+    /// absolute path. scene_load: "path" (required), the scene file to render, absolute. At
+    /// most kMaxRequestPathBytes, no control character. Whether the daemon may create or read
+    /// it is the daemon's to say (docs/control.md, "Paths and strings").
     std::optional<std::string> path{};
 };
 

@@ -31,6 +31,7 @@
 // that the supervising thread writes to.
 #pragma once
 
+#include <sys/stat.h>
 #include <sys/types.h>
 
 #include <atomic>
@@ -60,12 +61,18 @@ class ControlSocketError : public std::runtime_error {
 
 /// The connected process, from SO_PEERCRED.
 struct Peer {
+    static constexpr uid_t kUnknownUid = static_cast<uid_t>(-1);
+    static constexpr gid_t kUnknownGid = static_cast<gid_t>(-1);
     pid_t pid = 0;
-    uid_t uid = 0;
-    gid_t gid = 0;
+    uid_t uid = kUnknownUid;  ///< unknown: no credentials, so no one's rights
+    gid_t gid = kUnknownGid;
+    std::vector<gid_t> groups{};  ///< supplementary groups (SO_PEERGROUPS)
 
     /// "pid P uid U gid G", for the journal.
     std::string describe() const;
+    /// Whether the peer could read a file of this status itself, as its mode bits say (owner,
+    /// then group or supplementary group, then others; root reads all).
+    bool may_read(const struct stat& status) const noexcept;
 };
 
 struct Limits {

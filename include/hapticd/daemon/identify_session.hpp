@@ -86,11 +86,11 @@ struct IdentifyProgress {
 
 class IdentifySession {
   public:
-    /// The excitation is planned from `config` for `device` at each start; logs without a
-    /// path go to `directory` (none: a path is needed) as identify-START-N.csv.
+    /// The excitation is planned from `config` for `device` at each start; its log is a new
+    /// file `recording` makes in the run's outputs directory: the client's name, or
+    /// identify-START-N.csv.
     IdentifySession(const Config& config, device::DeviceInfo device, Recording& recording,
-                    IdentifyLoopPort loop, std::optional<std::string> directory,
-                    std::string start_name);
+                    IdentifyLoopPort loop, std::string start_name);
     ~IdentifySession();
     IdentifySession(const IdentifySession&) = delete;
     IdentifySession& operator=(const IdentifySession&) = delete;
@@ -121,7 +121,6 @@ class IdentifySession {
     device::DeviceInfo device_;
     Recording& recording_;
     IdentifyLoopPort loop_;
-    std::optional<std::string> directory_;
     std::string start_name_;
 
     mutable std::mutex mutex_;  // start(), poll() and progress() come from three threads

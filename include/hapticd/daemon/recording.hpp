@@ -22,6 +22,8 @@
 
 namespace hapticd::daemon {
 
+class OutputsDirectory;  // src/daemon/outputs_directory.hpp
+
 /// What a start or a stop came to.
 struct RecordingResult {
     bool ok = false;
@@ -35,14 +37,18 @@ struct RecordingResult {
 class Recording {
   public:
     /// `attach` hands the ring (or null) to the servo loop; `tick` is the servo's last
-    /// published tick. `lockstep`: the loop waits for the writer (no fdatasync either).
+    /// published tick. `lockstep`: the loop waits for the writer (no fdatasync either). The
+    /// files go in `directory` (the run's outputs directory; null: none, and start refuses).
     Recording(std::function<void(servo::TelemetryRing*)> attach,
-              std::function<std::uint64_t()> tick, int axes, bool lockstep);
+              std::function<std::uint64_t()> tick, int axes, bool lockstep,
+              const OutputsDirectory* directory);
     ~Recording();
     Recording(const Recording&) = delete;
     Recording& operator=(const Recording&) = delete;
 
-    /// Creates `path` (never over an existing file) and records from the next tick on.
+    /// Creates the file a client's `path` names in the directory (OutputsDirectory::
+    /// client_file(): never elsewhere, never over an existing file, never through a link) and
+    /// records from the next tick on.
     RecordingResult start(const std::string& path);
     /// Ends the recording: the file holds every tick from its start to the stop.
     RecordingResult stop();
@@ -67,6 +73,7 @@ class Recording {
     std::uint64_t dropped_before_ = 0;
     int axes_;
     bool lockstep_;
+    const OutputsDirectory* directory_;
 };
 
 }  // namespace hapticd::daemon

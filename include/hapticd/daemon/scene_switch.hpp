@@ -20,6 +20,7 @@
 #include "hapticd/daemon/config.hpp"
 #include "hapticd/daemon/startup_check.hpp"
 #include "hapticd/env/scene.hpp"
+#include "hapticd/input/text_input.hpp"
 #include "hapticd/servo/environment_port.hpp"
 
 namespace hapticd::daemon {
@@ -55,8 +56,11 @@ class SceneSwitch {
                 SceneLoopPort port);
 
     /// Loads `path` and has the loop render it, checked against `gains` (the gains in force).
-    /// One load at a time; the worker's.
-    SceneLoadResult load(const std::string& path, const servo::CouplingGains& gains);
+    /// `may_load` sees the opened file's status first and may refuse it (a client's file:
+    /// regular, and one the client could read itself; docs/control.md, "Paths and strings"). One
+    /// load at a time; the worker's.
+    SceneLoadResult load(const std::string& path, const servo::CouplingGains& gains,
+                         const input::FileCheck& may_load);
     /// The start-up check of the config with `gains`, against the scene in force (throws as
     /// check_coupling_at_startup does).
     StartupCheck check_coupling(const servo::CouplingGains& gains) const;

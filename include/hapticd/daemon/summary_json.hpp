@@ -53,6 +53,8 @@ struct RunContext {
     bool telemetry_complete = true;  ///< every record is in the file (none failed, none dropped)
     /// The flight recorder's files, one per fault (docs/daemon.md, "The flight recorder").
     std::vector<std::string> flight_records{};
+    /// Faults whose flight record was not written: past the run's cap, or a failed write.
+    std::uint64_t flight_records_not_written = 0;
     /// The control socket's recordings (record_start and identify), in order, once closed.
     std::vector<RecordedFile> recordings{};
     /// The control socket's identify excitations, in order, as they ended.
