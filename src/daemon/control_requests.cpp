@@ -37,6 +37,11 @@ std::string state_of(const servo::StatusSnapshot& s) {
     return std::string(servo::servo_state_name(s.state));
 }
 
+// Whether identify's excitation plays: asked on the worker, when a request's work runs.
+bool identify_playing(const RunFacts& facts) {
+    return facts.identify != nullptr && facts.identify->active();
+}
+
 constexpr const char* kIdentifyPlaying =
     "identify is playing the excitation: wait for its end, or stop it with hapticctl disarm";
 
@@ -52,7 +57,6 @@ Answer set_coupling(const Request& request, const Peer& peer, ServoControl& loop
     if (!facts.coupling_enabled) {
         return refusal("the config runs without the coupling ([coupling] enabled = false)");
     }
-    if (facts.identify != nullptr && facts.identify->active()) return refusal(kIdentifyPlaying);
     const servo::CouplingGains gains{
         .stiffness_n_per_m = request.stiffness_n_per_m.value_or(0.0),
         .damping_n_s_per_m = request.damping_n_s_per_m.value_or(loop.coupling().damping_n_s_per_m),
@@ -74,6 +78,9 @@ Answer set_coupling(const Request& request, const Peer& peer, ServoControl& loop
     if (!facts.check_coupling) return refusal("this run has no stability check to pass");
     return {.later = [&loop, &facts, gains, refusal, id = request.id, peer,
                       state_before = state_of(now)]() -> Answer {
+        // Here, when the work runs, not when the line was read: an identify queued before
+        // this request may have started since.
+        if (identify_playing(facts)) return refusal(kIdentifyPlaying);
         const CouplingVerdict verdict = facts.check_coupling(gains);
         if (!verdict.accepted) return refusal(verdict.verdict);
         loop.set_coupling(gains);
@@ -96,14 +103,13 @@ Answer record(const Request& request, const Peer& peer, const RunFacts& facts) {
         return {.reply = error_reply(request.id, name + " refused: this run cannot record"),
                 .journal = {}};
     }
-    if (request.kind == RequestKind::record_stop && facts.identify != nullptr &&
-        facts.identify->active()) {
-        return {.reply = error_reply(request.id, name + " refused: the recording is identify's "
-                                                        "log, which ends with the excitation"),
-                .journal = {}};
-    }
-    return {.later = [recording = facts.recording, kind = request.kind, path = request.path,
+    return {.later = [recording = facts.recording, &facts, kind = request.kind, path = request.path,
                       id = request.id, peer, name]() -> Answer {
+        if (kind == RequestKind::record_stop && identify_playing(facts)) {
+            return {.reply = error_reply(id, name + " refused: the recording is identify's log, "
+                                                    "which ends with the excitation"),
+                    .journal = {}};
+        }
         const RecordingResult result = kind == RequestKind::record_start
                                            ? recording->start(path.value_or(std::string()))
                                            : recording->stop();
@@ -118,6 +124,8 @@ Answer record(const Request& request, const Peer& peer, const RunFacts& facts) {
         } else {
             body["records"] = result.records;
             body["dropped"] = result.dropped;
+            body["complete"] = result.complete;
+            if (!result.complete) body["failure"] = result.failure;
         }
         return {.reply = ok_reply(id, body),
                 .journal = "control: " + name + " from " + peer.describe() + ": " + result.message};
@@ -134,13 +142,13 @@ Answer load_scene(const Request& request, const Peer& peer, ServoControl& loop,
                                      "identification run)"),
                 .journal = {}};
     }
-    if (facts.identify != nullptr && facts.identify->active()) {
-        return {.reply =
-                    error_reply(request.id, std::string("scene_load refused: ") + kIdentifyPlaying),
-                .journal = {}};
-    }
     return {.later = [scenes = facts.scenes, &loop, path = request.path.value_or(std::string()),
-                      id = request.id, peer, state_before = state_of(now)]() -> Answer {
+                      &facts, id = request.id, peer, state_before = state_of(now)]() -> Answer {
+        if (identify_playing(facts)) {
+            return {
+                .reply = error_reply(id, std::string("scene_load refused: ") + kIdentifyPlaying),
+                .journal = {}};
+        }
         // A client loads only a regular file it could read itself: the daemon may read more
         // than its clients, and a refusal quotes the file (docs/control.md, "Paths and strings").
         const SceneLoadResult result =

@@ -157,6 +157,7 @@ IdentifyStart IdentifySession::start(const std::optional<std::string>& path) {
     }
     source_ = std::move(source);
     active_ = true;
+    resets_at_start_ = now.fault_resets_taken;
     ++runs_;
     path_ = recording.path;
     started_ = std::chrono::steady_clock::now();
@@ -182,16 +183,17 @@ void IdentifySession::poll(std::ostream& log) {
     const std::lock_guard lock(mutex_);
     if (!active_) return;
     if (loop_.idle()) {
+        // Why it ended, for an excitation that did not run to its end (identify_outcome()
+        // names it then). A reset makes the source interrupted (done), so it is asked first.
         std::string ended_by;
-        if (!source_->done()) {
-            const servo::StatusSnapshot now = loop_.status();
-            if (now.faults != 0u) {
-                ended_by = "the fault " + fault_names(now.faults);
-            } else if (gave_up_) {
-                ended_by = "no still handle within " + seconds(wait_s_) + " s";
-            } else {
-                ended_by = "a disarm";
-            }
+        const servo::StatusSnapshot now = loop_.status();
+        if (now.faults != 0u) {
+            ended_by = "the fault " + fault_names(now.faults);
+        } else if (now.fault_resets_taken != resets_at_start_) {
+            ended_by = "a reset (hapticctl reset ends an excitation as a disarm does)";
+        } else if (!source_->done()) {
+            ended_by = gave_up_ ? "no still handle within " + seconds(wait_s_) + " s"
+                                : std::string("a disarm");
         }
         end(log, ended_by, /*servo_ticks=*/true);
         return;
@@ -212,9 +214,15 @@ void IdentifySession::end(std::ostream& log, const std::string& ended_by, bool s
     // The loop has let go (or its thread has ended): the excitation is this thread's now.
     // The recording ends after the tick that let go, so the log ends at zero force; once the
     // servo has stopped, the run's own finish ends it (run_loop).
-    if (servo_ticks) (void)recording_.stop();
+    std::optional<RecordingResult> log_closed;
+    if (servo_ticks) log_closed = recording_.stop();
     IdentifyOutcome outcome = identify_outcome(source_->excitation(), config_.servo.rate_hz,
                                                device_.axes, path_, /*log_ticks=*/false, ended_by);
+    if (log_closed && !log_closed->complete) {  // a full disk: the excitation's log is not whole
+        outcome.text += "; the log is INCOMPLETE: " + log_closed->failure;
+        outcome.complete = false;
+        outcome.priority = priority::err;
+    }
     log << outcome.priority << "hapticd: identify: " << outcome.text << "\n" << std::flush;
     outcome_ = std::move(outcome);
     active_ = false;

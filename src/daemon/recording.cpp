@@ -103,19 +103,18 @@ RecordingResult Recording::end(bool servo_stopped) {
     RecordingResult result{.ok = true, .path = writer_->path()};
     try {
         writer_->finish();
-    } catch (const std::exception& e) {
-        result.ok = false;
-        result.message = e.what();
+    } catch (const std::exception&) {  // failure() says it
     }
     result.records = writer_->records_written();
     result.dropped = ring_.dropped() - dropped_before_;
-    if (result.ok) {
-        result.message =
-            "recording " + result.path + " closed: " + std::to_string(result.records) + " records" +
-            (result.dropped == 0
-                 ? std::string(", none lost")
-                 : ", " + std::to_string(result.dropped) + " lost: the disk did not keep up");
+    result.failure = writer_->failure();
+    if (result.failure.empty() && result.dropped > 0) {
+        result.failure = std::to_string(result.dropped) + " records lost: the disk did not keep up";
     }
+    result.complete = result.failure.empty();
+    result.message =
+        "recording " + result.path + " closed: " + std::to_string(result.records) + " records" +
+        (result.complete ? std::string(", none lost") : ", INCOMPLETE: " + result.failure);
     writer_.reset();
     const std::lock_guard path_lock(path_mutex_);
     active_path_.reset();

@@ -101,14 +101,15 @@ void RunControl::drain_messages(std::ostream& log) {
 // A recording still running ends with the run, whole.
 void RunControl::finish_recording(RunContext& context, std::ostream& log) {
     if (const std::optional<RecordingResult> ended = recording_->finish_at_exit()) {
-        log << (ended->ok ? priority::notice : priority::err) << "hapticd: "
-            << (ended->ok ? ended->message + ", at the end of the run"
-                          : "recording " + ended->path + ": " + ended->message)
-            << "\n";
+        log << (ended->complete ? priority::notice : priority::err) << "hapticd: " << ended->message
+            << ", at the end of the run\n";
     }
     for (const RecordingResult& closed : recording_->closed()) {
-        context.recordings.push_back(
-            {.path = closed.path, .records = closed.records, .dropped = closed.dropped});
+        context.recordings.push_back({.path = closed.path,
+                                      .records = closed.records,
+                                      .dropped = closed.dropped,
+                                      .complete = closed.complete,
+                                      .failure = closed.failure});
     }
 }
 

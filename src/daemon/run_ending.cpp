@@ -106,7 +106,19 @@ int judge_run_end(const RunOptions& options, const Config& config,
 int check_outputs_whole(int code, bool summary_written, const servo::Summary& summary,
                         const RunContext& context, std::ostream& log) {
     // An output that is not whole is an exit status of its own, unless a fault (1) says more.
-    if (code == kExitOk && (!context.telemetry_complete || !summary_written)) {
+    // A client's recording counts too: it is the run's output as much as --log is.
+    std::uint64_t recordings_not_whole = 0;
+    for (const RecordedFile& file : context.recordings)
+        recordings_not_whole += file.complete ? 0 : 1;
+    if (code == kExitOk && recordings_not_whole > 0) {
+        log << priority::err << "hapticd: " << recordings_not_whole << " of "
+            << context.recordings.size()
+            << " recordings of the control socket are incomplete (the summary's recordings say "
+               "why); exit "
+            << kExitOutput << "\n";
+    }
+    if (code == kExitOk &&
+        (!context.telemetry_complete || !summary_written || recordings_not_whole > 0)) {
         if (!context.telemetry_complete) {
             log << priority::err << "hapticd: the telemetry log " << context.telemetry_log
                 << " is incomplete: " << context.telemetry_records_written << " of "

@@ -50,8 +50,12 @@ std::string summary_json(const servo::Summary& s, const RunContext& c) {
     j["flight_records_not_written"] = c.flight_records_not_written;
     j["recordings"] = nlohmann::ordered_json::array();
     for (const RecordedFile& file : c.recordings) {
-        j["recordings"].push_back(
-            {{"path", file.path}, {"records", file.records}, {"dropped", file.dropped}});
+        nlohmann::ordered_json entry{{"path", file.path},
+                                     {"records", file.records},
+                                     {"dropped", file.dropped},
+                                     {"complete", file.complete}};
+        if (!file.complete) entry["failure"] = file.failure;
+        j["recordings"].push_back(entry);
     }
     j["identify"] = nlohmann::ordered_json::array();
     for (const IdentifiedRun& run : c.identify_runs) {
@@ -110,7 +114,7 @@ std::string summary_text(const servo::Summary& s, const RunContext& c) {
     }
     for (const RecordedFile& file : c.recordings) {
         out << "  recorded: " << file.path << ", " << file.records << " records"
-            << (file.dropped == 0 ? "" : ", " + std::to_string(file.dropped) + " LOST") << "\n";
+            << (file.complete ? "" : " (INCOMPLETE: " + file.failure + ")") << "\n";
     }
     for (const IdentifiedRun& run : c.identify_runs) {
         out << "  identify: " << run.outcome << "\n";

@@ -76,12 +76,14 @@ void TelemetryWriter::finish() {
     }
     if (::close(fd_) != 0 && write_errno_ == 0 && errno != EINTR) write_errno_ = errno;
     fd_ = -1;
-    if (write_errno_ != 0) {
-        throw std::runtime_error(
-            "--log " + path_ + ": writing telemetry failed: " + std::strerror(write_errno_) +
-            "; the file holds the first " + std::to_string(records_written()) + " of " +
-            std::to_string(records_taken()) + " records, each line whole");
-    }
+    if (write_errno_ != 0) throw std::runtime_error("--log " + path_ + ": " + failure());
+}
+
+std::string TelemetryWriter::failure() const {
+    if (write_errno_ == 0) return {};
+    return "writing telemetry failed: " + std::string(std::strerror(write_errno_)) +
+           "; the file holds the first " + std::to_string(records_written()) + " of " +
+           std::to_string(records_taken()) + " records, each line whole";
 }
 
 void TelemetryWriter::run() noexcept {

@@ -5,6 +5,8 @@
 // it, and the daemon renders its scene again once armed. Plus the refusals, and a disarm
 // that ends the excitation early.
 #include <gtest/gtest.h>
+#include <sys/mount.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <cmath>
@@ -13,6 +15,7 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <thread>
 
 #include "control_daemon.hpp"
 #include "hapticd/daemon/config.hpp"
@@ -24,6 +27,7 @@
 #include "scratch_dir.hpp"
 #include "telemetry_csv.hpp"
 #include "text_file.hpp"
+#include "unix_client.hpp"
 
 namespace hapticd::testing {
 namespace {
@@ -342,6 +346,113 @@ TEST(HilIdentifySocket, WhileItPlaysTheSceneAndTheRecordingAreItsAndADisarmOrASt
     const TelemetryLog stopped = read_telemetry(second_log);
     EXPECT_GT(played_ticks(stopped).force_n.size(), 100u);
     EXPECT_EQ(mismatches_with_plan(played_ticks(stopped).force_n, planned_excitation(config)), 0u);
+}
+
+// The busy check runs when a request's work runs, not when its line is read (issue 28: a
+// record_stop read while another client's identify was still being set up ended identify's
+// log at 0 records, and identify still said it ran to its end, complete).
+TEST(HilIdentifySocket, ARequestQueuedBehindAnIdentifyIsCheckedWhenItRuns) {
+    const ScratchDir dir;
+    Daemon d(dir, "lab", ConfigText{hands_off_config()});
+    ASSERT_TRUE(d.process.wait_for_socket(d.socket)) << d.process.messages();
+    ASSERT_EQ(hapticctl(d.socket, "disarm").exit_code, 0);
+    UnixClient identify(d.socket);
+    UnixClient other(d.socket);
+    ASSERT_TRUE(identify.send(R"({"v":1,"id":1,"request":"identify","path":"pen.csv"})"
+                              "\n"));
+    ASSERT_TRUE(other.send(R"({"v":1,"id":2,"request":"record_stop"})"
+                           "\n"
+                           R"({"v":1,"id":3,"request":"coupling","stiffness":3000})"
+                           "\n"));
+    const auto started = identify.line();
+    ASSERT_TRUE(started.has_value());
+    EXPECT_EQ(nlohmann::json::parse(*started)["ok"], true) << *started;
+    for (const char* says : {"record_stop refused: the recording is identify's log",
+                             "coupling refused: identify is playing the excitation"}) {
+        const auto reply = other.line();
+        ASSERT_TRUE(reply.has_value());
+        EXPECT_CONTAINS(*reply, says);
+    }
+    const nlohmann::json ended = status_when(
+        d.socket,
+        [](const nlohmann::json& s) {
+            return s["identify"].is_object() && s["identify"]["active"] == false;
+        },
+        30s);
+    EXPECT_EQ(ended["identify"]["complete"], true) << ended.dump();
+    EXPECT_GT(read_telemetry(dir.file("pen.csv")).rows(), 3000u);  // the whole 3.5 s, and more
+    EXPECT_EQ(d.process.stop(), 0) << d.process.messages();
+}
+
+// A reset ends an excitation, and its outcome says so (issue 28: with no fault latched it
+// ended it silently: "stopped by a disarm").
+TEST(HilIdentifySocket, AResetThatEndsTheExcitationIsNamedInItsOutcome) {
+    const ScratchDir dir;
+    Daemon d(dir, "lab", ConfigText{hands_off_config()});
+    ASSERT_TRUE(d.process.wait_for_socket(d.socket)) << d.process.messages();
+    ASSERT_EQ(hapticctl(d.socket, "disarm").exit_code, 0);
+    ASSERT_EQ(hapticctl(d.socket, "identify pen.csv --no-wait").exit_code, 0);
+    status_when(d.socket, [](const nlohmann::json& s) {
+        return s["identify"].is_object() && s["identify"]["phase"] == "running";
+    });
+    ASSERT_EQ(hapticctl(d.socket, "reset").exit_code, 0);
+    const nlohmann::json ended = status_when(d.socket, [](const nlohmann::json& s) {
+        return s["identify"].is_object() && s["identify"]["active"] == false;
+    });
+    ASSERT_EQ(ended["identify"]["active"], false) << ended.dump();
+    EXPECT_EQ(ended["identify"]["complete"], false);
+    EXPECT_CONTAINS(ended["identify"]["outcome"].get<std::string>(), "stopped by a reset");
+    EXPECT_EQ(d.process.stop(), 0) << d.process.messages();
+}
+
+// A full disk under the outputs directory (a 64 KiB tmpfs as LOGS_DIRECTORY): a recording
+// and an identify log that are not whole say so in the reply, the outcome, the summary and
+// the exit status (3), as --log does (issue 28: both were reported whole, exit 0).
+TEST(HilIdentifySocket, ALogOnAFullDiskIsIncompleteInTheReplyTheOutcomeTheSummaryAndTheExit) {
+    if (::geteuid() != 0) GTEST_SKIP() << "needs root, to mount a small tmpfs";
+    const ScratchDir dir;
+    const std::string logs = dir.file("logs");
+    std::filesystem::create_directory(logs);
+    if (::mount("tmpfs", logs.c_str(), "tmpfs", 0, "size=64k") != 0) {
+        GTEST_SKIP() << "cannot mount a tmpfs here";
+    }
+    struct Unmount {
+        std::string path;
+        ~Unmount() { ::umount2(path.c_str(), MNT_DETACH); }
+    } unmount{logs};
+    const std::string socket = dir.file("lab.sock");
+    const std::string summary = dir.file("summary.json");
+    BackgroundDaemon daemon(
+        "/usr/bin/env",
+        {"LOGS_DIRECTORY=" + logs, HAPTICD_BIN, "--no-status", "--config",
+         dir.write("lab.toml", hands_off_config()), "--socket", socket, "--summary", summary},
+        dir.file("lab.err"));
+    ASSERT_TRUE(daemon.wait_for_socket(socket)) << daemon.messages();
+
+    ASSERT_EQ(hapticctl(socket, "record start take.csv").exit_code, 0);
+    std::this_thread::sleep_for(1500ms);  // 1500 rows: past 64 KiB
+    const CommandResult stopped = hapticctl(socket, "record stop");
+    EXPECT_EQ(stopped.exit_code, 1);
+    EXPECT_CONTAINS(stopped.err,
+                    "the recording is INCOMPLETE: writing telemetry failed: No "
+                    "space left on device; the file holds the first ");
+
+    ASSERT_EQ(hapticctl(socket, "disarm").exit_code, 0);
+    const CommandResult identified = hapticctl(socket, "identify pen.csv");
+    EXPECT_EQ(identified.exit_code, 1);
+    EXPECT_CONTAINS(identified.err,
+                    "the log is INCOMPLETE: writing telemetry failed: No space "
+                    "left on device");
+
+    EXPECT_EQ(daemon.stop(), 3) << daemon.messages();
+    const nlohmann::json s = nlohmann::json::parse(read_file(summary));
+    ASSERT_EQ(s["recordings"].size(), 2u) << s.dump(2);
+    for (const nlohmann::json& file : s["recordings"]) {
+        EXPECT_EQ(file["complete"], false) << file.dump();
+        EXPECT_CONTAINS(file["failure"].get<std::string>(), "No space left on device");
+    }
+    EXPECT_EQ(s["identify"][0]["complete"], false);
+    EXPECT_CONTAINS(daemon.messages(), "recordings of the control socket are incomplete");
 }
 
 }  // namespace

@@ -210,12 +210,19 @@ int record(ControlConnection& daemon, const std::optional<std::string>& path) {
                   << reply.at("first_tick").get<std::uint64_t>() << "\n";
         return hapticd::daemon::kExitOk;
     }
+    // "complete" is new in this release: a daemon of the one before says only "dropped".
     const auto dropped = reply.at("dropped").get<std::uint64_t>();
+    const bool complete = reply.value("complete", dropped == 0);
     std::cout << reply.at("path").get<std::string>() << ": "
               << reply.at("records").get<std::uint64_t>() << " records, "
               << (dropped == 0 ? std::string("none lost") : std::to_string(dropped) + " lost")
               << "\n";
-    return dropped == 0 ? hapticd::daemon::kExitOk : hapticd::daemon::kExitFault;
+    if (!complete) {
+        std::cerr << "hapticctl: the recording is INCOMPLETE: "
+                  << reply.value("failure", std::to_string(dropped) + " records lost") << "\n";
+        return hapticd::daemon::kExitFault;
+    }
+    return hapticd::daemon::kExitOk;
 }
 
 // scene FILE (made absolute here): the daemon reads, builds and checks it, and the servo takes

@@ -122,6 +122,7 @@ class IdentifySession {
     Recording& recording_;
     IdentifyLoopPort loop_;
     std::string start_name_;
+    std::uint64_t resets_at_start_ = 0;  // the status's fault_resets_taken at the start
 
     mutable std::mutex mutex_;  // start(), poll() and progress() come from three threads
     std::unique_ptr<env::ExcitationSource> source_;

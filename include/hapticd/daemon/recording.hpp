@@ -32,6 +32,11 @@ struct RecordingResult {
     std::uint64_t first_tick = 0;  ///< start: the file's first tick; none before it
     std::uint64_t records = 0;     ///< stop: whole lines in the file after its header
     std::uint64_t dropped = 0;     ///< stop: records the ring refused (0: lossless)
+    /// stop: every tick from the first to the stop is in the file (none dropped, no write
+    /// failed); `failure` says why not. A stop that closed a file that is not whole is still
+    /// ok: it stopped.
+    bool complete = true;
+    std::string failure{};
 };
 
 class Recording {

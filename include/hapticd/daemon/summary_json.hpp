@@ -21,6 +21,8 @@ struct RecordedFile {
     std::string path;
     std::uint64_t records = 0;  ///< whole lines after the header
     std::uint64_t dropped = 0;  ///< records the disk did not keep up with (0: lossless)
+    bool complete = true;       ///< every tick from its first to its stop is in it
+    std::string failure{};      ///< why not, when not
 };
 
 /// An excitation the control socket's identify played (identify_session.hpp).

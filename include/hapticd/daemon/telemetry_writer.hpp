@@ -65,6 +65,9 @@ class TelemetryWriter {
     }
     /// No write failed: every record taken is in the file (after finish()).
     bool complete() const noexcept { return write_errno_ == 0; }
+    /// After finish(): why the file is not whole ("writing telemetry failed: REASON; the
+    /// file holds the first N of M records, each line whole"); empty when it is.
+    std::string failure() const;
     const std::string& path() const noexcept { return path_; }
 
   private:
