@@ -219,8 +219,44 @@ void ControlServer::stop() noexcept {
     if (worker_.joinable()) worker_.join();
 }
 
+namespace {
+
+constexpr std::array<const char*, 4> kCauseNames{"client connected", "refused", "disconnected",
+                                                 "socket error"};
+
+}  // namespace
+
+void ControlServer::say_suppressed(Clock::time_point now) {
+    for (std::size_t i = 0; i < cause_windows_.size(); ++i) {
+        CauseWindow& window = cause_windows_[i];
+        if (now - window.start < limits_.journal_cause_window) continue;
+        if (window.suppressed > 0) {
+            messages_.push_back("control: " + std::to_string(window.suppressed) + " more \"" +
+                                kCauseNames[i] + "\" lines not written (rate-limited: at most " +
+                                std::to_string(limits_.journal_lines_per_cause) + " of a kind in " +
+                                std::to_string(limits_.journal_cause_window.count()) + " ms)");
+        }
+        window = CauseWindow{.start = now, .written = 0, .suppressed = 0};
+    }
+}
+
+void ControlServer::note_connection(Cause cause, const std::string& message) {
+    {
+        const std::lock_guard lock(messages_mutex_);
+        say_suppressed(Clock::now());
+        CauseWindow& window = cause_windows_[static_cast<std::size_t>(cause)];
+        if (window.written >= limits_.journal_lines_per_cause) {
+            ++window.suppressed;
+            return;
+        }
+        ++window.written;
+    }
+    note(message);
+}
+
 std::vector<std::string> ControlServer::take_messages() {
     const std::lock_guard lock(messages_mutex_);
+    say_suppressed(Clock::now());
     std::vector<std::string> taken = std::exchange(messages_, {});
     if (dropped_messages_ > 0) {
         taken.push_back("control: " + std::to_string(dropped_messages_) +
@@ -256,8 +292,9 @@ void ControlServer::serve() noexcept {
                                    wait_ms(Clock::now()));
         if (n < 0 && errno == EINTR) continue;
         if (n < 0) {
-            note("control socket " + path_ + ": epoll_wait(): " + errno_text(errno) +
-                 "; the socket no longer answers");
+            note_connection(Cause::socket_error, "control socket " + path_ +
+                                                     ": epoll_wait(): " + errno_text(errno) +
+                                                     "; the socket no longer answers");
             return;
         }
         bool connecting = false;
@@ -355,9 +392,11 @@ void ControlServer::enforce_deadlines(Clock::time_point now) {
             continue;
         }
         if (!client.out.empty() && now - client.last_progress > limits_.stalled_reader) {
-            note("control: disconnected " + client.peer.describe() + ": it took none of its " +
-                 std::to_string(client.out.size()) + " bytes of replies for " +
-                 std::to_string(limits_.stalled_reader.count()) + " ms");
+            note_connection(Cause::disconnected,
+                            "control: disconnected " + client.peer.describe() +
+                                ": it took none of its " + std::to_string(client.out.size()) +
+                                " bytes of replies for " +
+                                std::to_string(limits_.stalled_reader.count()) + " ms");
             client.gone = true;
             continue;
         }
@@ -370,8 +409,9 @@ void ControlServer::enforce_deadlines(Clock::time_point now) {
                                          " ms: closed; connect again when needed");
             client.last_progress = now;
             client.closing = true;
-            note("control: disconnected " + client.peer.describe() + ": idle for " +
-                 std::to_string(limits_.idle.count()) + " ms");
+            note_connection(Cause::disconnected, "control: disconnected " + client.peer.describe() +
+                                                     ": idle for " +
+                                                     std::to_string(limits_.idle.count()) + " ms");
             flush(client);
         }
     }
@@ -396,8 +436,9 @@ void ControlServer::accept_clients() {
         if (fd < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return;  // none left
         if (fd < 0 && (errno == EINTR || errno == ECONNABORTED)) continue;
         if (fd < 0) {
-            note("control: accept(): " + errno_text(errno) +
-                 "; new clients wait (accepting again in a second)");
+            note_connection(Cause::socket_error,
+                            "control: accept(): " + errno_text(errno) +
+                                "; new clients wait (accepting again in a second)");
             watch_listener(false);
             return;
         }
@@ -419,8 +460,8 @@ void ControlServer::accept_clients() {
         event.events = EPOLLIN | EPOLLRDHUP;
         event.data.fd = fd;
         if (::epoll_ctl(epoll_fd_, EPOLL_CTL_ADD, fd, &event) != 0) {
-            note("control: refused " + client.peer.describe() +
-                 ": epoll_ctl(): " + errno_text(errno));
+            note_connection(Cause::refused, "control: refused " + client.peer.describe() +
+                                                ": epoll_ctl(): " + errno_text(errno));
             ::close(fd);
             continue;
         }
@@ -428,7 +469,7 @@ void ControlServer::accept_clients() {
             admit_stop_only(std::move(client));
             continue;
         }
-        note("control: client connected: " + client.peer.describe());
+        note_connection(Cause::connected, "control: client connected: " + client.peer.describe());
         clients_.push_back(std::move(client));
     }
 }
@@ -468,8 +509,9 @@ void ControlServer::refuse_too_many(Client& client) {
     client.last_progress = Clock::now();
     client.closing = true;
     client.in.clear();
-    note("control: refused " + client.peer.describe() + ": " + std::to_string(limits_.max_clients) +
-         " clients already connected");
+    note_connection(Cause::refused, "control: refused " + client.peer.describe() + ": " +
+                                        std::to_string(limits_.max_clients) +
+                                        " clients already connected");
     flush(client);
 }
 
@@ -658,9 +700,10 @@ void ControlServer::watch(Client& client) {
 // gets no more of them, and the journal says why it is disconnected. True when so.
 bool ControlServer::drop_unread(Client& client, std::string_view what) {
     if (client.out.size() <= limits_.max_unread_reply_bytes) return false;
-    note("control: disconnected " + client.peer.describe() + ": it left more than " +
-         std::to_string(limits_.max_unread_reply_bytes) + " bytes of " + std::string(what) +
-         " unread");
+    note_connection(Cause::disconnected, "control: disconnected " + client.peer.describe() +
+                                             ": it left more than " +
+                                             std::to_string(limits_.max_unread_reply_bytes) +
+                                             " bytes of " + std::string(what) + " unread");
     client.out.clear();
     return true;
 }

@@ -34,6 +34,7 @@
 #include <sys/stat.h>
 #include <sys/types.h>
 
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -86,6 +87,11 @@ struct Limits {
     std::chrono::milliseconds idle{std::chrono::seconds{60}};
     /// A client that takes none of its waiting replies for this long is closed.
     std::chrono::milliseconds stalled_reader{std::chrono::seconds{10}};
+    /// At most this many journal lines of one connection cause (connected, refused,
+    /// disconnected, socket error) in this window; the rest are counted in one line.
+    /// journald allows a service 10,000 lines in 30 s by default: a storm must not spend them.
+    int journal_lines_per_cause = 10;
+    std::chrono::milliseconds journal_cause_window{std::chrono::seconds{10}};
 };
 
 /// What a handler made of a request.
@@ -150,6 +156,14 @@ class ControlServer {
     void work() noexcept;
     Client* find_client(int fd);
     void note(const std::string& message);
+    /// What a client's connection did (connected, refused, disconnected): lines a storm of
+    /// connects makes by the ten thousand, past journald's rate limit, which would then drop
+    /// the fault lines that follow. At most a few of each cause in a window; the
+    /// rest are counted and said in one line (Limits::journal_lines_per_cause). Requests' state
+    /// changes go through note() and are never limited.
+    enum class Cause { connected, refused, disconnected, socket_error };
+    void note_connection(Cause cause, const std::string& message);
+    void say_suppressed(Clock::time_point now);  // under messages_mutex_
 
     std::string path_;
     Handler handler_;
@@ -182,6 +196,12 @@ class ControlServer {
     std::mutex messages_mutex_;
     std::vector<std::string> messages_;
     std::size_t dropped_messages_ = 0;  // guarded by messages_mutex_
+    struct CauseWindow {                // guarded by messages_mutex_
+        Clock::time_point start{};
+        int written = 0;
+        std::uint64_t suppressed = 0;
+    };
+    std::array<CauseWindow, 4> cause_windows_{};
 };
 
 }  // namespace hapticd::daemon::control
