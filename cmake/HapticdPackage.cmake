@@ -7,7 +7,8 @@ set(CPACK_PACKAGE_VENDOR "hapticd")
 set(CPACK_PACKAGE_CONTACT "hapticd maintainers <hapticd@localhost>")
 set(CPACK_PACKAGE_DESCRIPTION_SUMMARY
     "real-time haptic servo daemon with a passive virtual coupling")
-set(CPACK_PACKAGE_DESCRIPTION
+# One string: set() with several would join them with ';', which the control file shows.
+string(CONCAT CPACK_PACKAGE_DESCRIPTION
     "hapticd renders virtual environments on haptic devices (USB, HID, serial, simulated) "
     "through the virtual coupling of Adams & Hannaford, sized and checked by haptic-tune so "
     "that the interaction is stable for every passive operator. A systemd service per device.")
@@ -16,6 +17,13 @@ set(CPACK_INSTALL_PREFIX /usr)  # the prefix of the staged install (with CPACK_S
 set(CPACK_SET_DESTDIR ON)
 set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
 set(CPACK_DEBIAN_PACKAGE_SECTION science)
+# Stripped executables and plugins (8 MB installed, not 236 MB); their debug information goes
+# to hapticd-dbgsym, a .ddeb beside the package whose files gdb finds by build ID, as Debian's
+# own packages ship it. CPack's CPACK_DEBIAN_DEBUGINFO_PACKAGE makes no .ddeb for a package
+# without components (CMake 3.25), so HapticdSplitDebug.cmake does it, after the staged
+# install and before the package is made.
+set(HAPTICD_PACKAGE_VERSION ${PROJECT_VERSION})
+set(CPACK_PRE_BUILD_SCRIPTS ${PROJECT_SOURCE_DIR}/cmake/HapticdSplitDebug.cmake)
 # Depends: from the executables' and plugins' shared libraries (dpkg-shlibdeps).
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 # The charts of haptic-tune plot and zwidth only.
