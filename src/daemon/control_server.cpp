@@ -13,6 +13,8 @@
 #include <array>
 #include <cerrno>
 #include <cstring>
+#include <deque>
+#include <optional>
 #include <utility>
 
 #include "hapticd/input/printable.hpp"
@@ -23,14 +25,23 @@ struct ControlServer::Client {
     std::uint64_t id = 0;  // never reused, unlike the descriptor: a finished job finds its client
     int fd = -1;
     Peer peer;
-    std::string in;            // bytes of the request line being read
-    std::string out;           // replies not yet taken by the client
-    bool read_closed = false;  // the client shut its side down: answer what came, then close
-    bool closing = false;      // answer nothing more; close once `out` is flushed
-    bool gone = false;         // the connection broke: close now
-    bool waiting = false;      // its request is on the worker; its next ones wait
-    bool registered = true;    // with epoll (a hung-up client waiting for its job is not)
-    bool stop_only = false;    // came over max_clients: one line, served only if `disarm`
+    std::string in;  // bytes of the request line being read
+    // Complete lines read while a request of this client was on the worker, in order; a
+    // disarm among them is carried out as it is read, its reply kept for its turn.
+    struct Line {
+        std::string text;
+        std::size_t oversized = 0;           // its bytes, past kMaxRequestBytes: refused
+        std::optional<std::string> early{};  // the reply of a disarm carried out already
+    };
+    std::deque<Line> lines;
+    std::size_t lines_bytes = 0;  // in `lines`: bounded while waiting (kMostWaitingBytes)
+    std::string out;              // replies not yet taken by the client
+    bool read_closed = false;     // the client shut its side down: answer what came, then close
+    bool closing = false;         // answer nothing more; close once `out` is flushed
+    bool gone = false;            // the connection broke: close now
+    bool waiting = false;         // its request is on the worker; its next ones wait
+    bool registered = true;       // with epoll (a hung-up client waiting for its job is not)
+    bool stop_only = false;       // came over max_clients: one line, served only if `disarm`
     std::uint32_t watched = EPOLLIN | EPOLLRDHUP;           // the events registered with epoll
     std::chrono::steady_clock::time_point last_request{};   // or the connect
     std::chrono::steady_clock::time_point last_progress{};  // a byte of `out` taken, or new
@@ -515,14 +526,25 @@ void ControlServer::refuse_too_many(Client& client) {
     flush(client);
 }
 
+namespace {
+
+// While a client's request is on the worker its next lines wait, but are read (a disarm among
+// them is carried out at once): up to this many bytes of them.
+constexpr std::size_t kMostWaitingBytes = 4 * kMaxRequestBytes;
+
+}  // namespace
+
+bool ControlServer::may_read(const Client& client) {
+    if (client.read_closed || client.closing || client.gone) return false;
+    return !client.waiting || client.in.size() + client.lines_bytes < kMostWaitingBytes;
+}
+
 void ControlServer::read_from(Client& client) {
     std::array<char, 4096> buffer{};
     // At most 16 reads a wake: epoll (level-triggered) comes back for the rest, so a client
     // that writes as fast as it reads cannot keep this thread from the others, or from stop().
     constexpr int kReadsPerWake = 16;
-    for (int reads = 0;
-         reads < kReadsPerWake && !client.read_closed && !client.closing && !client.waiting;
-         ++reads) {
+    for (int reads = 0; reads < kReadsPerWake && may_read(client); ++reads) {
         const ssize_t got = ::recv(client.fd, buffer.data(), buffer.size(), MSG_DONTWAIT);
         if (got < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) break;
         if (got < 0 && errno == EINTR) continue;
@@ -540,44 +562,61 @@ void ControlServer::read_from(Client& client) {
     flush(client);
 }
 
-void ControlServer::answer_lines(Client& client) {
+// The complete lines of `in` into `lines`, in order.
+void ControlServer::take_lines(Client& client) {
     std::size_t begin = 0;
-    while (!client.closing && !client.waiting) {
+    for (;;) {
         const std::size_t end = client.in.find('\n', begin);
         if (end == std::string::npos) break;
-        if (client.out.empty()) client.last_progress = Clock::now();  // replies from now on
-        std::string_view line(client.in.data() + begin, end - begin);
+        std::string_view text(client.in.data() + begin, end - begin);
         begin = end + 1;
-        if (line.size() + 1 > kMaxRequestBytes) {
+        Client::Line line{.text = {},
+                          .oversized = text.size() + 1 > kMaxRequestBytes ? text.size() + 1 : 0};
+        if (line.oversized == 0) {
+            if (!text.empty() && text.back() == '\r') text.remove_suffix(1);
+            if (text.empty()) continue;
+            line.text = std::string(text);
+        }
+        client.lines_bytes += line.text.size() + 1;
+        client.lines.push_back(std::move(line));
+    }
+    client.in.erase(0, begin);
+}
+
+// While the client waits for the worker, a disarm among its waiting lines is carried out now:
+// the stop does not wait behind a slow request (a coupling's exact check may take seconds);
+// only its reply keeps its place.
+void ControlServer::carry_out_waiting_disarms(Client& client) {
+    for (Client::Line& line : client.lines) {
+        if (line.oversized > 0 || line.early) continue;
+        const ParsedRequest parsed = parse_request(line.text);
+        if (!parsed.request || parsed.request->kind != RequestKind::disarm) continue;
+        Answer answer = handler_(*parsed.request, client.peer);
+        if (answer.later) answer = answer.later();  // a disarm has no work to wait for
+        if (!answer.journal.empty()) note(answer.journal);
+        line.early = std::move(answer.reply);
+        client.last_request = Clock::now();
+    }
+}
+
+void ControlServer::answer_lines(Client& client) {
+    take_lines(client);
+    while (!client.closing && !client.waiting && !client.lines.empty()) {
+        Client::Line line = std::move(client.lines.front());
+        client.lines.pop_front();
+        client.lines_bytes -= line.text.size() + 1;
+        if (client.out.empty()) client.last_progress = Clock::now();  // replies from now on
+        if (line.oversized > 0) {
             client.out += error_reply(
-                nullptr, "a request line of " + std::to_string(line.size() + 1) +
+                nullptr, "a request line of " + std::to_string(line.oversized) +
                              " bytes: at most " + std::to_string(kMaxRequestBytes) + " allowed");
             client.closing = true;
             break;
         }
-        if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-        if (line.empty()) continue;
-        client.last_request = Clock::now();
-        const ParsedRequest parsed = parse_request(line);
-        if (client.stop_only && !(parsed.request && parsed.request->kind == RequestKind::disarm)) {
-            refuse_too_many(client);
-            break;
-        }
-        if (client.stop_only) client.closing = true;  // its one request, then the disconnect
-        if (!parsed.request) {
-            client.out += error_reply(parsed.id, parsed.error);
-        } else if (Answer answer = handler_(*parsed.request, client.peer); answer.later) {
-            {
-                const std::lock_guard lock(job_mutex_);
-                jobs_.push_back(
-                    Job{.client_id = client.id, .work = std::move(answer.later), .answer = {}});
-            }
-            job_ready_.notify_one();
-            client.waiting = true;
+        if (line.early) {  // carried out as it was read; the reply in its turn
+            client.out += *line.early;
         } else {
-            if (!answer.journal.empty()) note(answer.journal);
-            client.out += answer.reply;
-            if (answer.subscribe_hz) subscribe(client, *answer.subscribe_hz);
+            answer_line(client, line.text);
         }
         // Unread means not taken by the socket: offer the replies first.
         if (client.out.size() > limits_.max_unread_reply_bytes) flush(client);
@@ -586,7 +625,7 @@ void ControlServer::answer_lines(Client& client) {
             break;
         }
     }
-    client.in.erase(0, begin);
+    if (client.waiting && !client.stop_only) carry_out_waiting_disarms(client);
     if (!client.closing && !client.waiting && client.in.size() >= kMaxRequestBytes) {
         client.out +=
             error_reply(nullptr, "a request line longer than " + std::to_string(kMaxRequestBytes) +
@@ -594,7 +633,36 @@ void ControlServer::answer_lines(Client& client) {
                                      std::to_string(kMaxRequestBytes) + " allowed");
         client.closing = true;
     }
-    if (client.closing) client.in.clear();
+    if (client.closing) {
+        client.in.clear();
+        client.lines.clear();
+        client.lines_bytes = 0;
+    }
+}
+
+void ControlServer::answer_line(Client& client, std::string_view line) {
+    client.last_request = Clock::now();
+    const ParsedRequest parsed = parse_request(line);
+    if (client.stop_only && !(parsed.request && parsed.request->kind == RequestKind::disarm)) {
+        refuse_too_many(client);
+        return;
+    }
+    if (client.stop_only) client.closing = true;  // its one request, then the disconnect
+    if (!parsed.request) {
+        client.out += error_reply(parsed.id, parsed.error);
+    } else if (Answer answer = handler_(*parsed.request, client.peer); answer.later) {
+        {
+            const std::lock_guard lock(job_mutex_);
+            jobs_.push_back(
+                Job{.client_id = client.id, .work = std::move(answer.later), .answer = {}});
+        }
+        job_ready_.notify_one();
+        client.waiting = true;
+    } else {
+        if (!answer.journal.empty()) note(answer.journal);
+        client.out += answer.reply;
+        if (answer.subscribe_hz) subscribe(client, *answer.subscribe_hz);
+    }
 }
 
 void ControlServer::subscribe(Client& client, double rate_hz) {
@@ -684,9 +752,7 @@ void ControlServer::flush(Client& client) {
 // that reads nothing, or has shut its side down, costs no wake-ups.
 void ControlServer::watch(Client& client) {
     const std::uint32_t want =
-        (client.read_closed || client.closing || client.waiting || client.gone
-             ? 0u
-             : static_cast<std::uint32_t>(EPOLLIN | EPOLLRDHUP)) |
+        (may_read(client) ? static_cast<std::uint32_t>(EPOLLIN | EPOLLRDHUP) : 0u) |
         (client.out.empty() ? 0u : static_cast<std::uint32_t>(EPOLLOUT));
     if (want == client.watched || !client.registered) return;
     epoll_event event{};

@@ -17,6 +17,7 @@
 #include <cstring>
 #include <fstream>
 #include <functional>
+#include <future>
 #include <memory>
 #include <string>
 #include <thread>
@@ -161,6 +162,61 @@ TEST(DaemonControlServer, WhatTheRateLimitLeftOutIsCounted) {
     EXPECT_TRUE(any_message_has(messages,
                                 "more \"client connected\" lines not written "
                                 "(rate-limited: at most 10 of a kind in 1000 ms)"));
+}
+
+// A disarm pipelined behind the same client's slow request (a coupling whose exact check
+// takes seconds) is carried out as it is read, not after the check; its reply keeps its place
+// behind the slow request's (issue 28, item 1).
+TEST(DaemonControlServer, ADisarmBehindTheClientsOwnSlowRequestIsCarriedOutAtOnce) {
+    const ScratchDir dir;
+    std::promise<void> release;
+    std::shared_future<void> released = release.get_future().share();
+    std::atomic<int> disarms{0};
+    ControlServer server(dir.file("c.sock"), Limits{}, /*group=*/"");
+    server.start([&](const Request& request, const Peer&) {
+        if (request.kind == RequestKind::coupling) {
+            return Answer{.later = [id = request.id, released] {
+                released.wait();  // the check that takes seconds
+                return Answer{.reply = ok_reply(id, {{"checked", true}})};
+            }};
+        }
+        if (request.kind == RequestKind::disarm) ++disarms;
+        return Answer{.reply = ok_reply(request.id, {{"disarms", disarms.load()}}),
+                      .journal = "disarmed"};
+    });
+    UnixClient client(dir.file("c.sock"));
+    ASSERT_TRUE(client.send(R"({"v":1,"id":1,"request":"coupling","stiffness":100})"
+                            "\n"
+                            R"({"v":1,"id":2,"request":"status"})"
+                            "\n"
+                            R"({"v":1,"id":3,"request":"disarm"})"
+                            "\n"));
+    // And one sent while the check runs.
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+    while (disarms.load() < 1 && std::chrono::steady_clock::now() < deadline) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    EXPECT_EQ(disarms.load(), 1) << "the disarm waited for the coupling's check";
+    ASSERT_TRUE(client.send(R"({"v":1,"id":4,"request":"disarm"})"
+                            "\n"));
+    while (disarms.load() < 2 && std::chrono::steady_clock::now() < deadline) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    EXPECT_EQ(disarms.load(), 2);
+    release.set_value();
+    // The replies in the order the requests came; the status was not carried out early.
+    const nlohmann::json first = reply_of(client);
+    const nlohmann::json second = reply_of(client);
+    const nlohmann::json third = reply_of(client);
+    const nlohmann::json fourth = reply_of(client);
+    EXPECT_EQ(first["id"], 1);
+    EXPECT_EQ(first["checked"], true);
+    EXPECT_EQ(second["id"], 2);
+    EXPECT_EQ(second["disarms"], 2);  // answered in its turn, after both disarms
+    EXPECT_EQ(third["id"], 3);
+    EXPECT_EQ(third["disarms"], 1);
+    EXPECT_EQ(fourth["id"], 4);
+    EXPECT_EQ(fourth["disarms"], 2);
 }
 
 TEST(DaemonControlServer, ABadLineGetsAnErrorAndTheConnectionStays) {

@@ -143,6 +143,10 @@ class ControlServer {
     std::size_t served_clients() const;
     void read_from(Client& client);
     void answer_lines(Client& client);
+    static bool may_read(const Client& client);
+    void take_lines(Client& client);
+    void carry_out_waiting_disarms(Client& client);
+    void answer_line(Client& client, std::string_view line);
     void flush(Client& client);
     void close_client(int fd);
     bool drop_unread(Client& client, std::string_view what);
