@@ -55,12 +55,13 @@ TEST(HilTwoInstances, EachKeepsItsRateOnItsOwnCpuAndWritesItsOwnSummary) {
         EXPECT_TRUE(s["faults"].empty()) << s.dump(2);
         EXPECT_EQ(s["rate_hz"], 1000.0);
         // --duration counts servo time from the first tick, and the supervising thread
-        // looks every 10 ms (run_watcher.cpp), so the run ends up to about 10 periods
-        // late: every period is a tick or a period a late wake missed (a shared VM stalls),
-        // whatever the other instance does, and almost all are ticks.
+        // looks every 10 ms (run_watcher.cpp), so the run ends about 10 periods late, or
+        // later when a loaded host runs that (not real-time) thread late (2016 periods of a
+        // 2 s run once, with other tests on both cores): every period is a tick or a period
+        // a late wake missed, whatever the other instance does, and almost all are ticks.
         const double periods = s["ticks"].get<double>() + s["missed_periods"].get<double>();
         EXPECT_GE(periods, kDurationS * 1000.0 - 1.0);
-        EXPECT_LE(periods, kDurationS * 1000.0 + 15.0);
+        EXPECT_LE(periods, kDurationS * 1000.0 + 100.0);
         EXPECT_GE(s["ticks"].get<double>(), 0.98 * kDurationS * 1000.0);
         EXPECT_EQ(s["realtime"]["cpu"], cpu);
         if (::geteuid() == 0) {
