@@ -5,7 +5,9 @@
 #   cpu     the same with one core kept busy (stress-ng --cpu 1): what CPU load alone does
 #   cpu2    both cores kept busy (stress-ng --cpu 2), as the hammer's threads keep them
 #   hammer  the same with socket_hammer: floods, garbage, oversized lines, connect churn,
-#           half-closes, idle clients and a polite client polling status as fast as it can
+#           half-closes, idle clients, a polite client polling status as fast as it can,
+#           sixteen busy clients that hold every place, and a disarm every 50 ms whose
+#           latency socket_hammer prints (so this arm's servo is mostly disarmed)
 #   other   socket_hammer on a second hapticd's socket, not this one's: the same load on the
 #           machine, none of it on this process (what is the machine's, what is hapticd's);
 #           with SERVO_CPU, that hapticd runs unpinned on the clients' CPUs

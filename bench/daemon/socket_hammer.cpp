@@ -5,7 +5,7 @@
 //
 //   socket_hammer SOCKET SECONDS
 //
-// One thread each:
+// One thread each (and `busy` sixteen times):
 //   flood    connects, sends status requests without reading a reply until the daemon
 //            hangs up on it, then connects again
 //   garbage  lines that are not JSON, unknown requests, other versions, and lines past the
@@ -13,11 +13,17 @@
 //   churn    connect and close, connect and half-close after one request, connect and
 //            never send (held open until the next round)
 //   poll     the well-behaved client: status, read the reply, at once again
+//   busy     sixteen clients that hold a place each and keep a request going (status after
+//            status): every place the daemon serves is taken
+//   disarm   the operator: every 50 ms a new connection, one disarm, its reply; the time from
+//            the connect to the reply is the disarm's latency (issue 28: the stop always
+//            gets through), printed as percentiles with the number that failed
 #include <poll.h>
 #include <sys/socket.h>
 #include <sys/un.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -139,6 +145,45 @@ void poll_status(const std::string& path, std::atomic<long>& replies) {
     }
 }
 
+void busy(const std::string& path, std::atomic<long>& replies) { poll_status(path, replies); }
+
+// One disarm every 50 ms, each on a connection of its own, timed from the connect to the
+// reply. A disarm that got no reply within 2 s, or whose reply was a refusal, failed.
+void disarm_probe(const std::string& path, std::vector<double>& latencies_ms, long& failed) {
+    const std::string disarm = "{\"v\":1,\"request\":\"disarm\"}\n";
+    while (!done) {
+        const auto start = std::chrono::steady_clock::now();
+        const int fd = connect_to(path);
+        std::string reply;
+        if (fd >= 0 && send_all(fd, disarm)) {
+            char buffer[4096];
+            while (reply.find('\n') == std::string::npos) {
+                pollfd p{.fd = fd, .events = POLLIN, .revents = 0};
+                if (::poll(&p, 1, 2000) <= 0) break;
+                const ssize_t got = ::recv(fd, buffer, sizeof(buffer), 0);
+                if (got <= 0) break;
+                reply.append(buffer, static_cast<std::size_t>(got));
+            }
+        }
+        if (fd >= 0) ::close(fd);
+        if (reply.find("\"ok\":true") != std::string::npos) {
+            latencies_ms.push_back(
+                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+                    .count());
+        } else {
+            ++failed;
+        }
+        std::this_thread::sleep_until(start + std::chrono::milliseconds(50));
+    }
+}
+
+double percentile(std::vector<double> values, double p) {
+    if (values.empty()) return 0.0;
+    std::sort(values.begin(), values.end());
+    const auto index = static_cast<std::size_t>(p * static_cast<double>(values.size() - 1) + 0.5);
+    return values[std::min(index, values.size() - 1)];
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -159,9 +204,19 @@ int main(int argc, char** argv) {
     threads.emplace_back(garbage, path, std::ref(garbage_disconnects));
     threads.emplace_back(churn, path, std::ref(churn_rounds));
     threads.emplace_back(poll_status, path, std::ref(replies));
+    std::atomic<long> busy_replies{0};
+    for (int i = 0; i < 16; ++i) threads.emplace_back(busy, path, std::ref(busy_replies));
+    std::vector<double> disarm_ms;
+    long disarm_failed = 0;
+    threads.emplace_back(disarm_probe, path, std::ref(disarm_ms), std::ref(disarm_failed));
     std::this_thread::sleep_for(std::chrono::duration<double>(seconds));
     done = true;
     for (std::thread& t : threads) t.join();
+    std::printf(
+        "socket_hammer: disarm: %zu carried out, %ld failed; latency p50 %.2f ms, p99 %.2f ms, "
+        "max %.2f ms\n",
+        disarm_ms.size(), disarm_failed, percentile(disarm_ms, 0.5), percentile(disarm_ms, 0.99),
+        percentile(disarm_ms, 1.0));
     std::printf(
         "socket_hammer: %.0f s: %ld status replies to the polite client (%.0f/s), %ld flooders "
         "and %ld garbage senders disconnected, %ld connect/half-close/idle rounds\n",
