@@ -275,6 +275,9 @@ nlohmann::json status_body(const servo::StatusSnapshot& s, const RunFacts& facts
     const std::optional<std::string> recording =
         facts.recording != nullptr ? facts.recording->active_path() : std::nullopt;
     j["recording"] = recording ? nlohmann::json(*recording) : nlohmann::json(nullptr);
+    const std::optional<bool> whole =
+        facts.recording != nullptr ? facts.recording->active_whole() : std::nullopt;
+    j["recording_whole"] = whole ? nlohmann::json(*whole) : nlohmann::json(nullptr);
     j["identify"] = identify;
     if (facts.scenes != nullptr) {
         const SceneInForce scene = facts.scenes->in_force();

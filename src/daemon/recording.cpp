@@ -115,11 +115,17 @@ RecordingResult Recording::end(bool servo_stopped) {
     result.message =
         "recording " + result.path + " closed: " + std::to_string(result.records) + " records" +
         (result.complete ? std::string(", none lost") : ", INCOMPLETE: " + result.failure);
-    writer_.reset();
     const std::lock_guard path_lock(path_mutex_);
+    writer_.reset();
     active_path_.reset();
     closed_.push_back(result);
     return result;
+}
+
+std::optional<bool> Recording::active_whole() const {
+    const std::lock_guard lock(path_mutex_);
+    if (!active_path_) return std::nullopt;
+    return writer_->complete();
 }
 
 std::optional<std::string> Recording::active_path() const {

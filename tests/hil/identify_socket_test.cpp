@@ -429,8 +429,13 @@ TEST(HilIdentifySocket, ALogOnAFullDiskIsIncompleteInTheReplyTheOutcomeTheSummar
         dir.file("lab.err"));
     ASSERT_TRUE(daemon.wait_for_socket(socket)) << daemon.messages();
 
+    EXPECT_TRUE(status_of(socket)["recording_whole"].is_null());
     ASSERT_EQ(hapticctl(socket, "record start take.csv").exit_code, 0);
-    std::this_thread::sleep_for(1500ms);  // 1500 rows: past 64 KiB
+    // 1500 rows, past 64 KiB: status says so while it records.
+    const nlohmann::json failing =
+        status_when(socket, [](const nlohmann::json& s) { return s["recording_whole"] == false; });
+    EXPECT_EQ(failing["recording_whole"], false) << failing.dump();
+    std::this_thread::sleep_for(500ms);
     const CommandResult stopped = hapticctl(socket, "record stop");
     EXPECT_EQ(stopped.exit_code, 1);
     EXPECT_CONTAINS(stopped.err,

@@ -61,6 +61,9 @@ class Recording {
     std::optional<RecordingResult> finish_at_exit();
     /// The file being recorded to, if any (cheap: for `status`).
     std::optional<std::string> active_path() const;
+    /// Whether the file being recorded to holds every record so far (no write failed); none
+    /// when not recording (for `status`).
+    std::optional<bool> active_whole() const;
     /// Every recording closed so far, in order (the summary's `recordings`).
     std::vector<RecordingResult> closed() const;
 
@@ -70,8 +73,10 @@ class Recording {
     servo::TelemetryRing ring_;
     std::function<void(servo::TelemetryRing*)> attach_;
     std::function<std::uint64_t()> tick_;
-    std::mutex mutex_;               // one start or stop at a time
-    mutable std::mutex path_mutex_;  // never held while waiting: status reads it
+    std::mutex mutex_;  // one start or stop at a time
+    // Never held while waiting: status reads it. It guards active_path_, closed_, and the
+    // writer_ pointer while active_path_ is set (status reads the writer's complete()).
+    mutable std::mutex path_mutex_;
     std::unique_ptr<TelemetryWriter> writer_;
     std::optional<std::string> active_path_;
     std::vector<RecordingResult> closed_;  // under path_mutex_

@@ -63,8 +63,9 @@ class TelemetryWriter {
     std::uint64_t records_taken() const noexcept {
         return records_taken_.load(std::memory_order_relaxed);
     }
-    /// No write failed: every record taken is in the file (after finish()).
-    bool complete() const noexcept { return write_errno_ == 0; }
+    /// No write failed: every record taken is in the file (after finish()). Any thread, at
+    /// any time: while the writer runs, whether any write failed so far.
+    bool complete() const noexcept { return write_errno_.load(std::memory_order_relaxed) == 0; }
     /// After finish(): why the file is not whole ("writing telemetry failed: REASON; the
     /// file holds the first N of M records, each line whole"); empty when it is.
     std::string failure() const;
@@ -85,7 +86,7 @@ class TelemetryWriter {
     std::uint64_t buffered_records_ = 0;  ///< lines in buffer_ (the header is not one)
     std::uint64_t file_bytes_ = 0;        ///< bytes on disk: whole lines only
     bool header_pending_ = true;          ///< the header row is still in buffer_
-    int write_errno_ = 0;
+    std::atomic<int> write_errno_{0};     // the writer thread's; read by complete() from any
     std::uint64_t first_tick_ = 0;
     std::chrono::steady_clock::time_point oldest_buffered_{};
     std::chrono::steady_clock::time_point last_sync_{};
