@@ -58,6 +58,7 @@ void FlightWriter::write_frozen(RunContext& context, std::ostream& log) {
         log << priority::notice << what.str() << ": " << file.path << "\n" << std::flush;
     } else {
         ++context.flight_records_not_written;
+        context.flight_records_complete = false;
         log << priority::err << what.str() << " not written: " << file.error << "\n";
     }
 }

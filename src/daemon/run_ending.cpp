@@ -117,8 +117,14 @@ int check_outputs_whole(int code, bool summary_written, const servo::Summary& su
                "why); exit "
             << kExitOutput << "\n";
     }
-    if (code == kExitOk &&
-        (!context.telemetry_complete || !summary_written || recordings_not_whole > 0)) {
+    if (code == kExitOk && !context.flight_records_complete) {
+        log << priority::err
+            << "hapticd: a flight record could not be written (the journal says which, and "
+               "why); exit "
+            << kExitOutput << "\n";
+    }
+    if (code == kExitOk && (!context.telemetry_complete || !summary_written ||
+                            recordings_not_whole > 0 || !context.flight_records_complete)) {
         if (!context.telemetry_complete) {
             log << priority::err << "hapticd: the telemetry log " << context.telemetry_log
                 << " is incomplete: " << context.telemetry_records_written << " of "

@@ -48,6 +48,7 @@ std::string summary_json(const servo::Summary& s, const RunContext& c) {
     j["passivity_energy_j"] = s.passivity_energy_j;
     j["flight_records"] = c.flight_records;
     j["flight_records_not_written"] = c.flight_records_not_written;
+    j["flight_records_complete"] = c.flight_records_complete;
     j["recordings"] = nlohmann::ordered_json::array();
     for (const RecordedFile& file : c.recordings) {
         nlohmann::ordered_json entry{{"path", file.path},

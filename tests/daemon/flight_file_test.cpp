@@ -11,6 +11,8 @@
 #include <vector>
 
 #include "../../src/daemon/flight_writer.hpp"
+#include "../../src/daemon/run_ending.hpp"
+#include "hapticd/daemon/exit_code.hpp"
 #include "scratch_dir.hpp"
 #include "telemetry_csv.hpp"
 #include "text_file.hpp"
@@ -76,6 +78,35 @@ TEST(DaemonFlightFile, ARunWritesAtMostItsCapAndCountsTheRest) {
     const std::string cap = "are capped at 16 files and 32 MiB";
     ASSERT_NE(said.find(cap), std::string::npos) << said;
     EXPECT_EQ(said.find(cap, said.find(cap) + 1), std::string::npos) << "said more than once";
+}
+
+// A flight record that could not be written is an output not whole: the summary says so and
+// a run that ends without a fault exits 3, as for an incomplete --log.
+TEST(DaemonFlightFile, AFailedWriteMakesTheRunsOutputsNotWhole) {
+    const ScratchDir dir;
+    const OutputsDirectory outputs(dir.path().string());
+    FlightWriter writer(&outputs, /*rate_hz=*/1000.0, /*axes=*/1);
+    RunContext context;
+    context.stamp.start_name = "run1";
+    dir.write("flight-run1-tick4.csv", "planted\n");  // the name its record would take
+    for (std::uint64_t tick = 0; tick < 5; ++tick) {
+        servo::TelemetryRecord record;
+        record.tick = tick;
+        record.faults = tick == 4 ? 1U : 0U;
+        ASSERT_TRUE(writer.recorder().record(record));
+    }
+    writer.recorder().freeze();
+    std::ostringstream log;
+    writer.write_frozen(context, log);
+    EXPECT_FALSE(context.flight_records_complete);
+    EXPECT_EQ(context.flight_records_not_written, 1u);
+    EXPECT_NE(log.str().find("not written: cannot create"), std::string::npos) << log.str();
+    const servo::Summary summary{};
+    EXPECT_EQ(check_outputs_whole(kExitOk, /*summary_written=*/true, summary, context, log),
+              kExitOutput);
+    context.flight_records_complete = true;
+    EXPECT_EQ(check_outputs_whole(kExitOk, /*summary_written=*/true, summary, context, log),
+              kExitOk);
 }
 
 }  // namespace

@@ -18,8 +18,8 @@ enum ExitCode : int {
                          ///< an output path that is empty, an input, another output, locked
                          ///< by another daemon, or cannot be created (found before the run)
     kExitOutput = 3,     ///< the run ended without a fault, but an output is not whole: the
-                         ///< --log (disk full, a write error, records dropped), --summary, or a
-                         ///< control socket's recording
+                         ///< --log (disk full, a write error, records dropped), --summary, a
+                         ///< control socket's recording, or a flight record
 };
 
 }  // namespace hapticd::daemon

@@ -55,8 +55,12 @@ struct RunContext {
     bool telemetry_complete = true;  ///< every record is in the file (none failed, none dropped)
     /// The flight recorder's files, one per fault (docs/daemon.md, "The flight recorder").
     std::vector<std::string> flight_records{};
-    /// Faults whose flight record was not written: past the run's cap, or a failed write.
+    /// Faults whose flight record was not written: past the run's cap, with nowhere to put
+    /// it, or a failed write.
     std::uint64_t flight_records_not_written = 0;
+    /// No flight record's write failed (the cap and a run with nowhere to put them are the
+    /// run's policy, said in the journal; a failure is an output not whole: exit 3).
+    bool flight_records_complete = true;
     /// The control socket's recordings (record_start and identify), in order, once closed.
     std::vector<RecordedFile> recordings{};
     /// The control socket's identify excitations, in order, as they ended.
