@@ -39,7 +39,7 @@ struct ServiceRun {
 /// kept time for an unprivileged daemon (a 24 ms stall latched overrun_budget, exit 1, while
 /// other work loaded both cores).
 std::string service_config(const ScratchDir& dir) {
-    const std::string path = dir.write("service.toml", config_with_room(""));
+    std::string path = dir.write("service.toml", config_with_room(""));
     EXPECT_EQ(::chmod(path.c_str(), 0644), 0);
     return path;
 }
