@@ -123,30 +123,34 @@ void churn(const std::string& path, std::atomic<long>& rounds) {
     if (held >= 0) ::close(held);
 }
 
+// Reads into `pending` until it holds a whole line; false when none came within `ms` of a
+// read, or the peer closed.
+bool read_line(int fd, std::string& pending, int ms) {
+    char buffer[65536];
+    while (pending.find('\n') == std::string::npos) {
+        pollfd p{.fd = fd, .events = POLLIN, .revents = 0};
+        if (::poll(&p, 1, ms) <= 0) return false;
+        const ssize_t got = ::recv(fd, buffer, sizeof(buffer), 0);
+        if (got <= 0) return false;
+        pending.append(buffer, static_cast<std::size_t>(got));
+    }
+    return true;
+}
+
 void poll_status(const std::string& path, std::atomic<long>& replies) {
     while (!done) {
         const int fd = connect_to(path);
         if (fd < 0) continue;
         std::string pending;
-        char buffer[65536];
         while (!done && send_all(fd, kStatus)) {
-            while (pending.find('\n') == std::string::npos) {
-                pollfd p{.fd = fd, .events = POLLIN, .revents = 0};
-                if (::poll(&p, 1, 1000) <= 0) break;
-                const ssize_t got = ::recv(fd, buffer, sizeof(buffer), 0);
-                if (got <= 0) break;
-                pending.append(buffer, static_cast<std::size_t>(got));
-            }
+            if (!read_line(fd, pending, 1000)) break;
             const std::size_t end = pending.find('\n');
-            if (end == std::string::npos) break;
             pending.erase(0, end + 1);
             ++replies;
         }
         ::close(fd);
     }
 }
-
-void busy(const std::string& path, std::atomic<long>& replies) { poll_status(path, replies); }
 
 // One disarm every 50 ms, each on a connection of its own, timed from the connect to the
 // reply. A disarm that got no reply within 2 s, or whose reply was a refusal, failed.
@@ -156,16 +160,7 @@ void disarm_probe(const std::string& path, std::vector<double>& latencies_ms, lo
         const auto start = std::chrono::steady_clock::now();
         const int fd = connect_to(path);
         std::string reply;
-        if (fd >= 0 && send_all(fd, disarm)) {
-            char buffer[4096];
-            while (reply.find('\n') == std::string::npos) {
-                pollfd p{.fd = fd, .events = POLLIN, .revents = 0};
-                if (::poll(&p, 1, 2000) <= 0) break;
-                const ssize_t got = ::recv(fd, buffer, sizeof(buffer), 0);
-                if (got <= 0) break;
-                reply.append(buffer, static_cast<std::size_t>(got));
-            }
-        }
+        if (fd >= 0 && send_all(fd, disarm)) (void)read_line(fd, reply, 2000);
         if (fd >= 0) ::close(fd);
         if (reply.find("\"ok\":true") != std::string::npos) {
             latencies_ms.push_back(
@@ -207,7 +202,7 @@ int main(int argc, char** argv) {
     threads.emplace_back(churn, path, std::ref(churn_rounds));
     threads.emplace_back(poll_status, path, std::ref(replies));
     std::atomic<long> busy_replies{0};
-    for (int i = 0; i < 16; ++i) threads.emplace_back(busy, path, std::ref(busy_replies));
+    for (int i = 0; i < 16; ++i) threads.emplace_back(poll_status, path, std::ref(busy_replies));
     std::vector<double> disarm_ms;
     long disarm_failed = 0;
     threads.emplace_back(disarm_probe, path, std::ref(disarm_ms), std::ref(disarm_failed));

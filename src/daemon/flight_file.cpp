@@ -6,6 +6,7 @@
 #include <cstring>
 #include <sstream>
 
+#include "hapticd/daemon/output_files.hpp"
 #include "hapticd/servo/telemetry_csv.hpp"
 
 namespace hapticd::daemon {
@@ -27,19 +28,10 @@ FlightFile write_flight_file(const OutputsDirectory& directory, const std::strin
             servo::write_csv_record(text, record, axes);
         }
         const std::string bytes = text.str();
-        std::size_t written = 0;
-        while (written < bytes.size()) {
-            const ssize_t n = ::write(created.fd, bytes.data() + written, bytes.size() - written);
-            if (n < 0 && errno == EINTR) continue;
-            if (n <= 0) {
-                file.error = "could not write all of " + file.path + " (" +
-                             std::to_string(written) + " of " + std::to_string(bytes.size()) +
-                             " bytes): " + std::strerror(n < 0 ? errno : ENOSPC);
-                break;
-            }
-            written += static_cast<std::size_t>(n);
+        if (!write_all(created.fd, bytes)) {
+            file.error = "could not write all of " + file.path + ": " + std::strerror(errno);
         }
-        file.bytes = written;
+        file.bytes = bytes.size();  // what it took of the run's cap, written or not
     } catch (const std::exception& e) {
         file.error = file.path + ": " + e.what();
     }

@@ -22,7 +22,7 @@ inline constexpr std::uint64_t kMaxFlightBytesPerRun = std::uint64_t{32} << 20;
 struct FlightFile {
     std::string path;         ///< written, or tried
     std::string error;        ///< empty when written whole
-    std::uint64_t bytes = 0;  ///< what the file holds
+    std::uint64_t bytes = 0;  ///< what was to be written (the run's cap counts it)
 };
 
 /// Writes `records` (oldest first) to a new DIR/flight-START-tickN.csv, N the last record's
