@@ -1,20 +1,25 @@
-// socket_hammer: every kind of client the control socket must survive, at once and as fast
-// as they go, for bench/socket_abuse.sh (docs/benchmarks.md, "The servo under socket
-// abuse"). Not a test: it reports what it did, and the daemon's summary says whether the
-// servo noticed.
+// socket_hammer: every kind of client the control socket must survive, as fast as they go,
+// for bench/socket_abuse.sh (docs/benchmarks.md, "The servo under socket abuse"). Not a test:
+// it reports what it did, and the daemon's summary says whether the servo noticed.
 //
-//   socket_hammer SOCKET SECONDS
+//   socket_hammer SOCKET SECONDS [STORM]
 //
-// One thread each (and `busy` sixteen times):
+// STORM (default all) picks the clients; the disarm probe runs with every storm:
+//   all      every one below at once (busy in place of streams: sixteen places in all)
 //   flood    connects, sends status requests without reading a reply until the daemon
 //            hangs up on it, then connects again
 //   garbage  lines that are not JSON, unknown requests, other versions, and lines past the
 //            4096-byte limit (each of those ends in a disconnect), again and again
-//   churn    connect and close, connect and half-close after one request, connect and
-//            never send (held open until the next round)
+//   connect  churn: connect and close, connect and half-close after one request, connect
+//            and never send (held open until the next round); and a thread that connects
+//            and closes without pause
 //   poll     the well-behaved client: status, read the reply, at once again
 //   busy     sixteen clients that hold a place each and keep a request going (status after
 //            status): every place the daemon serves is taken
+//   streams  sixteen subscribers at 100 Hz that read every event (sixteen `hapticctl stream`)
+//   slow     eight subscribers at 100 Hz that never read, and eight slow readers (200 status
+//            requests at once, then one reply read every 50 ms)
+// and always:
 //   disarm   the operator: every 50 ms a new connection, one disarm, its reply; the time from
 //            the connect to the reply is the disarm's latency (issue 28: the stop always
 //            gets through), printed as percentiles with the number that failed
@@ -152,6 +157,66 @@ void poll_status(const std::string& path, std::atomic<long>& replies) {
     }
 }
 
+const std::string kSubscribe = "{\"v\":1,\"request\":\"subscribe\",\"rate_hz\":100}\n";
+
+// A subscriber that reads every event, as `hapticctl stream` does.
+void stream(const std::string& path, std::atomic<long>& events) {
+    while (!done) {
+        const int fd = connect_to(path);
+        if (fd < 0) continue;
+        std::string pending;
+        if (send_all(fd, kSubscribe)) {
+            while (!done && read_line(fd, pending, 1000)) {
+                pending.erase(0, pending.find('\n') + 1);
+                ++events;
+            }
+        }
+        ::close(fd);
+    }
+}
+
+// A subscriber that never reads: the daemon must close it when its replies pile up.
+void unread_stream(const std::string& path, std::atomic<long>& disconnects) {
+    while (!done) {
+        const int fd = connect_to(path);
+        if (fd < 0) continue;
+        if (send_all(fd, kSubscribe)) {
+            pollfd p{.fd = fd, .events = POLLRDHUP, .revents = 0};
+            while (!done && ::poll(&p, 1, 50) == 0) {
+            }
+        }
+        ::close(fd);
+        ++disconnects;
+    }
+}
+
+// 200 requests at once, then one reply read every 50 ms.
+void slow_reader(const std::string& path, std::atomic<long>& replies) {
+    std::string burst;
+    for (int i = 0; i < 200; ++i) burst += kStatus;
+    while (!done) {
+        const int fd = connect_to(path);
+        if (fd < 0) continue;
+        std::string pending;
+        if (send_all(fd, burst)) {
+            while (!done && read_line(fd, pending, 1000)) {
+                pending.erase(0, pending.find('\n') + 1);
+                ++replies;
+                std::this_thread::sleep_for(std::chrono::milliseconds(50));
+            }
+        }
+        ::close(fd);
+    }
+}
+
+// Connects and closes without pause, saying nothing.
+void connect_storm(const std::string& path, std::atomic<long>& connects) {
+    while (!done) {
+        if (const int fd = connect_to(path); fd >= 0) ::close(fd);
+        ++connects;
+    }
+}
+
 // One disarm every 50 ms, each on a connection of its own, timed from the connect to the
 // reply. A disarm that got no reply within 2 s, or whose reply was a refusal, failed.
 void disarm_probe(const std::string& path, std::vector<double>& latencies_ms, long& failed) {
@@ -181,11 +246,54 @@ double percentile(std::vector<double> values, double p) {
     return values[std::min(index, values.size() - 1)];
 }
 
+struct Counts {
+    std::atomic<long> flood_disconnects{0}, garbage_disconnects{0}, churn_rounds{0}, connects{0};
+    std::atomic<long> replies{0}, busy_replies{0}, events{0}, unread_disconnects{0},
+        slow_replies{0};
+};
+
+const char* const kStorms[] = {"all",  "flood", "garbage", "connect",
+                               "poll", "busy",  "streams", "slow"};
+
+bool is_storm(const std::string& name) {
+    return std::any_of(std::begin(kStorms), std::end(kStorms),
+                       [&](const char* storm) { return name == storm; });
+}
+
+void start_storm(const std::string& storm, const std::string& path, Counts& counts,
+                 std::vector<std::thread>& threads) {
+    const bool all = storm == "all";
+    if (all || storm == "flood")
+        threads.emplace_back(flood, path, std::ref(counts.flood_disconnects));
+    if (all || storm == "garbage") {
+        threads.emplace_back(garbage, path, std::ref(counts.garbage_disconnects));
+    }
+    if (all || storm == "connect") {
+        threads.emplace_back(churn, path, std::ref(counts.churn_rounds));
+        threads.emplace_back(connect_storm, path, std::ref(counts.connects));
+    }
+    if (all || storm == "poll") threads.emplace_back(poll_status, path, std::ref(counts.replies));
+    if (all || storm == "busy") {
+        for (int i = 0; i < 16; ++i) {
+            threads.emplace_back(poll_status, path, std::ref(counts.busy_replies));
+        }
+    }
+    if (storm == "streams") {
+        for (int i = 0; i < 16; ++i) threads.emplace_back(stream, path, std::ref(counts.events));
+    }
+    if (all || storm == "slow") {
+        for (int i = 0; i < 8; ++i) {
+            threads.emplace_back(unread_stream, path, std::ref(counts.unread_disconnects));
+            threads.emplace_back(slow_reader, path, std::ref(counts.slow_replies));
+        }
+    }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-    if (argc != 3) {
-        std::fprintf(stderr, "usage: socket_hammer SOCKET SECONDS\n");
+    if (argc != 3 && argc != 4) {
+        std::fprintf(stderr, "usage: socket_hammer SOCKET SECONDS [STORM]\n");
         return 2;
     }
     const std::string path = argv[1];
@@ -195,14 +303,17 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "socket_hammer: SECONDS \"%s\": must be > 0 and <= 3600\n", argv[2]);
         return 2;
     }
-    std::atomic<long> flood_disconnects{0}, garbage_disconnects{0}, churn_rounds{0}, replies{0};
+    const std::string storm = argc == 4 ? argv[3] : "all";
+    if (!is_storm(storm)) {
+        std::fprintf(stderr,
+                     "socket_hammer: STORM \"%s\": must be all, flood, garbage, connect, poll, "
+                     "busy, streams or slow\n",
+                     storm.c_str());
+        return 2;
+    }
+    Counts counts;
     std::vector<std::thread> threads;
-    threads.emplace_back(flood, path, std::ref(flood_disconnects));
-    threads.emplace_back(garbage, path, std::ref(garbage_disconnects));
-    threads.emplace_back(churn, path, std::ref(churn_rounds));
-    threads.emplace_back(poll_status, path, std::ref(replies));
-    std::atomic<long> busy_replies{0};
-    for (int i = 0; i < 16; ++i) threads.emplace_back(poll_status, path, std::ref(busy_replies));
+    start_storm(storm, path, counts, threads);
     std::vector<double> disarm_ms;
     long disarm_failed = 0;
     threads.emplace_back(disarm_probe, path, std::ref(disarm_ms), std::ref(disarm_failed));
@@ -210,14 +321,17 @@ int main(int argc, char** argv) {
     done = true;
     for (std::thread& t : threads) t.join();
     std::printf(
-        "socket_hammer: disarm: %zu carried out, %ld failed; latency p50 %.2f ms, p99 %.2f ms, "
-        "max %.2f ms\n",
-        disarm_ms.size(), disarm_failed, percentile(disarm_ms, 0.5), percentile(disarm_ms, 0.99),
-        percentile(disarm_ms, 1.0));
+        "socket_hammer: %s: disarm: %zu carried out, %ld failed; latency p50 %.2f ms, p99 %.2f "
+        "ms, max %.2f ms\n",
+        storm.c_str(), disarm_ms.size(), disarm_failed, percentile(disarm_ms, 0.5),
+        percentile(disarm_ms, 0.99), percentile(disarm_ms, 1.0));
     std::printf(
-        "socket_hammer: %.0f s: %ld status replies to the polite client (%.0f/s), %ld flooders "
-        "and %ld garbage senders disconnected, %ld connect/half-close/idle rounds\n",
-        seconds, replies.load(), static_cast<double>(replies.load()) / seconds,
-        flood_disconnects.load(), garbage_disconnects.load(), churn_rounds.load());
+        "socket_hammer: %s: %.1f s: %ld status replies to the polite client, %ld to the busy "
+        "clients, %ld to slow readers; %ld stream events; disconnected %ld flooders, %ld garbage "
+        "senders, %ld unread streams; %ld churn rounds, %ld bare connects\n",
+        storm.c_str(), seconds, counts.replies.load(), counts.busy_replies.load(),
+        counts.slow_replies.load(), counts.events.load(), counts.flood_disconnects.load(),
+        counts.garbage_disconnects.load(), counts.unread_disconnects.load(),
+        counts.churn_rounds.load(), counts.connects.load());
     return 0;
 }
