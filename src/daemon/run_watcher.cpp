@@ -29,6 +29,7 @@ RunWatcher::RunWatcher(WatchedLoop loop, const RunOptions& options, const Config
       figures_every_(std::chrono::duration_cast<Clock::duration>(
           std::chrono::duration<double>(options.figures_interval_s))),
       next_figures_(started_ + figures_every_),
+      figures_since_(started_),
       rate_since_(started_) {}
 
 void RunWatcher::watch(const std::function<void()>& each_look) {
@@ -91,6 +92,7 @@ void RunWatcher::start_clock(Clock::time_point now) {
                          static_cast<double>(loop_.status().tick) / config_.servo.rate_hz));
     next_status_ = started_ + std::chrono::duration_cast<Clock::duration>(status_every_);
     next_figures_ = started_ + figures_every_;
+    figures_since_ = started_;
     // The rate's first second starts here, not before the real-time set-up.
     rate_since_ = now;
     rate_ticks_before_ = loop_.status().tick;
@@ -116,16 +118,18 @@ void RunWatcher::end_duration(Clock::time_point now) {
 }
 
 void RunWatcher::log_figures(Clock::time_point now) {
-    if (options_.figures_interval_s > 0.0 && now >= next_figures_) {
-        const servo::StatusSnapshot status = loop_.status();
-        log_ << priority::info
-             << figures_line(status, figures_before_,
-                             std::chrono::duration<double>(figures_every_).count())
-             << "\n"
-             << std::flush;
-        figures_before_ = status;
-        next_figures_ += figures_every_;
-    }
+    if (options_.figures_interval_s <= 0.0 || now < next_figures_) return;
+    const servo::StatusSnapshot status = loop_.status();
+    log_ << priority::info
+         << figures_line(status, figures_before_,
+                         std::chrono::duration<double>(now - figures_since_).count())
+         << "\n"
+         << std::flush;
+    figures_before_ = status;
+    figures_since_ = now;
+    // A late look (a slow start, a stalled host) gives one line over the time since the last,
+    // not a burst of lines, one per interval it missed, all of the same moment.
+    while (next_figures_ <= now) next_figures_ += figures_every_;
 }
 
 void RunWatcher::log_status(Clock::time_point now) {

@@ -106,6 +106,7 @@ class RunWatcher {
     // The run's figures once a minute, for the journal (the status line is per second).
     Clock::duration figures_every_;
     Clock::time_point next_figures_;
+    Clock::time_point figures_since_;  ///< when figures_before_ was taken
     servo::StatusSnapshot figures_before_;
     // The rate the control socket reports: ticks over the last second, from the first tick.
     Clock::time_point rate_since_;

@@ -373,19 +373,22 @@ TEST_F(DaemonRun, TheRunsFiguresGoToTheLogAtTheirInterval) {
     std::istringstream lines(outcome.log);
     std::vector<std::string> figures;
     for (std::string line; std::getline(lines, line);) {
-        if (line.find(" Hz over the last 0.1 s") != std::string::npos) figures.push_back(line);
+        if (line.find(" Hz over the last ") != std::string::npos) figures.push_back(line);
     }
-    ASSERT_GE(figures.size(), 3u) << outcome.log;
+    // Four on a machine that keeps time; a stalled one gives fewer, never more.
+    ASSERT_GE(figures.size(), 1u) << outcome.log;
     ASSERT_LE(figures.size(), 5u) << outcome.log;
+    double previous_t_s = -1.0;
     for (const std::string& line : figures) {
         EXPECT_TRUE(line.starts_with("<6>hapticd: t ")) << line;  // info, for the journal
         EXPECT_NE(line.find(", faults none"), std::string::npos) << line;
-        // About 100 ticks in each 0.1 s at 1 kHz (a shared machine stalls now and then).
-        const std::size_t hz = line.find(" Hz over");
-        const std::size_t from = line.rfind(", ", hz) + 2;
-        const double rate_hz = std::stod(line.substr(from, hz - from));
-        EXPECT_GT(rate_hz, 500.0) << line;
-        EXPECT_LT(rate_hz, 1500.0) << line;
+        // Each line covers the time since the last, at least the interval: never two of
+        // the same moment (a late look once wrote one line per interval it had missed).
+        const double t_s = std::stod(line.substr(std::string("<6>hapticd: t ").size()));
+        EXPECT_GT(t_s, previous_t_s) << outcome.log;
+        previous_t_s = t_s;
+        const std::size_t over = line.find(" Hz over the last ") + 18;
+        EXPECT_GE(std::stod(line.substr(over)), 0.1) << line;
     }
 }
 

@@ -14,6 +14,7 @@
 #include <cstring>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "hapticd/servo/faults.hpp"
@@ -122,6 +123,56 @@ TEST(DaemonRunWatcher, AFaultClearedBetweenTheWatchersReadsIsToldAtTheNextLook) 
     EXPECT_TRUE(cleared_told) << "no STATUS= after the reset; the log said:\n" << log.str();
     // And the journal has both changes.
     EXPECT_NE(log.str().find("encoder_jump"), std::string::npos) << log.str();
+}
+
+// The watcher's look after a stall (here its own callback sleeps 350 ms, as a stalled host
+// or a slow start would hold it) is late by three figures intervals of 0.1 s. It writes one
+// figures line over the time since the last, not three of the same moment: the loop's tick
+// moves only between looks here, and every figures line has a tick of its own.
+TEST(DaemonRunWatcher, ALateLookWritesOneFiguresLineNotOnePerIntervalMissed) {
+    int look = 0;
+    const servo::RealtimeReport realtime_report;
+    const WatchedLoop loop{
+        .status =
+            [&] {
+                servo::StatusSnapshot s;
+                s.tick = 1 + 10 * static_cast<std::uint64_t>(look);
+                s.state = servo::ServoState::running;
+                return s;
+            },
+        .realtime_report = [&]() -> const servo::RealtimeReport& { return realtime_report; },
+        .done = [&] { return look >= 30; }};
+    RunOptions options;
+    options.figures_interval_s = 0.1;
+    const Config config;
+    const servo::RealtimeRequest realtime;
+    const device::DeviceInfo info;
+    std::atomic<bool> stop{false};
+    std::atomic<double> measured_rate_hz{0.0};
+    std::ostringstream log;
+    RunWatcher watcher(loop, options, config, realtime, info, stop, measured_rate_hz, log);
+    watcher.watch([&] {
+        ++look;
+        if (look == 2) std::this_thread::sleep_for(std::chrono::milliseconds(350));
+    });
+
+    std::istringstream lines(log.str());
+    std::vector<std::uint64_t> ticks;
+    for (std::string line; std::getline(lines, line);) {
+        const std::size_t at = line.find(", tick ");
+        if (line.find(" Hz over the last ") == std::string::npos || at == std::string::npos)
+            continue;
+        ticks.push_back(std::stoull(line.substr(at + 7)));
+        if (ticks.size() == 1) {
+            // The first, after the stall: over the 0.35 s or more since the start.
+            const std::size_t over = line.find(" Hz over the last ") + 18;
+            EXPECT_GE(std::stod(line.substr(over)), 0.3) << line;
+        }
+    }
+    ASSERT_FALSE(ticks.empty()) << log.str();
+    for (std::size_t i = 1; i < ticks.size(); ++i) {
+        EXPECT_GT(ticks[i], ticks[i - 1]) << "two figures lines of one moment:\n" << log.str();
+    }
 }
 
 }  // namespace
