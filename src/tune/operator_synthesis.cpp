@@ -106,8 +106,8 @@ OperatorModel alias_tuned_operator(const theory::DeviceModel& device, double the
 }
 
 std::vector<OperatorModel> alias_shaped_operators(const theory::DeviceModel& device, double theta,
-                                                  double rate_hz, double delay_periods,
-                                                  int aliases) {
+                                                  double rate_hz, double delay_periods, int aliases,
+                                                  double direction) {
     if (!(theta > 0.0 && theta < kPi) || aliases < 2) {
         throw std::invalid_argument("alias_shaped_operators: need 0 < θ < π and >= 2 aliases");
     }
@@ -115,17 +115,19 @@ std::vector<OperatorModel> alias_shaped_operators(const theory::DeviceModel& dev
     const theory::LoopDelay delay = theory::split_delay(delay_periods);
     const std::vector<double> zeros = alias_frequencies_rad_per_s(theta, rate_hz, aliases);
     const auto n = static_cast<Eigen::Index>(zeros.size());
-    // The reactance of W = b + jX that puts the alias on its disk's worst point.
+    // The reactance of W = b + jX that puts the alias's c_k Y on its disk's rim point in
+    // `direction` ψ: Y = (1 + e^{j(ψ - arg c_k)})/(2b), so X = -b tan((ψ + a_k)/2) with
+    // a_k = -arg c_k = (1 + q)θ + φ(θ + 2πk); ψ = π gives b cot(a_k/2).
     Eigen::VectorXd target(n);
     for (Eigen::Index i = 0; i < n; ++i) {
         const double o = zeros[static_cast<std::size_t>(i)] * period;  // |θ + 2πk|
         const double k = std::round((o - theta) / (2.0 * kPi));
         const bool positive = std::abs(o - theta - 2.0 * kPi * k) < 1e-9 * o;
         const double a = (1.0 + delay.whole_periods) * theta + delay.fraction * (positive ? o : -o);
-        const double t = std::tan(a / 2.0);
-        if (!std::isfinite(t) || std::abs(t) < 1e-12) return {};
+        const double half = (direction + a) / 2.0;
+        if (std::abs(std::cos(half)) < 1e-12) return {};  // an infinite reactance
         // X(-ω) = -X(ω): a mirror alias takes the opposite sign at |ω|.
-        target(i) = (positive ? 1.0 : -1.0) * device.damping_n_s_per_m / t;
+        target(i) = (positive ? -1.0 : 1.0) * device.damping_n_s_per_m * std::tan(half);
     }
     // Foster: -k_0/ω (a spring to ground) or m_∞ ω (a rigid mass), and absorbers a_i ω/(p_i² -
     // ω²), one pole between each two aliases at p_i = ω_i (ω_{i+1}/ω_i)^λ_i; the coefficients
@@ -185,6 +187,7 @@ std::vector<OperatorModel> alias_shaped_operators(const theory::DeviceModel& dev
         std::ostringstream origin;
         origin << "each of " << aliases << " aliases of " << theory::frequency_hz(theta, period)
                << " Hz on its worst point for " << delay_periods << " periods of delay";
+        if (direction != kPi) origin << " (rim direction " << direction << " rad)";
         out.push_back(OperatorModel::multi_mode(grounded ? 0.0 : c(0), grounded ? c(0) : 0.0, 0.0,
                                                 std::move(modes), origin.str()));
     }
@@ -308,6 +311,20 @@ std::vector<OperatorModel> synthesize_scene_adversaries(
         for (const SceneEnvironment& env : scene) {
             const Complex z = port_impedance(coupling, env.model, theta, period);
             add_alias_tuned(out, device, theta, rate_hz, (-z * rotation).imag());
+            if (delay.fraction > 0.0 && theta < kPi * (1.0 - 1e-9)) {
+                // The pole at e^{jθ} needs the operators' alias sum Ĝ = -1/Z; it ranges over
+                // the disk of centre S/(2b) and radius 1/(2b), S the alias weight sum, and
+                // the rim point nearest -1/Z is in the direction arg(-2b/Z - S) from the
+                // centre: shape each alias for that direction.
+                const Complex weights = theory::passive_alias_weight_sum(theta, delay_periods);
+                const double direction = std::arg(-2.0 * device.damping_n_s_per_m / z - weights);
+                for (const int aliases : {2, 3, 4, 6, 8}) {
+                    for (OperatorModel& h : alias_shaped_operators(
+                             device, theta, rate_hz, delay_periods, aliases, direction)) {
+                        out.push_back(std::move(h));
+                    }
+                }
+            }
         }
     }
     return out;

@@ -144,6 +144,49 @@ hand_stiffness = 700
     EXPECT_EQ(c.initial_position_m[2], 0.03);
 }
 
+TEST(SimConfig, AMultiModeGraspHasOneToEightAbsorbers) {
+    const SimConfig c = parse_sim_config(config(R"(
+[human]
+model = "multi-mode-grasp"
+hand_stiffness = 500
+modes = [{ mass = 0.01, stiffness = 1e5 }, { mass = 0.002, stiffness = 3e5, damping = 0.5 }]
+)"));
+    const HumanModel& h = c.human[0];
+    EXPECT_EQ(h.family, HumanFamily::multi_mode_grasp);
+    EXPECT_EQ(h.hand_mass_kg, 0.0);  // the absorbers are the grasp: no hand unless given
+    EXPECT_EQ(h.hand_stiffness_n_per_m, 500.0);
+    ASSERT_EQ(h.mode_count, 2);
+    EXPECT_EQ(h.modes[0].mass_kg, 0.01);
+    EXPECT_EQ(h.modes[0].stiffness_n_per_m, 1e5);
+    EXPECT_EQ(h.modes[0].damping_n_s_per_m, 0.0);
+    EXPECT_EQ(h.modes[1].damping_n_s_per_m, 0.5);
+
+    const std::string none = error_of("[human]\nmodel = \"multi-mode-grasp\"");
+    EXPECT_NE(none.find("[device.sim.human] modes has 0 absorbers: allowed 1 to 8 tables"),
+              std::string::npos)
+        << none;
+    std::string nine = "[human]\nmodel = \"multi-mode-grasp\"\n";
+    for (int i = 0; i < 9; ++i) nine += "[[human.modes]]\nmass = 0.1\nstiffness = 10\n";
+    EXPECT_NE(error_of(nine).find("] has 9 absorbers: allowed 1 to 8"), std::string::npos)
+        << error_of(nine);
+    EXPECT_NE(
+        error_of("[human]\nmodel = \"multi-mode-grasp\"\nmodes = [{ mass = 0, stiffness = 1 }]")
+            .find("[[device.sim.human.modes]] #1 mass = 0 is out of range: allowed > 0"),
+        std::string::npos)
+        << error_of("[human]\nmodel = \"multi-mode-grasp\"\nmodes = [{ mass = 0, stiffness = 1 }]");
+    EXPECT_NE(error_of("[human]\nmodel = \"multi-mode-grasp\"\n"
+                       "modes = [{ mass = 1, stiffness = 1 }, { mass = 1, stifness = 1 }]")
+                  .find("stifness"),
+              std::string::npos);
+    EXPECT_NE(error_of("[human]\nmodel = \"multi-mode-grasp\"\nmodes = [1, 2]")
+                  .find("[device.sim.human] modes = [1, 2] is not an array of tables"),
+              std::string::npos)
+        << error_of("[human]\nmodel = \"multi-mode-grasp\"\nmodes = [1, 2]");
+    EXPECT_NE(error_of("[human]\nmodel = \"stiff-grasp\"\nmodes = [{ mass = 1, stiffness = 1 }]")
+                  .find("modes is not used by model = \"stiff-grasp\""),
+              std::string::npos);
+}
+
 TEST(SimConfig, LockstepFlagOverridesTheClock) {
     DeviceConfig d = config("clock = \"realtime\"");
     d.lockstep = true;

@@ -121,8 +121,8 @@ std::uint64_t trajectory_hash(const SimConfig& config, int ticks) {
             const AxisPlant::State& st = dev.plant(i).state();
             fnv.add(st.position_m);
             fnv.add(st.velocity_mps);
-            fnv.add(st.hand_position_m);
-            fnv.add(st.hand_velocity_mps);
+            fnv.add(st.mass_position_m[0]);
+            fnv.add(st.mass_velocity_mps[0]);
             fnv.add(st.set_point_m);
             fnv.add(dev.held_force_n()[i]);
         }
@@ -133,12 +133,16 @@ std::uint64_t trajectory_hash(const SimConfig& config, int ticks) {
 // The hashes were computed by this same function compiled against the sources of commit
 // cb6c389 (gcc 12 -O0 and -O2, clang 14 -O2 agree: nothing here depends on contraction or
 // vectorisation choices, x86-64 has no FMA by default). A change in any bit of any sample,
-// state or force of the 3000 ticks changes them.
+// state or force of the 3000 ticks changes them. The second was computed again when the
+// plant became a network of masses of run-time size (axis_plant.hpp, for the multi-mode
+// grasp): Eigen's products of that size sum in another order, which moved the last bits of
+// some samples of the friction-free run (the two plants' trajectories agree to 4e-13
+// relative); gcc -O0, -O2 and clang -O1, -O2 agree on the new one.
 TEST(SimDelay, ZeroDelayIsBitIdenticalToTheSimBeforeTheDelay) {
     SimConfig busy = busy_lockstep_config();
     EXPECT_EQ(trajectory_hash(busy, 3000), 0xee5526084cf956f9ull);
     busy.coulomb_n = 0.0;
-    EXPECT_EQ(trajectory_hash(busy, 3000), 0x55017c2c1a359eefull);
+    EXPECT_EQ(trajectory_hash(busy, 3000), 0x527dda6ac88a3f5dull);
     SimConfig hands_off;
     hands_off.clock = SimClock::lockstep;
     EXPECT_EQ(trajectory_hash(hands_off, 3000), 0x0790f9614d8c486aull);
@@ -222,8 +226,8 @@ TEST(SimDelay, OnePeriodDelayIsTheUndelayedSimFedTheCommandsOneTickLate) {
         const AxisPlant::State& b = delayed.plant(0).state();
         ASSERT_EQ(a.position_m, b.position_m) << n;
         ASSERT_EQ(a.velocity_mps, b.velocity_mps) << n;
-        ASSERT_EQ(a.hand_position_m, b.hand_position_m) << n;
-        ASSERT_EQ(a.hand_velocity_mps, b.hand_velocity_mps) << n;
+        ASSERT_EQ(a.mass_position_m, b.mass_position_m) << n;
+        ASSERT_EQ(a.mass_velocity_mps, b.mass_velocity_mps) << n;
         ASSERT_EQ(a.set_point_m, b.set_point_m) << n;
     }
 }

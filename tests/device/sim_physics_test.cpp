@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 #include <functional>
+#include <numbers>
 #include <vector>
 
 #include "hapticd/device/sim/axis_plant.hpp"
@@ -56,6 +57,23 @@ HumanModel two_mass(double ks, double bs, double mh, double ka, double ba,
     h.arm_damping_n_s_per_m = ba;
     h.push.from_m = h.push.to_m = set_point_m;
     return h;
+}
+
+/// A multi-mode grasp: a hand of mass mh on the handle, k_h and b_h to the set-point, and the
+/// absorbers (mass, stiffness, damping).
+HumanModel multi_mode(double mh, double kh, double bh, const std::vector<OperatorMode>& modes) {
+    HumanModel h = stiff_grasp(mh, kh, bh);
+    h.family = HumanFamily::multi_mode_grasp;
+    for (const OperatorMode& mode : modes) h.modes[static_cast<std::size_t>(h.mode_count++)] = mode;
+    return h;
+}
+
+/// Three absorbers on a 0.2 kg hand: 80 Hz, 400 Hz (lightly damped) and 2 kHz, above Nyquist.
+HumanModel three_absorbers() {
+    return multi_mode(0.2, 800.0, 1.5,
+                      {{0.05, 0.05 * std::pow(2 * std::numbers::pi * 80, 2), 0.2},
+                       {0.01, 0.01 * std::pow(2 * std::numbers::pi * 400, 2), 0.01},
+                       {0.002, 0.002 * std::pow(2 * std::numbers::pi * 2000, 2), 0.0}});
 }
 
 Command force(double f0, double f1 = 0.0, double f2 = 0.0) {
@@ -118,49 +136,79 @@ TEST(SimPhysics, StiffGraspFreeOscillationMatchesClosedForm) {
 struct Rk4Reference {
     double m, b;
     HumanModel h;
-    std::array<double, 4> s;  // x, v, x_h, v_h
+    std::vector<double> s;  // x, v, then each operator mass's position and velocity
 
-    std::array<double, 4> derivative(const std::array<double, 4>& y, double f, double xs,
-                                     double vs) const {
-        const double x = y[0], v = y[1], xh = y[2], vh = y[3];
+    std::vector<double> derivative(const std::vector<double>& y, double f, double xs,
+                                   double vs) const {
+        const double x = y[0], v = y[1];
+        std::vector<double> d(y.size(), 0.0);
+        d[0] = v;
         switch (h.family) {
             case HumanFamily::hands_off:
-                return {v, (f - b * v) / m, 0, 0};
+                d[1] = (f - b * v) / m;
+                break;
             case HumanFamily::heavy_hand:
-                return {v, (f - (b + h.hand_damping_n_s_per_m) * v) / (m + h.hand_mass_kg), 0, 0};
+                d[1] = (f - (b + h.hand_damping_n_s_per_m) * v) / (m + h.hand_mass_kg);
+                break;
             case HumanFamily::stiff_grasp:
-                return {v,
-                        (f - b * v - h.hand_damping_n_s_per_m * (v - vs) -
-                         h.hand_stiffness_n_per_m * (x - xs)) /
-                            (m + h.hand_mass_kg),
-                        0, 0};
+                d[1] = (f - b * v - h.hand_damping_n_s_per_m * (v - vs) -
+                        h.hand_stiffness_n_per_m * (x - xs)) /
+                       (m + h.hand_mass_kg);
+                break;
             case HumanFamily::two_mass_grasp: {
+                const double xh = y[2], vh = y[3];
                 const double skin =
                     h.skin_stiffness_n_per_m * (x - xh) + h.skin_damping_n_s_per_m * (v - vh);
                 const double arm =
                     h.arm_stiffness_n_per_m * (xh - xs) + h.arm_damping_n_s_per_m * (vh - vs);
-                return {v, (f - b * v - skin) / m, vh, (skin - arm) / h.hand_mass_kg};
+                d[1] = (f - b * v - skin) / m;
+                d[2] = vh;
+                d[3] = (skin - arm) / h.hand_mass_kg;
+                break;
+            }
+            case HumanFamily::multi_mode_grasp: {
+                double on_handle = f - b * v - h.hand_damping_n_s_per_m * (v - vs) -
+                                   h.hand_stiffness_n_per_m * (x - xs);
+                for (int i = 0; i < h.mode_count; ++i) {
+                    const OperatorMode& mode = h.modes[static_cast<std::size_t>(i)];
+                    const double xi = y[2 + 2 * i], vi = y[3 + 2 * i];
+                    const double spring =
+                        mode.stiffness_n_per_m * (x - xi) + mode.damping_n_s_per_m * (v - vi);
+                    on_handle -= spring;
+                    d[2 + 2 * i] = vi;
+                    d[3 + 2 * i] = spring / mode.mass_kg;
+                }
+                d[1] = on_handle / (m + h.hand_mass_kg);
+                break;
             }
         }
-        return {};
+        return d;
     }
     void period(double T, double f, double xs0, double xs1, int substeps) {
         const double h_s = T / substeps, vs = (xs1 - xs0) / T;
         for (int i = 0; i < substeps; ++i) {
             const double t0 = i * h_s;
-            auto add = [](const std::array<double, 4>& a, const std::array<double, 4>& d,
-                          double k) {
-                return std::array<double, 4>{a[0] + k * d[0], a[1] + k * d[1], a[2] + k * d[2],
-                                             a[3] + k * d[3]};
+            auto add = [](const std::vector<double>& a, const std::vector<double>& d, double k) {
+                std::vector<double> out(a.size());
+                for (std::size_t j = 0; j < a.size(); ++j) out[j] = a[j] + k * d[j];
+                return out;
             };
             const auto k1 = derivative(s, f, xs0 + vs * t0, vs);
             const auto k2 = derivative(add(s, k1, h_s / 2), f, xs0 + vs * (t0 + h_s / 2), vs);
             const auto k3 = derivative(add(s, k2, h_s / 2), f, xs0 + vs * (t0 + h_s / 2), vs);
             const auto k4 = derivative(add(s, k3, h_s), f, xs0 + vs * (t0 + h_s), vs);
-            for (int j = 0; j < 4; ++j) s[j] += h_s / 6 * (k1[j] + 2 * k2[j] + 2 * k3[j] + k4[j]);
+            for (std::size_t j = 0; j < s.size(); ++j) {
+                s[j] += h_s / 6 * (k1[j] + 2 * k2[j] + 2 * k3[j] + k4[j]);
+            }
         }
     }
 };
+
+/// The operator's own masses of `human`: the two-mass grasp's hand, or the absorbers.
+int operator_masses(const HumanModel& human) {
+    if (human.family == HumanFamily::two_mass_grasp) return 1;
+    return human.family == HumanFamily::multi_mode_grasp ? human.mode_count : 0;
+}
 
 void expect_matches_rk4(const HumanModel& human) {
     SimConfig c = lockstep_config();
@@ -168,22 +216,32 @@ void expect_matches_rk4(const HumanModel& human) {
     c.human[0] = human;
     SimDevice dev;
     dev.open(c);
-    Rk4Reference ref{c.mass_kg,
-                     c.damping_n_s_per_m,
-                     human,
-                     {0.003, 0.0, human.family == HumanFamily::two_mass_grasp ? 0.003 : 0.0, 0.0}};
+    const int masses = operator_masses(human);
+    std::vector<double> start{0.003, 0.0};
+    for (int i = 0; i < masses; ++i) start.insert(start.end(), {0.003, 0.0});
+    Rk4Reference ref{c.mass_kg, c.damping_n_s_per_m, human, start};
+    ASSERT_EQ(dev.plant(0).states(), 2 + 2 * masses);
     double scale = 1e-3;
     for (int n = 0; n < 400; ++n) {
         const double f = 2.0 * std::sin(0.05 * n) + (n % 7 == 0 ? 1.0 : 0.0);
         const double t0 = n * 1e-3, t1 = (n + 1) * 1e-3;
-        ref.period(1e-3, f, human.push.set_point_m(t0), human.push.set_point_m(t1), 200);
+        // The absorber at 2 kHz needs finer steps for RK4 to stay within 1e-9 of the truth.
+        ref.period(1e-3, f, human.push.set_point_m(t0), human.push.set_point_m(t1),
+                   masses > 1 ? 1000 : 200);
         ASSERT_EQ(dev.write(force(f)), IoResult::ok);
         const auto& s = dev.plant(0).state();
-        scale = std::max({scale, std::abs(ref.s[0]), std::abs(ref.s[2])});
+        for (std::size_t j = 0; j <= static_cast<std::size_t>(masses); ++j) {
+            scale = std::max(scale, std::abs(ref.s[2 * j]));
+        }
         ASSERT_NEAR(s.position_m, ref.s[0], 1e-9 * scale) << human.push.to_m << " tick " << n;
         ASSERT_NEAR(s.velocity_mps, ref.s[1], 1e-7 * (1 + std::abs(ref.s[1]))) << "tick " << n;
-        ASSERT_NEAR(s.hand_position_m, ref.s[2], 1e-9 * scale) << "tick " << n;
-        ASSERT_NEAR(s.hand_velocity_mps, ref.s[3], 1e-7 * (1 + std::abs(ref.s[3]))) << "tick " << n;
+        for (int i = 0; i < masses; ++i) {
+            const auto k = static_cast<std::size_t>(i);
+            const double xi = ref.s[2 + 2 * k], vi = ref.s[3 + 2 * k];
+            ASSERT_NEAR(s.mass_position_m[k], xi, 1e-9 * scale) << "mass " << i << " tick " << n;
+            ASSERT_NEAR(s.mass_velocity_mps[k], vi, 1e-7 * (1 + std::abs(vi)))
+                << "mass " << i << " tick " << n;
+        }
         ASSERT_DOUBLE_EQ(s.set_point_m, human.push.set_point_m(t1));
     }
 }
@@ -199,6 +257,10 @@ TEST(SimPhysics, EveryOperatorFamilyMatchesAnIndependentRk4Reference) {
     HumanModel arm_push = two_mass(3000.0, 5.0, 0.4, 300.0, 8.0);
     arm_push.push = PushProfile{0.003, -0.007, 0.02, 0.15, 0.05};
     expect_matches_rk4(arm_push);
+    expect_matches_rk4(three_absorbers());
+    HumanModel absorbers_pushed = three_absorbers();
+    absorbers_pushed.push = PushProfile{0.003, 0.009, 0.04, 0.1, 0.05};
+    expect_matches_rk4(absorbers_pushed);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -210,12 +272,12 @@ double sim_closed_loop_spectral_radius(const HumanModel& human, double kc, doubl
     AxisPlant plant;
     const double T = 1e-3;
     plant.configure(0.1, 2.0, 0.0, human, T, 0.0);
-    const Eigen::Matrix<double, 4, 7> e = plant.period_transition();
-    const int n = human.family == HumanFamily::two_mass_grasp ? 4 : 2;
+    const Eigen::MatrixXd e = plant.period_transition();
+    const int n = plant.states();
     // z = (s, x_d[n-1]); f on the handle = -F, F = k_c x + b_c (x - x_prev)/T.
     Eigen::MatrixXd loop = Eigen::MatrixXd::Zero(n + 1, n + 1);
     loop.topLeftCorner(n, n) = e.topLeftCorner(n, n);
-    const Eigen::VectorXd gamma = e.block(0, 4, n, 1);  // column of f
+    const Eigen::VectorXd gamma = e.block(0, n, n, 1);  // column of f
     loop.topLeftCorner(n, 1) += gamma * -(kc + bc / T);
     loop.topRightCorner(n, 1) = gamma * (bc / T);
     loop(n, 0) = 1.0;
@@ -235,6 +297,15 @@ tune::OperatorModel as_tune(const HumanModel& h) {
             return tune::OperatorModel::two_mass_grasp(
                 h.skin_stiffness_n_per_m, h.skin_damping_n_s_per_m, h.hand_mass_kg,
                 h.arm_stiffness_n_per_m, h.arm_damping_n_s_per_m);
+        case HumanFamily::multi_mode_grasp: {
+            std::vector<tune::OperatorMode> modes;
+            for (int i = 0; i < h.mode_count; ++i) {
+                const OperatorMode& m = h.modes[static_cast<std::size_t>(i)];
+                modes.push_back({m.mass_kg, m.stiffness_n_per_m, m.damping_n_s_per_m});
+            }
+            return tune::OperatorModel::multi_mode(h.hand_mass_kg, h.hand_stiffness_n_per_m,
+                                                   h.hand_damping_n_s_per_m, modes, "test");
+        }
     }
     return {};
 }
@@ -245,7 +316,9 @@ TEST(SimPhysics, OperatorFamiliesMatchTheExactModel) {
                                          heavy_hand(0.2, 3.0),
                                          stiff_grasp(0.5, 1000.0, 1.0),
                                          stiff_grasp(0.0, 4e5, 0.0),
-                                         two_mass(1e4, 1.0, 0.5, 1e3, 10.0)};
+                                         two_mass(1e4, 1.0, 0.5, 1e3, 10.0),
+                                         three_absorbers(),
+                                         multi_mode(0.0, 0.0, 0.0, {{0.3, 1e6, 0.0}})};
     for (const auto& human : humans) {
         for (const auto& [kc, bc] : {std::pair{1000.0, 0.0}, {3600.0, 0.5}, {9000.0, 0.0}}) {
             const auto poles = tune::closed_loop_poles({0.1, 2.0}, {kc, bc}, 1000.0, as_tune(human),
@@ -271,7 +344,9 @@ void expect_energy_never_increases(const HumanModel& human, double coulomb_n) {
     AxisPlant::State kick = dev.plant(0).state();
     kick.velocity_mps = 0.3;
     kick.position_m = 0.004;
-    kick.hand_position_m = human.family == HumanFamily::two_mass_grasp ? -0.002 : 0.0;
+    for (int i = 0; i < operator_masses(human); ++i) {
+        kick.mass_position_m[static_cast<std::size_t>(i)] = -0.002 * (i + 1);
+    }
     const_cast<AxisPlant&>(dev.plant(0)).set_state(kick);
     const double initial_j = dev.plant(0).energy_j();
     double energy = initial_j;
@@ -292,6 +367,7 @@ TEST(SimPhysics, EnergyNeverIncreasesWithPassiveOperatorsAndZeroForce) {
         expect_energy_never_increases(stiff_grasp(0.5, 3000.0, 0.0), coulomb);
         expect_energy_never_increases(stiff_grasp(0.0, 5e5, 0.0), coulomb);
         expect_energy_never_increases(two_mass(1e4, 0.0, 0.5, 1e3, 0.0), coulomb);
+        expect_energy_never_increases(three_absorbers(), coulomb);
     }
 }
 

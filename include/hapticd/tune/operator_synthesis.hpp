@@ -23,6 +23,7 @@
 //     kept as the rigid mass it is at the low aliases.
 #pragma once
 
+#include <numbers>
 #include <vector>
 
 #include "hapticd/theory/benchmark.hpp"
@@ -41,14 +42,16 @@ OperatorModel alias_tuned_operator(const theory::DeviceModel& device, double the
 
 /// With a fraction φ of a period of delay each alias k has its own worst point on the passive
 /// disk: W = b + j b cot(a_k/2), a_k = (1 + q)θ + φ(θ + 2πk) (docs/stability-models.md, "Every
-/// passive environment"). Lossless multi-mode grasps that put the first `aliases` (>= 2) of
-/// θ there: free-handle modes on the aliases, and a Foster reactance through the targets
-/// (a spring to ground or a rigid mass, and absorbers with a pole between each two aliases,
-/// placed by a compass search): one with the spring and one with the mass, each where a
-/// placement makes every coefficient >= 0 (none where neither does).
+/// passive environment"), the rim point of the operators' alias sum in the direction ψ = π;
+/// for one environment the rim point nearest it is in another direction ψ, and there
+/// W = b - j b tan((ψ + a_k)/2). Lossless multi-mode grasps that put the first `aliases`
+/// (>= 2) of θ there: free-handle modes on the aliases, and a Foster reactance through the
+/// targets (a spring to ground or a rigid mass, and absorbers with a pole between each two
+/// aliases, placed by a compass search): one with the spring and one with the mass, each
+/// where a placement makes every coefficient >= 0 (none where neither does).
 std::vector<OperatorModel> alias_shaped_operators(const theory::DeviceModel& device, double theta,
-                                                  double rate_hz, double delay_periods,
-                                                  int aliases);
+                                                  double rate_hz, double delay_periods, int aliases,
+                                                  double direction = std::numbers::pi);
 
 /// The lossless (trapezoidal) mass-spring whose admittance at θ is j·admittance_imag (m/(N s)).
 /// θ in (0, π); admittance_imag != 0.

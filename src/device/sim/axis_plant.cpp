@@ -4,88 +4,102 @@
 #include <unsupported/Eigen/MatrixFunctions>
 
 namespace hapticd::device::sim {
-namespace {
 
-// Indices into the augmented state z = (x, v, x_h, v_h, f, x_s, v_s).
-constexpr int kX = 0, kV = 1, kXh = 2, kVh = 3, kF = 4, kXs = 5, kVs = 6;
-using Augmented = Eigen::Matrix<double, 7, 7>;
-
-/// M of the file comment of axis_plant.hpp: dz/dt = M z.
-Augmented continuous_matrix(double m, double b, const HumanModel& h) {
-    Augmented a = Augmented::Zero();
-    a(kX, kV) = 1.0;
-    a(kXs, kVs) = 1.0;  // the set-point moves at v_s; f and v_s are held
+void AxisPlant::build_network(double mass_kg, double damping_n_s_per_m, const HumanModel& h) {
+    masses_ = 0;
+    link_count_ = 0;
+    mass_kg_.fill(0.0);
+    // Every hand but the two-mass grasp's is rigidly on the handle (hands-off: m_h = 0).
+    handle_mass_kg_ = mass_kg + (h.family == HumanFamily::two_mass_grasp ? 0.0 : h.hand_mass_kg);
+    const auto link = [&](int from, int to, double k, double b) {
+        links_[static_cast<std::size_t>(link_count_++)] = {from, to, k, b};
+    };
+    const auto mass = [&](double kg) {
+        mass_kg_[static_cast<std::size_t>(masses_++)] = kg;
+        return masses_;  // its node
+    };
+    link(0, kGround, 0.0, damping_n_s_per_m);  // (10)'s b
     switch (h.family) {
-        case HumanFamily::hands_off:  // (10): m dv/dt = -b v + f
-            a(kV, kV) = -b / m;
-            a(kV, kF) = 1.0 / m;
+        case HumanFamily::hands_off:
             break;
         case HumanFamily::heavy_hand:
-        case HumanFamily::stiff_grasp: {
-            // (m + m_h) dv/dt = -b v - b_h (v - v_s) - k_h (x - x_s) + f; heavy hand: k_h = 0,
-            // and its damper is to ground (v_s enters only through the stiff grasp).
-            const double total = m + h.hand_mass_kg;
-            const double bh = h.hand_damping_n_s_per_m, kh = h.hand_stiffness_n_per_m;
-            const bool grasp = h.family == HumanFamily::stiff_grasp;
-            a(kV, kX) = -kh / total;
-            a(kV, kV) = -(b + bh) / total;
-            a(kV, kF) = 1.0 / total;
-            a(kV, kXs) = kh / total;
-            a(kV, kVs) = grasp ? bh / total : 0.0;
+            link(0, kGround, 0.0, h.hand_damping_n_s_per_m);
+            break;
+        case HumanFamily::stiff_grasp:
+            link(0, kSetPoint, h.hand_stiffness_n_per_m, h.hand_damping_n_s_per_m);
+            break;
+        case HumanFamily::two_mass_grasp: {
+            const int hand = mass(h.hand_mass_kg);
+            link(0, hand, h.skin_stiffness_n_per_m, h.skin_damping_n_s_per_m);
+            link(hand, kSetPoint, h.arm_stiffness_n_per_m, h.arm_damping_n_s_per_m);
             break;
         }
-        case HumanFamily::two_mass_grasp: {
-            const double ks = h.skin_stiffness_n_per_m, bs = h.skin_damping_n_s_per_m;
-            const double mh = h.hand_mass_kg;
-            const double ka = h.arm_stiffness_n_per_m, ba = h.arm_damping_n_s_per_m;
-            // m dv/dt = -b v - k_s (x - x_h) - b_s (v - v_h) + f
-            a(kV, kX) = -ks / m;
-            a(kV, kV) = -(b + bs) / m;
-            a(kV, kXh) = ks / m;
-            a(kV, kVh) = bs / m;
-            a(kV, kF) = 1.0 / m;
-            // m_h dv_h/dt = k_s (x - x_h) + b_s (v - v_h) - k_a (x_h - x_s) - b_a (v_h - v_s)
-            a(kXh, kVh) = 1.0;
-            a(kVh, kX) = ks / mh;
-            a(kVh, kV) = bs / mh;
-            a(kVh, kXh) = -(ks + ka) / mh;
-            a(kVh, kVh) = -(bs + ba) / mh;
-            a(kVh, kXs) = ka / mh;
-            a(kVh, kVs) = ba / mh;
+        case HumanFamily::multi_mode_grasp:
+            link(0, kSetPoint, h.hand_stiffness_n_per_m, h.hand_damping_n_s_per_m);
+            for (int i = 0; i < h.mode_count; ++i) {
+                const OperatorMode& mode = h.modes[static_cast<std::size_t>(i)];
+                link(0, mass(mode.mass_kg), mode.stiffness_n_per_m, mode.damping_n_s_per_m);
+            }
             break;
+    }
+    states_ = 2 + 2 * masses_;
+}
+
+AxisPlant::Augmented AxisPlant::continuous_matrix() const {
+    // z = (x, v, x_1, v_1, ..., x_M, v_M, f, x_s, v_s); node 0 is the handle, node i the
+    // operator mass at rows 2i, 2i + 1.
+    const int n = states_, f = n, xs = n + 1, vs = n + 2;
+    Augmented a = Augmented::Zero(n + 3, n + 3);
+    const auto node_mass = [&](int node) {
+        return node == 0 ? handle_mass_kg_ : mass_kg_[static_cast<std::size_t>(node - 1)];
+    };
+    for (Eigen::Index node = 0; node <= masses_; ++node)
+        a(2 * node, 2 * node + 1) = 1.0;  // dx/dt = v
+    a(xs, vs) = 1.0;                      // the set-point moves at v_s; f and v_s are held
+    a(1, f) = 1.0 / node_mass(0);
+    // A link's force on `from` is -k (x_from - x_to) - b (v_from - v_to), and the opposite
+    // on `to`; ground stays at 0, the set-point is (x_s, v_s).
+    const auto add = [&](int on, int sign, const Link& l, int x_column, int v_column) {
+        const double m = node_mass(on);
+        a(2 * on + 1, x_column) += sign * l.stiffness_n_per_m / m;
+        a(2 * on + 1, v_column) += sign * l.damping_n_s_per_m / m;
+    };
+    for (int i = 0; i < link_count_; ++i) {
+        const Link& l = links_[static_cast<std::size_t>(i)];
+        add(l.from, -1, l, 2 * l.from, 2 * l.from + 1);
+        if (l.to >= 0) {
+            add(l.from, +1, l, 2 * l.to, 2 * l.to + 1);
+            add(l.to, -1, l, 2 * l.to, 2 * l.to + 1);
+            add(l.to, +1, l, 2 * l.from, 2 * l.from + 1);
+        } else if (l.to == kSetPoint) {
+            add(l.from, +1, l, xs, vs);
         }
     }
     return a;
 }
 
-}  // namespace
-
-AxisPlant::ExactStep AxisPlant::exact_step(const Augmented& a, double duration_s) {
+AxisPlant::ExactStep AxisPlant::exact_step(const Augmented& a, double duration_s) const {
     ExactStep step;
     step.duration_s = duration_s;
     const Augmented scaled = a * duration_s;
     const Augmented e = scaled.exp();
-    step.free = e.topRows<4>();
+    step.free = e.topRows(states_);
     Augmented held = a;  // the handle clamped by stiction: dx/dt = dv/dt = 0
-    held.row(kX).setZero();
-    held.row(kV).setZero();
+    held.row(0).setZero();
+    held.row(1).setZero();
     const Augmented held_scaled = held * duration_s;
     const Augmented held_e = held_scaled.exp();
-    step.stuck = held_e.topRows<4>();
+    step.stuck = held_e.topRows(states_);
     return step;
 }
 
 void AxisPlant::configure(double mass_kg, double damping_n_s_per_m, double coulomb_n,
                           const HumanModel& human, double period_s, double initial_position_m,
                           double split_fraction) {
-    human_ = human;
-    mass_kg_ = mass_kg;
     coulomb_n_ = coulomb_n;
-    const bool rigid_hand =
-        human.family == HumanFamily::heavy_hand || human.family == HumanFamily::stiff_grasp;
-    handle_mass_kg_ = rigid_hand ? mass_kg + human.hand_mass_kg : mass_kg;
-    const Augmented a = continuous_matrix(mass_kg, damping_n_s_per_m, human);
-    acceleration_row_ = a.row(kV);
+    build_network(mass_kg, damping_n_s_per_m, human);
+    const Augmented a = continuous_matrix();
+    acceleration_row_ = a.row(1);
     for (int k = 0; k <= kFractionBits; ++k) steps_[k] = exact_step(a, std::ldexp(period_s, -k));
     // A fractional loop delay: the period's two pieces [0, φT) and [φT, T), each with its
     // own exact ZOH transition (and 32 substeps of it for Coulomb friction).
@@ -102,38 +116,56 @@ void AxisPlant::configure(double mass_kg, double damping_n_s_per_m, double coulo
     state_ = State{};
     state_.position_m = initial_position_m;
     state_.set_point_m = human.push.set_point_m(0.0);
-    if (human.family == HumanFamily::two_mass_grasp) state_.hand_position_m = initial_position_m;
+    for (int i = 0; i < masses_; ++i)
+        state_.mass_position_m[static_cast<std::size_t>(i)] = initial_position_m;
+}
+
+AxisPlant::AugmentedVector AxisPlant::augmented(double handle_velocity_mps, double force_n,
+                                                double set_point_velocity_mps) const noexcept {
+    AugmentedVector z(states_ + 3);
+    z(0) = state_.position_m;
+    z(1) = handle_velocity_mps;
+    for (int i = 0; i < masses_; ++i) {
+        z(2 + 2 * i) = state_.mass_position_m[static_cast<std::size_t>(i)];
+        z(3 + 2 * i) = state_.mass_velocity_mps[static_cast<std::size_t>(i)];
+    }
+    z(states_) = force_n;
+    z(states_ + 1) = state_.set_point_m;
+    z(states_ + 2) = set_point_velocity_mps;
+    return z;
+}
+
+void AxisPlant::set_states(const StateVector& next) noexcept {
+    state_.position_m = next(0);
+    state_.velocity_mps = next(1);
+    for (int i = 0; i < masses_; ++i) {
+        state_.mass_position_m[static_cast<std::size_t>(i)] = next(2 + 2 * i);
+        state_.mass_velocity_mps[static_cast<std::size_t>(i)] = next(3 + 2 * i);
+    }
 }
 
 void AxisPlant::linear_step(const ExactStep& step, double force_n,
                             double set_point_velocity_mps) noexcept {
-    Eigen::Matrix<double, 7, 1> z;
-    z << state_.position_m, state_.velocity_mps, state_.hand_position_m, state_.hand_velocity_mps,
-        force_n, state_.set_point_m, set_point_velocity_mps;
-    const Eigen::Matrix<double, 4, 1> next = step.free * z;
-    state_.position_m = next(kX);
-    state_.velocity_mps = next(kV);
-    state_.hand_position_m = next(kXh);
-    state_.hand_velocity_mps = next(kVh);
+    const AugmentedVector z = augmented(state_.velocity_mps, force_n, set_point_velocity_mps);
+    StateVector next(states_);
+    next.noalias() = step.free * z;
+    set_states(next);
     state_.set_point_m += set_point_velocity_mps * step.duration_s;
 }
 
 double AxisPlant::resting_handle_force_n(double force_n,
                                          double set_point_velocity_mps) const noexcept {
-    Eigen::Matrix<double, 7, 1> z;
-    z << state_.position_m, 0.0, state_.hand_position_m, state_.hand_velocity_mps, force_n,
-        state_.set_point_m, set_point_velocity_mps;
-    return handle_mass_kg_ * acceleration_row_.dot(z);
+    return handle_mass_kg_ * acceleration_row_.dot(augmented(0.0, force_n, set_point_velocity_mps));
 }
 
 void AxisPlant::stuck_step(const ExactStep& step, double set_point_velocity_mps) noexcept {
-    Eigen::Matrix<double, 7, 1> z;
-    z << state_.position_m, 0.0, state_.hand_position_m, state_.hand_velocity_mps, 0.0,
-        state_.set_point_m, set_point_velocity_mps;
-    const Eigen::Matrix<double, 4, 1> next = step.stuck * z;
-    state_.velocity_mps = 0.0;  // the handle is held; x stays as it is
-    state_.hand_position_m = next(kXh);
-    state_.hand_velocity_mps = next(kVh);
+    const double x = state_.position_m;
+    const AugmentedVector z = augmented(0.0, 0.0, set_point_velocity_mps);
+    StateVector next(states_);
+    next.noalias() = step.stuck * z;
+    set_states(next);
+    state_.position_m = x;  // the handle is held; x stays as it is
+    state_.velocity_mps = 0.0;
     state_.set_point_m += set_point_velocity_mps * step.duration_s;
 }
 
@@ -222,25 +254,22 @@ void AxisPlant::step_period_split(double lead_force_n, double lag_force_n,
 
 double AxisPlant::energy_j() const noexcept {
     const State& s = state_;
-    const HumanModel& h = human_;
-    const double stretch_m = s.position_m - s.set_point_m;
-    switch (h.family) {
-        case HumanFamily::hands_off:
-            return 0.5 * mass_kg_ * s.velocity_mps * s.velocity_mps;
-        case HumanFamily::heavy_hand:
-        case HumanFamily::stiff_grasp:
-            return 0.5 * handle_mass_kg_ * s.velocity_mps * s.velocity_mps +
-                   0.5 * h.hand_stiffness_n_per_m * stretch_m * stretch_m;
-        case HumanFamily::two_mass_grasp: {
-            const double skin_m = s.position_m - s.hand_position_m;
-            const double arm_m = s.hand_position_m - s.set_point_m;
-            return 0.5 * mass_kg_ * s.velocity_mps * s.velocity_mps +
-                   0.5 * h.hand_mass_kg * s.hand_velocity_mps * s.hand_velocity_mps +
-                   0.5 * h.skin_stiffness_n_per_m * skin_m * skin_m +
-                   0.5 * h.arm_stiffness_n_per_m * arm_m * arm_m;
-        }
+    const auto position = [&](int node) {
+        if (node == kGround) return 0.0;
+        if (node == kSetPoint) return s.set_point_m;
+        return node == 0 ? s.position_m : s.mass_position_m[static_cast<std::size_t>(node - 1)];
+    };
+    double energy = 0.5 * handle_mass_kg_ * s.velocity_mps * s.velocity_mps;
+    for (int i = 0; i < masses_; ++i) {
+        const auto k = static_cast<std::size_t>(i);
+        energy += 0.5 * mass_kg_[k] * s.mass_velocity_mps[k] * s.mass_velocity_mps[k];
     }
-    return 0.0;
+    for (int i = 0; i < link_count_; ++i) {
+        const Link& l = links_[static_cast<std::size_t>(i)];
+        const double stretch_m = position(l.from) - position(l.to);
+        energy += 0.5 * l.stiffness_n_per_m * stretch_m * stretch_m;
+    }
+    return energy;
 }
 
 }  // namespace hapticd::device::sim

@@ -36,11 +36,14 @@ std::string_view to_string(HumanFamily family) noexcept {
             return "stiff-grasp";
         case HumanFamily::two_mass_grasp:
             return "two-mass-grasp";
+        case HumanFamily::multi_mode_grasp:
+            return "multi-mode-grasp";
     }
     return "hands-off";
 }
 constexpr HumanFamily kFamilies[] = {HumanFamily::hands_off, HumanFamily::heavy_hand,
-                                     HumanFamily::stiff_grasp, HumanFamily::two_mass_grasp};
+                                     HumanFamily::stiff_grasp, HumanFamily::two_mass_grasp,
+                                     HumanFamily::multi_mode_grasp};
 constexpr input::Choice<HumanFamily> kModel{"model", kFamilies, &to_string, HumanFamily::hands_off};
 
 std::string_view to_string(SimClock clock) noexcept {
@@ -58,13 +61,35 @@ void require_unused(TableReader& r, std::string_view key, HumanFamily model) {
     }
 }
 
+/// A multi-mode grasp's [[modes]]: 1 to kMaxOperatorModes absorbers.
+void read_modes(TableReader& r, HumanModel& h) {
+    const toml::array* modes = r.array_of_tables("modes");
+    const std::size_t count = modes == nullptr ? 0 : modes->size();
+    if (count < 1 || count > static_cast<std::size_t>(kMaxOperatorModes)) {
+        r.fail("modes", "has " + std::to_string(count) + " absorbers",
+               "1 to " + std::to_string(kMaxOperatorModes) + " tables [[" + r.path("modes") +
+                   "]], each { mass, stiffness, damping }");
+    }
+    h.mode_count = static_cast<int>(count);
+    for (std::size_t i = 0; i < count; ++i) {
+        TableReader m = r.nested(*modes->get(i)->as_table(), "modes", static_cast<int>(i) + 1);
+        m.only({"mass", "stiffness", "damping"});
+        h.modes[i] = {m.read(Number{"mass", kMass}),
+                      m.read(Number{"stiffness",
+                                    Range{.lo = 0.0, .hi = 1e9, .lo_open = true, .unit = "N/m"}}),
+                      m.read(Number{"damping", kDamping, 0.0})};
+        m.finish();
+    }
+}
+
 HumanModel read_human(TableReader& r, double initial_position_m) {
     HumanModel h;
     h.family = r.read(kModel);
+    const bool multi_mode = h.family == HumanFamily::multi_mode_grasp;
     const bool rigid_hand =
-        h.family == HumanFamily::heavy_hand || h.family == HumanFamily::stiff_grasp;
+        h.family == HumanFamily::heavy_hand || h.family == HumanFamily::stiff_grasp || multi_mode;
     const bool two_mass = h.family == HumanFamily::two_mass_grasp;
-    const bool set_point = h.family == HumanFamily::stiff_grasp || two_mass;
+    const bool set_point = h.family == HumanFamily::stiff_grasp || two_mass || multi_mode;
 
     auto param = [&](std::string_view key, bool used, double fallback, const Range& range) {
         if (!used) {
@@ -73,12 +98,19 @@ HumanModel read_human(TableReader& r, double initial_position_m) {
         }
         return r.read(Number{key, range, fallback});
     };
-    h.hand_mass_kg =
-        two_mass ? r.read(Number{"hand_mass", kMass, 0.5})
-                 : param("hand_mass", rigid_hand, 0.5, Range{.lo = 0.0, .hi = 1e3, .unit = "kg"});
+    // A multi-mode grasp's absorbers are the grasp: no hand mass or spring unless given.
+    h.hand_mass_kg = two_mass ? r.read(Number{"hand_mass", kMass, 0.5})
+                              : param("hand_mass", rigid_hand, multi_mode ? 0.0 : 0.5,
+                                      Range{.lo = 0.0, .hi = 1e3, .unit = "kg"});
     h.hand_damping_n_s_per_m = param("hand_damping", rigid_hand, 0.0, kDamping);
     h.hand_stiffness_n_per_m =
-        param("hand_stiffness", h.family == HumanFamily::stiff_grasp, 1000.0, kStiffness);
+        param("hand_stiffness", h.family == HumanFamily::stiff_grasp || multi_mode,
+              multi_mode ? 0.0 : 1000.0, kStiffness);
+    if (multi_mode) {
+        read_modes(r, h);
+    } else {
+        require_unused(r, "modes", h.family);
+    }
     h.skin_stiffness_n_per_m = param("skin_stiffness", two_mass, 1000.0, kStiffness);
     h.skin_damping_n_s_per_m = param("skin_damping", two_mass, 1.0, kDamping);
     h.arm_stiffness_n_per_m = param("arm_stiffness", two_mass, 100.0, kStiffness);

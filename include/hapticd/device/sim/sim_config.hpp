@@ -19,7 +19,17 @@ enum class SimClock {
 };
 
 /// The passive human operator families of hapticd::tune::OperatorFamily (exact_model.hpp).
-enum class HumanFamily { hands_off, heavy_hand, stiff_grasp, two_mass_grasp };
+enum class HumanFamily { hands_off, heavy_hand, stiff_grasp, two_mass_grasp, multi_mode_grasp };
+
+/// A multi-mode grasp's absorbers: at most this many (the sim's plant is fixed-size).
+inline constexpr int kMaxOperatorModes = 8;
+
+/// A multi-mode grasp's absorber: handle --(stiffness, damping)-- mass.
+struct OperatorMode {
+    double mass_kg = 0.0;            ///< > 0
+    double stiffness_n_per_m = 0.0;  ///< > 0
+    double damping_n_s_per_m = 0.0;  ///< >= 0
+};
 
 /// The hand's set-point x_s(t) for the grasps (stiff grasp: the spring's rest point; two-mass
 /// grasp: the arm's). A trapezoid: x_from until `start_s`, a linear ramp to x_to over `ramp_s`,
@@ -41,15 +51,17 @@ struct PushProfile {
 /// The fields a family does not use are zero.
 struct HumanModel {
     HumanFamily family = HumanFamily::hands_off;
-    double hand_mass_kg = 0.0;            ///< heavy hand, stiff grasp (>= 0); two-mass (> 0)
-    double hand_damping_n_s_per_m = 0.0;  ///< heavy hand (to ground); stiff grasp (to x_s)
-    double hand_stiffness_n_per_m = 0.0;  ///< stiff grasp: handle to x_s
+    double hand_mass_kg = 0.0;            ///< heavy hand, stiff, multi-mode (>= 0); two-mass (> 0)
+    double hand_damping_n_s_per_m = 0.0;  ///< heavy hand (to ground); stiff, multi-mode (to x_s)
+    double hand_stiffness_n_per_m = 0.0;  ///< stiff grasp, multi-mode: handle to x_s
     double skin_stiffness_n_per_m = 0.0;  ///< two-mass grasp: handle to hand
     double skin_damping_n_s_per_m = 0.0;  ///< two-mass grasp: handle to hand
     double arm_stiffness_n_per_m = 0.0;   ///< two-mass grasp: hand to x_s
     double arm_damping_n_s_per_m = 0.0;   ///< two-mass grasp: hand to x_s
-    /// Set-point x_s(t); used by the stiff and two-mass grasps. Its from_m defaults to the
-    /// axis's initial position, so a grasp starts at rest.
+    std::array<OperatorMode, kMaxOperatorModes> modes{};  ///< multi-mode grasp: the absorbers
+    int mode_count = 0;                                   ///< multi-mode grasp: 1..8
+    /// Set-point x_s(t); used by the stiff, two-mass and multi-mode grasps. Its from_m defaults to
+    /// the axis's initial position, so a grasp starts at rest.
     PushProfile push;
 };
 
