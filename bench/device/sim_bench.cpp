@@ -1,10 +1,12 @@
 // The sim device's share of a lockstep servo tick: one read() and one write(), for 1 and 3
-// axes, per operator family, with and without Coulomb friction (which substeps 32 times),
-// and with a fractional loop delay.
+// axes, per operator family (the multi-mode grasp with the most absorbers the sim holds: its
+// plant is the largest, 18 states), with and without Coulomb friction (which substeps 32
+// times), and with a fractional loop delay.
 // Run with --benchmark_repetitions=N --benchmark_report_aggregates_only=true for medians.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <numbers>
 
 #include "hapticd/device/sim/sim_device.hpp"
 
@@ -27,6 +29,15 @@ SimConfig config(int axes, HumanFamily family, double coulomb_n) {
             h.hand_damping_n_s_per_m = 1.0;
         }
         if (family == HumanFamily::stiff_grasp) h.hand_stiffness_n_per_m = 1000.0;
+        if (family == HumanFamily::multi_mode_grasp) {
+            h.hand_stiffness_n_per_m = 1000.0;
+            h.hand_damping_n_s_per_m = 1.0;
+            h.mode_count = kMaxOperatorModes;
+            for (int k = 0; k < kMaxOperatorModes; ++k) {  // 50 Hz to 6.4 kHz, lightly damped
+                const double omega = 2.0 * std::numbers::pi * 50.0 * std::pow(2.0, k);
+                h.modes[static_cast<std::size_t>(k)] = {0.01, 0.01 * omega * omega, 0.01};
+            }
+        }
         if (family == HumanFamily::two_mass_grasp) {
             h.skin_stiffness_n_per_m = 5000.0;
             h.skin_damping_n_s_per_m = 1.0;
@@ -70,6 +81,9 @@ void BM_SimLockstepStiffGrasp(benchmark::State& s) {
 void BM_SimLockstepTwoMassGrasp(benchmark::State& s) {
     lockstep_tick(s, HumanFamily::two_mass_grasp, 0.0);
 }
+void BM_SimLockstepMultiModeGrasp(benchmark::State& s) {
+    lockstep_tick(s, HumanFamily::multi_mode_grasp, 0.0);
+}
 void BM_SimLockstepHandsOffCoulomb(benchmark::State& s) {
     lockstep_tick(s, HumanFamily::hands_off, 0.2);
 }
@@ -81,6 +95,7 @@ void BM_SimLockstepHandsOffDelay(benchmark::State& s) {
 BENCHMARK(BM_SimLockstepHandsOff)->Arg(1)->Arg(3);
 BENCHMARK(BM_SimLockstepStiffGrasp)->Arg(1)->Arg(3);
 BENCHMARK(BM_SimLockstepTwoMassGrasp)->Arg(1)->Arg(3);
+BENCHMARK(BM_SimLockstepMultiModeGrasp)->Arg(1)->Arg(3);
 BENCHMARK(BM_SimLockstepHandsOffCoulomb)->Arg(1)->Arg(3);
 BENCHMARK(BM_SimLockstepHandsOffDelay)->Arg(1)->Arg(3);
 
