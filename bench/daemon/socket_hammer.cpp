@@ -79,14 +79,18 @@ bool drain(int fd, int ms) {
 }
 
 const std::string kStatus = "{\"v\":1,\"request\":\"status\"}\n";
-
-void flood(const std::string& path, std::atomic<long>& disconnects) {
+/// 200 status requests at once: a flooder's and a slow reader's.
+const std::string kStatusBurst = [] {
     std::string burst;
     for (int i = 0; i < 200; ++i) burst += kStatus;
+    return burst;
+}();
+
+void flood(const std::string& path, std::atomic<long>& disconnects) {
     while (!done) {
         const int fd = connect_to(path);
         if (fd < 0) continue;
-        while (!done && send_all(fd, burst)) {
+        while (!done && send_all(fd, kStatusBurst)) {
         }
         ::close(fd);
         ++disconnects;
@@ -159,16 +163,20 @@ void poll_status(const std::string& path, std::atomic<long>& replies) {
 
 const std::string kSubscribe = "{\"v\":1,\"request\":\"subscribe\",\"rate_hz\":100}\n";
 
-// A subscriber that reads every event, as `hapticctl stream` does.
-void stream(const std::string& path, std::atomic<long>& events) {
+// Sends `request` on a new connection, then reads its lines one by one, `pause` after each,
+// counting them; again when the daemon closes it. Pause 0 and a subscribe is `hapticctl
+// stream`; a burst of requests and 50 ms is a slow reader.
+void reader(const std::string& path, const std::string& request, std::chrono::milliseconds pause,
+            std::atomic<long>& lines) {
     while (!done) {
         const int fd = connect_to(path);
         if (fd < 0) continue;
         std::string pending;
-        if (send_all(fd, kSubscribe)) {
+        if (send_all(fd, request)) {
             while (!done && read_line(fd, pending, 1000)) {
                 pending.erase(0, pending.find('\n') + 1);
-                ++events;
+                ++lines;
+                if (pause.count() > 0) std::this_thread::sleep_for(pause);
             }
         }
         ::close(fd);
@@ -187,25 +195,6 @@ void unread_stream(const std::string& path, std::atomic<long>& disconnects) {
         }
         ::close(fd);
         ++disconnects;
-    }
-}
-
-// 200 requests at once, then one reply read every 50 ms.
-void slow_reader(const std::string& path, std::atomic<long>& replies) {
-    std::string burst;
-    for (int i = 0; i < 200; ++i) burst += kStatus;
-    while (!done) {
-        const int fd = connect_to(path);
-        if (fd < 0) continue;
-        std::string pending;
-        if (send_all(fd, burst)) {
-            while (!done && read_line(fd, pending, 1000)) {
-                pending.erase(0, pending.find('\n') + 1);
-                ++replies;
-                std::this_thread::sleep_for(std::chrono::milliseconds(50));
-            }
-        }
-        ::close(fd);
     }
 }
 
@@ -279,12 +268,16 @@ void start_storm(const std::string& storm, const std::string& path, Counts& coun
         }
     }
     if (storm == "streams") {
-        for (int i = 0; i < 16; ++i) threads.emplace_back(stream, path, std::ref(counts.events));
+        for (int i = 0; i < 16; ++i) {
+            threads.emplace_back(reader, path, kSubscribe, std::chrono::milliseconds(0),
+                                 std::ref(counts.events));
+        }
     }
     if (all || storm == "slow") {
         for (int i = 0; i < 8; ++i) {
             threads.emplace_back(unread_stream, path, std::ref(counts.unread_disconnects));
-            threads.emplace_back(slow_reader, path, std::ref(counts.slow_replies));
+            threads.emplace_back(reader, path, kStatusBurst, std::chrono::milliseconds(50),
+                                 std::ref(counts.slow_replies));
         }
     }
 }

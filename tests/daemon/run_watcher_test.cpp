@@ -12,6 +12,7 @@
 #include <array>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -68,6 +69,27 @@ bool tells_fault(const std::string& status) {
     return status.find("faults encoder_jump") != std::string::npos;
 }
 
+/// A RunWatcher over a scripted loop (its status, and whether it is done) with `options`,
+/// `each_look` called at every look until the loop is done; what the watcher logged.
+std::string watch_scripted_loop(const std::function<servo::StatusSnapshot()>& status,
+                                const std::function<bool()>& done, const RunOptions& options,
+                                const std::function<void()>& each_look) {
+    const servo::RealtimeReport realtime_report;
+    const WatchedLoop loop{
+        .status = status,
+        .realtime_report = [&]() -> const servo::RealtimeReport& { return realtime_report; },
+        .done = done};
+    const Config config;
+    const servo::RealtimeRequest realtime;
+    const device::DeviceInfo info;
+    std::atomic<bool> stop{false};
+    std::atomic<double> measured_rate_hz{0.0};
+    std::ostringstream log;
+    RunWatcher watcher(loop, options, config, realtime, info, stop, measured_rate_hz, log);
+    watcher.watch(each_look);
+    return log.str();
+}
+
 // The fault latches inside look 1, and a reset served on the control socket's thread clears it
 // inside look 4: each after the watcher told the service and before it logged the change. The
 // fault's STATUS= comes at look 2 and the cleared one's at look 5, not at the next
@@ -81,31 +103,20 @@ TEST(DaemonRunWatcher, AFaultClearedBetweenTheWatchersReadsIsToldAtTheNextLook) 
     int look = 0;
     std::uint64_t tick = 0;
     std::uint32_t faults = 0;
-    const servo::RealtimeReport realtime_report;
-    const WatchedLoop loop{
-        .status =
-            [&] {
-                servo::StatusSnapshot s;
-                s.tick = ++tick;
-                s.faults = faults;
-                s.state = faults != 0u ? servo::ServoState::fault : servo::ServoState::running;
-                return s;
-            },
-        .realtime_report = [&]() -> const servo::RealtimeReport& { return realtime_report; },
-        .done = [&] { return look >= 8; }};
-    const RunOptions options;
-    const Config config;
-    const servo::RealtimeRequest realtime;
-    const device::DeviceInfo info;
-    std::atomic<bool> stop{false};
-    std::atomic<double> measured_rate_hz{0.0};
-    std::ostringstream log;
-    RunWatcher watcher(loop, options, config, realtime, info, stop, measured_rate_hz, log);
-    watcher.watch([&] {
-        ++look;
-        if (look == 1) faults = servo::kFaultEncoderJump;  // the tick latches it, mid-look
-        if (look == 4) faults = 0;                         // the reset, mid-look
-    });
+    const std::string log = watch_scripted_loop(
+        [&] {
+            servo::StatusSnapshot s;
+            s.tick = ++tick;
+            s.faults = faults;
+            s.state = faults != 0u ? servo::ServoState::fault : servo::ServoState::running;
+            return s;
+        },
+        [&] { return look >= 8; }, RunOptions{},
+        [&] {
+            ++look;
+            if (look == 1) faults = servo::kFaultEncoderJump;  // the tick latches it, mid-look
+            if (look == 4) faults = 0;                         // the reset, mid-look
+        });
 
     const std::vector<std::string> told = manager.statuses();
     std::size_t first_fault = told.size();
@@ -120,9 +131,9 @@ TEST(DaemonRunWatcher, AFaultClearedBetweenTheWatchersReadsIsToldAtTheNextLook) 
     for (std::size_t i = first_fault + 1; i < told.size(); ++i) {
         cleared_told = cleared_told || told[i].find("faults none") != std::string::npos;
     }
-    EXPECT_TRUE(cleared_told) << "no STATUS= after the reset; the log said:\n" << log.str();
+    EXPECT_TRUE(cleared_told) << "no STATUS= after the reset; the log said:\n" << log;
     // And the journal has both changes.
-    EXPECT_NE(log.str().find("encoder_jump"), std::string::npos) << log.str();
+    EXPECT_NE(log.find("encoder_jump"), std::string::npos) << log;
 }
 
 // The watcher's look after a stall (here its own callback sleeps 350 ms, as a stalled host
@@ -131,32 +142,22 @@ TEST(DaemonRunWatcher, AFaultClearedBetweenTheWatchersReadsIsToldAtTheNextLook) 
 // moves only between looks here, and every figures line has a tick of its own.
 TEST(DaemonRunWatcher, ALateLookWritesOneFiguresLineNotOnePerIntervalMissed) {
     int look = 0;
-    const servo::RealtimeReport realtime_report;
-    const WatchedLoop loop{
-        .status =
-            [&] {
-                servo::StatusSnapshot s;
-                s.tick = 1 + 10 * static_cast<std::uint64_t>(look);
-                s.state = servo::ServoState::running;
-                return s;
-            },
-        .realtime_report = [&]() -> const servo::RealtimeReport& { return realtime_report; },
-        .done = [&] { return look >= 30; }};
     RunOptions options;
     options.figures_interval_s = 0.1;
-    const Config config;
-    const servo::RealtimeRequest realtime;
-    const device::DeviceInfo info;
-    std::atomic<bool> stop{false};
-    std::atomic<double> measured_rate_hz{0.0};
-    std::ostringstream log;
-    RunWatcher watcher(loop, options, config, realtime, info, stop, measured_rate_hz, log);
-    watcher.watch([&] {
-        ++look;
-        if (look == 2) std::this_thread::sleep_for(std::chrono::milliseconds(350));
-    });
+    const std::string log = watch_scripted_loop(
+        [&] {
+            servo::StatusSnapshot s;
+            s.tick = 1 + 10 * static_cast<std::uint64_t>(look);
+            s.state = servo::ServoState::running;
+            return s;
+        },
+        [&] { return look >= 30; }, options,
+        [&] {
+            ++look;
+            if (look == 2) std::this_thread::sleep_for(std::chrono::milliseconds(350));
+        });
 
-    std::istringstream lines(log.str());
+    std::istringstream lines(log);
     std::vector<std::uint64_t> ticks;
     for (std::string line; std::getline(lines, line);) {
         const std::size_t at = line.find(", tick ");
@@ -169,9 +170,9 @@ TEST(DaemonRunWatcher, ALateLookWritesOneFiguresLineNotOnePerIntervalMissed) {
             EXPECT_GE(std::stod(line.substr(over)), 0.3) << line;
         }
     }
-    ASSERT_FALSE(ticks.empty()) << log.str();
+    ASSERT_FALSE(ticks.empty()) << log;
     for (std::size_t i = 1; i < ticks.size(); ++i) {
-        EXPECT_GT(ticks[i], ticks[i - 1]) << "two figures lines of one moment:\n" << log.str();
+        EXPECT_GT(ticks[i], ticks[i - 1]) << "two figures lines of one moment:\n" << log;
     }
 }
 

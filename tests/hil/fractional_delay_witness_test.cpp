@@ -128,26 +128,16 @@ Demodulated demodulate(const std::vector<double>& x, double frequency_hz, double
     const auto n = static_cast<std::size_t>(std::lround(kDemodulationWindowS * kRateHz));
     for (auto begin = static_cast<std::size_t>(std::lround(from_s * kRateHz));
          begin + n <= x.size(); begin += n) {
-        std::vector<double> index(n), value(n);
-        for (std::size_t i = 0; i < n; ++i) {
-            index[i] = static_cast<double>(i);
-            value[i] = x[begin + i];
-        }
-        const double slope = detail::slope(index, value, 0, n);
-        double mean = 0.0;
-        for (const double v : value) mean += v;
-        mean /= static_cast<double>(n);
+        const std::vector<double> residual = detail::detrended(x, begin, n);
         double in_phase = 0.0, quadrature = 0.0, weights = 0.0;
         for (std::size_t i = 0; i < n; ++i) {
-            const double t = static_cast<double>(i) - 0.5 * static_cast<double>(n - 1);
-            const double detrended = value[i] - mean - slope * t;
             const double hann =
                 0.5 - 0.5 * std::cos(2.0 * std::numbers::pi * static_cast<double>(i) /
                                      static_cast<double>(n - 1));
             const double phase =
                 2.0 * std::numbers::pi * frequency_hz * static_cast<double>(begin + i) / kRateHz;
-            in_phase += hann * detrended * std::cos(phase);
-            quadrature += hann * detrended * std::sin(phase);
+            in_phase += hann * residual[i] * std::cos(phase);
+            quadrature += hann * residual[i] * std::sin(phase);
             weights += hann;
         }
         out.mid_s.push_back((static_cast<double>(begin) + 0.5 * static_cast<double>(n)) / kRateHz);

@@ -54,8 +54,8 @@ inline double slope(const std::vector<double>& x, const std::vector<double>& y, 
     return (n * sxy - sx * sy) / (n * sxx - sx * sx);
 }
 
-/// Peak-to-peak of x[begin, begin + count) after removing its least-squares line.
-inline double detrended_peak_to_peak(const std::vector<double>& x, std::size_t begin,
+/// x[begin, begin + count) with its least-squares line removed.
+inline std::vector<double> detrended(const std::vector<double>& x, std::size_t begin,
                                      std::size_t count) {
     std::vector<double> index(count);
     std::vector<double> value(x.begin() + static_cast<std::ptrdiff_t>(begin),
@@ -67,13 +67,17 @@ inline double detrended_peak_to_peak(const std::vector<double>& x, std::size_t b
         mean_index += index[i] / static_cast<double>(count);
         mean_value += value[i] / static_cast<double>(count);
     }
-    double lo = 0.0, hi = 0.0;
-    for (std::size_t i = 0; i < count; ++i) {
-        const double residual = value[i] - (mean_value + b * (index[i] - mean_index));
-        lo = i == 0 ? residual : std::min(lo, residual);
-        hi = i == 0 ? residual : std::max(hi, residual);
-    }
-    return hi - lo;
+    for (std::size_t i = 0; i < count; ++i) value[i] -= mean_value + b * (index[i] - mean_index);
+    return value;
+}
+
+/// Peak-to-peak of x[begin, begin + count) after removing its least-squares line.
+inline double detrended_peak_to_peak(const std::vector<double>& x, std::size_t begin,
+                                     std::size_t count) {
+    const std::vector<double> residual = detrended(x, begin, count);
+    if (residual.empty()) return 0.0;
+    const auto [lo, hi] = std::minmax_element(residual.begin(), residual.end());
+    return *hi - *lo;
 }
 
 }  // namespace detail
