@@ -1,0 +1,60 @@
+#include "hfw_kinematics.h"
+
+void hfw_motor_map_init(struct hfw_motor_map* map, uint16_t duty_top, uint32_t full_duty_un,
+                        int8_t force_sign) {
+    map->duty_top = duty_top;
+    /* 2^32 duty_top / full_duty_un, rounded; duty_top <= 2^16 keeps it within 48 bits */
+    const uint64_t scaled = ((uint64_t)duty_top << 32) + full_duty_un / 2u;
+    const uint64_t per_un = scaled / full_duty_un;
+    map->duty_per_un = per_un > 0xFFFFFFFFu ? 0xFFFFFFFFu : (uint32_t)per_un;
+    map->force_sign = force_sign < 0 ? -1 : 1;
+}
+
+struct hfw_duty hfw_force_to_duty(const struct hfw_motor_map* map, int32_t force_un) {
+    struct hfw_duty out;
+    const uint8_t negative = force_un < 0;
+    out.direction = negative ^ (map->force_sign < 0);
+    /* |force_un| without negating INT32_MIN */
+    const uint32_t magnitude_un = negative ? (uint32_t)(-(force_un + 1)) + 1u : (uint32_t)force_un;
+    const uint64_t duty = ((uint64_t)magnitude_un * map->duty_per_un + 0x80000000u) >> 32;
+    out.duty = duty > map->duty_top ? map->duty_top : (uint16_t)duty;
+    return out;
+}
+
+void hfw_mr_sensor_init(struct hfw_mr_sensor* s, int16_t counts_per_flip, int16_t flip_threshold) {
+    s->counts_per_flip = counts_per_flip;
+    s->flip_threshold = flip_threshold;
+    s->last_raw = -1;
+    s->flips = 0;
+}
+
+int32_t hfw_mr_sensor_update(struct hfw_mr_sensor* s, int16_t raw) {
+    if (s->last_raw >= 0) {
+        const int16_t step = (int16_t)(raw - s->last_raw);
+        if (step < -s->flip_threshold) ++s->flips; /* climbed past the top: a half turn up */
+        if (step > s->flip_threshold) --s->flips;
+    }
+    s->last_raw = raw;
+    return raw + s->flips * (int32_t)s->counts_per_flip;
+}
+
+int8_t hfw_quadrature_step(uint8_t from, uint8_t to) {
+    /* Gray code A B: 00 -> 01 -> 11 -> 10 -> 00 is +1 */
+    static const int8_t step[16] = {0,
+                                    +1,
+                                    -1,
+                                    HFW_QUADRATURE_ILLEGAL, /* from 00 */
+                                    -1,
+                                    0,
+                                    HFW_QUADRATURE_ILLEGAL,
+                                    +1, /* from 01 */
+                                    +1,
+                                    HFW_QUADRATURE_ILLEGAL,
+                                    0,
+                                    -1, /* from 10 */
+                                    HFW_QUADRATURE_ILLEGAL,
+                                    -1,
+                                    +1,
+                                    0}; /* from 11 */
+    return step[((from & 3u) << 2) | (to & 3u)];
+}
