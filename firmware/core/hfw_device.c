@@ -8,13 +8,12 @@
 static const int32_t kZeroForce[HFW_MAX_AXES] = {0, 0, 0};
 
 void hfw_device_init(struct hfw_device* d, const struct hfw_device_config* config,
-                     hfw_set_force_fn set_force, void* context) {
+                     struct hfw_board board) {
     memset(d, 0, sizeof *d);
     d->config = config;
-    d->set_force = set_force;
-    d->context = context;
+    d->board = board;
     d->watchdog_timeout_us = config->default_watchdog_timeout_us;
-    set_force(context, kZeroForce);
+    board.set_force(board.context, kZeroForce);
 }
 
 /* ---- output: 5.2 (ZOH), 5.4, 5.5 ---- */
@@ -22,7 +21,7 @@ void hfw_device_init(struct hfw_device* d, const struct hfw_device_config* confi
 static void output(struct hfw_device* d, const int32_t force_un[HFW_MAX_AXES], uint8_t active) {
     memcpy(d->force_un, force_un, sizeof d->force_un);
     d->force_active = active;
-    d->set_force(d->context, d->force_un);
+    d->board.set_force(d->board.context, d->force_un);
 }
 
 static void zero_force(struct hfw_device* d) { output(d, kZeroForce, 0); }
@@ -196,7 +195,7 @@ static void on_command(struct hfw_device* d, const uint8_t* payload, uint64_t no
     /* 4.6: this command took effect now, whatever it set (zero too) */
     d->applied_known = 1;
     d->applied_sequence = sequence;
-    d->applied_us = now_us;
+    d->applied_us = d->board.now_us(d->board.context);
     d->force_clamped = clamped;
     d->command_status = status;
     d->command_seen = 1;

@@ -30,14 +30,19 @@ struct hfw_device_config {
     char serial[16]; /* 1 to 16 printable ASCII characters, padded with 0x00 */
 };
 
-/* The motor: sets the force on every axis at once (uN, within the force limit; all zero
-   when the device holds no force). Called in the same call that decided it. */
-typedef void (*hfw_set_force_fn)(void* context, const int32_t force_un[HFW_MAX_AXES]);
+/* The board's side, called by the core:
+   - set_force sets the motor's force on every axis at once (uN, within the force limit; all
+     zero when the device holds no force), in the same call that decided it;
+   - now_us reads the board's clock: the moment a command's output was set (4.6). */
+struct hfw_board {
+    void (*set_force)(void* context, const int32_t force_un[HFW_MAX_AXES]);
+    uint64_t (*now_us)(void* context);
+    void* context;
+};
 
 struct hfw_device {
     const struct hfw_device_config* config;
-    hfw_set_force_fn set_force;
-    void* context;
+    struct hfw_board board;
 
     /* 5.1 the session */
     uint8_t session_open;
@@ -72,7 +77,7 @@ struct hfw_device {
 
 /* Starts with no session and zero force (power-up, 5.1). */
 void hfw_device_init(struct hfw_device* d, const struct hfw_device_config* config,
-                     hfw_set_force_fn set_force, void* context);
+                     struct hfw_board board);
 
 /* What a request needs from the board after hfw_device_receive(). */
 enum hfw_reply {
@@ -81,9 +86,9 @@ enum hfw_reply {
     HFW_REPLY_SAMPLE = 2 /* latch the encoders, then hfw_device_sample() writes the reply */
 };
 
-/* One received frame (COBS already removed), arriving at `now_us`. Applies what it asks
-   (the force, through set_force, before returning) and writes any reply other than a sample
-   to `out` (HFW_MAX_FRAME_SIZE bytes), its size in *out_size. */
+/* One received frame (COBS already removed) whose last byte arrived at `now_us`. Applies
+   what it asks (the force, through set_force, before returning) and writes any reply other than a
+   sample to `out` (HFW_MAX_FRAME_SIZE bytes), its size in *out_size. */
 enum hfw_reply hfw_device_receive(struct hfw_device* d, const uint8_t* frame, size_t size,
                                   uint64_t now_us, uint8_t* out, size_t* out_size);
 

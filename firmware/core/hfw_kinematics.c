@@ -26,16 +26,23 @@ void hfw_mr_sensor_init(struct hfw_mr_sensor* s, int16_t counts_per_flip, int16_
     s->flip_threshold = flip_threshold;
     s->last_raw = -1;
     s->flips = 0;
+    s->offset = 0;
 }
 
 int32_t hfw_mr_sensor_update(struct hfw_mr_sensor* s, int16_t raw) {
     if (s->last_raw >= 0) {
         const int16_t step = (int16_t)(raw - s->last_raw);
-        if (step < -s->flip_threshold) ++s->flips; /* climbed past the top: a half turn up */
-        if (step > s->flip_threshold) --s->flips;
+        if (step < -s->flip_threshold) { /* climbed past the top: a half turn up */
+            ++s->flips;
+            s->offset += s->counts_per_flip;
+        }
+        if (step > s->flip_threshold) {
+            --s->flips;
+            s->offset -= s->counts_per_flip;
+        }
     }
     s->last_raw = raw;
-    return raw + s->flips * (int32_t)s->counts_per_flip;
+    return raw + s->offset;
 }
 
 int8_t hfw_quadrature_step(uint8_t from, uint8_t to) {

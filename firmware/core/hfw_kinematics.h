@@ -45,6 +45,7 @@ struct hfw_mr_sensor {
     int16_t flip_threshold;
     int16_t last_raw; /* -1 before the first reading */
     int32_t flips;
+    int32_t offset; /* flips * counts_per_flip, kept so that a reading costs no multiply */
 };
 
 void hfw_mr_sensor_init(struct hfw_mr_sensor* s, int16_t counts_per_flip, int16_t flip_threshold);

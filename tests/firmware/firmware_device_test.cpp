@@ -34,9 +34,17 @@ struct Motor {
     std::array<std::int32_t, 3> force_un() const { return calls.back(); }
 };
 
+/// The board the core sees: the motor and the test's clock.
+struct Board {
+    Motor motor;
+    std::uint64_t now_us = 0;
+};
+
 void record_force(void* context, const std::int32_t force_un[HFW_MAX_AXES]) {
-    static_cast<Motor*>(context)->calls.push_back({force_un[0], force_un[1], force_un[2]});
+    static_cast<Board*>(context)->motor.calls.push_back({force_un[0], force_un[1], force_un[2]});
 }
+
+std::uint64_t board_clock(void* context) { return static_cast<Board*>(context)->now_us; }
 
 hfw_device_config make_config(std::uint8_t axes, std::uint8_t max_version = 2) {
     hfw_device_config config{};
@@ -73,7 +81,7 @@ class FirmwareDevice : public ::testing::Test {
   protected:
     explicit FirmwareDevice(std::uint8_t axes = 1, std::uint8_t max_version = 2)
         : config_(make_config(axes, max_version)) {
-        hfw_device_init(&device_, &config_, record_force, &motor_);
+        hfw_device_init(&device_, &config_, {record_force, board_clock, &board_});
     }
 
     struct Reply {
@@ -89,6 +97,7 @@ class FirmwareDevice : public ::testing::Test {
         Reply reply;
         std::array<std::uint8_t, HFW_MAX_FRAME_SIZE> out{};
         std::size_t size = 0;
+        board_.now_us = now_us_;  // the output is set at the arrival instant
         reply.kind =
             hfw_device_receive(&device_, reinterpret_cast<const std::uint8_t*>(request.data()),
                                request.size(), now_us_, out.data(), &size);
@@ -152,7 +161,8 @@ class FirmwareDevice : public ::testing::Test {
 
     hfw_device_config config_;
     hfw_device device_{};
-    Motor motor_;
+    Board board_;
+    Motor& motor_ = board_.motor;
     std::uint64_t now_us_ = kStartUs;
     std::uint8_t version_ = 2;
 };

@@ -4,8 +4,8 @@
    The loop: bytes from the UART ring are COBS-decoded as they come; a whole frame goes to
    the core, which sets the motor before it returns; a command or poll is answered with the
    counts latched right after. Between frames the loop checks the command watchdog and sleeps
-   until the next interrupt (a byte, an ADC conversion every 52 us, the clock). The MCU's own
-   watchdog resets a hung firmware within 15 ms, and a reset leaves the motor off. */
+   until the next interrupt (a byte, an ADC conversion, the clock's tick every period). The MCU's
+   own watchdog resets a hung firmware within 15 ms, and a reset leaves the motor off. */
 #include <avr/interrupt.h>
 #include <avr/io.h>
 #include <avr/sleep.h>
@@ -41,6 +41,11 @@ static void set_force(void* context, const int32_t force_un[HFW_MAX_AXES]) {
     motor_set(duty.duty, duty.direction);
 }
 
+static uint64_t now_us(void* context) {
+    (void)context;
+    return clock_now_us();
+}
+
 static void answer(const uint8_t* frame, uint8_t size) {
     size_t reply_size = 0;
     const enum hfw_reply kind =
@@ -62,7 +67,8 @@ int main(void) {
     motor_init(); /* zero force before anything else */
     hfw_motor_map_init(&motor_map, 256u, (uint32_t)(HFW_FULL_DUTY_FORCE_N * 1e6), HFW_FORCE_SIGN);
     config.counts_per_meter_bits = hfw_f64_bits(position_counts_per_meter());
-    hfw_device_init(&device, &config, set_force, 0);
+    const struct hfw_board board = {.set_force = set_force, .now_us = now_us, .context = 0};
+    hfw_device_init(&device, &config, board);
     hfw_cobs_reset(&receiver);
     clock_init();
     uart_init();

@@ -1,6 +1,7 @@
 /* The Hapkit's magnetoresistive angle sensor on A2: ADC conversions run back to back
-   (prescaler 64: 250 kHz, 13 cycles, 52 us each) and each one is unwrapped over the sensor's
-   flips in the interrupt, so no flip is missed between two latches. */
+   (prescaler 128: a 125 kHz ADC clock, within the 50-200 kHz that full 10-bit accuracy needs;
+   13 cycles, 104 us each) and each one is unwrapped over the sensor's flips in the
+   interrupt, so no flip is missed between two latches. */
 #include <avr/interrupt.h>
 #include <avr/io.h>
 
@@ -17,7 +18,7 @@ static uint8_t latched_conversions; /* `conversions` at the last latch that saw 
 static uint64_t fresh_us;           /* the time of that latch */
 
 /* Two conversions' time and some: no new reading for this long means the ADC stopped. */
-#define STALE_AFTER_US 120u
+#define STALE_AFTER_US 250u
 
 ISR(ADC_vect) {
     unwrapped = hfw_mr_sensor_update(&sensor, (int16_t)ADC);
@@ -29,7 +30,7 @@ void position_init(void) {
     ADMUX = _BV(REFS0) | 2u; /* AVcc reference, channel 2 (A2) */
     DIDR0 = _BV(ADC2D);      /* no digital input buffer on A2 */
     ADCSRB = 0;              /* free running */
-    ADCSRA = _BV(ADEN) | _BV(ADSC) | _BV(ADATE) | _BV(ADIE) | _BV(ADPS2) | _BV(ADPS1);
+    ADCSRA = _BV(ADEN) | _BV(ADSC) | _BV(ADATE) | _BV(ADIE) | _BV(ADPS2) | _BV(ADPS1) | _BV(ADPS0);
     sei();
     while (conversions < 2u) {
     } /* the first conversion after enabling takes 25 cycles: use the second */

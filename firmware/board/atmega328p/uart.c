@@ -31,8 +31,8 @@ ISR(USART_UDRE_vect) {
 }
 
 void uart_init(void) {
+    UCSR0A = _BV(U2X0); /* before UBRR0: simavr takes the rate from both when UBRR0 is written */
     UBRR0 = 0;
-    UCSR0A = _BV(U2X0);
     UCSR0C = _BV(UCSZ01) | _BV(UCSZ00); /* 8N1 */
     UCSR0B = _BV(RXEN0) | _BV(TXEN0) | _BV(RXCIE0);
 }

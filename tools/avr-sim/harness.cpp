@@ -1,0 +1,161 @@
+#include "harness.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+namespace hapticd::avr_sim {
+namespace {
+
+using SteadyClock = std::chrono::steady_clock;
+
+/// Real time: at most this much emulated time between two looks at the host (20 us: a
+/// host byte waits no longer than that to start onto the line).
+constexpr std::uint64_t kSliceCycles = EmulatedBoard::kCpuHz / 50'000;
+/// Lockstep: a request that gets no reply within this many periods is given up on.
+constexpr int kLockstepMaxPeriods = 10;
+
+}  // namespace
+
+Harness::Harness(EmulatedBoard& board, PtyLink& link, const HarnessOptions& options)
+    : board_(board), link_(link), options_(options) {
+    if (!options_.record_path.empty()) {
+        record_.open(options_.record_path);
+        if (!record_) throw std::runtime_error("cannot write --record " + options_.record_path);
+        record_ << "time_s,duty,direction,motor_force_n,position_m,velocity_mps,mr_adc\n";
+        board_.on_step([this](const EmulatedBoard& b, MotorPins pins) { record(b, pins); });
+    }
+    if (options_.duration_s > 0.0) {
+        end_cycle_ =
+            board_.cycle() +
+            static_cast<std::uint64_t>(std::llround(options_.duration_s * EmulatedBoard::kCpuHz));
+    }
+}
+
+bool Harness::done() const { return end_cycle_ != 0 && board_.cycle() >= end_cycle_; }
+
+void Harness::record(const EmulatedBoard& board, MotorPins pins) {
+    const PaddlePlant& plant = board.plant();
+    const bool changed =
+        pins.duty != recorded_pins_.duty || pins.direction_high != recorded_pins_.direction_high;
+    if (!changed && plant.time_s() < next_record_s_) return;
+    recorded_pins_ = pins;
+    next_record_s_ = plant.time_s() + options_.record_interval_s;
+    record_ << plant.time_s() << ',' << pins.duty << ',' << (pins.direction_high ? 1 : 0) << ','
+            << plant.motor_force_n() << ',' << plant.position_m() << ',' << plant.velocity_mps()
+            << ',' << plant.mr_adc_counts() << '\n';
+}
+
+bool Harness::take_host_bytes() {
+    std::uint8_t bytes[256];
+    bool request = false;
+    for (std::size_t n; (n = link_.read(bytes, sizeof bytes)) > 0;) {
+        for (std::size_t i = 0; i < n; ++i) {
+            const std::uint64_t in_cycle = board_.send_to_board(bytes[i]);
+            if (bytes[i] != 0x00) {
+                host_frame_open_ = true;
+            } else if (host_frame_open_) {
+                host_frame_open_ = false;
+                request = true;
+                ++figures_.requests;
+                request_in_cycle_ = in_cycle;
+                request_pending_ = true;
+                board_.profile_from(in_cycle);
+            }
+        }
+    }
+    return request;
+}
+
+bool Harness::pass_board_bytes() {
+    const std::vector<LineByte> sent = board_.take_sent();
+    if (sent.empty()) return false;
+    std::vector<std::uint8_t> bytes;
+    bytes.reserve(sent.size());
+    bool reply = false;
+    for (const LineByte& b : sent) {
+        bytes.push_back(b.value);
+        if (b.value != 0x00) {
+            if (!board_frame_open_) reply_first_cycle_ = b.done_cycle - board_.cycles_per_byte();
+            board_frame_open_ = true;
+        } else if (board_frame_open_) {
+            board_frame_open_ = false;
+            reply = true;
+            ++figures_.replies;
+            if (request_pending_) {
+                request_pending_ = false;
+                figures_.latency_us.push_back(
+                    static_cast<double>(b.done_cycle - request_in_cycle_) * 1e6 /
+                    EmulatedBoard::kCpuHz);
+                figures_.compute_us.push_back((static_cast<double>(reply_first_cycle_) -
+                                               static_cast<double>(request_in_cycle_)) *
+                                              1e6 / EmulatedBoard::kCpuHz);
+            }
+        }
+    }
+    link_.write(bytes.data(), bytes.size());
+    return reply;
+}
+
+void Harness::run_real_time(const std::atomic<bool>& stop) {
+    const SteadyClock::time_point start = SteadyClock::now();
+    const std::uint64_t start_cycle = board_.cycle();
+    while (!stop.load() && !done()) {
+        const double wall_s = std::chrono::duration<double>(SteadyClock::now() - start).count();
+        const auto due = start_cycle + static_cast<std::uint64_t>(wall_s * EmulatedBoard::kCpuHz);
+        if (board_.cycle() < due) {
+            figures_.lag_max_s =
+                std::max(figures_.lag_max_s,
+                         static_cast<double>(due - board_.cycle()) / EmulatedBoard::kCpuHz);
+            std::uint64_t until = std::min(due, board_.cycle() + kSliceCycles);
+            if (end_cycle_ != 0) until = std::min(until, end_cycle_);
+            board_.run_until(until);
+            pass_board_bytes();
+            take_host_bytes();
+            continue;
+        }
+        // Ahead of the wall clock: wait for it, or for the host.
+        const auto ahead_ns = static_cast<std::int64_t>(static_cast<double>(board_.cycle() - due) *
+                                                        1e9 / EmulatedBoard::kCpuHz);
+        if (link_.wait_readable(std::max<std::int64_t>(ahead_ns, 20'000))) take_host_bytes();
+    }
+}
+
+void Harness::run_lockstep(const std::atomic<bool>& stop) {
+    const auto period_cycles =
+        static_cast<std::uint64_t>(std::llround(options_.period_s * EmulatedBoard::kCpuHz));
+    while (!stop.load() && !done()) {
+        // Emulated time stands still until a whole request has come.
+        if (!take_host_bytes()) {
+            link_.wait_readable(100'000'000);
+            continue;
+        }
+        // One period of emulated time per request, longer while its reply is still going
+        // out (up to kLockstepMaxPeriods).
+        const std::uint64_t start = board_.cycle();
+        bool replied = false;
+        for (std::uint64_t until = start + period_cycles; !done();) {
+            board_.run_until(std::min(until, start + kLockstepMaxPeriods * period_cycles));
+            replied = pass_board_bytes() || replied;
+            if (board_.cycle() >= start + kLockstepMaxPeriods * period_cycles) break;
+            if (board_.cycle() >= until && replied) break;
+            if (board_.cycle() >= until) until += period_cycles / 10;
+        }
+    }
+}
+
+HarnessFigures Harness::run(const std::atomic<bool>& stop) {
+    const SteadyClock::time_point start = SteadyClock::now();
+    const std::uint64_t start_cycle = board_.cycle();
+    if (options_.clock == Clock::lockstep) {
+        run_lockstep(stop);
+    } else {
+        run_real_time(stop);
+    }
+    figures_.emulated_s = static_cast<double>(board_.cycle() - start_cycle) / EmulatedBoard::kCpuHz;
+    figures_.wall_s = std::chrono::duration<double>(SteadyClock::now() - start).count();
+    return figures_;
+}
+
+}  // namespace hapticd::avr_sim

@@ -1,0 +1,75 @@
+// hapticd-avr-sim's run: the emulated board (emulated_board.hpp) behind the pty
+// (pty_link.hpp), on the harness's clock, with the device's latency measured cycle-exact.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "emulated_board.hpp"
+#include "pty_link.hpp"
+
+namespace hapticd::avr_sim {
+
+enum class Clock {
+    real_time,  ///< emulated time held to the wall clock
+    lockstep,   ///< one period of emulated time per request (hapticd --lockstep)
+};
+
+struct HarnessOptions {
+    Clock clock = Clock::real_time;
+    double period_s = 1e-3;   ///< lockstep: emulated time per request
+    double duration_s = 0.0;  ///< emulated seconds to run; 0: until SIGINT or SIGTERM
+    std::string record_path;  ///< the pins and the plant, as CSV; empty: none
+    double record_interval_s = 1e-4;
+};
+
+/// What a run measured. Device latency: from the last byte of a request in (its delimiter
+/// off the line) to the last byte of its reply out, in emulated time.
+struct HarnessFigures {
+    std::uint64_t requests = 0;
+    std::uint64_t replies = 0;
+    std::vector<double> latency_us;
+    /// Of that, from the request's last byte in to the reply's first byte written: the
+    /// firmware's own time, without the reply's time on the line.
+    std::vector<double> compute_us;
+    double emulated_s = 0.0;
+    double wall_s = 0.0;
+    double lag_max_s = 0.0;  ///< real time: how far emulated time fell behind the wall clock
+};
+
+class Harness {
+  public:
+    Harness(EmulatedBoard& board, PtyLink& link, const HarnessOptions& options);
+
+    /// Runs until the duration or `stop`; returns the figures.
+    HarnessFigures run(const std::atomic<bool>& stop);
+
+  private:
+    void run_real_time(const std::atomic<bool>& stop);
+    void run_lockstep(const std::atomic<bool>& stop);
+    /// Host bytes to the board; true when a whole request (a delimiter after data) came.
+    bool take_host_bytes();
+    /// Board bytes that have left the line to the host; true when a reply ended.
+    bool pass_board_bytes();
+    void record(const EmulatedBoard& board, MotorPins pins);
+    bool done() const;
+
+    EmulatedBoard& board_;
+    PtyLink& link_;
+    HarnessOptions options_;
+    HarnessFigures figures_;
+    std::uint64_t end_cycle_ = 0;
+    bool host_frame_open_ = false;
+    bool board_frame_open_ = false;
+    std::uint64_t reply_first_cycle_ = 0;
+    std::uint64_t request_in_cycle_ = 0;
+    bool request_pending_ = false;
+    std::ofstream record_;
+    double next_record_s_ = 0.0;
+    MotorPins recorded_pins_{-1.0, false};
+};
+
+}  // namespace hapticd::avr_sim
