@@ -9,6 +9,11 @@
 #define HFW_FIRMWARE_VERSION 0x00010000 /* 1.0.0 */
 #define HFW_PERIOD_US 1000              /* 1 kHz */
 #define HFW_WATCHDOG_TIMEOUT_US 20000   /* the default after hello: 20 periods */
+/* 1: in a version-3 session the board paces the loop, answering each command at its next
+   period boundary (docs/protocol.md 5.8); 0: it answers at once, as a version-2 device.
+   Off until the firmware's answer fits the period with room for the host (docs/firmware.md,
+   "Timing"). */
+#define HFW_PACED 0
 
 /* The handle: a capstan of radius r_p on the motor shaft drives a sector of radius r_s; the
    handle is r_h long from the sector's pivot. A motor angle dθ moves the handle by

@@ -29,36 +29,3 @@ void hfw_cobs_reset(struct hfw_cobs_decoder* d) {
     d->encoded = 0;
     d->broken = 0;
 }
-
-static void append(struct hfw_cobs_decoder* d, uint8_t byte) {
-    if (d->size == HFW_MAX_FRAME_SIZE) {
-        d->broken = 1;
-        return;
-    }
-    d->frame[d->size++] = byte;
-}
-
-int hfw_cobs_push(struct hfw_cobs_decoder* d, uint8_t byte) {
-    if (byte == 0x00) {
-        const int whole = d->encoded > 0 && !d->broken && d->remaining == 0;
-        if (d->encoded > 0 && !whole) ++d->dropped;
-        d->remaining = 0;
-        d->zero_pending = 0;
-        d->encoded = 0;
-        d->broken = 0;
-        if (!whole) d->size = 0;
-        return whole;
-    }
-    if (d->encoded == 0) d->size = 0; /* a new frame: the last one is no longer kept */
-    if (d->encoded < 0xFF) ++d->encoded;
-    if (d->broken) return 0;
-    if (d->remaining == 0) { /* a code byte */
-        if (d->zero_pending) append(d, 0x00);
-        d->zero_pending = byte != 0xFF;
-        d->remaining = (uint8_t)(byte - 1);
-        return 0;
-    }
-    append(d, byte);
-    --d->remaining;
-    return 0;
-}

@@ -137,7 +137,7 @@ static enum hfw_reply on_hello(struct hfw_device* d, uint32_t session, const uin
     const struct hfw_device_config* c = d->config;
     uint8_t* p = out + HFW_HEADER_SIZE;
     p[0] = c->axes;
-    p[1] = 0;
+    p[1] = hfw_device_paced(d) ? HFW_IDENTITY_PACED : 0u; /* reserved before version 3 */
     hfw_store_u16(p + 2, 0);
     hfw_store_u32(p + 4, (uint32_t)c->force_limit_un);
     hfw_store_u64(p + 8, c->counts_per_meter_bits);
@@ -172,7 +172,8 @@ static void on_command(struct hfw_device* d, const uint8_t* payload, uint64_t no
     if (d->command_seen) {
         if (sequence != d->command_sequence + 1u) status |= HFW_STATUS_COMMAND_GAP;
         /* more than 1.5 periods since the last: that force was held too long */
-        if (2u * (now_us - d->command_arrival_us) > 3u * (uint64_t)d->config->period_us) {
+        const uint32_t late_us = d->config->period_us + d->config->period_us / 2u;
+        if (now_us - d->command_arrival_us > late_us) {
             status |= HFW_STATUS_COMMAND_LATE;
         }
     }
@@ -193,7 +194,9 @@ static void on_command(struct hfw_device* d, const uint8_t* payload, uint64_t no
     }
     output(d, force_un, active);
     /* 4.6: this command took effect now, whatever it set (zero too) */
-    d->applied_known = 1;
+    d->previous_sequence = d->applied_sequence;
+    d->previous_us = d->applied_us;
+    d->applied_known = d->applied_known == 0 ? 1 : 2;
     d->applied_sequence = sequence;
     d->applied_us = d->board.now_us(d->board.context);
     d->force_clamped = clamped;
@@ -285,10 +288,20 @@ size_t hfw_device_sample(struct hfw_device* d, const int64_t counts[HFW_MAX_AXES
     if (d->version >= 2) {
         lag = HFW_APPLIED_LAG_NONE;
         age_us = HFW_APPLIED_AGE_UNKNOWN;
-        const uint32_t behind = d->command_sequence - d->applied_sequence;
-        if (d->applied_known && behind <= HFW_MAX_APPLIED_LAG && d->applied_us <= time_us) {
+        /* the command in effect at time_us: the last one, or the one before if the last took
+           effect after time_us */
+        uint32_t sequence = d->applied_sequence;
+        uint64_t applied_us = d->applied_us;
+        uint8_t known = d->applied_known > 0;
+        if (known && applied_us > time_us) {
+            sequence = d->previous_sequence;
+            applied_us = d->previous_us;
+            known = d->applied_known > 1 && applied_us <= time_us;
+        }
+        const uint32_t behind = d->command_sequence - sequence;
+        if (known && behind <= HFW_MAX_APPLIED_LAG) {
             lag = (uint8_t)behind;
-            const uint64_t age = time_us - d->applied_us;
+            const uint64_t age = time_us - applied_us;
             age_us = age >= HFW_APPLIED_AGE_UNKNOWN ? HFW_APPLIED_AGE_UNKNOWN : (uint16_t)age;
         }
     }
@@ -296,6 +309,10 @@ size_t hfw_device_sample(struct hfw_device* d, const int64_t counts[HFW_MAX_AXES
     hfw_store_u16(p + 22, age_us);
     for (uint8_t i = 0; i < axes; ++i) hfw_store_u64(p + 24 + (size_t)8 * i, (uint64_t)counts[i]);
     return finish(d->version, HFW_SAMPLE, (uint8_t)HFW_SAMPLE_PAYLOAD(axes), d->session, out);
+}
+
+int hfw_device_paced(const struct hfw_device* d) {
+    return d->session_open && d->version >= 3 && d->config->paced;
 }
 
 /* ---- 5.4, 5.5 ---- */

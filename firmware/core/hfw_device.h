@@ -20,9 +20,10 @@ extern "C" {
 
 /* What identity reports, fixed for the firmware's build (firmware/config/). */
 struct hfw_device_config {
-    uint8_t axes;                         /* 1..3 */
-    uint8_t max_version;                  /* the newest version spoken: 1 or 2 */
-    int32_t force_limit_un;               /* > 0; commands beyond it are clamped */
+    uint8_t axes;           /* 1..3 */
+    uint8_t max_version;    /* the newest version spoken: 1 to 3 */
+    uint8_t paced;          /* in a version-3 session, answer at the next period boundary (5.8) */
+    int32_t force_limit_un; /* > 0; commands beyond it are clamped */
     uint64_t counts_per_meter_bits;       /* IEEE 754 binary64 bits (hfw_f64_bits) */
     uint32_t period_us;                   /* the servo period the host must keep */
     uint32_t default_watchdog_timeout_us; /* in [2 period_us, 1 s] */
@@ -60,10 +61,13 @@ struct hfw_device {
     uint8_t force_clamped;
     uint16_t command_status; /* command_late, command_gap for the sample answering it */
 
-    /* 4.6 version 2: the command in effect and when it took effect */
-    uint8_t applied_known;
+    /* 4.6 version 2: the last two commands that took effect, and when; a sample latched
+       before the last one took effect names the one before */
+    uint8_t applied_known; /* how many of the two are known: 0..2 */
     uint32_t applied_sequence;
     uint64_t applied_us;
+    uint32_t previous_sequence;
+    uint64_t previous_us;
 
     /* 5.5 faults: latched bits, and the causes still present (cleared only when gone) */
     uint16_t latched_faults;
@@ -92,11 +96,16 @@ enum hfw_reply {
 enum hfw_reply hfw_device_receive(struct hfw_device* d, const uint8_t* frame, size_t size,
                                   uint64_t now_us, uint8_t* out, size_t* out_size);
 
-/* The sample answering the last command or poll, from counts latched at `time_us` (after
-   the force took effect); `sensor_status` holds HFW_STATUS_ENCODER_STALE/JUMP as the board
+/* The sample answering the last command or poll, from counts sampled at `time_us` (in
+   version 1, after the force took effect; in versions 2 and 3 the sample names the command
+   that was in effect then); `sensor_status` holds HFW_STATUS_ENCODER_STALE/JUMP as the board
    saw them. Writes the frame to `out` and returns its size. */
 size_t hfw_device_sample(struct hfw_device* d, const int64_t counts[HFW_MAX_AXES], uint64_t time_us,
                          uint16_t sensor_status, uint8_t* out);
+
+/* 5.8: whether this session is paced by the device (version 3 and config->paced): every
+   command and poll is then answered at the next period boundary, with counts sampled for it. */
+int hfw_device_paced(const struct hfw_device* d);
 
 /* 5.4: call at least once a period (and whenever convenient). Zeroes the force and latches
    the watchdog fault at the first call at or after the timeout. Returns 1 when it tripped. */

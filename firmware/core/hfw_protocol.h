@@ -12,9 +12,9 @@
 #define HFW_MAX_FRAME_SIZE (HFW_MIN_FRAME_SIZE + HFW_MAX_PAYLOAD_SIZE)
 #define HFW_MAX_AXES 3u
 
-/* 3.2 versions: this firmware speaks 1 and 2; hello and error always carry 1. */
+/* 3.2 versions: this firmware speaks 1 to 3; hello and error always carry 1. */
 #define HFW_MIN_VERSION 1u
-#define HFW_MAX_VERSION 2u
+#define HFW_MAX_VERSION 3u
 #define HFW_FROZEN_VERSION 1u
 
 /* 4 message types */
@@ -36,6 +36,9 @@
 #define HFW_COMMAND_PAYLOAD(axes) (8u + 4u * (axes))
 #define HFW_SAMPLE_PAYLOAD(axes) (24u + 8u * (axes))
 #define HFW_ERROR_PAYLOAD 8u
+
+/* 4.2 identity flags (version 3) */
+#define HFW_IDENTITY_PACED 0x01u
 
 /* 4.5 command flags */
 #define HFW_COMMAND_ENABLE 0x01u

@@ -4,6 +4,7 @@
 #define HFW_WIRE_H
 
 #include <stdint.h>
+#include <string.h>
 
 static inline uint16_t hfw_load_u16(const uint8_t* p) {
     return (uint16_t)(p[0] | ((uint16_t)p[1] << 8));
@@ -26,8 +27,13 @@ static inline void hfw_store_u32(uint8_t* p, uint32_t v) {
 }
 
 static inline void hfw_store_u64(uint8_t* p, uint64_t v) {
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+    /* the wire's order already (the AVR, x86): no 64-bit shifts, which avr-gcc calls out for */
+    memcpy(p, &v, sizeof v);
+#else
     hfw_store_u32(p, (uint32_t)v);
     hfw_store_u32(p + 4, (uint32_t)(v >> 32));
+#endif
 }
 
 #endif

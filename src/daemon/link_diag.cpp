@@ -155,6 +155,7 @@ DiagReport run_link_diag(const Config& config, const DiagOptions& options, std::
     report.rate_hz = config.servo.rate_hz;
     report.lockstep = options.lockstep;
     report.samples_at_read = info.samples_at_read;
+    report.paced = info.paces_loop;
     report.protocol_version = info.protocol_version;
     report.configured_delay_s = config.device.model_delay_s;
     const auto period_ns = static_cast<std::int64_t>(std::llround(1e9 / config.servo.rate_hz));
@@ -267,7 +268,7 @@ DiagReport run_link_diag(const Config& config, const DiagOptions& options, std::
     const std::int64_t start_ns = servo::monotonic_now_ns();
     std::int64_t deadline_ns = start_ns;
     for (std::uint64_t i = 0; i < exchanges; ++i) {
-        if (!options.lockstep) {
+        if (!options.lockstep && !info.paces_loop) {
             deadline_ns += period_ns;
             if (servo::monotonic_now_ns() > deadline_ns) {
                 ++report.overruns;
@@ -417,7 +418,7 @@ DiagVerdict DiagReport::verdict() const {
     const std::uint64_t bad_acks = bad_ack_command + bad_ack_time + acausal;
     std::ostringstream s;
     if (replies == 0) return {Level::fail, "FAIL: the device never answered"};
-    if (rtt_p99_us > 0.3 * period_us) {
+    if (!paced && rtt_p99_us > 0.3 * period_us) {
         s << std::fixed << std::setprecision(0) << "WARN: p99 round trip " << rtt_p99_us
           << " us is over 30 % of the " << period_us
           << " us period; replies will miss the tick (serial: FTDI latency timer? "
@@ -452,7 +453,11 @@ std::string diag_text(const DiagReport& r) {
     const auto percent = [&](std::uint64_t n) { return r.percent_of_exchanges(n); };
     s << "link: " << r.plugin << (r.serial.empty() ? "" : " serial " + r.serial) << ", "
       << servo::axes_text(r.axes) << ", " << std::setprecision(0) << r.rate_hz << " Hz, "
-      << r.exchanges << " exchanges in " << std::setprecision(2) << r.duration_s << " s\n";
+      << r.exchanges << " exchanges in " << std::setprecision(2) << r.duration_s << " s"
+      << (r.paced && !r.lockstep ? ", paced by the device (each round trip includes the wait for "
+                                   "its period boundary)"
+                                 : "")
+      << "\n";
     s << std::setprecision(1) << "round trip (write -> reply), us: p50 " << r.rtt_p50_us << "  p90 "
       << r.rtt_p90_us << "  p99 " << r.rtt_p99_us << "  p99.9 " << r.rtt_p999_us << "  max "
       << r.rtt_max_us << "  mean " << r.rtt_mean_us << "\n";
@@ -512,6 +517,7 @@ std::string diag_json(const DiagReport& r) {
     j["disconnects"] = r.disconnects;
     j["errors"] = r.errors;
     j["host_overruns"] = r.overruns;
+    j["paced_by_device"] = r.paced;
     j["clock_drift_ppm"] =
         r.clock_fit ? nlohmann::ordered_json(r.clock_drift_ppm) : nlohmann::ordered_json(nullptr);
     j["clock_jitter_us"] =

@@ -55,8 +55,9 @@ class Host {
     }
     void send_raw(const Frame& frame) { ASSERT_EQ(link_.send(frame), LinkResult::ok); }
 
-    /// The next reply within `timeout_ms` of wall time, decoded; nullopt if none came.
-    std::optional<protocol::Message> receive(int timeout_ms = 200) {
+    /// The next reply within `timeout_ms` of wall time, decoded; nullopt if none came. The
+    /// default is long: a loaded host may hold the emulation back, never the reverse.
+    std::optional<protocol::Message> receive(int timeout_ms = 2000) {
         std::array<std::byte, protocol::kMaxFrameSize> frame{};
         std::size_t size = 0;
         const std::int64_t deadline = device::link::monotonic_now_ns() + timeout_ms * 1'000'000LL;

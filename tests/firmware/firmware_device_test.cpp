@@ -172,6 +172,14 @@ class FirmwareDevice3Axes : public FirmwareDevice {
     FirmwareDevice3Axes() : FirmwareDevice(3) {}
 };
 
+class FirmwareDevicePaced : public FirmwareDevice {
+  protected:
+    FirmwareDevicePaced() : FirmwareDevice(1, 3) {
+        config_.paced = 1;
+        version_ = 3;
+    }
+};
+
 class FirmwareDeviceVersion1 : public FirmwareDevice {
   protected:
     FirmwareDeviceVersion1() : FirmwareDevice(1, 1) { version_ = 1; }
@@ -264,6 +272,24 @@ TEST_F(FirmwareDeviceVersion1, AVersion1FirmwareAnswersInVersion1AndSaysNothingO
     EXPECT_EQ(report.detail, 1u | (1u << 8));
 }
 
+TEST_F(FirmwareDevicePaced, AVersion3SessionSaysTheBoardPacesTheLoop) {
+    const protocol::Identity identity = hello(kSession, 1, 3);
+    EXPECT_EQ(identity.version, 3);
+    EXPECT_TRUE(identity.paced());
+    EXPECT_EQ(hfw_device_paced(&device_), 1);
+    EXPECT_EQ(send_command(1, 1000).version, 3);
+    // A host that speaks only up to version 2 gets a version-2 session, which cannot say it:
+    // the board then answers at once.
+    const protocol::Identity older = hello(kSession + 1, 1, 2);
+    EXPECT_EQ(older.version, 2);
+    EXPECT_FALSE(older.paced());
+    EXPECT_EQ(hfw_device_paced(&device_), 0);
+    // After bye there is no session to pace.
+    hello(kSession, 1, 3);
+    send(encoded(in_session(protocol::Bye{})));
+    EXPECT_EQ(hfw_device_paced(&device_), 0);
+}
+
 TEST_F(FirmwareDevice, CommandsAreAppliedAtOnceHeldAndClampedToTheLimit) {
     hello();
     auto sample = send_command(1, 1'500'000);
@@ -322,6 +348,41 @@ TEST_F(FirmwareDevice, NamesTheCommandInEffectAndWhenItTookEffect) {
     now_us_ += 70'000;
     sample = expect<protocol::EncoderSample>(send(encoded(in_session(protocol::Poll{}))));
     EXPECT_EQ(sample.applied_lag, 0);
+    EXPECT_EQ(sample.applied_age_us, protocol::kAppliedAgeUnknown);
+}
+
+TEST_F(FirmwareDevice, ASampleTakenBeforeTheLastCommandTookEffectNamesTheOneBefore) {
+    // A reading sampled for the period boundary, answered after a later command took effect
+    // (a command that came between the sample and its answer): the command in effect when
+    // the counts were sampled was the one before, and the sample says so.
+    hello();
+    const std::uint64_t first_us = now_us_;
+    send_command(1, 1000);
+    now_us_ = first_us + 1000;
+    const std::uint64_t second_us = now_us_;
+    std::array<std::uint8_t, HFW_MAX_FRAME_SIZE> out{};
+    std::size_t size = 0;
+    const Frame second = encoded(command(2, 2000));
+    board_.now_us = second_us;
+    ASSERT_EQ(hfw_device_receive(&device_, reinterpret_cast<const std::uint8_t*>(second.data()),
+                                 second.size(), second_us, out.data(), &size),
+              HFW_REPLY_SAMPLE);
+    const std::int64_t counts[3] = {7, 0, 0};
+    size = hfw_device_sample(&device_, counts, second_us - 40, 0, out.data());
+    const auto* begin = reinterpret_cast<const std::byte*>(out.data());
+    protocol::EncoderSample sample;
+    ASSERT_EQ(protocol::decode(std::span<const std::byte>(begin, size), sample),
+              protocol::Error::none);
+    EXPECT_EQ(sample.command_sequence, 2u);
+    EXPECT_EQ(sample.applied_lag, 1);
+    EXPECT_EQ(sample.time_us - sample.applied_age_us, first_us);
+    // Before the session's first command took effect, none is named.
+    hello(kSession);
+    send_command(1, 1000);
+    size = hfw_device_sample(&device_, counts, now_us_ - 100, 0, out.data());
+    ASSERT_EQ(protocol::decode(std::span<const std::byte>(begin, size), sample),
+              protocol::Error::none);
+    EXPECT_EQ(sample.applied_lag, protocol::kAppliedLagNone);
     EXPECT_EQ(sample.applied_age_us, protocol::kAppliedAgeUnknown);
 }
 

@@ -4,10 +4,14 @@
 #include <avr/io.h>
 
 #include "hfw_config.h"
+#include "position.h"
 
 #if F_CPU != 16000000UL
 #error "clock.c counts 0.5 us ticks: F_CPU must be 16 MHz"
 #endif
+
+#define TICKS_PER_US 2u
+#define PERIOD_TICKS ((uint16_t)(TICKS_PER_US * HFW_PERIOD_US))
 
 /* The microseconds at the last overflow: 65536 ticks are 32,768 us. Kept whole so that
    reading the clock costs an add, not a 64-bit shift (a library call on the AVR). */
@@ -15,16 +19,32 @@ static volatile uint64_t overflow_us;
 
 ISR(TIMER1_OVF_vect) { overflow_us += 32768u; }
 
-/* Compare match A every period: it only wakes the main loop, which then checks the command
-   watchdog (docs/protocol.md 5.4: at the latest at the first period boundary after the
-   timeout). */
-ISR(TIMER1_COMPA_vect) { OCR1A += 2u * HFW_PERIOD_US; }
+/* The boundary: only wakes the main loop, which checks the command watchdog
+   (docs/protocol.md 5.4: at the latest at the first period boundary after the timeout) and
+   sends a paced sample once its reading is in. */
+ISR(TIMER1_COMPA_vect) { OCR1A += PERIOD_TICKS; }
+
+/* The reading that completes at the boundary (and keeps the MR sensor's flips counted). */
+ISR(TIMER1_COMPB_vect) {
+    OCR1B += PERIOD_TICKS;
+    position_start();
+}
 
 void clock_init(void) {
     TCCR1A = 0;
     TCCR1B = _BV(CS11); /* F_CPU / 8 */
-    OCR1A = 2u * HFW_PERIOD_US;
-    TIMSK1 = _BV(TOIE1) | _BV(OCIE1A);
+    TIMSK1 = _BV(TOIE1);
+}
+
+void clock_start_periods(uint16_t lead_us) {
+    const uint8_t sreg = SREG;
+    cli();
+    const uint16_t boundary = (uint16_t)(TCNT1 + PERIOD_TICKS);
+    OCR1A = boundary;
+    OCR1B = (uint16_t)(boundary - TICKS_PER_US * lead_us);
+    TIFR1 = _BV(OCF1A) | _BV(OCF1B);
+    TIMSK1 |= _BV(OCIE1A) | _BV(OCIE1B);
+    SREG = sreg;
 }
 
 uint64_t clock_now_us(void) {

@@ -1,6 +1,7 @@
 /* The firmware's 64-bit microsecond clock from power-up (docs/protocol.md section 2):
-   Timer1 counting F_CPU / 8 (0.5 us at 16 MHz), extended by its overflows; its compare match
-   wakes the main loop once a period. */
+   Timer1 counting F_CPU / 8 (0.5 us at 16 MHz), extended by its overflows. And the period's
+   schedule on the same timer: compare B starts the position reading that completes at the
+   period boundary, compare A marks the boundary (and wakes the main loop for the watchdog). */
 #ifndef HFW_BOARD_CLOCK_H
 #define HFW_BOARD_CLOCK_H
 
@@ -8,5 +9,9 @@
 
 void clock_init(void);
 uint64_t clock_now_us(void);
+
+/* Starts the period's schedule: boundaries every HFW_PERIOD_US from now, each reading
+   started lead_us before its boundary (position_lead_us()). */
+void clock_start_periods(uint16_t lead_us);
 
 #endif

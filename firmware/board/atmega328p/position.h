@@ -1,19 +1,33 @@
-/* The handle's position sensor, read in the background: the magnetoresistive sensor on A2
-   (position_mr.c) or a quadrature encoder on D2/D3 (position_quadrature.c), chosen by the
-   build (HAPTICD_FIRMWARE_SENSOR). Counts are signed by HFW_POSITION_SIGN and zero where the
-   handle was at power-up: start the board with the handle at its centre. */
+/* The handle's position sensor: the magnetoresistive sensor on A2 (position_mr.c) or a
+   quadrature encoder on D2/D3 (position_quadrature.c), chosen by the build
+   (HAPTICD_FIRMWARE_SENSOR). Counts are signed by HFW_POSITION_SIGN and zero where the handle
+   was at power-up: start the board with the handle at its centre.
+
+   A reading is taken on request (position_start) and by the clock once a period, timed to
+   complete at the period boundary (clock.c); each carries the moment the sensor sampled it. */
 #ifndef HFW_BOARD_POSITION_H
 #define HFW_BOARD_POSITION_H
 
 #include <stdint.h>
 
-/* Starts the sensor and waits for its first reading, which becomes the zero. */
+/* Starts the sensor and takes its first reading, which becomes the zero. */
 void position_init(void);
 
-/* The latest counts, latched at now_us; *status gets HFW_STATUS_ENCODER_STALE when the
-   sensor has given no new reading for longer than it should, HFW_STATUS_ENCODER_JUMP when it
-   saw an impossible step since the last latch. */
-int64_t position_latch(uint64_t now_us, uint16_t* status);
+/* How long a reading takes from position_start() to its result (us): the clock starts the
+   period's reading this long before the boundary. */
+uint16_t position_lead_us(void);
+
+/* Starts a reading now, or right after the one under way. Returns the number of readings
+   (position_readings()) once the first reading sampled at or after now has completed. */
+uint8_t position_start(void);
+
+/* Readings completed since power-up (wraps at 256). */
+uint8_t position_readings(void);
+
+/* The last completed reading's counts; *sampled_us is when the sensor sampled them, and
+   *status has HFW_STATUS_ENCODER_JUMP when the sensor saw an impossible step since the
+   reading before. */
+int64_t position_last(uint64_t* sampled_us, uint16_t* status);
 
 /* The counts per metre of handle travel the identity reports. */
 float position_counts_per_meter(void);

@@ -1,57 +1,89 @@
-/* The Hapkit's magnetoresistive angle sensor on A2: ADC conversions run back to back
-   (prescaler 128: a 125 kHz ADC clock, within the 50-200 kHz that full 10-bit accuracy needs;
-   13 cycles, 104 us each) and each one is unwrapped over the sensor's flips in the
-   interrupt, so no flip is missed between two latches. */
+/* The Hapkit's magnetoresistive angle sensor on A2, one ADC conversion per reading (prescaler
+   64: a 250 kHz ADC clock, a little above the 200 kHz that the last bit of 10 needs, for a
+   reading in half the time: a 12.3 um count is finer than the sensor's noise). A conversion
+   samples 1.5 ADC clocks (6 us) after it starts and completes 13 ADC clocks (52 us) after it
+   starts; the interrupt unwraps each one over the sensor's flips. The clock
+   starts one a period, so no flip is missed (the shaft turns less than a flip threshold in a
+   millisecond below 8 m/s at the handle). */
 #include <avr/interrupt.h>
 #include <avr/io.h>
 
+#include "clock.h"
 #include "hfw_config.h"
 #include "hfw_kinematics.h"
-#include "hfw_protocol.h"
 #include "position.h"
 
-static struct hfw_mr_sensor sensor;
-static volatile int32_t unwrapped;
-static volatile uint8_t conversions;
-static int32_t zero;
-static uint8_t latched_conversions; /* `conversions` at the last latch that saw a new one */
-static uint64_t fresh_us;           /* the time of that latch */
+#define SAMPLE_AFTER_START_US 6u
+#define CONVERSION_US 52u
 
-/* Two conversions' time and some: no new reading for this long means the ADC stopped. */
-#define STALE_AFTER_US 250u
+static struct hfw_mr_sensor sensor;
+static int32_t zero;
+static volatile int32_t unwrapped;
+static volatile uint64_t sampled_us; /* of `unwrapped` */
+static volatile uint64_t started_us; /* of the conversion under way */
+static volatile uint8_t readings;
+static volatile uint8_t busy;
+static volatile uint8_t restart; /* start another as soon as this one completes */
+
+static void start_conversion(void) {
+    started_us = clock_now_us();
+    busy = 1;
+    ADCSRA |= _BV(ADSC);
+}
 
 ISR(ADC_vect) {
     unwrapped = hfw_mr_sensor_update(&sensor, (int16_t)ADC);
-    ++conversions;
+    sampled_us = started_us + SAMPLE_AFTER_START_US;
+    ++readings;
+    busy = 0;
+    if (restart) {
+        restart = 0;
+        start_conversion();
+    }
 }
 
 void position_init(void) {
     hfw_mr_sensor_init(&sensor, HFW_MR_COUNTS_PER_FLIP, HFW_MR_FLIP_THRESHOLD);
     ADMUX = _BV(REFS0) | 2u; /* AVcc reference, channel 2 (A2) */
     DIDR0 = _BV(ADC2D);      /* no digital input buffer on A2 */
-    ADCSRB = 0;              /* free running */
-    ADCSRA = _BV(ADEN) | _BV(ADSC) | _BV(ADATE) | _BV(ADIE) | _BV(ADPS2) | _BV(ADPS1) | _BV(ADPS0);
+    ADCSRA = _BV(ADEN) | _BV(ADIE) | _BV(ADPS2) | _BV(ADPS1);
     sei();
-    while (conversions < 2u) {
-    } /* the first conversion after enabling takes 25 cycles: use the second */
+    /* The first conversion after enabling initialises the ADC (25 ADC clocks): use the next. */
+    for (uint8_t n = 0; n < 2u; ++n) {
+        const uint8_t target = position_start();
+        while (readings != target) {
+        }
+    }
     cli();
     zero = unwrapped;
-    latched_conversions = conversions;
     sei();
 }
 
-int64_t position_latch(uint64_t now_us, uint16_t* status) {
+uint16_t position_lead_us(void) { return CONVERSION_US + 16u; }
+
+uint8_t position_start(void) {
+    const uint8_t sreg = SREG;
+    cli();
+    uint8_t target = (uint8_t)(readings + 1u);
+    if (busy) {
+        restart = 1;
+        ++target;
+    } else {
+        start_conversion();
+    }
+    SREG = sreg;
+    return target;
+}
+
+uint8_t position_readings(void) { return readings; }
+
+int64_t position_last(uint64_t* sampled, uint16_t* status) {
+    const uint8_t sreg = SREG;
     cli();
     const int32_t counts = unwrapped;
-    const uint8_t seen = conversions;
-    sei();
+    *sampled = sampled_us;
+    SREG = sreg;
     *status = 0;
-    if (seen != latched_conversions) {
-        latched_conversions = seen;
-        fresh_us = now_us;
-    } else if (now_us - fresh_us > STALE_AFTER_US) {
-        *status = HFW_STATUS_ENCODER_STALE;
-    }
     return (int64_t)HFW_POSITION_SIGN * (int64_t)(counts - zero);
 }
 

@@ -1,8 +1,10 @@
 /* A quadrature encoder on D2 (A, INT0) and D3 (B, INT1), decoded x4 in their interrupts.
-   HFW_ENCODER_COUNTS_PER_REV is the motor shaft's counts per turn after x4 decoding. */
+   HFW_ENCODER_COUNTS_PER_REV is the motor shaft's counts per turn after x4 decoding. The
+   count is always current: a reading is the count at the moment it is asked for. */
 #include <avr/interrupt.h>
 #include <avr/io.h>
 
+#include "clock.h"
 #include "hfw_config.h"
 #include "hfw_kinematics.h"
 #include "hfw_protocol.h"
@@ -15,6 +17,10 @@
 static volatile int32_t counts;
 static volatile uint8_t channels; /* bit 1: A, bit 0: B */
 static volatile uint8_t jumped;
+static int32_t reading;
+static uint64_t reading_us;
+static uint8_t reading_jumped;
+static volatile uint8_t readings;
 
 static uint8_t read_channels(void) {
     const uint8_t pins = PIND;
@@ -45,14 +51,29 @@ void position_init(void) {
     sei();
 }
 
-int64_t position_latch(uint64_t now_us, uint16_t* status) {
-    (void)now_us; /* edges come only when the shaft turns: an encoder is never stale */
+uint16_t position_lead_us(void) { return 0; }
+
+uint8_t position_start(void) {
+    const uint8_t sreg = SREG;
     cli();
-    const int32_t latched = counts;
-    const uint8_t jump = jumped;
+    reading = counts;
+    reading_jumped = jumped;
     jumped = 0;
-    sei();
-    *status = jump ? HFW_STATUS_ENCODER_JUMP : 0u;
+    reading_us = clock_now_us();
+    ++readings;
+    SREG = sreg;
+    return readings;
+}
+
+uint8_t position_readings(void) { return readings; }
+
+int64_t position_last(uint64_t* sampled, uint16_t* status) {
+    const uint8_t sreg = SREG;
+    cli();
+    const int32_t latched = reading;
+    *sampled = reading_us;
+    *status = reading_jumped ? HFW_STATUS_ENCODER_JUMP : 0u;
+    SREG = sreg;
     return (int64_t)HFW_POSITION_SIGN * latched;
 }
 

@@ -1,12 +1,12 @@
 // Link diagnostics (`haptic-tune diag --config FILE`, docs/link-diagnostics.md): runs the
 // configured device at zero force for a while and measures the link the servo will depend on.
 //
-// Every period (absolute deadlines at [servo] rate_hz): write a disabled zero-force command,
-// then read its answer. The time from the write to the read's return is one round trip. A
-// device that takes its sample when read() is called (the sim: DeviceInfo::samples_at_read)
-// is read first and then written, as the daemon's tick does, and its "round trip" is the two
-// calls. It works through the Device interface only, so it measures any plugin (usb, hid,
-// serial, and sim as a baseline) exactly as the daemon's loop drives it:
+// Every period (absolute deadlines at [servo] rate_hz, or as the device answers when it paces
+// the loop): write a disabled zero-force command, then read its answer. The time from the write to
+// the read's return is one round trip. A device that takes its sample when read() is called (the
+// sim: DeviceInfo::samples_at_read) is read first and then written, as the daemon's tick does, and
+// its "round trip" is the two calls. It works through the Device interface only, so it measures any
+// plugin (usb, hid, serial, and sim as a baseline) exactly as the daemon's loop drives it:
 //   - round-trip time: percentiles and a histogram;
 //   - no reply: reads that ended without a sample (timeout or dropped);
 //   - late: samples flagged kStatusLate (a reply, or the device's command, came after its
@@ -57,7 +57,8 @@ struct DelayStats {
 inline constexpr double kDelayRoundingPeriods = 0.05;
 
 /// What the diagnosis concludes: the first figure that a 1 kHz-class servo cannot live with,
-/// in the order the rules are checked (no reply; p99 round trip over 30 % of the period;
+/// in the order the rules are checked (no reply; p99 round trip over 30 % of the period, for a
+/// device that does not pace the loop;
 /// over 0.1 % of exchanges lost or late; timestamps or acknowledgements that contradict
 /// themselves; a configured delay below the measured p99), or ok.
 struct DiagVerdict {
@@ -91,7 +92,11 @@ struct DiagReport {
 
     // The loop delay (encoder sample -> force in effect).
     bool lockstep = false;
-    bool samples_at_read = false;      ///< DeviceInfo::samples_at_read
+    bool samples_at_read = false;  ///< DeviceInfo::samples_at_read
+    /// The device paces the loop (DeviceInfo::paces_loop: protocol version 3's paced flag, or
+    /// lockstep): no host deadlines; each round trip includes the wait for the device's period
+    /// boundary, so it is not judged against the period.
+    bool paced = false;
     int protocol_version = 0;          ///< 0: not an open-protocol device
     double configured_delay_s = 0.0;   ///< [device.model] delay
     bool delay_measured = false;       ///< at least one command's delay was measured

@@ -23,6 +23,9 @@ using servo::kStatusDropped;
 constexpr int kHelloAttempts = 3;  // section 5.1, step 3
 constexpr std::int64_t kLockstepReplyTimeoutNs = 1'000'000'000;
 constexpr double kRealtimeReplyFraction = 0.3;  // of a period: leaves 70 % for the tick
+// A device that paces the loop answers at its next period boundary: up to a period after the
+// command, plus the reply's time on the link (docs/protocol.md 5.8).
+constexpr double kPacedReplyPeriods = 1.5;
 constexpr std::int64_t kByeTimeoutNs = 50'000'000;
 // 5.3, "Out of step": reads in a row that the device answered only with samples behind the
 // host's count before the session is given up.
@@ -104,7 +107,13 @@ void ProtocolDevice::open(const DeviceConfig& config) {
     info_.axes = identity_.axes;
     info_.counts_per_meter = identity_.counts_per_meter;
     info_.force_limit_n = proto::force_from_micronewtons(identity_.force_limit_un);
-    info_.paces_loop = config.lockstep;  // lockstep: each command is one virtual period
+    // Lockstep: each command is one virtual period. A device that says it paces the loop
+    // (version 3) answers each command at its own period boundary: the loop runs on its
+    // samples, and waits up to kPacedReplyPeriods for each.
+    info_.paces_loop = config.lockstep || identity_.paced();
+    if (identity_.paced() && !config.lockstep && settings_.reply_timeout_us == 0) {
+        reply_timeout_ns_ = static_cast<std::int64_t>(kPacedReplyPeriods * period_ns);
+    }
     info_.lockstep = config.lockstep;
     info_.name = plugin_;
     info_.serial = std::string(identity_.serial_number());
@@ -129,7 +138,8 @@ void ProtocolDevice::check_identity(const proto::Identity& identity) const {
     }
     if (have_identity_) {
         if (serial != identity_.serial_number() || identity.axes != identity_.axes ||
-            identity.counts_per_meter != identity_.counts_per_meter) {
+            identity.counts_per_meter != identity_.counts_per_meter ||
+            identity.paced() != identity_.paced()) {
             throw std::runtime_error("wrong device: " + where + " answered as serial number " +
                                      quoted(serial) + ", not the device this run started with (" +
                                      quoted(identity_.serial_number()) + "); not adopted");

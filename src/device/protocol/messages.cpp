@@ -73,10 +73,25 @@ Error read(Payload p, Hello& m) noexcept {
 }
 
 // ---- 4.2 identity ----
-enum class IdentityField { none, axes, force_limit, counts_per_meter, period, watchdog, serial };
+enum class IdentityField {
+    none,
+    axes,
+    flags,
+    force_limit,
+    counts_per_meter,
+    period,
+    watchdog,
+    serial
+};
+
+/// The flags a version allows: none before version 3.
+std::uint8_t allowed_identity_flags(std::uint8_t version) noexcept {
+    return version >= kProtocolVersion3 ? kIdentityFlagsMask : std::uint8_t{0};
+}
 
 IdentityField first_out_of_range(const Identity& m) noexcept {
     if (!valid_axes(m.axes)) return IdentityField::axes;
+    if ((m.flags & ~allowed_identity_flags(m.version)) != 0u) return IdentityField::flags;
     if (m.force_limit_un <= 0) return IdentityField::force_limit;
     if (!std::isfinite(m.counts_per_meter) || !(m.counts_per_meter > 0.0)) {
         return IdentityField::counts_per_meter;
@@ -93,7 +108,7 @@ Error check(const Identity& m) noexcept {
 std::size_t payload_size(const Identity&) noexcept { return kIdentityPayloadSize; }
 void write(const Identity& m, PayloadOut p) noexcept {
     wire::store_u8(p, 0, m.axes);
-    wire::store_u8(p, 1, 0);
+    wire::store_u8(p, 1, m.flags);  // reserved (0) before version 3: check() sees to it
     wire::store_u16(p, 2, 0);
     wire::store_i32(p, 4, m.force_limit_un);
     wire::store_f64(p, 8, m.counts_per_meter);
@@ -106,8 +121,9 @@ void write(const Identity& m, PayloadOut p) noexcept {
 }
 Error read(Payload p, Identity& m) noexcept {
     if (p.size() != kIdentityPayloadSize) return Error::bad_payload_size;
-    if (wire::load_u8(p, 1) != 0 || wire::load_u16(p, 2) != 0) return Error::bad_field;
+    if (wire::load_u16(p, 2) != 0) return Error::bad_field;
     m.axes = wire::load_u8(p, 0);
+    m.flags = wire::load_u8(p, 1);
     m.force_limit_un = wire::load_i32(p, 4);
     m.counts_per_meter = wire::load_f64(p, 8);
     m.period_us = wire::load_u32(p, 16);
@@ -389,6 +405,9 @@ std::string out_of_range_field(const Identity& m) {
         case IdentityField::axes:
             return "axes = " + std::to_string(m.axes) + ": allowed 1.." +
                    std::to_string(kMaxProtocolAxes);
+        case IdentityField::flags:
+            return "flags = " + std::to_string(m.flags) + ": allowed " +
+                   (m.version >= kProtocolVersion3 ? "bit 0 (paced) only" : "0 before version 3");
         case IdentityField::force_limit:
             return "force_limit_un = " + std::to_string(m.force_limit_un) +
                    ": allowed > 0 (micronewtons)";

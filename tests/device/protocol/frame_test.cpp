@@ -121,7 +121,7 @@ TEST(ProtocolFrame, BadCrcOnAnySingleBitFlip) {
 
 TEST(ProtocolFrame, BadVersion) {
     FrameView view;
-    for (const int version : {0, 3, 255}) {
+    for (const int version : {0, 4, 255}) {
         Bytes frame = command_frame();
         frame[1] = static_cast<std::byte>(version);
         fix_crc(frame);
@@ -132,9 +132,9 @@ TEST(ProtocolFrame, BadVersion) {
     }
 }
 
-TEST(ProtocolFrame, VersionsOneAndTwoAreSpoken) {
+TEST(ProtocolFrame, VersionsOneToThreeAreSpoken) {
     FrameView view;
-    for (const int version : {1, 2}) {
+    for (const int version : {1, 2, 3}) {
         Bytes frame = command_frame();
         frame[1] = static_cast<std::byte>(version);
         fix_crc(frame);
@@ -143,8 +143,9 @@ TEST(ProtocolFrame, VersionsOneAndTwoAreSpoken) {
     }
     EXPECT_TRUE(is_spoken_version(1));
     EXPECT_TRUE(is_spoken_version(2));
+    EXPECT_TRUE(is_spoken_version(3));
     EXPECT_FALSE(is_spoken_version(0));
-    EXPECT_FALSE(is_spoken_version(3));
+    EXPECT_FALSE(is_spoken_version(4));
 }
 
 TEST(ProtocolFrame, HelloAndErrorAreFrozenAtVersionOne) {

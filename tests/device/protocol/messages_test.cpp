@@ -129,6 +129,31 @@ TEST(ProtocolMessages, IdentityRoundTripAndLayout) {
     EXPECT_EQ(m.serial_number(), " ~");
 }
 
+TEST(ProtocolMessages, Version3IdentitySaysWhetherTheDevicePacesTheLoop) {
+    Identity m = an_identity();
+    m.version = kProtocolVersion3;
+    m.flags = kIdentityPaced;
+    const Bytes frame = round_trip(m, 56);
+    EXPECT_EQ(wire::load_u8(frame, 9), 0x01);
+    Identity decoded;
+    ASSERT_EQ(decode(frame, decoded), Error::none);
+    EXPECT_TRUE(decoded.paced());
+    // Bits the version does not define, and any flag before version 3, are refused by the
+    // encoder and the decoder alike, naming the field.
+    m.flags = 0x02;
+    Bytes out(kMaxFrameSize);
+    EXPECT_EQ(encode(m, out).error, Error::bad_field);
+    EXPECT_EQ(out_of_range_field(m), "flags = 2: allowed bit 0 (paced) only");
+    m.version = kProtocolVersion2;
+    m.flags = kIdentityPaced;
+    EXPECT_EQ(encode(m, out).error, Error::bad_field);
+    EXPECT_EQ(out_of_range_field(m), "flags = 1: allowed 0 before version 3");
+    Bytes v2 = frame;
+    wire::store_u8(v2, 1, kProtocolVersion2);
+    wire::store_u32(v2, 52, crc32c(std::span<const std::byte>(v2).first(52)));
+    EXPECT_EQ(decode(v2, decoded), Error::bad_field);
+}
+
 TEST(ProtocolMessages, SerialNumberRules) {
     Identity m;
     EXPECT_FALSE(m.set_serial_number(""));
@@ -378,7 +403,7 @@ TEST(ProtocolMessages, EncoderRefusesWhatTheDecoderWouldRefuse) {
     sample.time_us = 10;
     EXPECT_EQ(encode(sample, out).error, Error::none);
     // A version this codec does not speak.
-    for (const std::uint8_t version : {0, 3, 255}) {
+    for (const std::uint8_t version : {0, 4, 255}) {
         sample.version = version;
         EXPECT_EQ(encode(sample, out).error, Error::bad_version) << int{version};
         ForceCommand c = a_command(1);

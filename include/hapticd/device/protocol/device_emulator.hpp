@@ -50,9 +50,11 @@ struct EmulatorConfig {
     std::string serial_number = "EMU-0001";  ///< 1..16 printable ASCII characters
     std::uint32_t firmware_version = 0x00010000;
     /// Versions it speaks (tests narrow them: max_version = 1 is a firmware from before the
-    /// applied_* fields). It answers a hello with the highest version in common.
+    /// applied_* fields). It answers a hello with the highest version in common. Version 2 by
+    /// default: it answers every request at once and never paces the loop, which is all that
+    /// version 3 adds (the reference firmware does: docs/firmware.md).
     std::uint8_t min_version = kMinVersion;
-    std::uint8_t max_version = kMaxVersion;
+    std::uint8_t max_version = kProtocolVersion2;
     std::uint32_t default_watchdog_timeout_us = kDefaultWatchdogTimeoutUs;  ///< section 5.4
     std::uint32_t max_watchdog_timeout_us = kMaxWatchdogTimeoutUs;          ///< <= 1 s
 };

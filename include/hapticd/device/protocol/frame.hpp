@@ -28,12 +28,15 @@ namespace hapticd::device::protocol {
 inline constexpr std::uint8_t kMagic = 0x48;  ///< 'H'
 /// The protocol versions this codec speaks (docs/protocol.md 3.2). Version 2 is version 1
 /// with the sample's reserved bytes used to say which command is in effect and since when
-/// (applied_lag, applied_age_us: section 4.6), so that the host can measure the loop delay;
-/// every other layout is the same.
+/// (applied_lag, applied_age_us: section 4.6), so that the host can measure the loop delay.
+/// Version 3 is version 2 with the identity's first reserved byte used for flags: a device
+/// may say that it paces the loop (kIdentityPaced, section 5.8). Every other layout is the
+/// same.
 inline constexpr std::uint8_t kProtocolVersion1 = 1;
 inline constexpr std::uint8_t kProtocolVersion2 = 2;
+inline constexpr std::uint8_t kProtocolVersion3 = 3;
 inline constexpr std::uint8_t kMinVersion = kProtocolVersion1;
-inline constexpr std::uint8_t kMaxVersion = kProtocolVersion2;
+inline constexpr std::uint8_t kMaxVersion = kProtocolVersion3;
 /// The version of a message struct that does not say otherwise.
 inline constexpr std::uint8_t kProtocolVersion = kProtocolVersion1;
 /// The header version of hello and error frames, in every protocol version (section 3.2).

@@ -97,6 +97,12 @@ struct Hello {
     bool operator==(const Hello&) const = default;
 };
 
+/// 4.2 identity flags (version 3): the device paces the loop. It answers every command and
+/// poll at its next period boundary, with counts it sampled for that boundary, and the host
+/// sends each command as soon as it has the sample before it (section 5.8).
+inline constexpr std::uint8_t kIdentityPaced = 0x01;
+inline constexpr std::uint8_t kIdentityFlagsMask = kIdentityPaced;
+
 /// 4.2 identity, device -> host: the answer to hello, in the chosen version (`version`).
 struct Identity {
     static constexpr MessageType kType = MessageType::identity;  ///< the header's type
@@ -110,6 +116,11 @@ struct Identity {
     std::uint32_t firmware_version = 0;     ///< vendor-defined
     /// Printable ASCII (0x20..0x7E), at least one character, padded with NUL.
     std::array<char, kSerialSize> serial{};
+    /// Version 3: kIdentity* bits; 0 in versions 1 and 2 (the byte is reserved there).
+    std::uint8_t flags = 0;
+
+    /// The device paces the loop (version 3, kIdentityPaced).
+    bool paced() const noexcept { return (flags & kIdentityPaced) != 0u; }
 
     /// The serial number up to the first NUL.
     std::string_view serial_number() const noexcept;
