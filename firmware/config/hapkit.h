@@ -13,7 +13,7 @@
    period boundary (docs/protocol.md 5.8); 0: it answers at once, as a version-2 device.
    Off until the firmware's answer fits the period with room for the host (docs/firmware.md,
    "Timing"). */
-#define HFW_PACED 0
+#define HFW_PACED 1
 
 /* The handle: a capstan of radius r_p on the motor shaft drives a sector of radius r_s; the
    handle is r_h long from the sector's pivot. A motor angle dθ moves the handle by

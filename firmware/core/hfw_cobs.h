@@ -20,6 +20,23 @@ extern "C" {
    the 0x00 delimiter; returns the bytes written (size + 2). */
 size_t hfw_cobs_encode(const uint8_t* frame, size_t size, uint8_t* out);
 
+/* The same in parts, so that the front of a frame can go out before its end is known: a
+   block's code byte is written when the block ends, so out[0 .. hfw_cobs_final()) is final
+   while the rest is still to come. */
+struct hfw_cobs_encoder {
+    uint8_t* out;
+    uint8_t code_at;  /* where the open block's code byte goes */
+    uint8_t write_at; /* where the next byte goes */
+    uint8_t code;     /* the open block's code so far */
+};
+
+void hfw_cobs_start(struct hfw_cobs_encoder* e, uint8_t* out);
+void hfw_cobs_put(struct hfw_cobs_encoder* e, const uint8_t* bytes, size_t size);
+/* The bytes of out that no later put can change. */
+static inline uint8_t hfw_cobs_final(const struct hfw_cobs_encoder* e) { return e->code_at; }
+/* Closes the last block and writes the delimiter; returns the encoded size. */
+size_t hfw_cobs_finish(struct hfw_cobs_encoder* e);
+
 /* The receiver, fed one byte at a time as the bytes arrive. */
 struct hfw_cobs_decoder {
     uint8_t frame[HFW_MAX_FRAME_SIZE];

@@ -44,8 +44,11 @@ static const HFW_FLASH uint32_t table[256] = {
     0xBE2DA0A5u, 0x4C4623A6u, 0x5F16D052u, 0xAD7D5351u,
 };
 
+uint32_t hfw_crc32c_update(uint32_t state, const uint8_t* data, size_t size) {
+    while (size--) state = (state >> 8) ^ table[(uint8_t)(state ^ *data++)];
+    return state;
+}
+
 uint32_t hfw_crc32c(const uint8_t* data, size_t size) {
-    uint32_t crc = 0xFFFFFFFFu;
-    while (size--) crc = (crc >> 8) ^ table[(uint8_t)(crc ^ *data++)];
-    return crc ^ 0xFFFFFFFFu;
+    return hfw_crc32c_update(HFW_CRC32C_START, data, size) ^ HFW_CRC32C_START;
 }

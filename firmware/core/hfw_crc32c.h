@@ -14,6 +14,11 @@ extern "C" {
    (1 KB), against 232 for the bitwise code of the protocol's appendix (docs/firmware.md). */
 uint32_t hfw_crc32c(const uint8_t* data, size_t size);
 
+/* The same in parts: start from HFW_CRC32C_START, feed each part to hfw_crc32c_update(), and
+   the CRC is the last state ^ HFW_CRC32C_START. */
+#define HFW_CRC32C_START 0xFFFFFFFFu
+uint32_t hfw_crc32c_update(uint32_t state, const uint8_t* data, size_t size);
+
 #ifdef __cplusplus
 }
 #endif

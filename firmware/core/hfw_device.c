@@ -267,18 +267,22 @@ enum hfw_reply hfw_device_receive(struct hfw_device* d, const uint8_t* frame, si
 
 /* ---- 4.6 sample ---- */
 
-size_t hfw_device_sample(struct hfw_device* d, const int64_t counts[HFW_MAX_AXES], uint64_t time_us,
-                         uint16_t sensor_status, uint8_t* out) {
-    const uint8_t axes = d->config->axes;
+uint32_t hfw_device_sample_begin(const struct hfw_device* d, uint64_t time_us,
+                                 uint16_t sensor_status, uint8_t* out) {
     uint8_t* p = out + HFW_HEADER_SIZE;
     uint16_t status =
         (uint16_t)(sensor_status & (HFW_STATUS_ENCODER_STALE | HFW_STATUS_ENCODER_JUMP));
     status |= d->command_status; /* the answer to a command says how it came; 0 for a poll */
-    d->command_status = 0;
     if (d->force_active) status |= HFW_STATUS_FORCE_ACTIVE;
     if (d->force_clamped) status |= HFW_STATUS_FORCE_CLAMPED;
+    const uint8_t axes = d->config->axes;
+    out[0] = HFW_MAGIC;
+    out[1] = d->version;
+    out[2] = HFW_SAMPLE;
+    out[3] = (uint8_t)HFW_SAMPLE_PAYLOAD(axes);
+    hfw_store_u32(out + 4, d->session);
     hfw_store_u32(p, d->command_seen ? d->command_sequence : 0u);
-    hfw_store_u32(p + 4, d->sample_sequence++);
+    hfw_store_u32(p + 4, d->sample_sequence);
     hfw_store_u64(p + 8, time_us);
     hfw_store_u16(p + 16, status);
     hfw_store_u16(p + 18, d->latched_faults);
@@ -307,8 +311,26 @@ size_t hfw_device_sample(struct hfw_device* d, const int64_t counts[HFW_MAX_AXES
     }
     p[21] = lag;
     hfw_store_u16(p + 22, age_us);
-    for (uint8_t i = 0; i < axes; ++i) hfw_store_u64(p + 24 + (size_t)8 * i, (uint64_t)counts[i]);
-    return finish(d->version, HFW_SAMPLE, (uint8_t)HFW_SAMPLE_PAYLOAD(axes), d->session, out);
+    return hfw_crc32c_update(HFW_CRC32C_START, out, HFW_SAMPLE_COUNTS_OFFSET);
+}
+
+size_t hfw_device_sample_end(struct hfw_device* d, uint32_t crc_state,
+                             const int64_t counts[HFW_MAX_AXES], uint8_t* out) {
+    const uint8_t axes = d->config->axes;
+    uint8_t* c = out + HFW_SAMPLE_COUNTS_OFFSET;
+    for (uint8_t i = 0; i < axes; ++i) hfw_store_u64(c + (size_t)8 * i, (uint64_t)counts[i]);
+    const size_t crc_at = HFW_SAMPLE_COUNTS_OFFSET + (size_t)8 * axes;
+    crc_state = hfw_crc32c_update(crc_state, c, (size_t)8 * axes);
+    hfw_store_u32(out + crc_at, crc_state ^ HFW_CRC32C_START);
+    ++d->sample_sequence;
+    d->command_status = 0;
+    return crc_at + HFW_CRC_SIZE;
+}
+
+size_t hfw_device_sample(struct hfw_device* d, const int64_t counts[HFW_MAX_AXES], uint64_t time_us,
+                         uint16_t sensor_status, uint8_t* out) {
+    return hfw_device_sample_end(d, hfw_device_sample_begin(d, time_us, sensor_status, out), counts,
+                                 out);
 }
 
 int hfw_device_paced(const struct hfw_device* d) {

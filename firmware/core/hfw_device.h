@@ -103,6 +103,20 @@ enum hfw_reply hfw_device_receive(struct hfw_device* d, const uint8_t* frame, si
 size_t hfw_device_sample(struct hfw_device* d, const int64_t counts[HFW_MAX_AXES], uint64_t time_us,
                          uint16_t sensor_status, uint8_t* out);
 
+/* The same sample in two parts, so that a board can send the front of it while the sensor
+   is still sampling (5.8): hfw_device_sample_begin() writes the frame up to the counts, for
+   counts sampled at time_us, and returns the CRC's state over it; it changes nothing, and may
+   be called again (a command that came meanwhile changes what it writes).
+   hfw_device_sample_end() writes the counts and the CRC, commits the sample (its sequence
+   number) and returns the frame's size. hfw_device_sample() is the two together. */
+uint32_t hfw_device_sample_begin(const struct hfw_device* d, uint64_t time_us,
+                                 uint16_t sensor_status, uint8_t* out);
+size_t hfw_device_sample_end(struct hfw_device* d, uint32_t crc_state,
+                             const int64_t counts[HFW_MAX_AXES], uint8_t* out);
+/* Where the counts start in a sample frame: the size of what hfw_device_sample_begin()
+   writes. */
+#define HFW_SAMPLE_COUNTS_OFFSET (HFW_HEADER_SIZE + 24u)
+
 /* 5.8: whether this session is paced by the device (version 3 and config->paced): every
    command and poll is then answered at the next period boundary, with counts sampled for it. */
 int hfw_device_paced(const struct hfw_device* d);

@@ -83,6 +83,46 @@ std::vector<std::vector<std::uint8_t>> firmware_decode(hfw_cobs_decoder& decoder
     return frames;
 }
 
+TEST(FirmwareCrc32c, InPartsIsTheWhole) {
+    std::mt19937 random(31);
+    for (int trial = 0; trial < 500; ++trial) {
+        std::vector<std::uint8_t> data(1 + random() % 60);
+        for (auto& b : data) b = static_cast<std::uint8_t>(random());
+        const std::size_t cut = random() % (data.size() + 1);
+        std::uint32_t state = hfw_crc32c_update(HFW_CRC32C_START, data.data(), cut);
+        state = hfw_crc32c_update(state, data.data() + cut, data.size() - cut);
+        ASSERT_EQ(state ^ HFW_CRC32C_START, hfw_crc32c(data.data(), data.size()));
+    }
+}
+
+TEST(FirmwareCobs, InPartsIsTheWholeAndTheFinalBytesNeverChange) {
+    // The board sends out[0 .. hfw_cobs_final()) while the rest of the frame is still to
+    // come: those bytes must be the ones the whole encoding has.
+    std::mt19937 random(32);
+    for (int trial = 0; trial < 3000; ++trial) {
+        const auto frame = random_frame(random, 1 + random() % HFW_MAX_FRAME_SIZE,
+                                        static_cast<int>(random() % 101));
+        const auto whole = firmware_encode(frame);
+        std::vector<std::uint8_t> out(HFW_COBS_MAX_ENCODED, 0xEE);
+        hfw_cobs_encoder encoder{};
+        hfw_cobs_start(&encoder, out.data());
+        const std::size_t cut = random() % (frame.size() + 1);
+        hfw_cobs_put(&encoder, frame.data(), cut);
+        const std::size_t final_bytes = hfw_cobs_final(&encoder);
+        ASSERT_LE(final_bytes, whole.size());
+        const std::vector<std::uint8_t> sent(out.begin(),
+                                             out.begin() + static_cast<long>(final_bytes));
+        hfw_cobs_put(&encoder, frame.data() + cut, frame.size() - cut);
+        const std::size_t size = hfw_cobs_finish(&encoder);
+        ASSERT_EQ(std::vector<std::uint8_t>(out.begin(), out.begin() + static_cast<long>(size)),
+                  whole);
+        ASSERT_EQ(std::vector<std::uint8_t>(whole.begin(),
+                                            whole.begin() + static_cast<long>(final_bytes)),
+                  sent);
+        ASSERT_EQ(hfw_cobs_final(&encoder), size);
+    }
+}
+
 TEST(FirmwareCobs, EncodesAsTheHostDoesAndRoundTrips) {
     std::mt19937 random(6);
     hfw_cobs_decoder decoder{};

@@ -386,6 +386,32 @@ TEST_F(FirmwareDevice, ASampleTakenBeforeTheLastCommandTookEffectNamesTheOneBefo
     EXPECT_EQ(sample.applied_age_us, protocol::kAppliedAgeUnknown);
 }
 
+TEST_F(FirmwareDevice, ASampleBuiltInTwoPartsIsTheSampleAndItsFrontCanBeRebuilt) {
+    // The paced board writes the front of the next sample before its counts are sampled,
+    // and writes it again if a command comes meanwhile: begin changes nothing.
+    hello();
+    send_command(1, 1000);
+    std::array<std::uint8_t, HFW_MAX_FRAME_SIZE> parts{}, whole{};
+    const std::int64_t counts[3] = {-123456789, 0, 0};
+    const std::uint64_t time_us = now_us_ + 100;
+    (void)hfw_device_sample_begin(&device_, time_us - 50, 0, parts.data());
+    const std::uint32_t state = hfw_device_sample_begin(&device_, time_us, 0, parts.data());
+    const std::size_t size = hfw_device_sample_end(&device_, state, counts, parts.data());
+    EXPECT_EQ(size, 44u);
+    device_.sample_sequence -= 1;  // the same sample again, whole
+    device_.command_status = 0;
+    EXPECT_EQ(hfw_device_sample(&device_, counts, time_us, 0, whole.data()), size);
+    EXPECT_EQ(parts, whole);
+    protocol::EncoderSample sample;
+    ASSERT_EQ(protocol::decode(std::span<const std::byte>(
+                                   reinterpret_cast<const std::byte*>(parts.data()), size),
+                               sample),
+              protocol::Error::none);
+    EXPECT_EQ(sample.counts[0], -123456789);
+    EXPECT_EQ(sample.sample_sequence, 1u);
+    EXPECT_EQ(HFW_SAMPLE_COUNTS_OFFSET, 32u);
+}
+
 TEST_F(FirmwareDevice, TheWatchdogTripsAtItsTimeoutAndNotBefore) {
     hello();
     EXPECT_EQ(hfw_device_check_watchdog(&device_, now_us_ + 1'000'000), 0) << "not armed yet";

@@ -54,8 +54,15 @@ bool Harness::take_host_bytes() {
     bool request = false;
     for (std::size_t n; (n = link_.read(bytes, sizeof bytes)) > 0;) {
         for (std::size_t i = 0; i < n; ++i) {
+            const std::uint64_t start_cycle = board_.cycle();
             const std::uint64_t in_cycle = board_.send_to_board(bytes[i]);
             if (bytes[i] != 0x00) {
+                if (!host_frame_open_ && reply_done_) {
+                    reply_done_ = false;
+                    figures_.turnaround_us.push_back(
+                        static_cast<double>(start_cycle - reply_done_cycle_) * 1e6 /
+                        EmulatedBoard::kCpuHz);
+                }
                 host_frame_open_ = true;
             } else if (host_frame_open_) {
                 host_frame_open_ = false;
@@ -85,6 +92,8 @@ bool Harness::pass_board_bytes() {
             board_frame_open_ = false;
             reply = true;
             ++figures_.replies;
+            reply_done_cycle_ = b.done_cycle;
+            reply_done_ = true;
             if (request_pending_) {
                 request_pending_ = false;
                 figures_.latency_us.push_back(

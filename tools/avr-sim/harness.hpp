@@ -35,6 +35,9 @@ struct HarnessFigures {
     /// Of that, from the request's last byte in to the reply's first byte written: the
     /// firmware's own time, without the reply's time on the line.
     std::vector<double> compute_us;
+    /// From a reply's last byte out to the next request's first byte onto the line: the
+    /// host's turnaround, the pseudo-terminal's both ways included.
+    std::vector<double> turnaround_us;
     double emulated_s = 0.0;
     double wall_s = 0.0;
     double lag_max_s = 0.0;  ///< real time: how far emulated time fell behind the wall clock
@@ -65,6 +68,8 @@ class Harness {
     bool host_frame_open_ = false;
     bool board_frame_open_ = false;
     std::uint64_t reply_first_cycle_ = 0;
+    std::uint64_t reply_done_cycle_ = 0;
+    bool reply_done_ = false;
     std::uint64_t request_in_cycle_ = 0;
     bool request_pending_ = false;
     std::ofstream record_;

@@ -35,18 +35,18 @@ double percentile(std::vector<double> values, double p) {
 
 nlohmann::json figures_json(const hapticd::avr_sim::HarnessFigures& f,
                             const hapticd::avr_sim::PaddlePlant& plant) {
-    nlohmann::json latency = {{"count", f.latency_us.size()},
-                              {"p50", percentile(f.latency_us, 0.5)},
-                              {"p99", percentile(f.latency_us, 0.99)},
-                              {"max", percentile(f.latency_us, 1.0)}};
-    nlohmann::json compute = {{"count", f.compute_us.size()},
-                              {"p50", percentile(f.compute_us, 0.5)},
-                              {"p99", percentile(f.compute_us, 0.99)},
-                              {"max", percentile(f.compute_us, 1.0)}};
+    const auto stats = [](const std::vector<double>& values) {
+        return nlohmann::json{{"count", values.size()},
+                              {"p50", percentile(values, 0.5)},
+                              {"p99", percentile(values, 0.99)},
+                              {"max", percentile(values, 1.0)}};
+    };
+    const nlohmann::json compute = stats(f.compute_us);
     return {{"requests", f.requests},
             {"replies", f.replies},
-            {"device_latency_us", latency},
+            {"device_latency_us", stats(f.latency_us)},
             {"device_compute_us", compute},
+            {"host_turnaround_us", stats(f.turnaround_us)},
             {"emulated_s", f.emulated_s},
             {"wall_s", f.wall_s},
             {"lag_max_s", f.lag_max_s},

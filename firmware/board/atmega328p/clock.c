@@ -24,10 +24,25 @@ ISR(TIMER1_OVF_vect) { overflow_us += 32768u; }
    sends a paced sample once its reading is in. */
 ISR(TIMER1_COMPA_vect) { OCR1A += PERIOD_TICKS; }
 
+static volatile uint64_t next_sample_us; /* when compare B next starts a reading */
+static volatile uint8_t sample_epoch;    /* the number of the last reading it started */
+
 /* The reading that completes at the boundary (and keeps the MR sensor's flips counted). */
 ISR(TIMER1_COMPB_vect) {
     OCR1B += PERIOD_TICKS;
-    position_start();
+    const uint8_t reading = position_start();
+    next_sample_us += HFW_PERIOD_US;
+    ++sample_epoch;
+    clock_on_sample(sample_epoch, reading);
+}
+
+uint64_t clock_next_sample(uint8_t* epoch) {
+    const uint8_t sreg = SREG;
+    cli();
+    const uint64_t at_us = next_sample_us;
+    *epoch = (uint8_t)(sample_epoch + 1u);
+    SREG = sreg;
+    return at_us;
 }
 
 void clock_init(void) {
@@ -39,9 +54,11 @@ void clock_init(void) {
 void clock_start_periods(uint16_t lead_us) {
     const uint8_t sreg = SREG;
     cli();
-    const uint16_t boundary = (uint16_t)(TCNT1 + PERIOD_TICKS);
+    const uint16_t now = TCNT1;
+    const uint16_t boundary = (uint16_t)(now + PERIOD_TICKS);
     OCR1A = boundary;
     OCR1B = (uint16_t)(boundary - TICKS_PER_US * lead_us);
+    next_sample_us = clock_now_us() + (uint16_t)(OCR1B - now) / TICKS_PER_US;
     TIFR1 = _BV(OCF1A) | _BV(OCF1B);
     TIMSK1 |= _BV(OCIE1A) | _BV(OCIE1B);
     SREG = sreg;

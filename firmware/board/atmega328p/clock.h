@@ -14,4 +14,12 @@ uint64_t clock_now_us(void);
    started lead_us before its boundary (position_lead_us()). */
 void clock_start_periods(uint16_t lead_us);
 
+/* The next period's reading: when it will start (us) and its number (*epoch; the readings
+   the clock starts are numbered from 1, wrapping at 256). */
+uint64_t clock_next_sample(uint8_t* epoch);
+
+/* Called by the clock's interrupt right after it started reading number `epoch`, which
+   completes as position_readings() reaches `reading` (paced.c sends a sample's front then). */
+void clock_on_sample(uint8_t epoch, uint8_t reading);
+
 #endif

@@ -20,6 +20,7 @@
 #include "hfw_device.h"
 #include "hfw_kinematics.h"
 #include "motor.h"
+#include "paced.h"
 #include "position.h"
 #include "uart.h"
 
@@ -51,13 +52,29 @@ static uint64_t now_us(void* context) {
     return clock_now_us();
 }
 
-static void send(size_t size) { uart_send(hfw_cobs_encode(reply, size, uart_tx_buffer())); }
+/* A paced sample on its way out is finished first: its reading is at most a conversion
+   away, and the line must carry it whole before anything else. */
+static void finish_paced(void) {
+    while (paced_started()) {
+        if (paced_ready_to_finish()) paced_finish(&device);
+    }
+}
+
+static void send(size_t size) {
+    finish_paced();
+    uart_send(hfw_cobs_encode(reply, size, uart_tx_buffer()));
+}
 
 static void send_sample(void);
 
 static void answer(const uint8_t* frame, uint8_t size) {
     /* Every request gets its reply: one still waiting for its reading goes out now, with the
-       latest (a host that does not wait for its replies). */
+       latest (a host that does not wait for its replies). A paced front that has not started
+       answers that request too: it goes now, whole. */
+    if (paced_pending() && !paced_started()) {
+        paced_cancel();
+        sample_due = 1;
+    }
     if (sample_due) send_sample();
     size_t reply_size = 0;
     const enum hfw_reply kind =
@@ -65,10 +82,10 @@ static void answer(const uint8_t* frame, uint8_t size) {
     if (kind == HFW_REPLY_FRAME) send(reply_size);
     if (kind != HFW_REPLY_SAMPLE) return;
     sample_due = 1;
-    /* Paced: the reading the clock completes at the boundary. Otherwise one sampled after
-       the force was set (a reading under way may have sampled before it). */
-    sample_reading =
-        hfw_device_paced(&device) ? (uint8_t)(position_readings() + 1u) : position_start();
+    /* Paced: the main loop writes the front for the next period's reading (paced.h).
+       Otherwise a reading sampled after the force was set (one under way may have sampled
+       before it). */
+    if (!hfw_device_paced(&device)) sample_reading = position_start();
 }
 
 /* Reads and decodes bytes as they come until the line is quiet, answering each whole frame.
@@ -90,6 +107,7 @@ static void receive(void) {
 }
 
 static void send_sample(void) {
+    finish_paced(); /* its sample comes first: it has the earlier sequence number */
     uint64_t sampled_us = 0;
     uint16_t sensor_status = 0;
     int64_t counts[HFW_MAX_AXES] = {0, 0, 0};
@@ -117,10 +135,20 @@ int main(void) {
     for (;;) {
         wdt_reset();
         if (uart_pending()) receive();
-        if (sample_due && position_readings() == sample_reading) send_sample();
+        if (paced_ready_to_finish()) paced_finish(&device); /* even if the session just ended */
+        if (hfw_device_paced(&device)) {
+            if (sample_due && !paced_pending() && uart_idle()) {
+                paced_prepare(&device);
+                sample_due = 0;
+            }
+        } else if (sample_due && position_readings() == sample_reading) {
+            send_sample();
+        }
         hfw_device_check_watchdog(&device, clock_now_us());
         cli();
-        if (!uart_pending() && !(sample_due && position_readings() == sample_reading)) {
+        if (!uart_pending() && !paced_ready_to_finish() &&
+            !(sample_due &&
+              (hfw_device_paced(&device) ? uart_idle() : position_readings() == sample_reading))) {
             sleep_enable();
             sei();
             sleep_cpu();

@@ -17,6 +17,9 @@ void position_init(void);
    period's reading this long before the boundary. */
 uint16_t position_lead_us(void);
 
+/* From a reading's start to the moment the sensor samples (us): the sample's time_us. */
+uint8_t position_sample_delay_us(void);
+
 /* Starts a reading now, or right after the one under way. Returns the number of readings
    (position_readings()) once the first reading sampled at or after now has completed. */
 uint8_t position_start(void);

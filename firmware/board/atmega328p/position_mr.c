@@ -61,6 +61,8 @@ void position_init(void) {
 
 uint16_t position_lead_us(void) { return CONVERSION_US + 16u; }
 
+uint8_t position_sample_delay_us(void) { return SAMPLE_AFTER_START_US; }
+
 uint8_t position_start(void) {
     const uint8_t sreg = SREG;
     cli();

@@ -53,6 +53,8 @@ void position_init(void) {
 
 uint16_t position_lead_us(void) { return 0; }
 
+uint8_t position_sample_delay_us(void) { return 0; }
+
 uint8_t position_start(void) {
     const uint8_t sreg = SREG;
     cli();

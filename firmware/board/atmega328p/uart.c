@@ -6,7 +6,8 @@
 #include "hfw_cobs.h"
 
 static uint8_t tx_buffer[HFW_COBS_MAX_ENCODED];
-static volatile uint8_t tx_next, tx_size;
+static volatile uint8_t tx_next, tx_allowed; /* sent, and allowed to go */
+static volatile uint8_t tx_last = 1;         /* tx_allowed covers the whole frame */
 
 /* A byte has come: wake the main loop, and leave the bytes to it. */
 ISR(USART_RX_vect) { UCSR0B &= (uint8_t)~_BV(RXCIE0); }
@@ -15,7 +16,7 @@ ISR(USART_UDRE_vect) {
     const uint8_t next = tx_next;
     UDR0 = tx_buffer[next];
     tx_next = (uint8_t)(next + 1u);
-    if (next + 1u == tx_size) UCSR0B &= (uint8_t)~_BV(UDRIE0);
+    if (next + 1u == tx_allowed) UCSR0B &= (uint8_t)~_BV(UDRIE0); /* until more is allowed */
 }
 
 void uart_init(void) {
@@ -29,15 +30,29 @@ uint8_t uart_pending(void) { return (UCSR0A & _BV(RXC0)) != 0; }
 
 void uart_receive_done(void) { UCSR0B |= _BV(RXCIE0); }
 
+uint8_t uart_idle(void) {
+    const uint8_t sreg = SREG;
+    cli();
+    const uint8_t idle = tx_last && tx_next == tx_allowed;
+    SREG = sreg;
+    return idle;
+}
+
 uint8_t* uart_tx_buffer(void) {
-    while (UCSR0B & _BV(UDRIE0)) {
+    while (!uart_idle()) {
     } /* the last frame is still going out */
+    tx_next = 0;
+    tx_allowed = 0;
+    tx_last = 0;
     return tx_buffer;
 }
 
-void uart_send(size_t size) {
-    if (size == 0 || size > sizeof tx_buffer) return;
-    tx_next = 0;
-    tx_size = (uint8_t)size;
-    UCSR0B |= _BV(UDRIE0);
+void uart_allow(uint8_t count, uint8_t last) {
+    const uint8_t sreg = SREG;
+    cli();
+    if (count > sizeof tx_buffer) count = sizeof tx_buffer;
+    tx_allowed = count;
+    tx_last = last;
+    if (tx_next < count) UCSR0B |= _BV(UDRIE0);
+    SREG = sreg;
 }

@@ -30,8 +30,12 @@ static inline uint8_t uart_poll(uint8_t* byte) {
 void uart_receive_done(void);
 
 /* The buffer for the next frame out (HFW_COBS_MAX_ENCODED bytes), once the last one has
-   gone; uart_send() sends its first `size` bytes. */
+   gone. uart_send() sends its first `size` bytes; uart_allow() lets its first `count` go
+   while the rest is still being written (an interrupt may call it), `last` when they are all.
+   uart_idle(): the last frame has gone. */
 uint8_t* uart_tx_buffer(void);
-void uart_send(size_t size);
+void uart_allow(uint8_t count, uint8_t last);
+static inline void uart_send(size_t size) { uart_allow((uint8_t)size, 1); }
+uint8_t uart_idle(void);
 
 #endif

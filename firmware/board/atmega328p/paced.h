@@ -1,0 +1,31 @@
+/* docs/protocol.md 5.8 on this board: in a session the board paces, a sample goes out in two
+   parts. Before the period's reading is sampled, its front (everything but the counts: the
+   first 32 bytes of a one-axis sample) is written, CRC'd and COBS-encoded into the UART's
+   buffer; the clock's interrupt starts sending it as it starts the reading; when the reading
+   is in, the counts and the CRC finish it. So the counts wait only for their own 12 bytes on
+   the line, not for the whole frame's 46, and the host's next command can come back before
+   the next boundary. */
+#ifndef HFW_BOARD_PACED_H
+#define HFW_BOARD_PACED_H
+
+#include <stdint.h>
+
+#include "hfw_device.h"
+
+/* Writes the front of the sample answering the device's last request for the next period's
+   reading (the UART must be idle). */
+void paced_prepare(const struct hfw_device* d);
+
+/* A front is written, or on its way out. */
+uint8_t paced_pending(void);
+/* ... and the clock has started sending it: it can no longer change. */
+uint8_t paced_started(void);
+/* Drops a front that has not started (a request came that it does not answer). */
+void paced_cancel(void);
+
+/* Started, and its reading is in: paced_finish() writes the counts and the CRC and lets the
+   rest go. */
+uint8_t paced_ready_to_finish(void);
+void paced_finish(struct hfw_device* d);
+
+#endif
