@@ -44,6 +44,12 @@ size_t hfw_cobs_encode(const uint8_t* frame, size_t size, uint8_t* out) {
     return hfw_cobs_finish(&e);
 }
 
+void hfw_cobs_init(struct hfw_cobs_decoder* d, uint8_t* frame) {
+    d->frame = frame;
+    d->dropped = 0;
+    hfw_cobs_reset(d);
+}
+
 void hfw_cobs_reset(struct hfw_cobs_decoder* d) {
     d->size = 0;
     d->remaining = 0;

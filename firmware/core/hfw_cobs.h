@@ -37,9 +37,11 @@ static inline uint8_t hfw_cobs_final(const struct hfw_cobs_encoder* e) { return 
 /* Closes the last block and writes the delimiter; returns the encoded size. */
 size_t hfw_cobs_finish(struct hfw_cobs_encoder* e);
 
-/* The receiver, fed one byte at a time as the bytes arrive. */
+/* The receiver, fed one byte at a time as the bytes arrive. Its state is a few bytes, which a
+   board copies into a local variable while bytes come (the compiler then keeps it in
+   registers); the frame is in a buffer of the caller's. */
 struct hfw_cobs_decoder {
-    uint8_t frame[HFW_MAX_FRAME_SIZE];
+    uint8_t* frame;       /* HFW_MAX_FRAME_SIZE bytes */
     uint8_t size;         /* decoded bytes so far */
     uint8_t remaining;    /* data bytes left in the current block; 0: next is a code byte */
     uint8_t zero_pending; /* the current block ends in an implied 0x00 */
@@ -48,6 +50,9 @@ struct hfw_cobs_decoder {
     uint16_t dropped;     /* frames dropped as broken (wraps) */
 };
 
+/* Starts a receiver on `frame` (HFW_MAX_FRAME_SIZE bytes); hfw_cobs_reset() forgets a
+   partial frame. */
+void hfw_cobs_init(struct hfw_cobs_decoder* d, uint8_t* frame);
 void hfw_cobs_reset(struct hfw_cobs_decoder* d);
 
 /* Takes one byte; returns 1 when it was the delimiter after a whole frame, which is then in

@@ -314,17 +314,28 @@ uint32_t hfw_device_sample_begin(const struct hfw_device* d, uint64_t time_us,
     return hfw_crc32c_update(HFW_CRC32C_START, out, HFW_SAMPLE_COUNTS_OFFSET);
 }
 
-size_t hfw_device_sample_end(struct hfw_device* d, uint32_t crc_state,
-                             const int64_t counts[HFW_MAX_AXES], uint8_t* out) {
-    const uint8_t axes = d->config->axes;
+void hfw_device_sample_counts(const struct hfw_device* d, const int64_t counts[HFW_MAX_AXES],
+                              uint8_t* out) {
     uint8_t* c = out + HFW_SAMPLE_COUNTS_OFFSET;
-    for (uint8_t i = 0; i < axes; ++i) hfw_store_u64(c + (size_t)8 * i, (uint64_t)counts[i]);
-    const size_t crc_at = HFW_SAMPLE_COUNTS_OFFSET + (size_t)8 * axes;
-    crc_state = hfw_crc32c_update(crc_state, c, (size_t)8 * axes);
+    for (uint8_t i = 0; i < d->config->axes; ++i) {
+        hfw_store_u64(c + (size_t)8 * i, (uint64_t)counts[i]);
+    }
+}
+
+size_t hfw_device_sample_close(struct hfw_device* d, uint32_t crc_state, uint8_t* out) {
+    const size_t crc_at = HFW_SAMPLE_COUNTS_OFFSET + (size_t)8 * d->config->axes;
     hfw_store_u32(out + crc_at, crc_state ^ HFW_CRC32C_START);
     ++d->sample_sequence;
     d->command_status = 0;
     return crc_at + HFW_CRC_SIZE;
+}
+
+size_t hfw_device_sample_end(struct hfw_device* d, uint32_t crc_state,
+                             const int64_t counts[HFW_MAX_AXES], uint8_t* out) {
+    hfw_device_sample_counts(d, counts, out);
+    crc_state =
+        hfw_crc32c_update(crc_state, out + HFW_SAMPLE_COUNTS_OFFSET, (size_t)8 * d->config->axes);
+    return hfw_device_sample_close(d, crc_state, out);
 }
 
 size_t hfw_device_sample(struct hfw_device* d, const int64_t counts[HFW_MAX_AXES], uint64_t time_us,

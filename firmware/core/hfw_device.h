@@ -113,6 +113,13 @@ uint32_t hfw_device_sample_begin(const struct hfw_device* d, uint64_t time_us,
                                  uint16_t sensor_status, uint8_t* out);
 size_t hfw_device_sample_end(struct hfw_device* d, uint32_t crc_state,
                              const int64_t counts[HFW_MAX_AXES], uint8_t* out);
+/* hfw_device_sample_end() in steps, for a board that sends the frame while it finishes it:
+   hfw_device_sample_counts() writes the counts at HFW_SAMPLE_COUNTS_OFFSET; the caller runs
+   the CRC's state over those bytes (hfw_crc32c_update); hfw_device_sample_close() writes the
+   CRC, commits the sample and returns the frame's size. */
+void hfw_device_sample_counts(const struct hfw_device* d, const int64_t counts[HFW_MAX_AXES],
+                              uint8_t* out);
+size_t hfw_device_sample_close(struct hfw_device* d, uint32_t crc_state, uint8_t* out);
 /* Where the counts start in a sample frame: the size of what hfw_device_sample_begin()
    writes. */
 #define HFW_SAMPLE_COUNTS_OFFSET (HFW_HEADER_SIZE + 24u)

@@ -2,6 +2,7 @@
 // protocol's definitions and the host's own codec (docs/protocol.md sections 3.3 and 6.3).
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cstdint>
 #include <random>
 #include <span>
@@ -125,8 +126,9 @@ TEST(FirmwareCobs, InPartsIsTheWholeAndTheFinalBytesNeverChange) {
 
 TEST(FirmwareCobs, EncodesAsTheHostDoesAndRoundTrips) {
     std::mt19937 random(6);
+    std::array<std::uint8_t, HFW_MAX_FRAME_SIZE> buffer{};
     hfw_cobs_decoder decoder{};
-    hfw_cobs_reset(&decoder);
+    hfw_cobs_init(&decoder, buffer.data());
     for (int trial = 0; trial < 3000; ++trial) {
         // Frames of every size the protocol has, from no zeros to nothing but zeros.
         const auto frame = random_frame(random, 1 + random() % HFW_MAX_FRAME_SIZE,
@@ -148,8 +150,9 @@ TEST(FirmwareCobs, EncodesAsTheHostDoesAndRoundTrips) {
 
 TEST(FirmwareCobs, GarbageCostsOnlyTheFrameItRanInto) {
     std::mt19937 random(7);
+    std::array<std::uint8_t, HFW_MAX_FRAME_SIZE> buffer{};
     hfw_cobs_decoder decoder{};
-    hfw_cobs_reset(&decoder);
+    hfw_cobs_init(&decoder, buffer.data());
     const auto good = random_frame(random, 44, 30);
     std::vector<std::uint8_t> line = {0x00};  // the host's opening delimiter
     for (int i = 0; i < 500; ++i) line.push_back(static_cast<std::uint8_t>(random()));
@@ -163,8 +166,9 @@ TEST(FirmwareCobs, GarbageCostsOnlyTheFrameItRanInto) {
 }
 
 TEST(FirmwareCobs, DropsAndCountsOverlongAndCutFrames) {
+    std::array<std::uint8_t, HFW_MAX_FRAME_SIZE> buffer{};
     hfw_cobs_decoder decoder{};
-    hfw_cobs_reset(&decoder);
+    hfw_cobs_init(&decoder, buffer.data());
     // 61 non-zero bytes: one more than the largest frame.
     std::vector<std::uint8_t> overlong(HFW_MAX_FRAME_SIZE + 1, 0x55);
     std::vector<std::uint8_t> line = firmware_encode(overlong);
@@ -185,8 +189,9 @@ TEST(FirmwareCobs, DropsAndCountsOverlongAndCutFrames) {
 
 TEST(FirmwareCobs, DecodesWhatTheHostEncodes) {
     std::mt19937 random(8);
+    std::array<std::uint8_t, HFW_MAX_FRAME_SIZE> buffer{};
     hfw_cobs_decoder decoder{};
-    hfw_cobs_reset(&decoder);
+    hfw_cobs_init(&decoder, buffer.data());
     std::vector<std::uint8_t> line;
     std::vector<std::vector<std::uint8_t>> frames;
     for (int i = 0; i < 200; ++i) {

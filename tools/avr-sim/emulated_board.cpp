@@ -9,6 +9,7 @@
 #include <simavr/sim_io.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <stdexcept>
 
@@ -25,6 +26,8 @@ constexpr std::uint8_t kPin5 = 1u << 5, kPin0 = 1u << 0;
 constexpr std::uint16_t kUcsr0A = 0xC0, kUcsr0B = 0xC1, kUcsr0C = 0xC2, kUbrr0L = 0xC4,
                         kUbrr0H = 0xC5;
 constexpr std::uint32_t kSupplyMv = 5000;
+/// Overruns named on standard error, each with where the firmware was; the rest are counted.
+constexpr std::uint64_t kOverrunsReported = 10;
 
 /// USART0's time per byte as the hardware sends it: start, data, parity if enabled, stop
 /// bits. simavr 1.6 counts a parity bit in every byte (11 bit times for 8N1, not 10) and
@@ -78,8 +81,6 @@ EmulatedBoard::EmulatedBoard(const std::string& firmware_elf, const PaddleConfig
     avr_ioctl(avr_, AVR_IOCTL_UART_SET_FLAGS('0'), &flags);
     avr_irq_register_notify(avr_io_getirq(avr_, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUTPUT),
                             &EmulatedBoard::on_uart_output, this);
-    avr_irq_register_notify(avr_io_getirq(avr_, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUT_XOFF),
-                            &EmulatedBoard::on_uart_xoff, this);
     avr_irq_register_notify(avr_io_getirq(avr_, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_OUT_TRIGGER),
                             &EmulatedBoard::on_adc_trigger, this);
     if (sensor_ == PositionSensor::quadrature) {
@@ -110,26 +111,61 @@ void EmulatedBoard::run_until(std::uint64_t cycle) {
                 std::to_string(avr_->pc) +
                 "): " + (state == cpu_Done ? "it slept with interrupts off" : "it crashed"));
         }
-        if (!to_board_.empty() && !uart_full_) feed_uart();
     }
 }
 
 std::uint64_t EmulatedBoard::cycles_per_byte() const { return uart_->cycles_per_byte; }
 
 std::uint64_t EmulatedBoard::send_to_board(std::uint8_t byte) {
-    line_in_free_cycle_ = std::max(line_in_free_cycle_, cycle()) + cycles_per_byte();
-    to_board_.push_back(byte);
-    if (!uart_full_) feed_uart();
+    line_in_free_cycle_ =
+        std::max(line_in_free_cycle_, cycle() + cycles_per_byte()) + cycles_per_byte();
+    const bool idle = to_board_.empty() && !arriving_;
+    to_board_.push_back({byte, line_in_free_cycle_});
+    if (idle) {
+        const std::uint64_t hand_over = line_in_free_cycle_ - cycles_per_byte();
+        avr_cycle_timer_register(avr_, hand_over - cycle(), &EmulatedBoard::receive_timer, this);
+    }
     return line_in_free_cycle_;
 }
 
-void EmulatedBoard::feed_uart() {
-    avr_irq_t* input = avr_io_getirq(avr_, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_INPUT);
-    while (!to_board_.empty() && !uart_full_) {
-        const std::uint8_t byte = to_board_.front();
-        to_board_.pop_front();
-        avr_raise_irq(input, byte);  // may raise XOFF, which sets uart_full_
+std::uint64_t EmulatedBoard::receive_timer(avr_t* avr, std::uint64_t when, void* self) {
+    auto* board = static_cast<EmulatedBoard*>(self);
+    avr_uart_t* uart = board->uart_;
+    uart->rxc_raise_time = 0;  // as in plant_timer: no read throttle
+    const std::uint64_t byte_cycles = board->cycles_per_byte();
+    // The byte handed over last has arrived whole: the USART holds two, so if two were still
+    // unread it never got in (an overrun), and it is taken back out of simavr's FIFO.
+    if (board->arriving_ && board->arrival_cycle_ <= when) {
+        board->arriving_ = false;
+        const unsigned unread = (uart->input.write - uart->input.read) & (uart_fifo_fifo_size - 1);
+        if (unread >= 3) {
+            uart->input.write = (uart->input.write - 1) & (uart_fifo_fifo_size - 1);
+            if (++board->receive_overruns_ <= kOverrunsReported) {
+                std::fprintf(stderr,
+                             "hapticd-avr-sim: a received byte overran the USART at cycle %llu: "
+                             "the firmware was at 0x%04x (avr-addr2line -e the ELF says where)\n",
+                             static_cast<unsigned long long>(when), avr->pc);
+            }
+        }
     }
+    if (!board->to_board_.empty() && board->to_board_.front().done_cycle - byte_cycles <= when) {
+        avr_raise_irq(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_INPUT),
+                      board->to_board_.front().value);
+        board->arriving_ = true;
+        board->arrival_cycle_ = board->to_board_.front().done_cycle;
+        board->to_board_.pop_front();
+    }
+    std::uint64_t next = board->arriving_ ? board->arrival_cycle_ : 0;
+    if (!board->to_board_.empty()) {
+        const std::uint64_t hand_over = board->to_board_.front().done_cycle - byte_cycles;
+        next = next == 0 ? hand_over : std::min(next, hand_over);
+    }
+    return next;
+}
+
+std::uint64_t EmulatedBoard::transmit_free_timer(avr_t* avr, std::uint64_t, void* self) {
+    avr_raise_interrupt(avr, &static_cast<EmulatedBoard*>(self)->uart_->udrc);
+    return 0;
 }
 
 std::vector<LineByte> EmulatedBoard::take_sent() {
@@ -157,6 +193,10 @@ MotorPins EmulatedBoard::motor_pins() const {
 std::uint64_t EmulatedBoard::plant_timer(avr_t*, std::uint64_t when, void* self) {
     auto* board = static_cast<EmulatedBoard*>(self);
     board->uart_->cycles_per_byte = usart0_cycles_per_byte(board->avr_->data);
+    // simavr lets the firmware read at most one byte per byte time since RXC first rose, so a
+    // firmware delayed by an interrupt could never catch up; the real USART lets it read its
+    // two-byte FIFO back to back. Keep that throttle from ever applying.
+    board->uart_->rxc_raise_time = 0;
     const MotorPins pins = board->motor_pins();
     board->plant_.step(static_cast<double>(board->plant_step_cycles_) / kCpuHz, pins);
     if (board->sensor_ == PositionSensor::quadrature) {
@@ -201,12 +241,21 @@ std::uint64_t EmulatedBoard::profile_timer(avr_t* avr, std::uint64_t when, void*
 void EmulatedBoard::on_uart_output(avr_irq_t*, std::uint32_t value, void* self) {
     auto* board = static_cast<EmulatedBoard*>(self);
     board->profiling_ = false;
-    board->sent_.push_back(
-        {static_cast<std::uint8_t>(value), board->cycle() + board->cycles_per_byte()});
-}
-
-void EmulatedBoard::on_uart_xoff(avr_irq_t*, std::uint32_t value, void* self) {
-    static_cast<EmulatedBoard*>(self)->uart_full_ = value != 0;
+    // The USART's data register and shift register: a byte written while the line is idle
+    // starts at once and frees the data register for the next; one written while a byte is
+    // shifting out waits in it until that one is done. simavr 1.6 frees the data register
+    // only when its byte is done, which halves a polled UART's rate; UDRE is raised here
+    // when the hardware would.
+    const std::uint64_t now = board->cycle();
+    const std::uint64_t start = std::max(now, board->line_out_free_cycle_);
+    board->line_out_free_cycle_ = start + board->cycles_per_byte();
+    board->sent_.push_back({static_cast<std::uint8_t>(value), board->line_out_free_cycle_});
+    if (start == now) {
+        avr_raise_interrupt(board->avr_, &board->uart_->udrc);
+    } else {
+        avr_cycle_timer_register(board->avr_, start - now, &EmulatedBoard::transmit_free_timer,
+                                 board);
+    }
 }
 
 void EmulatedBoard::on_adc_trigger(avr_irq_t*, std::uint32_t, void* self) {

@@ -51,8 +51,12 @@ class EmulatedBoard {
     double time_s() const { return static_cast<double>(cycle()) / kCpuHz; }
 
     /// A byte from the host onto the line into the MCU's RX pin. Bytes follow each other at
-    /// the line's rate; the cycle at which this one has arrived whole is returned.
+    /// the line's rate; the cycle at which this one has arrived whole is returned. As on the
+    /// real USART, a byte that arrives while two are still unread is lost (an overrun).
     std::uint64_t send_to_board(std::uint8_t byte);
+
+    /// Bytes lost because the firmware had not read the two before them in time.
+    std::uint64_t receive_overruns() const { return receive_overruns_; }
 
     /// The bytes the firmware has sent that have left the line by now, in order.
     std::vector<LineByte> take_sent();
@@ -82,9 +86,9 @@ class EmulatedBoard {
     static std::uint64_t profile_timer(avr_t* avr, std::uint64_t when, void* self);
     static std::uint64_t profile_start(avr_t* avr, std::uint64_t when, void* self);
     static void on_uart_output(avr_irq_t* irq, std::uint32_t value, void* self);
-    static void on_uart_xoff(avr_irq_t* irq, std::uint32_t value, void* self);
     static void on_adc_trigger(avr_irq_t* irq, std::uint32_t value, void* self);
-    void feed_uart();
+    static std::uint64_t receive_timer(avr_t* avr, std::uint64_t when, void* self);
+    static std::uint64_t transmit_free_timer(avr_t* avr, std::uint64_t when, void* self);
 
     avr_t* avr_ = nullptr;
     avr_uart_t* uart_ = nullptr;
@@ -92,9 +96,15 @@ class EmulatedBoard {
     PositionSensor sensor_;
     std::uint64_t plant_step_cycles_;
     std::function<void(const EmulatedBoard&, MotorPins)> observer_;
-    std::deque<std::uint8_t> to_board_;  // waiting while the UART's receive FIFO is full
-    bool uart_full_ = false;
-    std::uint64_t line_in_free_cycle_ = 0;  // when the RX line is free for the next byte
+    /// Host bytes on their way, each handed to simavr's receiver a byte time before it has
+    /// arrived whole (simavr makes a byte readable a byte time after it is handed over), and
+    /// taken back out at its arrival if the USART would have had no room for it.
+    std::deque<LineByte> to_board_;
+    bool arriving_ = false;                  // a byte handed over has yet to arrive
+    std::uint64_t arrival_cycle_ = 0;        // ... at this cycle
+    std::uint64_t line_in_free_cycle_ = 0;   // when the RX line is free for the next byte
+    std::uint64_t line_out_free_cycle_ = 0;  // when the TX shift register is free
+    std::uint64_t receive_overruns_ = 0;
     std::deque<LineByte> sent_;
     std::uint8_t encoder_channels_ = 0;
     std::uint64_t profile_every_cycles_ = 0;

@@ -34,7 +34,8 @@ double percentile(std::vector<double> values, double p) {
 }
 
 nlohmann::json figures_json(const hapticd::avr_sim::HarnessFigures& f,
-                            const hapticd::avr_sim::PaddlePlant& plant) {
+                            const hapticd::avr_sim::EmulatedBoard& board) {
+    const hapticd::avr_sim::PaddlePlant& plant = board.plant();
     const auto stats = [](const std::vector<double>& values) {
         return nlohmann::json{{"count", values.size()},
                               {"p50", percentile(values, 0.5)},
@@ -47,6 +48,7 @@ nlohmann::json figures_json(const hapticd::avr_sim::HarnessFigures& f,
             {"device_latency_us", stats(f.latency_us)},
             {"device_compute_us", compute},
             {"host_turnaround_us", stats(f.turnaround_us)},
+            {"receive_overruns", board.receive_overruns()},
             {"emulated_s", f.emulated_s},
             {"wall_s", f.wall_s},
             {"lag_max_s", f.lag_max_s},
@@ -185,7 +187,7 @@ int run(int argc, char** argv) {
         if (!profile.empty()) board.start_profile(7);
         Harness harness(board, pty, options);
         const HarnessFigures figures = harness.run(g_stop);
-        const nlohmann::json report = figures_json(figures, board.plant());
+        const nlohmann::json report = figures_json(figures, board);
         std::cerr << "hapticd-avr-sim: " << report.dump() << "\n";
         if (!profile.empty()) {
             std::ofstream out(profile);

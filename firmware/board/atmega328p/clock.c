@@ -27,8 +27,11 @@ ISR(TIMER1_COMPA_vect) { OCR1A += PERIOD_TICKS; }
 static volatile uint64_t next_sample_us; /* when compare B next starts a reading */
 static volatile uint8_t sample_epoch;    /* the number of the last reading it started */
 
-/* The reading that completes at the boundary (and keeps the MR sensor's flips counted). */
-ISR(TIMER1_COMPB_vect) {
+/* The reading that completes at the boundary (and keeps the MR sensor's flips counted).
+   Interruptible (ISR_NOBLOCK), as the ADC's is: the USART's receive interrupt must run within
+   two byte times (10 us) of a byte, or the next one overruns its two-byte buffer. The short
+   ones (the overflow's 64-bit add, compare A) block. */
+ISR(TIMER1_COMPB_vect, ISR_NOBLOCK) {
     OCR1B += PERIOD_TICKS;
     const uint8_t reading = position_start();
     next_sample_us += HFW_PERIOD_US;

@@ -5,6 +5,7 @@
 
 #include "clock.h"
 #include "hfw_cobs.h"
+#include "hfw_crc32c.h"
 #include "position.h"
 #include "uart.h"
 
@@ -12,15 +13,14 @@ static uint8_t frame[HFW_MAX_FRAME_SIZE];
 static struct hfw_cobs_encoder encoder;
 static uint32_t crc_state;
 static volatile uint8_t written; /* a front is in the UART's buffer */
-static volatile uint8_t started; /* the clock has let it go */
+static volatile uint8_t started; /* the clock has started its reading */
 static volatile uint8_t epoch;   /* the reading it is for */
 static volatile uint8_t reading; /* position_readings() once that reading is in */
 
 void clock_on_sample(uint8_t sample_epoch, uint8_t sample_reading) {
     if (!written || started || sample_epoch != epoch) return;
-    started = 1;
     reading = sample_reading;
-    uart_allow(hfw_cobs_final(&encoder), 0);
+    started = 1;
 }
 
 void paced_prepare(const struct hfw_device* d) {
@@ -58,17 +58,60 @@ void paced_cancel(void) {
     if (drop) uart_allow(0, 1); /* nothing of it went out: the buffer is free again */
 }
 
-uint8_t paced_ready_to_finish(void) { return started && position_readings() == reading; }
+/* The bytes of the UART's buffer sent so far, by hand. */
+static uint8_t sent;
 
-void paced_finish(struct hfw_device* d) {
-    uint64_t sampled_us = 0;
+/* One byte more onto the line, if the UART can take it and it is final. The UART holds two
+   (its data register and its shift register): called at least every 140 cycles, the line
+   never idles while there is something to send. */
+static inline void feed(void) {
+    if (uart_tx_free() && sent < hfw_cobs_final(&encoder)) uart_tx_put(encoder.out[sent++]);
+}
+
+/* Sends until the reading is in. */
+static void send_until_reading(void) {
+    while (position_readings() != reading) feed();
+}
+
+/* Runs `size` bytes of the frame through the CRC (or the COBS encoder) four at a time, a feed
+   between each: four bytes are about 140 cycles of either. */
+static void crc_bytes(uint8_t from, uint8_t size) {
+    for (uint8_t i = 0; i < size; i = (uint8_t)(i + 4u)) {
+        const uint8_t left = (uint8_t)(size - i);
+        const uint8_t n = left < 4u ? left : 4u;
+        crc_state = hfw_crc32c_update(crc_state, frame + from + i, n);
+        feed();
+    }
+}
+
+static void encode_bytes(uint8_t from, uint8_t size) {
+    for (uint8_t i = 0; i < size; i = (uint8_t)(i + 4u)) {
+        const uint8_t left = (uint8_t)(size - i);
+        const uint8_t n = left < 4u ? left : 4u;
+        hfw_cobs_put(&encoder, frame + from + i, n);
+        feed();
+    }
+}
+
+void paced_send(struct hfw_device* d) {
+    sent = 0;
+    send_until_reading();
+    uint64_t sampled_us =
+        0; /* the front said when: the start the clock scheduled, plus the delay */
     uint16_t status = 0;
     int64_t counts[HFW_MAX_AXES] = {0, 0, 0};
     counts[0] = position_last(&sampled_us, &status);
-    (void)sampled_us; /* the front said when: the start the clock scheduled, plus the delay */
-    const size_t size = hfw_device_sample_end(d, crc_state, counts, frame);
-    hfw_cobs_put(&encoder, frame + HFW_SAMPLE_COUNTS_OFFSET, size - HFW_SAMPLE_COUNTS_OFFSET);
-    uart_allow((uint8_t)hfw_cobs_finish(&encoder), 1);
+    feed();
+    hfw_device_sample_counts(d, counts, frame);
+    feed();
+    const uint8_t counts_size = (uint8_t)(8u * d->config->axes);
+    crc_bytes(HFW_SAMPLE_COUNTS_OFFSET, counts_size);
+    const uint8_t size = (uint8_t)hfw_device_sample_close(d, crc_state, frame);
+    feed();
+    encode_bytes(HFW_SAMPLE_COUNTS_OFFSET, (uint8_t)(size - HFW_SAMPLE_COUNTS_OFFSET));
+    const uint8_t total = (uint8_t)hfw_cobs_finish(&encoder);
+    while (sent < total) feed();
+    uart_allow(0, 1);
     cli();
     written = 0;
     started = 0;

@@ -1,10 +1,10 @@
 /* docs/protocol.md 5.8 on this board: in a session the board paces, a sample goes out in two
    parts. Before the period's reading is sampled, its front (everything but the counts: the
    first 32 bytes of a one-axis sample) is written, CRC'd and COBS-encoded into the UART's
-   buffer; the clock's interrupt starts sending it as it starts the reading; when the reading
-   is in, the counts and the CRC finish it. So the counts wait only for their own 12 bytes on
-   the line, not for the whole frame's 46, and the host's next command can come back before
-   the next boundary. */
+   buffer; once the clock's interrupt has started the reading, the main loop sends it while
+   the reading completes, and finishes the frame between bytes. So the counts wait only for their
+   own 12 bytes on the line, not for the whole frame's 46, and the host's next command can come back
+   before the next boundary. */
 #ifndef HFW_BOARD_PACED_H
 #define HFW_BOARD_PACED_H
 
@@ -23,9 +23,11 @@ uint8_t paced_started(void);
 /* Drops a front that has not started (a request came that it does not answer). */
 void paced_cancel(void);
 
-/* Started, and its reading is in: paced_finish() writes the counts and the CRC and lets the
-   rest go. */
-uint8_t paced_ready_to_finish(void);
-void paced_finish(struct hfw_device* d);
+/* Once the clock has started the reading: sends the front byte by byte while the reading
+   completes, then finishes the frame (the counts, the CRC) in short steps between bytes and
+   sends the rest (bytes that come in meanwhile wait in the UART's receive ring). Returns when the
+   frame is out: a period's last byte about 230 us (46 bytes at 2 Mbaud) after its reading started.
+ */
+void paced_send(struct hfw_device* d);
 
 #endif

@@ -25,20 +25,21 @@ static volatile uint8_t readings;
 static volatile uint8_t busy;
 static volatile uint8_t restart; /* start another as soon as this one completes */
 
+/* Called with `busy` just set, by its only owner: nothing else touches the conversion. */
 static void start_conversion(void) {
     started_us = clock_now_us();
-    busy = 1;
     ADCSRA |= _BV(ADSC);
 }
 
-ISR(ADC_vect) {
+ISR(ADC_vect, ISR_NOBLOCK) {
     unwrapped = hfw_mr_sensor_update(&sensor, (int16_t)ADC);
     sampled_us = started_us + SAMPLE_AFTER_START_US;
     ++readings;
-    busy = 0;
     if (restart) {
-        restart = 0;
+        restart = 0; /* busy stays set: the next conversion is this interrupt's */
         start_conversion();
+    } else {
+        busy = 0;
     }
 }
 
@@ -64,16 +65,20 @@ uint16_t position_lead_us(void) { return CONVERSION_US + 16u; }
 uint8_t position_sample_delay_us(void) { return SAMPLE_AFTER_START_US; }
 
 uint8_t position_start(void) {
+    /* Interrupts are off only for the flags: the USART's receive interrupt must never wait
+       long (uart.h). */
     const uint8_t sreg = SREG;
     cli();
     uint8_t target = (uint8_t)(readings + 1u);
-    if (busy) {
+    const uint8_t was_busy = busy;
+    if (was_busy) {
         restart = 1;
         ++target;
     } else {
-        start_conversion();
+        busy = 1;
     }
     SREG = sreg;
+    if (!was_busy) start_conversion();
     return target;
 }
 

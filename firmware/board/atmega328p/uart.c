@@ -9,8 +9,17 @@ static uint8_t tx_buffer[HFW_COBS_MAX_ENCODED];
 static volatile uint8_t tx_next, tx_allowed; /* sent, and allowed to go */
 static volatile uint8_t tx_last = 1;         /* tx_allowed covers the whole frame */
 
-/* A byte has come: wake the main loop, and leave the bytes to it. */
-ISR(USART_RX_vect) { UCSR0B &= (uint8_t)~_BV(RXCIE0); }
+volatile uint8_t uart_rx_ring[UART_RX_RING];
+volatile uint8_t uart_rx_head;
+uint8_t uart_rx_tail;
+
+/* Nothing but the move into the ring: a ring that the main loop lets fill overwrites its
+   oldest bytes, and that frame fails its CRC. */
+ISR(USART_RX_vect) {
+    const uint8_t head = uart_rx_head;
+    uart_rx_ring[head % UART_RX_RING] = UDR0;
+    uart_rx_head = (uint8_t)(head + 1u);
+}
 
 ISR(USART_UDRE_vect) {
     const uint8_t next = tx_next;
@@ -25,10 +34,6 @@ void uart_init(void) {
     UCSR0C = _BV(UCSZ01) | _BV(UCSZ00); /* 8N1 */
     UCSR0B = _BV(RXEN0) | _BV(TXEN0) | _BV(RXCIE0);
 }
-
-uint8_t uart_pending(void) { return (UCSR0A & _BV(RXC0)) != 0; }
-
-void uart_receive_done(void) { UCSR0B |= _BV(RXCIE0); }
 
 uint8_t uart_idle(void) {
     const uint8_t sreg = SREG;
