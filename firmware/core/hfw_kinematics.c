@@ -1,12 +1,17 @@
 #include "hfw_kinematics.h"
 
+#define DUTY_FRACTION_BITS 22u
+
 void hfw_motor_map_init(struct hfw_motor_map* map, uint16_t duty_top, uint32_t full_duty_un,
                         int8_t force_sign) {
     map->duty_top = duty_top;
-    /* 2^32 duty_top / full_duty_un, rounded; duty_top <= 2^16 keeps it within 48 bits */
-    const uint64_t scaled = ((uint64_t)duty_top << 32) + full_duty_un / 2u;
-    const uint64_t per_un = scaled / full_duty_un;
-    map->duty_per_un = per_un > 0xFFFFFFFFu ? 0xFFFFFFFFu : (uint32_t)per_un;
+    map->full_duty_un = full_duty_un;
+    uint8_t shift = 0;
+    while ((full_duty_un >> shift) >= 0x10000u) ++shift;
+    map->shift = shift;
+    /* duty_top * 2^(22 + shift) / full_duty_un, rounded: at most duty_top * 2^22 / 2^15 */
+    const uint64_t scaled = ((uint64_t)duty_top << (DUTY_FRACTION_BITS + shift));
+    map->multiplier = (uint32_t)((scaled + full_duty_un / 2u) / full_duty_un);
     map->force_sign = force_sign < 0 ? -1 : 1;
 }
 
@@ -16,8 +21,13 @@ struct hfw_duty hfw_force_to_duty(const struct hfw_motor_map* map, int32_t force
     out.direction = negative ^ (map->force_sign < 0);
     /* |force_un| without negating INT32_MIN */
     const uint32_t magnitude_un = negative ? (uint32_t)(-(force_un + 1)) + 1u : (uint32_t)force_un;
-    const uint64_t duty = ((uint64_t)magnitude_un * map->duty_per_un + 0x80000000u) >> 32;
-    out.duty = duty > map->duty_top ? map->duty_top : (uint16_t)duty;
+    if (magnitude_un >= map->full_duty_un) {
+        out.duty = map->duty_top;
+        return out;
+    }
+    const uint32_t product = (magnitude_un >> map->shift) * map->multiplier;
+    out.duty = (uint16_t)((product + (1ul << (DUTY_FRACTION_BITS - 1u))) >> DUTY_FRACTION_BITS);
+    if (out.duty > map->duty_top) out.duty = map->duty_top;
     return out;
 }
 

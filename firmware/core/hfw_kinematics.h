@@ -16,10 +16,15 @@ extern "C" {
    direction on a pin. full_duty_un = force on the handle at 100 % duty
    (motor torque at full duty * sector radius / (handle radius * capstan radius)). */
 struct hfw_motor_map {
-    uint16_t duty_top;    /* the PWM's count at 100 % (255 for Timer0's 8 bits) */
-    uint32_t duty_per_un; /* duty_top / full_duty_un in units of 2^-32, from hfw_motor_map_init */
-    int8_t force_sign;    /* +1, or -1 when a positive duty with direction 1 pushes the handle
-                             towards -x */
+    uint16_t duty_top;     /* the PWM's count at 100 % (256 for Timer0 with its off state) */
+    uint32_t full_duty_un; /* the force at 100 % */
+    /* duty = ((|force| >> shift) * multiplier) >> 22 in 32 bits: shift keeps the force at
+       full duty below 2^16, so the product stays below 2^30 (a 64-bit product costs about
+       300 cycles on the AVR, this one 60) */
+    uint8_t shift;
+    uint32_t multiplier;
+    int8_t force_sign; /* +1, or -1 when a positive duty with direction 1 pushes the handle
+                          towards -x */
 };
 
 struct hfw_duty {

@@ -26,8 +26,9 @@ TEST(FirmwareMotorMap, DutyIsProportionalToForceAndRoundsToTheNearestStep) {
                               static_cast<std::int32_t>(kFullDutyUn);
         const hfw_duty duty = hfw_force_to_duty(&map, force_un);
         const double exact = 256.0 * std::abs(force_un) / kFullDutyUn;
-        // The nearest step, but for the multiplier's rounding (2^-32 of a step per uN).
-        ASSERT_LE(std::abs(duty.duty - exact), 0.5 + 1e-3) << force_un;
+        // The nearest step, but for the 32-bit fixed point: the force's last 7 bits dropped
+        // (128 uN, 0.004 of a 31 mN step) and the multiplier rounded (3e-5 of the duty).
+        ASSERT_LE(std::abs(duty.duty - exact), 0.5 + 0.01) << force_un;
         ASSERT_EQ(duty.direction, force_un < 0 ? 1 : 0) << force_un;
     }
     EXPECT_EQ(hfw_force_to_duty(&map, 0).duty, 0);

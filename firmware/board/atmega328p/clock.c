@@ -17,35 +17,32 @@
    reading the clock costs an add, not a 64-bit shift (a library call on the AVR). */
 static volatile uint64_t overflow_us;
 
+static volatile uint8_t period;          /* the number of the last period started */
+static volatile uint64_t next_sample_us; /* when the next period's reading starts */
+
+/* Blocking: a 64-bit add that clock_now_us() must never see half done. */
 ISR(TIMER1_OVF_vect) { overflow_us += 32768u; }
 
-/* The boundary: only wakes the main loop, which checks the command watchdog
-   (docs/protocol.md 5.4: at the latest at the first period boundary after the timeout) and
-   sends a paced sample once its reading is in. */
-ISR(TIMER1_COMPA_vect) { OCR1A += PERIOD_TICKS; }
-
-static volatile uint64_t next_sample_us; /* when compare B next starts a reading */
-static volatile uint8_t sample_epoch;    /* the number of the last reading it started */
-
-/* The reading that completes at the boundary (and keeps the MR sensor's flips counted).
-   Interruptible (ISR_NOBLOCK), as the ADC's is: the USART's receive interrupt must run within
-   two byte times (10 us) of a byte, or the next one overruns its two-byte buffer. The short
-   ones (the overflow's 64-bit add, compare A) block. */
-ISR(TIMER1_COMPB_vect, ISR_NOBLOCK) {
-    OCR1B += PERIOD_TICKS;
-    const uint8_t reading = position_start();
-    next_sample_us += HFW_PERIOD_US;
-    ++sample_epoch;
-    clock_on_sample(sample_epoch, reading);
-}
-
-uint64_t clock_next_sample(uint8_t* epoch) {
+/* A period starts: its paced sample's front goes out (paced.c), and the main loop wakes and
+   checks the command watchdog (docs/protocol.md 5.4: at the latest at the first period start
+   after the timeout). Interruptible (ISR_NOBLOCK), as compare B's and the ADC's are: the
+   USART's receive interrupt must run within two byte times (10 us) of a byte, or the next one
+   overruns its two-byte buffer. */
+ISR(TIMER1_COMPA_vect, ISR_NOBLOCK) {
+    OCR1A += PERIOD_TICKS;
     const uint8_t sreg = SREG;
     cli();
-    const uint64_t at_us = next_sample_us;
-    *epoch = (uint8_t)(sample_epoch + 1u);
+    const uint8_t started = (uint8_t)(period + 1u);
+    period = started;
+    next_sample_us += HFW_PERIOD_US;
     SREG = sreg;
-    return at_us;
+    clock_on_period(started);
+}
+
+/* The period's reading (which also keeps the MR sensor's flips counted). */
+ISR(TIMER1_COMPB_vect, ISR_NOBLOCK) {
+    OCR1B += PERIOD_TICKS;
+    clock_on_sample(period, position_start_at(next_sample_us));
 }
 
 void clock_init(void) {
@@ -54,17 +51,27 @@ void clock_init(void) {
     TIMSK1 = _BV(TOIE1);
 }
 
-void clock_start_periods(uint16_t lead_us) {
+void clock_start_periods(uint16_t front_lead_us) {
     const uint8_t sreg = SREG;
     cli();
     const uint16_t now = TCNT1;
-    const uint16_t boundary = (uint16_t)(now + PERIOD_TICKS);
-    OCR1A = boundary;
-    OCR1B = (uint16_t)(boundary - TICKS_PER_US * lead_us);
-    next_sample_us = clock_now_us() + (uint16_t)(OCR1B - now) / TICKS_PER_US;
+    const uint16_t start = (uint16_t)(now + PERIOD_TICKS);
+    OCR1A = start;
+    OCR1B = (uint16_t)(start + TICKS_PER_US * front_lead_us);
+    /* the reading of the period before the first: compare A adds a period as it starts */
+    next_sample_us = clock_now_us() + (uint16_t)(OCR1B - now) / TICKS_PER_US - HFW_PERIOD_US;
     TIFR1 = _BV(OCF1A) | _BV(OCF1B);
     TIMSK1 |= _BV(OCIE1A) | _BV(OCIE1B);
     SREG = sreg;
+}
+
+uint64_t clock_next_period(uint8_t* next) {
+    const uint8_t sreg = SREG;
+    cli();
+    const uint64_t at_us = next_sample_us + HFW_PERIOD_US;
+    *next = (uint8_t)(period + 1u);
+    SREG = sreg;
+    return at_us;
 }
 
 uint64_t clock_now_us(void) {

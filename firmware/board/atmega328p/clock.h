@@ -1,7 +1,9 @@
 /* The firmware's 64-bit microsecond clock from power-up (docs/protocol.md section 2):
    Timer1 counting F_CPU / 8 (0.5 us at 16 MHz), extended by its overflows. And the period's
-   schedule on the same timer: compare B starts the position reading that completes at the
-   period boundary, compare A marks the boundary (and wakes the main loop for the watchdog). */
+   schedule on the same timer, once a period: compare A starts the period (a paced sample's
+   front goes out, and the main loop wakes to check the command watchdog), compare B starts
+   the position reading front_lead_us later (so that its counts are in as the front's last
+   bytes leave). */
 #ifndef HFW_BOARD_CLOCK_H
 #define HFW_BOARD_CLOCK_H
 
@@ -10,16 +12,17 @@
 void clock_init(void);
 uint64_t clock_now_us(void);
 
-/* Starts the period's schedule: boundaries every HFW_PERIOD_US from now, each reading
-   started lead_us before its boundary (position_lead_us()). */
-void clock_start_periods(uint16_t lead_us);
+/* Starts the schedule: a period every HFW_PERIOD_US, its reading front_lead_us after its
+   start. */
+void clock_start_periods(uint16_t front_lead_us);
 
-/* The next period's reading: when it will start (us) and its number (*epoch; the readings
-   the clock starts are numbered from 1, wrapping at 256). */
-uint64_t clock_next_sample(uint8_t* epoch);
+/* The next period that has not started: when its reading will start (us), and its number
+   (*period, counted from 1 and wrapping at 256). */
+uint64_t clock_next_period(uint8_t* period);
 
-/* Called by the clock's interrupt right after it started reading number `epoch`, which
-   completes as position_readings() reaches `reading` (paced.c sends a sample's front then). */
-void clock_on_sample(uint8_t epoch, uint8_t reading);
+/* Called by the clock's interrupts (paced.c): at the start of period `period`, and when its
+   reading has started, which completes as position_readings() reaches `reading`. */
+void clock_on_period(uint8_t period);
+void clock_on_sample(uint8_t period, uint8_t reading);
 
 #endif

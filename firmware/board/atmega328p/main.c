@@ -39,8 +39,7 @@ static struct hfw_device device;
 static struct hfw_motor_map motor_map;
 static struct hfw_cobs_decoder receiver;
 static uint8_t received[HFW_MAX_FRAME_SIZE];
-static uint8_t pending[HFW_MAX_FRAME_SIZE]; /* a whole frame, to be answered */
-static uint8_t pending_size;
+static uint8_t pending_size; /* received[0 .. pending_size) is a whole frame to answer */
 static uint8_t reply[HFW_MAX_FRAME_SIZE];
 static uint8_t sample_due;     /* a command or poll awaits its sample */
 static uint8_t sample_reading; /* ... from the reading that makes position_readings() this */
@@ -90,17 +89,23 @@ static void answer(const uint8_t* frame, uint8_t size) {
     if (!hfw_device_paced(&device)) sample_reading = position_start();
 }
 
-/* Decodes the bytes in the receive ring until it is empty or a frame is whole (it then waits
-   in `pending`, answered by the main loop). The decoder's state works on a local copy (9
-   bytes; the frame stays in its buffer), which the compiler keeps in registers. */
+/* Decodes the bytes in the receive ring until a frame is whole (it then stays in the
+   decoder's buffer until answered: no byte is decoded meanwhile, they wait in the ring) or
+   the line has been quiet for two byte times; while a frame is half in, it waits for the
+   rest here rather than in the main loop's round. The decoder's state works on a local copy
+   (9 bytes), which the compiler keeps in registers. */
 static void receive(void) {
     struct hfw_cobs_decoder decoder = receiver;
     uint8_t byte = 0;
-    while (pending_size == 0 && uart_poll(&byte)) {
-        if (hfw_cobs_push(&decoder, byte)) {
-            memcpy(pending, decoder.frame, decoder.size);
-            pending_size = decoder.size;
+    uint8_t quiet = 0;
+    while (pending_size == 0 && quiet < UART_QUIET_POLLS) {
+        if (!uart_poll(&byte)) {
+            if (decoder.encoded == 0) break; /* between frames: nothing to wait for */
+            ++quiet;
+            continue;
         }
+        quiet = 0;
+        if (hfw_cobs_push(&decoder, byte)) pending_size = decoder.size;
     }
     receiver = decoder;
 }
@@ -127,7 +132,7 @@ int main(void) {
     clock_init();
     uart_init();
     position_init();
-    clock_start_periods(position_lead_us());
+    clock_start_periods(paced_front_lead_us());
     sei();
     wdt_enable(WDTO_15MS);
     set_sleep_mode(SLEEP_MODE_IDLE);
@@ -136,12 +141,8 @@ int main(void) {
         if (uart_pending() && pending_size == 0) receive();
         finish_paced(); /* even if the session just ended */
         if (pending_size != 0) {
-            /* a copy: while it is answered, the next frame may come into `pending` */
-            uint8_t frame[HFW_MAX_FRAME_SIZE];
-            const uint8_t size = pending_size;
-            memcpy(frame, pending, size);
+            answer(received, pending_size);
             pending_size = 0;
-            answer(frame, size);
         }
         if (hfw_device_paced(&device)) {
             if (sample_due && !paced_pending() && uart_idle()) {

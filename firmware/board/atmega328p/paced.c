@@ -12,37 +12,54 @@
 static uint8_t frame[HFW_MAX_FRAME_SIZE];
 static struct hfw_cobs_encoder encoder;
 static uint32_t crc_state;
-static volatile uint8_t written; /* a front is in the UART's buffer */
-static volatile uint8_t started; /* the clock has started its reading */
-static volatile uint8_t epoch;   /* the reading it is for */
-static volatile uint8_t reading; /* position_readings() once that reading is in */
+static volatile uint8_t written;  /* a front is in the UART's buffer */
+static volatile uint8_t started;  /* its period has started: it is going out */
+static volatile uint8_t sampling; /* its reading has started */
+static volatile uint8_t period;   /* the period it is for */
+static volatile uint8_t reading;  /* position_readings() once that reading is in */
 
-void clock_on_sample(uint8_t sample_epoch, uint8_t sample_reading) {
-    if (!written || started || sample_epoch != epoch) return;
+/* On the line at 2 Mbaud, 8N1: 5 us a byte. The counts of a sample are its 33rd byte on the
+   line (the 32 before them and COBS's one); finishing the frame once they are in takes about
+   60 us. */
+#define BYTE_US 5u
+#define FINISH_US 60u
+
+uint16_t paced_front_lead_us(void) {
+    return (uint16_t)((HFW_SAMPLE_COUNTS_OFFSET + 1u) * BYTE_US - position_conversion_us() -
+                      FINISH_US);
+}
+
+void clock_on_period(uint8_t started_period) {
+    if (written && !started && started_period == period) started = 1;
+}
+
+void clock_on_sample(uint8_t sample_period, uint8_t sample_reading) {
+    if (!started || sampling || sample_period != period) return;
     reading = sample_reading;
-    started = 1;
+    sampling = 1;
 }
 
 void paced_prepare(const struct hfw_device* d) {
     for (;;) {
         written = 0;
-        uint8_t next_epoch = 0;
-        const uint64_t start_us = clock_next_sample(&next_epoch);
+        uint8_t next_period = 0;
+        const uint64_t start_us = clock_next_period(&next_period);
         crc_state = hfw_device_sample_begin(d, start_us + position_sample_delay_us(), 0, frame);
         hfw_cobs_start(&encoder, uart_tx_buffer());
         hfw_cobs_put(&encoder, frame, HFW_SAMPLE_COUNTS_OFFSET);
         cli();
-        uint8_t now_epoch = 0;
-        (void)clock_next_sample(&now_epoch);
-        const uint8_t in_time = now_epoch == next_epoch; /* that reading has not started */
+        uint8_t now_period = 0;
+        (void)clock_next_period(&now_period);
+        const uint8_t in_time = now_period == next_period; /* that period has not started */
         if (in_time) {
-            epoch = next_epoch;
+            period = next_period;
             started = 0;
+            sampling = 0;
             written = 1;
         }
         sei();
         if (in_time) return;
-        uart_allow(0, 1); /* that reading started while the front was written: release the
+        uart_allow(0, 1); /* that period started while the front was written: release the
                              buffer, and write it for the next one */
     }
 }
@@ -61,16 +78,15 @@ void paced_cancel(void) {
 /* The bytes of the UART's buffer sent so far, by hand. */
 static uint8_t sent;
 
-/* One byte more onto the line, if the UART can take it and it is final. The UART holds two
-   (its data register and its shift register): called at least every 140 cycles, the line
-   never idles while there is something to send. */
+/* The UART's two bytes (its data register and its shift register) filled with what is final.
+   Called at least every 140 cycles, the line never idles while there is something to send. */
 static inline void feed(void) {
-    if (uart_tx_free() && sent < hfw_cobs_final(&encoder)) uart_tx_put(encoder.out[sent++]);
+    while (uart_tx_free() && sent < hfw_cobs_final(&encoder)) uart_tx_put(encoder.out[sent++]);
 }
 
-/* Sends until the reading is in. */
+/* Sends until the period's reading has started and is in. */
 static void send_until_reading(void) {
-    while (position_readings() != reading) feed();
+    while (!sampling || position_readings() != reading) feed();
 }
 
 /* Runs `size` bytes of the frame through the CRC (or the COBS encoder) four at a time, a feed
@@ -115,5 +131,6 @@ void paced_send(struct hfw_device* d) {
     cli();
     written = 0;
     started = 0;
+    sampling = 0;
     sei();
 }

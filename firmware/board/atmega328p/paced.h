@@ -1,8 +1,8 @@
 /* docs/protocol.md 5.8 on this board: in a session the board paces, a sample goes out in two
    parts. Before the period's reading is sampled, its front (everything but the counts: the
    first 32 bytes of a one-axis sample) is written, CRC'd and COBS-encoded into the UART's
-   buffer; once the clock's interrupt has started the reading, the main loop sends it while
-   the reading completes, and finishes the frame between bytes. So the counts wait only for their
+   buffer; the period's start sends it, the reading starts while it goes out, and the main
+   loop finishes the frame between its last bytes. So the counts wait only for their
    own 12 bytes on the line, not for the whole frame's 46, and the host's next command can come back
    before the next boundary. */
 #ifndef HFW_BOARD_PACED_H
@@ -11,6 +11,12 @@
 #include <stdint.h>
 
 #include "hfw_device.h"
+
+/* How long after a period starts (and its front with it) its reading starts (us): so that
+   the reading and the frame's end are ready just as the front's last byte leaves. The
+   sample's time is then as late in the exchange as it can be. clock_start_periods() takes
+   it. */
+uint16_t paced_front_lead_us(void);
 
 /* Writes the front of the sample answering the device's last request for the next period's
    reading (the UART must be idle). */

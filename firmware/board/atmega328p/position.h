@@ -3,8 +3,8 @@
    (HAPTICD_FIRMWARE_SENSOR). Counts are signed by HFW_POSITION_SIGN and zero where the handle
    was at power-up: start the board with the handle at its centre.
 
-   A reading is taken on request (position_start) and by the clock once a period, timed to
-   complete at the period boundary (clock.c); each carries the moment the sensor sampled it. */
+   A reading is taken on request (position_start) and by the clock once a period (clock.c);
+   each carries the moment the sensor sampled it. */
 #ifndef HFW_BOARD_POSITION_H
 #define HFW_BOARD_POSITION_H
 
@@ -13,12 +13,15 @@
 /* Starts the sensor and takes its first reading, which becomes the zero. */
 void position_init(void);
 
-/* How long a reading takes from position_start() to its result (us): the clock starts the
-   period's reading this long before the boundary. */
-uint16_t position_lead_us(void);
+/* How long a reading takes from position_start() to its result (us). */
+uint16_t position_conversion_us(void);
 
 /* From a reading's start to the moment the sensor samples (us): the sample's time_us. */
 uint8_t position_sample_delay_us(void);
+
+/* The period's reading, started by the clock's interrupt at the time it scheduled (start_us):
+   the same as position_start() without reading the clock. */
+uint8_t position_start_at(uint64_t start_us);
 
 /* Starts a reading now, or right after the one under way. Returns the number of readings
    (position_readings()) once the first reading sampled at or after now has completed. */

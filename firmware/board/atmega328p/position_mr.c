@@ -19,21 +19,23 @@
 static struct hfw_mr_sensor sensor;
 static int32_t zero;
 static volatile int32_t unwrapped;
-static volatile uint64_t sampled_us; /* of `unwrapped` */
-static volatile uint64_t started_us; /* of the conversion under way */
+static volatile uint64_t sampled_us;      /* of `unwrapped` */
+static volatile uint64_t sampled_next_us; /* when the conversion under way sampled */
 static volatile uint8_t readings;
 static volatile uint8_t busy;
 static volatile uint8_t restart; /* start another as soon as this one completes */
 
 /* Called with `busy` just set, by its only owner: nothing else touches the conversion. */
-static void start_conversion(void) {
-    started_us = clock_now_us();
+static void start_conversion_at(uint64_t start_us) {
+    sampled_next_us = start_us + SAMPLE_AFTER_START_US;
     ADCSRA |= _BV(ADSC);
 }
 
+static void start_conversion(void) { start_conversion_at(clock_now_us()); }
+
 ISR(ADC_vect, ISR_NOBLOCK) {
     unwrapped = hfw_mr_sensor_update(&sensor, (int16_t)ADC);
-    sampled_us = started_us + SAMPLE_AFTER_START_US;
+    sampled_us = sampled_next_us;
     ++readings;
     if (restart) {
         restart = 0; /* busy stays set: the next conversion is this interrupt's */
@@ -60,25 +62,36 @@ void position_init(void) {
     sei();
 }
 
-uint16_t position_lead_us(void) { return CONVERSION_US + 16u; }
+uint16_t position_conversion_us(void) { return CONVERSION_US; }
 
 uint8_t position_sample_delay_us(void) { return SAMPLE_AFTER_START_US; }
 
-uint8_t position_start(void) {
-    /* Interrupts are off only for the flags: the USART's receive interrupt must never wait
-       long (uart.h). */
+/* Interrupts are off only for the flags: the USART's receive interrupt must never wait long
+   (uart.h). A reading asked for while one is under way starts when that one is in. */
+static uint8_t claim(uint8_t* target) {
     const uint8_t sreg = SREG;
     cli();
-    uint8_t target = (uint8_t)(readings + 1u);
+    *target = (uint8_t)(readings + 1u);
     const uint8_t was_busy = busy;
     if (was_busy) {
         restart = 1;
-        ++target;
+        ++*target;
     } else {
         busy = 1;
     }
     SREG = sreg;
-    if (!was_busy) start_conversion();
+    return !was_busy;
+}
+
+uint8_t position_start(void) {
+    uint8_t target = 0;
+    if (claim(&target)) start_conversion();
+    return target;
+}
+
+uint8_t position_start_at(uint64_t start_us) {
+    uint8_t target = 0;
+    if (claim(&target)) start_conversion_at(start_us);
     return target;
 }
 

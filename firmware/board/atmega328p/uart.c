@@ -13,12 +13,34 @@ volatile uint8_t uart_rx_ring[UART_RX_RING];
 volatile uint8_t uart_rx_head;
 uint8_t uart_rx_tail;
 
-/* Nothing but the move into the ring: a ring that the main loop lets fill overwrites its
-   oldest bytes, and that frame fails its CRC. */
-ISR(USART_RX_vect) {
-    const uint8_t head = uart_rx_head;
-    uart_rx_ring[head % UART_RX_RING] = UDR0;
-    uart_rx_head = (uint8_t)(head + 1u);
+/* Nothing but the move into the ring, by hand: the compiler's version took 57 cycles of the
+   80 between two bytes at 2 Mbaud (it saves registers this never touches), leaving the main
+   loop too little to decode in; this one takes about 35. A ring that the main loop lets fill
+   overwrites its oldest bytes, and that frame fails its CRC. */
+ISR(USART_RX_vect, ISR_NAKED) {
+    __asm__ volatile(
+        "push r24\n\t"
+        "in r24, __SREG__\n\t"
+        "push r24\n\t"
+        "push r30\n\t"
+        "push r31\n\t"
+        "lds r30, uart_rx_head\n\t"
+        "andi r30, %[mask]\n\t"
+        "ldi r31, 0\n\t"
+        "subi r30, lo8(-(uart_rx_ring))\n\t"
+        "sbci r31, hi8(-(uart_rx_ring))\n\t"
+        "lds r24, %[udr]\n\t"
+        "st Z, r24\n\t"
+        "lds r24, uart_rx_head\n\t"
+        "subi r24, 0xFF\n\t" /* + 1 */
+        "sts uart_rx_head, r24\n\t"
+        "pop r31\n\t"
+        "pop r30\n\t"
+        "pop r24\n\t"
+        "out __SREG__, r24\n\t"
+        "pop r24\n\t"
+        "reti\n\t" ::[mask] "M"(UART_RX_RING - 1u),
+        [udr] "n"(_SFR_MEM_ADDR(UDR0)));
 }
 
 ISR(USART_UDRE_vect) {

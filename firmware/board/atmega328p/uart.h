@@ -30,6 +30,10 @@ static inline uint8_t uart_poll(uint8_t* byte) {
     return 1;
 }
 
+/* Polls of the ring (about 8 cycles each) in two byte times (160 cycles): a line quiet this
+   long in the middle of a frame has stopped. */
+#define UART_QUIET_POLLS 20u
+
 /* The buffer for the next frame out (HFW_COBS_MAX_ENCODED bytes), once the last one has
    gone. uart_send() sends its first `size` bytes; uart_allow() lets its first `count` go
    while the rest is still being written (an interrupt may call it), `last` when they are all.
