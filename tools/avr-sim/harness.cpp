@@ -17,6 +17,9 @@ using SteadyClock = std::chrono::steady_clock;
 constexpr std::uint64_t kSliceCycles = EmulatedBoard::kCpuHz / 50'000;
 /// Lockstep: a request that gets no reply within this many periods is given up on.
 constexpr int kLockstepMaxPeriods = 10;
+/// Lockstep with a board that paces the loop: how finely the end of its answer is found (a
+/// byte at 2 Mbaud).
+constexpr std::uint64_t kLockstepPacedStep = 80;
 
 }  // namespace
 
@@ -86,10 +89,15 @@ bool Harness::pass_board_bytes() {
     for (const LineByte& b : sent) {
         bytes.push_back(b.value);
         if (b.value != 0x00) {
-            if (!board_frame_open_) reply_first_cycle_ = b.done_cycle - board_.cycles_per_byte();
+            if (!board_frame_open_) {
+                reply_first_cycle_ = b.done_cycle - board_.cycles_per_byte();
+                reply_bytes_.clear();
+            }
             board_frame_open_ = true;
+            reply_bytes_.push_back(b.value);
         } else if (board_frame_open_) {
             board_frame_open_ = false;
+            note_reply(reply_bytes_);
             reply = true;
             ++figures_.replies;
             reply_done_cycle_ = b.done_cycle;
@@ -107,6 +115,21 @@ bool Harness::pass_board_bytes() {
     }
     link_.write(bytes.data(), bytes.size());
     return reply;
+}
+
+void Harness::note_reply(const std::vector<std::uint8_t>& encoded) {
+    // COBS-decode enough of the frame to read an identity's header and flags.
+    std::vector<std::uint8_t> frame;
+    for (std::size_t i = 0; i < encoded.size();) {
+        const std::uint8_t code = encoded[i++];
+        for (std::uint8_t j = 1; j < code && i < encoded.size(); ++j) frame.push_back(encoded[i++]);
+        if (code < 0xFF && i < encoded.size()) frame.push_back(0x00);
+    }
+    constexpr std::uint8_t kIdentity = 0x81;
+    constexpr std::size_t kFlags = 9;  // docs/protocol.md 4.2, version 3
+    if (frame.size() > kFlags && frame[0] == 0x48 && frame[2] == kIdentity) {
+        board_paces_ = frame[1] >= 3 && (frame[kFlags] & 0x01) != 0;
+    }
 }
 
 void Harness::run_real_time(const std::atomic<bool>& stop) {
@@ -145,16 +168,19 @@ void Harness::run_lockstep(const std::atomic<bool>& stop) {
             link_.wait_readable(100'000'000);
             continue;
         }
-        // One period of emulated time per request, longer while its reply is still going
-        // out (up to kLockstepMaxPeriods).
+        // One period of emulated time per request (a board that paces the loop: until its
+        // answer is out), longer while the answer is still going out (up to
+        // kLockstepMaxPeriods).
         const std::uint64_t start = board_.cycle();
+        const std::uint64_t limit = start + kLockstepMaxPeriods * period_cycles;
+        const std::uint64_t step = board_paces_ ? kLockstepPacedStep : period_cycles / 10;
         bool replied = false;
-        for (std::uint64_t until = start + period_cycles; !done();) {
-            board_.run_until(std::min(until, start + kLockstepMaxPeriods * period_cycles));
+        for (std::uint64_t until = board_paces_ ? start + step : start + period_cycles; !done();) {
+            board_.run_until(std::min(until, limit));
             replied = pass_board_bytes() || replied;
-            if (board_.cycle() >= start + kLockstepMaxPeriods * period_cycles) break;
+            if (board_.cycle() >= limit) break;
             if (board_.cycle() >= until && replied) break;
-            if (board_.cycle() >= until) until += period_cycles / 10;
+            if (board_.cycle() >= until) until += step;
         }
     }
 }

@@ -15,7 +15,12 @@ namespace hapticd::avr_sim {
 
 enum class Clock {
     real_time,  ///< emulated time held to the wall clock
-    lockstep,   ///< one period of emulated time per request (hapticd --lockstep)
+    /// For hapticd --lockstep: emulated time stands still while the host computes. A board
+    /// that answers at once gets a period of emulated time per request; one that paces the
+    /// loop (its identity says so: docs/protocol.md 5.8) runs until its answer is out, so the
+    /// host's command follows its sample with no time between, as from an infinitely fast
+    /// host.
+    lockstep,
 };
 
 struct HarnessOptions {
@@ -57,6 +62,8 @@ class Harness {
     bool take_host_bytes();
     /// Board bytes that have left the line to the host; true when a reply ended.
     bool pass_board_bytes();
+    /// Notes whether an identity the board sent says that it paces the loop.
+    void note_reply(const std::vector<std::uint8_t>& encoded);
     void record(const EmulatedBoard& board, MotorPins pins);
     bool done() const;
 
@@ -68,6 +75,8 @@ class Harness {
     bool host_frame_open_ = false;
     bool board_frame_open_ = false;
     std::uint64_t reply_first_cycle_ = 0;
+    std::vector<std::uint8_t> reply_bytes_;  // the frame on its way out, COBS-encoded
+    bool board_paces_ = false;               // its last identity said it paces the loop
     std::uint64_t reply_done_cycle_ = 0;
     bool reply_done_ = false;
     std::uint64_t request_in_cycle_ = 0;
