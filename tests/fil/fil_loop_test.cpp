@@ -23,7 +23,6 @@
 namespace hapticd::testing {
 namespace {
 
-constexpr double kPeriodS = 1e-3;
 
 /// The emulated Hapkit for hapticd: its model, a coupling sized under its passive bound with
 /// the loop delay it measures (docs/firmware.md), and `scene` if not empty.
