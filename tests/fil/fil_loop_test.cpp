@@ -23,7 +23,6 @@
 namespace hapticd::testing {
 namespace {
 
-
 /// The emulated Hapkit for hapticd: its model, a coupling sized under its passive bound with
 /// the loop delay it measures (docs/firmware.md), and `scene` if not empty.
 std::string serial_config(const std::string& port, const std::string& scene, double stiffness) {
