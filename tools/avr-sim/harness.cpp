@@ -88,16 +88,12 @@ bool Harness::pass_board_bytes() {
     bool reply = false;
     for (const LineByte& b : sent) {
         bytes.push_back(b.value);
+        note_identity(b.value);
         if (b.value != 0x00) {
-            if (!board_frame_open_) {
-                reply_first_cycle_ = b.done_cycle - board_.cycles_per_byte();
-                reply_bytes_.clear();
-            }
+            if (!board_frame_open_) reply_first_cycle_ = b.done_cycle - board_.cycles_per_byte();
             board_frame_open_ = true;
-            reply_bytes_.push_back(b.value);
         } else if (board_frame_open_) {
             board_frame_open_ = false;
-            note_reply(reply_bytes_);
             reply = true;
             ++figures_.replies;
             reply_done_cycle_ = b.done_cycle;
@@ -117,18 +113,12 @@ bool Harness::pass_board_bytes() {
     return reply;
 }
 
-void Harness::note_reply(const std::vector<std::uint8_t>& encoded) {
-    // COBS-decode enough of the frame to read an identity's header and flags.
-    std::vector<std::uint8_t> frame;
-    for (std::size_t i = 0; i < encoded.size();) {
-        const std::uint8_t code = encoded[i++];
-        for (std::uint8_t j = 1; j < code && i < encoded.size(); ++j) frame.push_back(encoded[i++]);
-        if (code < 0xFF && i < encoded.size()) frame.push_back(0x00);
-    }
-    constexpr std::uint8_t kIdentity = 0x81;
-    constexpr std::size_t kFlags = 9;  // docs/protocol.md 4.2, version 3
-    if (frame.size() > kFlags && frame[0] == 0x48 && frame[2] == kIdentity) {
-        board_paces_ = frame[1] >= 3 && (frame[kFlags] & 0x01) != 0;
+void Harness::note_identity(std::uint8_t byte) {
+    namespace protocol = device::protocol;
+    if (board_frames_.push(std::byte{byte}) != protocol::StreamDecoder::Event::frame) return;
+    protocol::Identity identity;
+    if (protocol::decode(board_frames_.frame(), identity) == protocol::Error::none) {
+        board_paces_ = identity.paced();
     }
 }
 

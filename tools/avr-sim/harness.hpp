@@ -9,6 +9,8 @@
 #include <vector>
 
 #include "emulated_board.hpp"
+#include "hapticd/device/protocol/messages.hpp"
+#include "hapticd/device/protocol/stream_framer.hpp"
 #include "pty_link.hpp"
 
 namespace hapticd::avr_sim {
@@ -62,8 +64,9 @@ class Harness {
     bool take_host_bytes();
     /// Board bytes that have left the line to the host; true when a reply ended.
     bool pass_board_bytes();
-    /// Notes whether an identity the board sent says that it paces the loop.
-    void note_reply(const std::vector<std::uint8_t>& encoded);
+    /// A byte the board sent, through the host's own stream decoder: whether an identity in
+    /// them says that the board paces the loop.
+    void note_identity(std::uint8_t byte);
     void record(const EmulatedBoard& board, MotorPins pins);
     bool done() const;
 
@@ -75,8 +78,8 @@ class Harness {
     bool host_frame_open_ = false;
     bool board_frame_open_ = false;
     std::uint64_t reply_first_cycle_ = 0;
-    std::vector<std::uint8_t> reply_bytes_;  // the frame on its way out, COBS-encoded
-    bool board_paces_ = false;               // its last identity said it paces the loop
+    device::protocol::StreamDecoder board_frames_;
+    bool board_paces_ = false;  // its last identity said it paces the loop
     std::uint64_t reply_done_cycle_ = 0;
     bool reply_done_ = false;
     std::uint64_t request_in_cycle_ = 0;

@@ -42,7 +42,12 @@ ISR(TIMER1_COMPA_vect, ISR_NOBLOCK) {
 /* The period's reading (which also keeps the MR sensor's flips counted). */
 ISR(TIMER1_COMPB_vect, ISR_NOBLOCK) {
     OCR1B += PERIOD_TICKS;
-    clock_on_sample(period, position_start_at(next_sample_us));
+    const uint8_t sreg = SREG;
+    cli(); /* a 64-bit value compare A writes: never read half of it */
+    const uint64_t start_us = next_sample_us;
+    const uint8_t this_period = period;
+    SREG = sreg;
+    clock_on_sample(this_period, position_start_at(start_us));
 }
 
 void clock_init(void) {

@@ -1,19 +1,18 @@
 /* The reference firmware on the ATmega328P (docs/firmware.md): the portable core
    (firmware/core/) behind this board's UART, clock, motor and position sensor.
 
-   The loop: bytes are read from the UART and COBS-decoded as they come (uart_receive); a
+   The loop: bytes come through the UART's ring and are COBS-decoded as they come (receive); a
    whole frame goes to the core, which sets the motor before it returns. A command or poll is
    answered with a sample from a position reading taken for it: in a session paced by the device
-   (version 3, docs/protocol.md 5.8) the reading that completes at the next period boundary;
-   otherwise a reading started right after the force was set, so that its counts show that force.
-   Between frames the loop checks the command watchdog and sleeps until the next interrupt (a byte,
-   a reading, the clock's boundary). The MCU's own watchdog resets a hung firmware within 15 ms, and
-   a reset leaves the motor off. */
+   (version 3, docs/protocol.md 5.8) the next period's, its sample sent as that period starts
+   (paced.h); otherwise a reading started right after the force was set, so that its counts show
+   that force. Between frames the loop checks the command watchdog and sleeps until the next
+   interrupt (a byte, a reading, the period's start). The MCU's own watchdog resets a hung firmware
+   within 15 ms, and a reset leaves the motor off. */
 #include <avr/interrupt.h>
 #include <avr/io.h>
 #include <avr/sleep.h>
 #include <avr/wdt.h>
-#include <string.h>
 
 #include "clock.h"
 #include "hfw_cobs.h"
@@ -110,6 +109,14 @@ static void receive(void) {
     receiver = decoder;
 }
 
+/* The sample due can go now: in a paced session, its front can be written (nothing pending,
+   the UART idle); otherwise its reading is in. */
+static uint8_t sample_ready(void) {
+    if (!sample_due) return 0;
+    if (hfw_device_paced(&device)) return !paced_pending() && uart_idle();
+    return position_readings() == sample_reading;
+}
+
 static void send_sample(void) {
     finish_paced(); /* its sample comes first: it has the earlier sequence number */
     uint64_t sampled_us = 0;
@@ -144,19 +151,17 @@ int main(void) {
             answer(received, pending_size);
             pending_size = 0;
         }
-        if (hfw_device_paced(&device)) {
-            if (sample_due && !paced_pending() && uart_idle()) {
+        if (sample_ready()) {
+            if (hfw_device_paced(&device)) {
                 paced_prepare(&device);
                 sample_due = 0;
+            } else {
+                send_sample();
             }
-        } else if (sample_due && position_readings() == sample_reading) {
-            send_sample();
         }
         hfw_device_check_watchdog(&device, clock_now_us());
         cli();
-        if (!uart_pending() && !paced_started() && pending_size == 0 &&
-            !(sample_due &&
-              (hfw_device_paced(&device) ? uart_idle() : position_readings() == sample_reading))) {
+        if (!uart_pending() && !paced_started() && pending_size == 0 && !sample_ready()) {
             sleep_enable();
             sei();
             sleep_cpu();

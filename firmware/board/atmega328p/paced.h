@@ -4,7 +4,7 @@
    buffer; the period's start sends it, the reading starts while it goes out, and the main
    loop finishes the frame between its last bytes. So the counts wait only for their
    own 12 bytes on the line, not for the whole frame's 46, and the host's next command can come back
-   before the next boundary. */
+   before the next period starts. */
 #ifndef HFW_BOARD_PACED_H
 #define HFW_BOARD_PACED_H
 
