@@ -67,23 +67,34 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 
 /// Simulates a segment from (global, state) with its derivatives: calls visit(j, x_j) for each
 /// of its `length` samples, x_j the position with its derivatives by (log m, log b, F_c, F_0,
-/// x0, v0). Nothing is stored. Returns false when the simulation is not finite; `stuck`
-/// counts the holds after which the handle is at rest (stuck by Coulomb friction).
+/// x0, v0). `force` points at the segment's first row; with a loop delay the holds reach
+/// back `delay.history()` rows before it (HoldDelay). Nothing is stored. Returns false when
+/// the simulation is not finite; `stuck` counts the holds after which the handle is at rest
+/// (stuck by Coulomb friction).
 template <typename Visit>
 bool simulate_segment(const double* force, std::size_t length, double period_s,
-                      const double* global, const double* state, Visit&& visit,
-                      std::size_t* stuck = nullptr) {
+                      const HoldDelay& delay, const double* global, const double* state,
+                      Visit&& visit, std::size_t* stuck = nullptr) {
     const Jet mass = exp(Jet(global[0], 0));
     const Jet damping = exp(Jet(global[1], 1));
     const Jet coulomb(global[2], 2);
     const Jet offset(global[3], 3);
     const Jet a = damping / mass;
-    const HoldConstants<Jet> full = hold_constants(a, period_s);
+    // A fractional delay splits each period in two holds: the older force, then the newer.
+    const double early_s = delay.fraction * period_s;
+    const double late_s = period_s - early_s;
+    const HoldConstants<Jet> early = hold_constants(a, early_s);
+    const HoldConstants<Jet> late = hold_constants(a, late_s);
+    const std::ptrdiff_t lag = static_cast<std::ptrdiff_t>(delay.whole_periods);
     MotionState<Jet> motion{Jet(state[0], 4), Jet(state[1], 5)};
     visit(std::size_t{0}, motion.x);
     std::size_t at_rest = 0;
     for (std::size_t j = 1; j < length; ++j) {
-        hold_step(motion, mass, a, coulomb, Jet(force[j - 1]) + offset, full, period_s);
+        const double* acting = force + (static_cast<std::ptrdiff_t>(j) - 1 - lag);  // F[n - q]
+        if (early_s > 0.0) {
+            hold_step(motion, mass, a, coulomb, Jet(acting[-1]) + offset, early, early_s);
+        }
+        hold_step(motion, mass, a, coulomb, Jet(acting[0]) + offset, late, late_s);
         visit(j, motion.x);
         at_rest += motion.v == 0.0;
     }
@@ -116,6 +127,7 @@ class SegmentResidual final : public ceres::CostFunction {
           masked_(data.masked.data() + range.start),
           length_(range.length),
           period_s_(data.period_s),
+          delay_(data.delay),
           inverse_unit_(1.0 / unit_m),
           huber_(huber) {
         set_num_residuals(static_cast<int>(fresh) + 1);
@@ -131,7 +143,7 @@ class SegmentResidual final : public ceres::CostFunction {
         double excess = 0.0;
         std::size_t k = 0;  // the residual's index in the block
         const bool finite = simulate_segment(
-            force_, length_, period_s_, parameters[0], parameters[1],
+            force_, length_, period_s_, delay_, parameters[0], parameters[1],
             [&](std::size_t j, const Jet& x) {
                 if (masked_[j]) return;
                 const double r = (x.a - logged_[j]) * inverse_unit_;
@@ -176,6 +188,7 @@ class SegmentResidual final : public ceres::CostFunction {
     const char* masked_;
     std::size_t length_;
     double period_s_;
+    HoldDelay delay_;
     double inverse_unit_;
     const HuberScale* huber_;
 };
@@ -364,7 +377,8 @@ class OutputErrorFit {
     template <typename Visit>
     bool simulate(const Segment& s, Visit&& visit, std::size_t* stuck = nullptr) const {
         return simulate_segment(data_.f->data() + s.range.start, s.range.length, data_.period_s,
-                                global_.data(), s.state.data(), std::forward<Visit>(visit), stuck);
+                                data_.delay, global_.data(), s.state.data(),
+                                std::forward<Visit>(visit), stuck);
     }
 
     /// Calls visit(residual, ∂residual/∂(global, state), segment) for every fresh sample at
@@ -499,7 +513,12 @@ void check_precision(const IdentifiedAxis& fit, const AxisData& data,
                    percent(error / value) + ", allowed " + percent(limit) + "). " +
                    percent(detail::force_power_above(data, corner_hz)) +
                    " of the force's variance lies above the mechanical corner b/(2 pi m) = " +
-                   format(corner_hz, 3) + " Hz; " + advice);
+                   format(corner_hz, 3) + " Hz; " + advice +
+                   (options.delay_s > 0.0
+                        ? std::string()
+                        : ". Or the model misses the loop delay: a device whose forces act "
+                          "after a delay (a serial or USB link) needs it (--delay; haptic-tune "
+                          "diag measures it)"));
     };
     if (!(se.mass_kg <= limit * e.mass_kg)) {
         explain("mass m", e.mass_kg, se.mass_kg, "kg",
@@ -552,6 +571,10 @@ void IdentificationOptions::validate() const {
         input::reject_out_of_range("identification option segment_s", segment_s, "> 0 s");
     if (resolution_m && !(std::isfinite(*resolution_m) && *resolution_m > 0.0)) {
         input::reject_out_of_range("identification option resolution_m", *resolution_m, "> 0 m");
+    }
+    if (!(std::isfinite(delay_s) && delay_s >= 0.0)) {
+        input::reject_out_of_range("identification option delay_s", delay_s,
+                                   ">= 0 s (and under 10 of the log's periods)");
     }
     if (force_limit_n && !(std::isfinite(*force_limit_n) && *force_limit_n > 0.0)) {
         input::reject_out_of_range("identification option force_limit_n", *force_limit_n, "> 0 N");
@@ -651,6 +674,7 @@ IdentifiedAxis identify_axis(const TelemetryLog& log, int axis,
         q > 0.0 ? result.residual_rms_m / q : std::numeric_limits<double>::quiet_NaN();
     result.resolution_m = q;
     result.resolution_estimated = data.resolution_estimated;
+    result.delay_s = options.delay_s;
     result.rate_hz = 1.0 / data.period_s;
     result.duration_s = data.duration_s;
     result.samples = fit.samples();

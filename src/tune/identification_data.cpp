@@ -9,7 +9,9 @@
 #include <sstream>
 #include <utility>
 
+#include "hapticd/input/range.hpp"
 #include "hapticd/servo/telemetry.hpp"
+#include "hapticd/tune/input_checks.hpp"
 
 namespace hapticd::tune::detail {
 namespace {
@@ -288,6 +290,13 @@ AxisData prepare_axis(const TelemetryLog& log, int axis, const IdentificationOpt
                    " samples at " + format(1.0 / data.period_s) +
                    " Hz); identification needs at least " + format(options.min_duration_s) + " s");
     }
+    if (!(options.delay_s < kMaxDelayPeriods * data.period_s)) {
+        input::reject_out_of_range("identification option delay_s", options.delay_s,
+                                   "< " + format(kMaxDelayPeriods * data.period_s) + " s (" +
+                                       format(kMaxDelayPeriods) + " periods at the log's " +
+                                       format(1.0 / data.period_s) + " Hz)");
+    }
+    data.delay = split_hold_delay(options.delay_s, data.period_s);
     check_status(log, data, options);
     check_saturation(log, data, options);
     if (options.resolution_m) {
@@ -303,10 +312,10 @@ AxisData prepare_axis(const TelemetryLog& log, int axis, const IdentificationOpt
 std::vector<SegmentRange> make_segments(const AxisData& data, std::size_t target) {
     std::vector<SegmentRange> segments;
     const std::size_t n = data.x->size();
-    std::size_t run_start = 0;
+    std::size_t run_start = data.delay.history();
     for (std::size_t i = 0; i < n; ++i) {
         if (i + 1 < n && !data.gap_after[i]) continue;
-        const std::size_t run = i + 1 - run_start;
+        const std::size_t run = i + 1 < run_start ? 0 : i + 1 - run_start;
         if (run >= kMinSegmentSamples) {
             const std::size_t pieces = std::max<std::size_t>(1, run / target);
             for (std::size_t p = 0; p < pieces; ++p) {
@@ -315,7 +324,7 @@ std::vector<SegmentRange> make_segments(const AxisData& data, std::size_t target
                 segments.push_back({begin, end - begin});
             }
         }
-        run_start = i + 1;
+        run_start = i + 1 + data.delay.history();
     }
     // A segment needs more fresh samples than its two initial-state parameters.
     std::erase_if(segments, [&](const SegmentRange& s) {
@@ -339,6 +348,9 @@ StartingGuess starting_guess(const AxisData& data, const std::vector<SegmentRang
     const std::vector<double>& f = *data.f;
     const double T = data.period_s;
     const int h = smoothing_half_width(data);
+    // The force acting around row i was commanded about D earlier (segments start past it).
+    const auto lag = static_cast<std::size_t>(
+        std::lround(static_cast<double>(data.delay.whole_periods) + data.delay.fraction));
     double sum_j2 = 0.0;
     double sum_j4 = 0.0;
     for (int j = -h; j <= h; ++j) {
@@ -359,7 +371,7 @@ StartingGuess starting_guess(const AxisData& data, const std::vector<SegmentRang
             for (int j = -h; j <= h && usable; ++j) {
                 const std::size_t i = c + j;
                 usable = !data.masked[i];
-                p0 += f[i];
+                p0 += f[i - lag];
                 p1 += j * x[i];
                 p2 += (j * j - mean_j2) * x[i];
             }

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "hapticd/tune/identification.hpp"
+#include "hapticd/tune/identification_model.hpp"
 
 namespace hapticd::tune::detail {
 
@@ -41,6 +42,7 @@ struct AxisData {
     double duration_s = 0.0;
     double resolution_m = 0.0;  ///< 0: the positions are not quantised
     bool resolution_estimated = true;
+    HoldDelay delay;  ///< IdentificationOptions::delay_s at the log's period
 };
 
 /// Columns, time, status columns, saturation, resolution and excitation of `axis`; throws
@@ -52,7 +54,9 @@ AxisData prepare_axis(const TelemetryLog& log, int axis, const IdentificationOpt
 inline constexpr std::size_t kMinSegmentSamples = 10;
 
 /// The runs between gaps, each cut into segments of about `target` samples; segments with
-/// fewer than three fresh samples are dropped. Refuses a log left with none.
+/// fewer than three fresh samples are dropped. A run's first `delay.history()` rows start no
+/// segment: the forces acting in them were commanded before the run (in a gap, or before the
+/// log). Refuses a log left with none.
 std::vector<SegmentRange> make_segments(const AxisData& data, std::size_t target);
 
 struct StartingGuess {

@@ -74,6 +74,7 @@ void to_json(nlohmann::ordered_json& json, const IdentifiedAxis& a) {
         {"stuck_fraction", a.stuck_fraction},
         {"resolution_m", a.resolution_m},
         {"resolution_source", a.resolution_estimated ? "log" : "option"},
+        {"delay_s", a.delay_s},
         {"rate_hz", a.rate_hz},
         {"duration_s", a.duration_s},
         {"samples", a.samples},

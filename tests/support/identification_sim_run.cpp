@@ -48,6 +48,7 @@ std::vector<servo::TelemetryRecord> simulate_run(const SimulatedRun& run) {
     config.counts_per_meter = run.counts_per_meter;
     config.force_limit_n = run.force_limit_n;
     config.coulomb_n = run.coulomb_n;
+    config.delay_s = run.delay_s;
     config.clock = device::sim::SimClock::lockstep;
     device::sim::SimDevice sim;
     sim.open(config);

@@ -29,6 +29,7 @@ struct SimulatedRun {
     double counts_per_meter = 1e5;  ///< 10 µm counts
     double force_limit_n = 20.0;
     double rate_hz = 1000.0;
+    double delay_s = 0.0;  ///< [device.sim] delay: from a sample to its command acting
     int axes = 1;
     // The run.
     double duration_s = 10.0;

@@ -52,6 +52,35 @@ TEST(HapticTuneIdentify, PrintsTheDesignNamesAsJson) {
     EXPECT_LT(j.at("solve_time_s").get<double>(), 10.0);
 }
 
+TEST(HapticTuneIdentify, DelayShiftsTheForcesByTheLoopDelayAndIsChecked) {
+    const ScratchDir dir;
+    testing::SimulatedRun run;
+    run.delay_s = 0.001;  // one period: a serial board's host-paced schedule
+    const std::string log =
+        dir.write("delayed.csv", testing::daemon_csv(testing::simulate_run(run), 1));
+    const auto with = run_command(tune("identify " + log + " --json --delay 0.001"));
+    ASSERT_EQ(with.exit_code, 0) << with.err;
+    const json j = json::parse(with.out);
+    EXPECT_EQ(j.at("delay_s").get<double>(), 0.001);
+    EXPECT_NEAR(j.at("mass").get<double>(), 0.1, 0.0002);
+    EXPECT_NEAR(j.at("damping").get<double>(), 2.0, 0.01);
+
+    const auto without = run_command(tune("identify " + log + " --json"));
+    EXPECT_EQ(without.exit_code, 2);
+    EXPECT_CONTAINS(without.err, "[too_little_excitation]");
+    EXPECT_CONTAINS(without.err, "--delay");
+
+    for (const char* bad : {"-0.001", "nan", "x"}) {
+        const auto refused = run_command(tune("identify " + log + " --delay " + bad));
+        EXPECT_EQ(refused.exit_code, 2) << bad;
+        EXPECT_CONTAINS(refused.err, "--delay");
+    }
+    const auto too_long = run_command(tune("identify " + log + " --delay 0.01"));
+    EXPECT_EQ(too_long.exit_code, 2);
+    EXPECT_CONTAINS(too_long.err, "delay_s");
+    EXPECT_CONTAINS(too_long.err, "10 periods");
+}
+
 TEST(HapticTuneIdentify, TextOutputNamesEveryField) {
     const ScratchDir dir;
     const std::string log = dir.write("text.csv", simulated_csv());

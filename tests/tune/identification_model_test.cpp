@@ -180,5 +180,24 @@ TEST(IdentificationModel, JetDerivativesMatchFiniteDifferences) {
     }
 }
 
+TEST(HoldDelay, SplitsTheDelayIntoWholePeriodsAndAFraction) {
+    const HoldDelay none = split_hold_delay(0.0, 1e-3);
+    EXPECT_EQ(none.whole_periods, 0u);
+    EXPECT_EQ(none.fraction, 0.0);
+    EXPECT_EQ(none.history(), 0u);
+    const HoldDelay one = split_hold_delay(1e-3, 1.0 / 1000.0);  // whatever the rounding
+    EXPECT_EQ(one.whole_periods, 1u);
+    EXPECT_EQ(one.fraction, 0.0);
+    EXPECT_EQ(one.history(), 1u);
+    const HoldDelay part = split_hold_delay(0.55e-3, 1e-3);
+    EXPECT_EQ(part.whole_periods, 0u);
+    EXPECT_NEAR(part.fraction, 0.55, 1e-12);
+    EXPECT_EQ(part.history(), 1u);
+    const HoldDelay more = split_hold_delay(2.3e-3, 1e-3);
+    EXPECT_EQ(more.whole_periods, 2u);
+    EXPECT_NEAR(more.fraction, 0.3, 1e-12);
+    EXPECT_EQ(more.history(), 3u);
+}
+
 }  // namespace
 }  // namespace hapticd::tune

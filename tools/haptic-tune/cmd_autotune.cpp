@@ -217,6 +217,7 @@ int run_autotune(const AutotuneCliOptions& o) {
     outcome.dry_run = o.dry_run;
     outcome.delay = find_loop_delay(o.delay_s, !o.log_path.empty(), config);
     options.delay_periods = outcome.delay.delay_s * config.servo.rate_hz;
+    options.identification.delay_s = outcome.delay.identification_delay_s;
     try {
         tune::check_delay_periods(options.delay_periods);
     } catch (const std::invalid_argument& e) {

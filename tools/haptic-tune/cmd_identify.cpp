@@ -19,6 +19,7 @@ struct IdentifyOptions {
     std::optional<int> axis;
     std::optional<double> resolution_m;
     std::optional<double> force_limit_n;
+    double delay_s = 0.0;
     double segment_s = tune::IdentificationOptions{}.segment_s;
     double max_relative_std_error = tune::IdentificationOptions{}.max_relative_std_error;
     double max_stuck_fraction = tune::IdentificationOptions{}.max_stuck_fraction;
@@ -37,6 +38,7 @@ int run_identify(const IdentifyOptions& o) {
     options.segment_s = o.segment_s;
     options.resolution_m = o.resolution_m;
     options.force_limit_n = o.force_limit_n;
+    options.delay_s = o.delay_s;
     options.max_relative_std_error = o.max_relative_std_error;
     options.max_stuck_fraction = o.max_stuck_fraction;
     std::vector<tune::IdentifiedAxis> axes;
@@ -99,6 +101,12 @@ void add_identify_command(CLI::App& app, Invocation& invocation) {
         ->add_option("--force-limit", options->force_limit_n,
                      "the device's force limit, N: refuse the log if the force sits there")
         ->check(positive_finite("N"));
+    command
+        ->add_option("--delay", options->delay_s,
+                     "the loop delay, s, from a position's sample to the force computed from it "
+                     "acting (haptic-tune diag measures it: its loop_delay p50); the fit shifts "
+                     "the logged forces by it (default 0; under 10 periods)")
+        ->check(non_negative_finite("s"));
     command
         ->add_option("--segment", options->segment_s,
                      "length of a shooting segment, s (default 0.02; docs/identification.md)")

@@ -28,8 +28,10 @@ std::string periods_text(double delay_s, double rate_hz) {
     return number_text(periods, 4) + (periods == 1.0 ? " period" : " periods");
 }
 
-LoopDelay find_loop_delay(std::optional<double> delay_option, bool from_log,
-                          const daemon::Config& config) {
+namespace {
+
+LoopDelay find_sizing_delay(std::optional<double> delay_option, bool from_log,
+                            const daemon::Config& config) {
     LoopDelay out;
     const double rate_hz = config.servo.rate_hz;
     const bool stated = config.device.model_delay_stated;
@@ -106,6 +108,16 @@ LoopDelay find_loop_delay(std::optional<double> delay_option, bool from_log,
                         "for no delay would be past the limit of a real loop; give --delay "
                         "SECONDS (docs/autotune.md, docs/stability-models.md); nothing was "
                         "written");
+}
+
+}  // namespace
+
+LoopDelay find_loop_delay(std::optional<double> delay_option, bool from_log,
+                          const daemon::Config& config) {
+    LoopDelay out = find_sizing_delay(delay_option, from_log, config);
+    out.identification_delay_s =
+        out.source == DelaySource::measured ? out.measurement->delay_s.p50 : out.delay_s;
+    return out;
 }
 
 }  // namespace hapticd::tools

@@ -26,7 +26,10 @@ const char* to_string(DelaySource source);
 inline constexpr double kDelayMeasurementS = 2.0;
 
 struct LoopDelay {
-    double delay_s = 0.0;
+    double delay_s = 0.0;  ///< what the gains are sized for
+    /// What the identification shifts the logged forces by (IdentificationOptions::delay_s):
+    /// the measured median when measured (the delay the run's forces met), else delay_s.
+    double identification_delay_s = 0.0;
     DelaySource source = DelaySource::none;
     std::optional<daemon::DiagReport> measurement;  ///< when it ran the link
     std::string note;  ///< one line for the report: how the delay was found

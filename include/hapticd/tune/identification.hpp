@@ -66,6 +66,10 @@ struct IdentificationOptions {
     /// Encoder resolution, m per count. nullopt: the smallest step between logged positions
     /// (exact for the daemon's logs, which hold counts / counts_per_meter).
     std::optional<double> resolution_m;
+    /// The loop delay, s, from a position's sample to the force computed from it acting on
+    /// the handle (haptic-tune diag measures it): the fit shifts the logged forces by it
+    /// (HoldDelay, identification_model.hpp). >= 0 and under 10 of the log's periods.
+    double delay_s = 0.0;
     /// The device's force limit, N, if known: more than `max_saturated_fraction` of the
     /// samples at |f| >= it is refused as saturated.
     std::optional<double> force_limit_n;
@@ -128,6 +132,7 @@ struct IdentifiedAxis {
     /// friction (refused above IdentificationOptions::max_stuck_fraction).
     double stuck_fraction = 0.0;
 
+    double delay_s = 0.0;  ///< the loop delay the fit assumed (IdentificationOptions)
     double rate_hz = 0.0;  ///< 1 / the log's period
     double duration_s = 0.0;
     std::size_t samples = 0;         ///< rows used

@@ -3,9 +3,10 @@
 //     m dv/dt + b v = F - F_c sign(v) + F_0                                        (10)+
 //
 // F the logged force command f{i}_n (on the handle along +axis, held by the device over
-// one period: zero-order hold), m the mass (kg), b the viscous damping (N s/m), F_c >= 0
-// the Coulomb friction (N; it opposes the motion), F_0 a constant force offset (N; it adds
-// to the command: an amplifier offset, gravity on a tilted axis, a cable's pull).
+// one period: zero-order hold, from the loop delay D after its sample on), m the mass (kg), b the
+// viscous damping (N s/m), F_c >= 0 the Coulomb friction (N; it opposes the motion), F_0 a constant
+// force offset (N; it adds to the command: an amplifier offset, gravity on a tilted axis, a cable's
+// pull).
 //
 // The step below is the exact solution of this model over one hold interval, including
 // stops and reversals inside the interval: between events the motion is the closed form of
@@ -16,8 +17,31 @@
 #pragma once
 
 #include <cmath>
+#include <cstddef>
 
 namespace hapticd::tune {
+
+/// The loop delay D = (whole_periods + fraction) T from the sample at t_n = nT to the force
+/// computed from it acting (the zero-order hold of (13), shifted by D, as
+/// device/sim/command_pipeline.hpp renders it): period n, [t_n, t_{n+1}), sees F[n - q - 1]
+/// for its first fraction T and F[n - q] for the rest, q = whole_periods.
+struct HoldDelay {
+    std::size_t whole_periods = 0;
+    double fraction = 0.0;  ///< in [0, 1)
+
+    /// Forces before period n that it needs: F[n - history()] is the oldest.
+    std::size_t history() const { return whole_periods + (fraction > 0.0 ? 1 : 0); }
+};
+
+/// Splits `delay_s` (finite, >= 0) at the period `period_s`. A delay within 1e-9 periods of
+/// a whole number of periods is that number (1e-3 s at 1 kHz is one period, exactly).
+inline HoldDelay split_hold_delay(double delay_s, double period_s) {
+    const double periods = delay_s / period_s;
+    const double whole = std::round(periods);
+    if (std::abs(periods - whole) < 1e-9) return {static_cast<std::size_t>(whole), 0.0};
+    const double floor = std::floor(periods);
+    return {static_cast<std::size_t>(floor), periods - floor};
+}
 
 /// Position (m) and velocity (m/s) of the handle.
 template <typename T>
