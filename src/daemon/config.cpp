@@ -52,6 +52,7 @@ void read_servo(TableReader& servo, ServoSection& out) {
 void read_model(TableReader& model, double rate_hz, DeviceSection& out) {
     out.model_mass_kg = model.read_optional(schema::kModelMass);
     out.model_damping_n_s_per_m = model.read_optional(schema::kModelDamping);
+    out.model_coulomb_n = model.read_optional(schema::kModelCoulomb);
     out.model_delay_stated = model.has(schema::kModelDelay.key);
     // In periods, as every model checks it.
     out.model_delay_s =

@@ -31,14 +31,6 @@ void describe_identify(const Config& config, const IdentifyPlan& plan,
         << *options.duration_s << " s\n";
     for (const std::string& chosen : plan.chosen)
         log << "hapticd: identify: chose " << chosen << "\n";
-    if (plan.predicted_excursion_m && *plan.predicted_excursion_m > s.workspace_half_width_m) {
-        log << priority::warning
-            << "hapticd: identify: WARNING: [device.model] predicts a swing of +-"
-            << 1e3 * *plan.predicted_excursion_m
-            << " mm, beyond [identify] workspace = " << s.workspace_half_width_m
-            << " m: the excitation will likely stop at its edge (lower force_amplitude or "
-               "raise band_low)\n";
-    }
 }
 
 }  // namespace

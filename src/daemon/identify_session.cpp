@@ -104,6 +104,10 @@ std::string describe_excitation(const IdentifyPlan& plan, const env::Multisine& 
         out << "; [device.model] predicts a swing of +-" << 1e3 * *plan.predicted_excursion_m
             << " mm";
     }
+    if (plan.predicted_stuck_fraction) {
+        out << " and the handle held still by friction after "
+            << 100.0 * *plan.predicted_stuck_fraction << " % of the periods";
+    }
     return out.str();
 }
 

@@ -9,6 +9,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "identify_prediction.hpp"
+
 namespace hapticd::daemon {
 namespace {
 
@@ -193,7 +195,6 @@ IdentifyPlan make_identify_plan(const Config& config, const device::DeviceInfo& 
                           " N ([safety] max_force, or the device's own): allowed <= " +
                           format(settings.force_limit_n / norm_per_n) + " N");
     }
-    if (swing_per_n) plan.predicted_excursion_m = settings.signal.peak_force_n * *swing_per_n;
 
     if (identify.periods) {
         settings.periods = *identify.periods;
@@ -213,6 +214,7 @@ IdentifyPlan make_identify_plan(const Config& config, const device::DeviceInfo& 
     const double excitation_samples =
         2.0 * fade_samples + settings.periods * static_cast<double>(shape->period_samples());
     plan.duration_s = settings.still_time_s + excitation_samples / rate_hz + kTail_s;
+    predict_identify_run(config, plan, kTail_s);
     return plan;
 }
 

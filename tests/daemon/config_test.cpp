@@ -163,7 +163,7 @@ INSTANTIATE_TEST_SUITE_P(
             "periods at [servo] rate_hz = 1000)"},
         Bad{"[device.model]\ndamping = nan\n", "[device.model] damping = nan"},
         Bad{"[device.model]\ninertia = 1\n",
-            "[device.model] inertia = 1 is not a known key: allowed mass, damping, delay"},
+            "[device.model] inertia = 1 is not a known key: allowed mass, damping, coulomb, delay"},
         Bad{"[coupling]\nstiffness = -3\n",
             "[coupling] stiffness = -3 is out of range: allowed >= 0 and <= 1e+09 (N/m)"},
         Bad{"[coupling]\ncheck = \"none\"\n", "[coupling] check = \"none\" is not allowed"},

@@ -146,14 +146,16 @@ TEST(HilIdentify, PenDisplayLogsTheSignalItCommandedAndStaysInTheWorkspace) {
 
 TEST(HilIdentify, LeavingTheWorkspaceZeroesTheForceThatTickAndForTheRestOfTheRun) {
     const ScratchDir dir;
-    // 2 N on a 0.1 kg pen: the model predicts a swing of about +-40 mm; the box is +-10 mm.
-    const std::string config = pen_config("force_amplitude = 2.0\nworkspace = 0.01\n");
+    // 2 N on a 0.1 kg pen swings about +-40 mm; the box is +-10 mm. Told so, hapticd refuses
+    // the run before it starts (HilIdentify.ARunThatWouldLeaveTheWorkspaceIsRefusedBeforeItMoves);
+    // a model five times too heavy (the same corner) predicts +-8 mm, so the run starts and
+    // the rule stops it.
+    std::string config = pen_config("force_amplitude = 2.0\nworkspace = 0.01\n");
+    config.replace(config.find("mass = 0.1\ndamping = 2.0"), 24, "mass = 0.5\ndamping = 10.0");
     const DaemonRun run = run_identify(dir, config);
     EXPECT_EQ(run.exit_code, 1) << run.err;
     EXPECT_EQ(run.summary.at("exit"), "workspace");
     EXPECT_TRUE(run.summary.at("faults").empty());
-    EXPECT_NE(run.err.find("WARNING: [device.model] predicts a swing of"), std::string::npos)
-        << run.err;
     EXPECT_NE(run.err.find("the handle left the workspace at tick"), std::string::npos) << run.err;
     const env::ExcitationEnvironment e = planned_excitation(config);
     ASSERT_EQ(run.log.rows(), static_cast<std::size_t>(kStartTick + e.samples() + 500));
@@ -232,6 +234,32 @@ TEST(HilIdentify, TwoAxesEachGetTheirOwnLinesAndStayInTheWorkspace) {
                   << e.signal().lines(axis).front().frequency_hz << " Hz, swing +-" << 1e3 * swing
                   << " mm\n";
     }
+}
+
+TEST(HilIdentify, ARunThatWouldLeaveTheWorkspaceIsRefusedBeforeItMoves) {
+    const ScratchDir dir;
+    const DaemonRun run =
+        run_identify(dir, pen_config("force_amplitude = 2.0\nworkspace = 0.01\n"));
+    EXPECT_EQ(run.exit_code, 2);
+    EXPECT_NE(run.err.find("[identify] force_amplitude = 2 N: [device.model] (m = 0.1 kg, b = 2 "
+                           "N s/m) predicts the handle swings +-"),
+              std::string::npos)
+        << run.err;
+    EXPECT_NE(run.err.find("Lower force_amplitude to <= "), std::string::npos) << run.err;
+    EXPECT_EQ(run.log.rows(), 0u) << "nothing moved: the refusal comes before the first tick";
+}
+
+TEST(HilIdentify, ARunFrictionWouldHoldStillIsRefusedBeforeItMoves) {
+    const ScratchDir dir;
+    std::string config = pen_config("force_amplitude = 0.3\n");
+    config.replace(config.find("damping = 2.0\n"), 14, "damping = 2.0\ncoulomb = 0.2\n");
+    const DaemonRun run = run_identify(dir, config);
+    EXPECT_EQ(run.exit_code, 2);
+    EXPECT_NE(run.err.find("predicts Coulomb friction holds the handle still after"),
+              std::string::npos)
+        << run.err;
+    EXPECT_NE(run.err.find("Raise force_amplitude to >= "), std::string::npos) << run.err;
+    EXPECT_EQ(run.log.rows(), 0u);
 }
 
 TEST(HilIdentify, NeedsALogFile) {

@@ -73,6 +73,7 @@ struct DeviceSection {
     int axes = static_cast<int>(*schema::kAxes.default_value);
     std::optional<double> model_mass_kg;
     std::optional<double> model_damping_n_s_per_m;
+    std::optional<double> model_coulomb_n;  ///< Coulomb friction; the identify plan uses it
     double model_delay_s =
         *schema::kModelDelay.default_value;  ///< sample to force, beyond the hold
     /// [device.model] delay is written in the file (model_delay_s is its value); false:

@@ -58,6 +58,9 @@ inline constexpr Number kModelMass{
     "mass", {.lo = tune::kMinDeviceMassKg, .hi = tune::kMaxDeviceMassKg, .unit = "kg"}};
 inline constexpr Number kModelDamping{
     "damping", {.lo = tune::kMinDeviceDamping, .hi = tune::kMaxDeviceDamping, .unit = "N s/m"}};
+/// Coulomb friction F_c (haptic-tune identify's `coulomb`): the identification run's plan
+/// predicts with it how long the handle sticks. None: not known (the plan assumes none).
+inline constexpr Number kModelCoulomb{"coulomb", {.lo = 0.0, .hi = 1e4, .unit = "N"}};
 /// From 0 to below tune::kMaxDelayPeriods periods of the rate (TableReader::read_periods).
 inline constexpr Number kModelDelay{"delay", {.lo = 0.0, .unit = "s"}, 0.0};
 

@@ -62,8 +62,13 @@ struct IdentifyPlan {
     env::ExcitationSettings excitation;
     /// Still wait + the excitation + 0.5 s of zero force after it: the default --duration.
     double duration_s = 0.0;
-    /// What [device.model] predicts for the swing about the start, m (none without it).
+    /// What [device.model] predicts for the swing about the start, m (none without it):
+    /// the identification's model driven from rest by the planned run
+    /// (identify_prediction.hpp).
     std::optional<double> predicted_excursion_m;
+    /// The fraction of the periods after which [device.model] coulomb would hold the handle
+    /// still (none without it).
+    std::optional<double> predicted_stuck_fraction;
     /// The values that were chosen here rather than read from [identify], one per line,
     /// e.g. "band_low = 1.59 Hz (half the corner b/(2 pi m) = 3.18 Hz of [device.model])".
     std::vector<std::string> chosen;
