@@ -52,9 +52,9 @@ void Harness::record(const EmulatedBoard& board, MotorPins pins) {
             << ',' << plant.mr_adc_counts() << '\n';
 }
 
-bool Harness::take_host_bytes() {
+int Harness::take_host_bytes() {
     std::uint8_t bytes[256];
-    bool request = false;
+    int requests = 0;
     for (std::size_t n; (n = link_.read(bytes, sizeof bytes)) > 0;) {
         for (std::size_t i = 0; i < n; ++i) {
             const std::uint64_t start_cycle = board_.cycle();
@@ -69,7 +69,7 @@ bool Harness::take_host_bytes() {
                 host_frame_open_ = true;
             } else if (host_frame_open_) {
                 host_frame_open_ = false;
-                request = true;
+                ++requests;
                 ++figures_.requests;
                 request_in_cycle_ = in_cycle;
                 request_pending_ = true;
@@ -77,15 +77,15 @@ bool Harness::take_host_bytes() {
             }
         }
     }
-    return request;
+    return requests;
 }
 
-bool Harness::pass_board_bytes() {
+int Harness::pass_board_bytes() {
     const std::vector<LineByte> sent = board_.take_sent();
-    if (sent.empty()) return false;
+    if (sent.empty()) return 0;
     std::vector<std::uint8_t> bytes;
     bytes.reserve(sent.size());
-    bool reply = false;
+    int replies = 0;
     for (const LineByte& b : sent) {
         bytes.push_back(b.value);
         note_identity(b.value);
@@ -94,7 +94,7 @@ bool Harness::pass_board_bytes() {
             board_frame_open_ = true;
         } else if (board_frame_open_) {
             board_frame_open_ = false;
-            reply = true;
+            ++replies;
             ++figures_.replies;
             reply_done_cycle_ = b.done_cycle;
             reply_done_ = true;
@@ -110,7 +110,7 @@ bool Harness::pass_board_bytes() {
         }
     }
     link_.write(bytes.data(), bytes.size());
-    return reply;
+    return replies;
 }
 
 void Harness::note_identity(std::uint8_t byte) {
@@ -154,24 +154,26 @@ void Harness::run_lockstep(const std::atomic<bool>& stop) {
         static_cast<std::uint64_t>(std::llround(options_.period_s * EmulatedBoard::kCpuHz));
     while (!stop.load() && !done()) {
         // Emulated time stands still until a whole request has come.
-        if (!take_host_bytes()) {
+        const int requests = take_host_bytes();
+        if (requests == 0) {
             link_.wait_readable(100'000'000);
             continue;
         }
+        unanswered_ += requests;
         // One period of emulated time per request (a board that paces the loop: until its
-        // answer is out), longer while the answer is still going out (up to
-        // kLockstepMaxPeriods).
+        // answer is out), longer while answers are still going out (up to
+        // kLockstepMaxPeriods; what is still unanswered then is given up on).
         const std::uint64_t start = board_.cycle();
         const std::uint64_t limit = start + kLockstepMaxPeriods * period_cycles;
         const std::uint64_t step = board_paces_ ? kLockstepPacedStep : period_cycles / 10;
-        bool replied = false;
         for (std::uint64_t until = board_paces_ ? start + step : start + period_cycles; !done();) {
             board_.run_until(std::min(until, limit));
-            replied = pass_board_bytes() || replied;
+            unanswered_ = std::max(0, unanswered_ - pass_board_bytes());
             if (board_.cycle() >= limit) break;
-            if (board_.cycle() >= until && replied) break;
+            if (board_.cycle() >= until && unanswered_ == 0) break;
             if (board_.cycle() >= until) until += step;
         }
+        unanswered_ = 0;
     }
 }
 

@@ -60,10 +60,11 @@ class Harness {
   private:
     void run_real_time(const std::atomic<bool>& stop);
     void run_lockstep(const std::atomic<bool>& stop);
-    /// Host bytes to the board; true when a whole request (a delimiter after data) came.
-    bool take_host_bytes();
-    /// Board bytes that have left the line to the host; true when a reply ended.
-    bool pass_board_bytes();
+    /// Host bytes to the board; the number of whole requests (a delimiter after data) that
+    /// came.
+    int take_host_bytes();
+    /// Board bytes that have left the line to the host; the number of replies that ended.
+    int pass_board_bytes();
     /// A byte the board sent, through the host's own stream decoder: whether an identity in
     /// them says that the board paces the loop.
     void note_identity(std::uint8_t byte);
@@ -84,6 +85,10 @@ class Harness {
     bool reply_done_ = false;
     std::uint64_t request_in_cycle_ = 0;
     bool request_pending_ = false;
+    /// Lockstep: requests not answered yet. A bye after a command in one write, or a hello
+    /// after a session that ended mid-exchange, leaves more than one in flight; emulated
+    /// time runs until each has its reply (or the request is given up on).
+    int unanswered_ = 0;
     std::ofstream record_;
     double next_record_s_ = 0.0;
     MotorPins recorded_pins_{-1.0, false};

@@ -40,6 +40,7 @@ struct AutotuneCliOptions {
     double margin = tune::kDefaultAutotuneMargin;
     bool optimize_damping = false;
     std::optional<double> delay_s;  ///< --delay; default [device.model] delay
+    bool lockstep = false;          ///< --lockstep; also a sim device on its lockstep clock
     bool dry_run = false;
     bool json = false;
 };
@@ -215,7 +216,8 @@ int run_autotune(const AutotuneCliOptions& o) {
     Outcome outcome;
     outcome.config_path = o.config_path;
     outcome.dry_run = o.dry_run;
-    outcome.delay = find_loop_delay(o.delay_s, !o.log_path.empty(), config);
+    const bool lockstep = o.lockstep || sim_lockstep(config);
+    outcome.delay = find_loop_delay(o.delay_s, !o.log_path.empty(), config, lockstep);
     options.delay_periods = outcome.delay.delay_s * config.servo.rate_hz;
     options.identification.delay_s = outcome.delay.identification_delay_s;
     try {
@@ -230,8 +232,7 @@ int run_autotune(const AutotuneCliOptions& o) {
     try {
         if (o.log_path.empty()) {
             run_identification(o.hapticd_path.empty() ? default_hapticd() : o.hapticd_path,
-                               o.config_path, run_log.path(), sim_lockstep(config), o.json,
-                               run_log.started);
+                               o.config_path, run_log.path(), lockstep, o.json, run_log.started);
             // Named now, so that whatever ends autotune from here on, the log can be found.
             std::cerr << "haptic-tune: autotune: identifying from the run's log " << run_log.path()
                       << (run_log.temporary() ? " (removed once the config is written)" : "")
@@ -310,6 +311,11 @@ void add_autotune_command(CLI::App& app, Invocation& invocation) {
                      "delay; from --log, [device.model] delay, else 0); written to "
                      "[device.model] delay")
         ->check(non_negative_finite("s"));
+    command->add_flag("--lockstep", options->lockstep,
+                      "the device keeps virtual time with the host (an emulated board: "
+                      "hapticd-avr-sim --clock lockstep): measure the delay and run hapticd "
+                      "--identify with --lockstep (implied by a sim device on its lockstep "
+                      "clock)");
     command->add_flag("--dry-run", options->dry_run,
                       "identify, size, verify and print the changes, but do not write");
     command->add_flag("--json", options->json, "print the result as JSON");

@@ -5,7 +5,6 @@
 #include "autotune_error.hpp"
 #include "cli_common.hpp"
 #include "hapticd/tune/input_checks.hpp"
-#include "identification_run.hpp"
 
 namespace hapticd::tools {
 
@@ -31,7 +30,7 @@ std::string periods_text(double delay_s, double rate_hz) {
 namespace {
 
 LoopDelay find_sizing_delay(std::optional<double> delay_option, bool from_log,
-                            const daemon::Config& config) {
+                            const daemon::Config& config, bool lockstep) {
     LoopDelay out;
     const double rate_hz = config.servo.rate_hz;
     const bool stated = config.device.model_delay_stated;
@@ -56,7 +55,7 @@ LoopDelay find_sizing_delay(std::optional<double> delay_option, bool from_log,
     // Measure it, as haptic-tune diag does: zero force, the daemon's schedule.
     daemon::DiagOptions diag;
     diag.duration_s = kDelayMeasurementS;
-    diag.lockstep = sim_lockstep(config);
+    diag.lockstep = lockstep;
     std::cerr << "haptic-tune: autotune: measuring the loop delay over the link ("
               << kDelayMeasurementS << " s at zero force)\n";
     try {
@@ -113,8 +112,8 @@ LoopDelay find_sizing_delay(std::optional<double> delay_option, bool from_log,
 }  // namespace
 
 LoopDelay find_loop_delay(std::optional<double> delay_option, bool from_log,
-                          const daemon::Config& config) {
-    LoopDelay out = find_sizing_delay(delay_option, from_log, config);
+                          const daemon::Config& config, bool lockstep) {
+    LoopDelay out = find_sizing_delay(delay_option, from_log, config, lockstep);
     out.identification_delay_s =
         out.source == DelaySource::measured ? out.measurement->delay_s.p50 : out.delay_s;
     return out;

@@ -37,10 +37,11 @@ struct LoopDelay {
 
 /// --delay (delay_option), else the link's measurement (unless from_log), else the
 /// config's [device.model] delay when the file states one
-/// (daemon::DeviceSection::model_delay_stated). Throws AutotuneError when the delay is
-/// unknown or the device fails.
+/// (daemon::DeviceSection::model_delay_stated). `lockstep`: the device keeps virtual time
+/// with the host (diag --lockstep). Throws AutotuneError when the delay is unknown or the
+/// device fails.
 LoopDelay find_loop_delay(std::optional<double> delay_option, bool from_log,
-                          const daemon::Config& config);
+                          const daemon::Config& config, bool lockstep);
 
 /// "1.5 periods".
 std::string periods_text(double delay_s, double rate_hz);
