@@ -52,15 +52,17 @@ inline PinRecord read_pin_record(const std::string& path) {
 
 class EmulatedHapkit {
   public:
-    /// `options`: hapticd-avr-sim's own (--clock, --mass, --operator, ...); the firmware,
-    /// the link, --stats and --record (pins.csv) are added.
-    EmulatedHapkit(const ScratchDir& dir, std::vector<std::string> options)
+    /// `options`: hapticd-avr-sim's own (--clock, --mass, --operator, ...); the firmware
+    /// (`firmware`, the reference build by default), the link, --stats and --record
+    /// (pins.csv) are added.
+    EmulatedHapkit(const ScratchDir& dir, std::vector<std::string> options,
+                   const std::string& firmware = HAPTICD_FIRMWARE_ELF)
         : link_(dir.file("hapkit")),
           stats_(dir.file("avr-sim.json")),
           record_(dir.file("pins.csv")) {
         std::vector<std::string> argv = {
-            HAPTICD_AVR_SIM_BIN, "--firmware", HAPTICD_FIRMWARE_ELF, "--link", link_,
-            "--stats",           stats_,       "--record",           record_};
+            HAPTICD_AVR_SIM_BIN, "--firmware", firmware,   "--link", link_,
+            "--stats",           stats_,       "--record", record_};
         argv.insert(argv.end(), options.begin(), options.end());
         process_ =
             std::make_unique<ChildProcess>(argv, dir.file("avr-sim.out"), dir.file("avr-sim.err"));

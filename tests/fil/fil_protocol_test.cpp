@@ -169,7 +169,9 @@ TEST(FilProtocol, TheWatchdogStopsTheMotorAtItsTimeout) {
 
 TEST(FilProtocol, DamagedAndForeignFramesNeverMoveTheMotor) {
     const ScratchDir dir;
-    EmulatedHapkit board(dir, {});
+    // Lockstep: how long the good command's force lasts before the bye is in emulated time,
+    // whatever the host's round trip.
+    EmulatedHapkit board(dir, {"--clock", "lockstep"});
     Host host(board.port());
     host.hello();
     Frame good(protocol::kMaxFrameSize);

@@ -15,5 +15,6 @@ void add_zwidth_command(CLI::App& app, Invocation& invocation);
 void add_diag_command(CLI::App& app, Invocation& invocation);
 void add_identify_command(CLI::App& app, Invocation& invocation);
 void add_autotune_command(CLI::App& app, Invocation& invocation);
+void add_conform_command(CLI::App& app, Invocation& invocation);
 
 }  // namespace hapticd::tools

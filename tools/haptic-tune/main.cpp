@@ -26,6 +26,7 @@ int run_main(int argc, char** argv) {
     add_diag_command(app, invocation);
     add_identify_command(app, invocation);
     add_autotune_command(app, invocation);
+    add_conform_command(app, invocation);
     if (const std::optional<int> ended = parse_command_line(app, argc, argv)) return *ended;
     try {
         return invocation.run();

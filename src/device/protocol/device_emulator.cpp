@@ -39,6 +39,7 @@ DeviceEmulator::DeviceEmulator(const EmulatorConfig& config)
       max_version_(config.max_version),
       default_watchdog_timeout_us_(config.default_watchdog_timeout_us),
       max_watchdog_timeout_us_(config.max_watchdog_timeout_us),
+      poll_advances_period_(config.poll_advances_period),
       force_limit_un_(0) {
     sim::SimConfig sim_config = config.sim;
     sim_config.clock = sim::SimClock::lockstep;
@@ -318,7 +319,13 @@ void DeviceEmulator::on_command(const ForceCommand& command, Outbox& outbox) noe
     send_sample(status, outbox);
 }
 
-void DeviceEmulator::on_poll(Outbox& outbox) noexcept { send_sample(0, outbox); }
+void DeviceEmulator::on_poll(Outbox& outbox) noexcept {
+    if (poll_advances_period_) {
+        advance_period();
+        if (gone_) return;
+    }
+    send_sample(0, outbox);
+}
 
 void DeviceEmulator::on_bye(const Bye& bye, Outbox& outbox) noexcept {
     close_session();

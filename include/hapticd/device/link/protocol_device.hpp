@@ -112,17 +112,18 @@ class ProtocolDevice final : public Device {
     const protocol::Identity& identity() const noexcept { return identity_; }
     const FrameLink* link() const noexcept { return link_.get(); }
 
-  private:
-    enum class LinkState : std::uint8_t { closed, connected, lost, ready };
-
     /// The settings and the unopened link, read from config and the table: open()'s first
-    /// step and check_config()'s whole. Throws input::ConfigError.
+    /// step, check_config()'s whole, and what `haptic-tune conform` talks to the device
+    /// through. Throws input::ConfigError.
     struct Configured {
         ProtocolSettings settings;
         std::unique_ptr<FrameLink> link;
     };
     static Configured configure(const DeviceConfig& config, const std::string& plugin,
                                 const MakeLink& make_link);
+
+  private:
+    enum class LinkState : std::uint8_t { closed, connected, lost, ready };
 
     /// hello -> identity, configure -> ack, a disabled command with clear_faults -> sample.
     /// Outside the tick; throws std::runtime_error on failure.

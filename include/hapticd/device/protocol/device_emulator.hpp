@@ -57,6 +57,10 @@ struct EmulatorConfig {
     std::uint8_t max_version = kProtocolVersion2;
     std::uint32_t default_watchdog_timeout_us = kDefaultWatchdogTimeoutUs;  ///< section 5.4
     std::uint32_t max_watchdog_timeout_us = kMaxWatchdogTimeoutUs;          ///< <= 1 s
+    /// A poll lets a period pass before it is answered (advance_period()), as a device whose
+    /// clock runs while a host polls it once a period: what `haptic-tune conform` needs to
+    /// see the watchdog trip (docs/conform.md). Off: a poll changes nothing, time included.
+    bool poll_advances_period = false;
 };
 
 /// One-shot misbehaviour, for tests. Every counter is decremented as it fires.
@@ -181,6 +185,7 @@ class DeviceEmulator {
     std::uint8_t max_version_;
     std::uint32_t default_watchdog_timeout_us_;
     std::uint32_t max_watchdog_timeout_us_;
+    bool poll_advances_period_ = false;
     std::int32_t force_limit_un_;
 
     bool session_open_ = false;
