@@ -26,7 +26,11 @@ CheckResult verdict(const char* name, const char* section, const Finding& findin
     result.name = name;
     result.section = section;
     result.outcome = finding.failed ? Outcome::fail : Outcome::pass;
-    result.detail = finding.failed ? finding.detail : std::move(evidence);
+    if (finding.failed) {
+        result.detail = finding.detail;
+    } else {
+        result.detail = std::move(evidence);
+    }
     return result;
 }
 
