@@ -116,6 +116,9 @@ TEST_F(InstalledTree, TheTemplateUnitRunsTheInstalledHapticdOnTheInstancesConfig
           "\nLimitRTPRIO=", "\nLimitMEMLOCK=infinity\n", "\nLogsDirectory=hapticd/%i\n",
           "\nLogsDirectoryMode=0750\n", "\nRuntimeDirectory=hapticd\n",
           "\nRuntimeDirectoryPreserve=yes\n", "\nUMask=0027\n", "\nDevicePolicy=closed\n",
+          // the device nodes the plugins open: a Hapkit's or an Uno's tty among them
+          "\nDeviceAllow=char-usb_device rw\n", "\nDeviceAllow=char-hidraw rw\n",
+          "\nDeviceAllow=char-ttyACM rw\n", "\nDeviceAllow=char-ttyUSB rw\n",
           "summary-{start}.json", " --socket ${RUNTIME_DIRECTORY}/%i.sock\n"}) {
         EXPECT_NE(unit.find(line), std::string::npos) << line;
     }
