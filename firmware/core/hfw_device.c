@@ -166,17 +166,8 @@ static size_t on_configure(struct hfw_device* d, const uint8_t* payload, uint8_t
 /* ---- 5.2 command ---- */
 
 static void on_command(struct hfw_device* d, const uint8_t* payload, uint64_t now_us) {
-    const uint32_t sequence = hfw_load_u32(payload);
+    /* The force first, the bookkeeping after: every cycle before output() is loop delay. */
     const uint8_t flags = payload[4];
-    uint16_t status = 0;
-    if (d->command_seen) {
-        if (sequence != d->command_sequence + 1u) status |= HFW_STATUS_COMMAND_GAP;
-        /* more than 1.5 periods since the last: that force was held too long */
-        const uint32_t late_us = d->config->period_us + d->config->period_us / 2u;
-        if (now_us - d->command_arrival_us > late_us) {
-            status |= HFW_STATUS_COMMAND_LATE;
-        }
-    }
     const int enable = (flags & HFW_COMMAND_ENABLE) != 0;
     if ((flags & HFW_COMMAND_CLEAR_FAULTS) != 0 && !enable) {
         d->latched_faults = d->fault_causes; /* 5.5: those whose cause has gone */
@@ -194,11 +185,22 @@ static void on_command(struct hfw_device* d, const uint8_t* payload, uint64_t no
     }
     output(d, force_un, active);
     /* 4.6: this command took effect now, whatever it set (zero too) */
+    const uint64_t applied_us = d->board.now_us(d->board.context);
+    const uint32_t sequence = hfw_load_u32(payload);
+    uint16_t status = 0;
+    if (d->command_seen) {
+        if (sequence != d->command_sequence + 1u) status |= HFW_STATUS_COMMAND_GAP;
+        /* more than 1.5 periods since the last: that force was held too long */
+        const uint32_t late_us = d->config->period_us + d->config->period_us / 2u;
+        if (now_us - d->command_arrival_us > late_us) {
+            status |= HFW_STATUS_COMMAND_LATE;
+        }
+    }
     d->previous_sequence = d->applied_sequence;
     d->previous_us = d->applied_us;
     d->applied_known = d->applied_known == 0 ? 1 : 2;
     d->applied_sequence = sequence;
-    d->applied_us = d->board.now_us(d->board.context);
+    d->applied_us = applied_us;
     d->force_clamped = clamped;
     d->command_status = status;
     d->command_seen = 1;

@@ -25,7 +25,12 @@ struct hfw_duty hfw_force_to_duty(const struct hfw_motor_map* map, int32_t force
         out.duty = map->duty_top;
         return out;
     }
-    const uint32_t product = (magnitude_un >> map->shift) * map->multiplier;
+    const uint32_t scaled_un = magnitude_un >> map->shift; /* < 2^16: shift says so */
+    /* Both factors fit 16 bits when duty_top <= 256 (the multiplier is then below 2^15): a
+       16 x 16 -> 32 product, a third of a 32 x 32 one on the AVR, and the same number. */
+    const uint32_t product = map->multiplier <= 0xFFFFu
+                                 ? (uint32_t)(uint16_t)scaled_un * (uint16_t)map->multiplier
+                                 : scaled_un * map->multiplier;
     out.duty = (uint16_t)((product + (1ul << (DUTY_FRACTION_BITS - 1u))) >> DUTY_FRACTION_BITS);
     if (out.duty > map->duty_top) out.duty = map->duty_top;
     return out;

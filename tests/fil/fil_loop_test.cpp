@@ -2,9 +2,9 @@
 // deterministic, emulated time stands still while the host computes).
 //
 // 1. The board paces the loop (docs/protocol.md 5.8): haptic-tune diag --lockstep measures the
-//    board's own share of the loop delay from its acknowledgements, and it is a little over
-//    half a period: under the one period of the host-paced schedule (5.2), over what the
-//    line alone costs (the sample's end and the command: 38 bytes, 190 us).
+//    board's own share of the loop delay from its acknowledgements, and it is at most half a
+//    period (issue 29's target; the host-paced schedule of 5.2 costs one and more), over what
+//    the line alone costs (the sample's end and the command: 38 bytes, 190 us).
 // 2. hapticd renders a wall through the virtual coupling on the emulated board: pushed by 1 N,
 //    the handle settles where the coupling in series with the wall says, and the force the
 //    motor's pins make (through the paddle's kinematics) is the force hapticd commanded.
@@ -32,7 +32,7 @@ std::string serial_config(const std::string& port, const std::string& scene, dou
         "[device.serial]\nport = \"" +
         port +
         "\"\n\n"
-        "[device.model]\nmass = 0.05\ndamping = 0.5\ndelay = 0.00055\n\n"
+        "[device.model]\nmass = 0.05\ndamping = 0.5\ndelay = 0.0005\n\n"
         "[coupling]\nstiffness = " +
         std::to_string(stiffness) + "\ndamping = 0.0\ncheck = \"passive\"\n\n" +
         "[safety]\nmax_force = 4.0\nmax_speed = 1.0\n";
@@ -40,7 +40,7 @@ std::string serial_config(const std::string& port, const std::string& scene, dou
     return config;
 }
 
-TEST(FilLoop, TheBoardPacesTheLoopAtLittleMoreThanHalfAPeriod) {
+TEST(FilLoop, TheBoardPacesTheLoopAtHalfAPeriodOrLess) {
     const ScratchDir dir;
     EmulatedHapkit board(dir, {"--clock", "lockstep"});
     const std::string config = dir.write("cfg.toml", serial_config(board.port(), "", 200.0));
@@ -60,7 +60,7 @@ TEST(FilLoop, TheBoardPacesTheLoopAtLittleMoreThanHalfAPeriod) {
     const double p50 = delay.at("periods").at("p50").get<double>();
     const double p99 = delay.at("periods").at("p99").get<double>();
     std::cout << "[fil] paced loop delay p50 " << p50 << " p99 " << p99 << " periods\n";
-    EXPECT_LT(p99, 0.6) << "the board no longer paces the loop as docs/firmware.md says";
+    EXPECT_LE(p99, 0.5) << "the board's share of the loop delay is over half a period";
     EXPECT_GT(p50, 0.19) << "faster than the line: 38 bytes at 5 us";
     EXPECT_LT(p99 - p50, 0.02) << "lockstep is deterministic: a spread is a scheduling fault";
     board.stop();

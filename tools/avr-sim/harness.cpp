@@ -98,7 +98,10 @@ int Harness::pass_board_bytes() {
             ++figures_.replies;
             reply_done_cycle_ = b.done_cycle;
             reply_done_ = true;
-            if (request_pending_) {
+            // A frame that ended before the request was in (real time: a host late for the
+            // period, whose request came while the board's next sample was going out) is not
+            // its reply.
+            if (request_pending_ && b.done_cycle > request_in_cycle_) {
                 request_pending_ = false;
                 figures_.latency_us.push_back(
                     static_cast<double>(b.done_cycle - request_in_cycle_) * 1e6 /

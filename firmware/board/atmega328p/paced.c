@@ -118,11 +118,15 @@ void paced_send(struct hfw_device* d) {
     feed();
     hfw_device_sample_counts(d, counts, frame);
     feed();
+    /* The counts onto the line first (as far as COBS lets them: up to their last zero), and
+       their CRC while they go. */
     const uint8_t counts_size = (uint8_t)(8u * d->config->axes);
+    encode_bytes(HFW_SAMPLE_COUNTS_OFFSET, counts_size);
     crc_bytes(HFW_SAMPLE_COUNTS_OFFSET, counts_size);
     const uint8_t size = (uint8_t)hfw_device_sample_close(d, crc_state, frame);
     feed();
-    encode_bytes(HFW_SAMPLE_COUNTS_OFFSET, (uint8_t)(size - HFW_SAMPLE_COUNTS_OFFSET));
+    const uint8_t crc_at = (uint8_t)(HFW_SAMPLE_COUNTS_OFFSET + counts_size);
+    encode_bytes(crc_at, (uint8_t)(size - crc_at));
     const uint8_t total = (uint8_t)hfw_cobs_finish(&encoder);
     while (sent < total) feed();
     uart_allow(0, 1);
