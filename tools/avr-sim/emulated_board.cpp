@@ -21,6 +21,7 @@ namespace {
 constexpr std::uint16_t kDdrB = 0x24, kPortB = 0x25;
 constexpr std::uint16_t kDdrD = 0x2A, kPortD = 0x2B;
 constexpr std::uint16_t kTccr0A = 0x44, kTccr0B = 0x45, kOcr0B = 0x48;
+constexpr std::uint16_t kAdcsra = 0x7A;
 constexpr std::uint8_t kCom0B1 = 1u << 5, kCom0B0 = 1u << 4, kWgmFastPwm = 0x03;
 constexpr std::uint8_t kPin5 = 1u << 5, kPin0 = 1u << 0;
 constexpr std::uint16_t kUcsr0A = 0xC0, kUcsr0B = 0xC1, kUcsr0C = 0xC2, kUbrr0L = 0xC4,
@@ -83,6 +84,7 @@ EmulatedBoard::EmulatedBoard(const std::string& firmware_elf, const PaddleConfig
                             &EmulatedBoard::on_uart_output, this);
     avr_irq_register_notify(avr_io_getirq(avr_, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_OUT_TRIGGER),
                             &EmulatedBoard::on_adc_trigger, this);
+    avr_register_io_write(avr_, kOcr0B, &EmulatedBoard::on_duty_write, this);
     if (sensor_ == PositionSensor::quadrature) {
         encoder_channels_ = plant_.encoder_channels();
         avr_raise_irq(avr_io_getirq(avr_, AVR_IOCTL_IOPORT_GETIRQ('D'), IOPORT_IRQ_PIN2),
@@ -258,8 +260,19 @@ void EmulatedBoard::on_uart_output(avr_irq_t*, std::uint32_t value, void* self) 
     }
 }
 
+void EmulatedBoard::on_duty_write(avr_t* avr, std::uint16_t addr, std::uint8_t value, void* self) {
+    auto* board = static_cast<EmulatedBoard*>(self);
+    board->duty_writes_.push_back(avr->cycle);
+    avr_core_watch_write(avr, addr, value);
+}
+
 void EmulatedBoard::on_adc_trigger(avr_irq_t*, std::uint32_t, void* self) {
     auto* board = static_cast<EmulatedBoard*>(self);
+    // A conversion started: the sample-and-hold closes 1.5 ADC clocks later (ADPS2:0 sets
+    // the ADC clock to F_CPU / 2^ADPS, 2 for 0).
+    const std::uint8_t adps = board->avr_->data[kAdcsra] & 0x07u;
+    const std::uint64_t adc_clock_cycles = adps == 0 ? 2u : (1u << adps);
+    board->adc_samples_.push_back(board->avr_->cycle + adc_clock_cycles * 3u / 2u);
     // The sensor on A2; the other channels read 0 V.
     avr_raise_irq(avr_io_getirq(board->avr_, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_ADC2),
                   millivolts_for(board->plant_.mr_adc_counts()));

@@ -76,6 +76,13 @@ class EmulatedBoard {
     void profile_from(std::uint64_t cycle);
     const std::map<std::uint32_t, std::uint64_t>& profile() const { return profile_; }
 
+    /// The cycles, in order, at which the ADC sampled its input (a conversion's start plus 1.5
+    /// ADC clocks, the ATmega328P's sample-and-hold instant), and at which the firmware wrote
+    /// the motor's duty (OCR0B), even an unchanged one: what the loop delay is measured
+    /// between, outside the firmware (Harness).
+    const std::vector<std::uint64_t>& adc_samples() const { return adc_samples_; }
+    const std::vector<std::uint64_t>& duty_writes() const { return duty_writes_; }
+
     /// Called after every plant step (time, pins), e.g. to record them.
     void on_step(std::function<void(const EmulatedBoard&, MotorPins)> observer) {
         observer_ = std::move(observer);
@@ -87,6 +94,7 @@ class EmulatedBoard {
     static std::uint64_t profile_start(avr_t* avr, std::uint64_t when, void* self);
     static void on_uart_output(avr_irq_t* irq, std::uint32_t value, void* self);
     static void on_adc_trigger(avr_irq_t* irq, std::uint32_t value, void* self);
+    static void on_duty_write(avr_t* avr, std::uint16_t addr, std::uint8_t value, void* self);
     static std::uint64_t receive_timer(avr_t* avr, std::uint64_t when, void* self);
     static std::uint64_t transmit_free_timer(avr_t* avr, std::uint64_t when, void* self);
 
@@ -110,6 +118,8 @@ class EmulatedBoard {
     std::uint64_t profile_every_cycles_ = 0;
     bool profiling_ = false;
     std::map<std::uint32_t, std::uint64_t> profile_;
+    std::vector<std::uint64_t> adc_samples_;
+    std::vector<std::uint64_t> duty_writes_;
 };
 
 }  // namespace hapticd::avr_sim

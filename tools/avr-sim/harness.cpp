@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace hapticd::avr_sim {
@@ -71,6 +72,7 @@ int Harness::take_host_bytes() {
                 host_frame_open_ = false;
                 ++requests;
                 ++figures_.requests;
+                request_ends_.push_back(in_cycle);
                 request_in_cycle_ = in_cycle;
                 request_pending_ = true;
                 board_.profile_from(in_cycle);
@@ -96,6 +98,7 @@ int Harness::pass_board_bytes() {
             board_frame_open_ = false;
             ++replies;
             ++figures_.replies;
+            reply_ends_.push_back(b.done_cycle);
             reply_done_cycle_ = b.done_cycle;
             reply_done_ = true;
             // A frame that ended before the request was in (real time: a host late for the
@@ -180,6 +183,29 @@ void Harness::run_lockstep(const std::atomic<bool>& stop) {
     }
 }
 
+void Harness::measure_loop_delay() {
+    const std::vector<std::uint64_t>& samples = board_.adc_samples();
+    const std::vector<std::uint64_t>& writes = board_.duty_writes();
+    // The last element <= x, or nullptr.
+    const auto last_at_or_before = [](const std::vector<std::uint64_t>& v, std::uint64_t x) {
+        const auto it = std::upper_bound(v.begin(), v.end(), x);
+        return it == v.begin() ? nullptr : &*(it - 1);
+    };
+    for (std::size_t i = 0; i < request_ends_.size(); ++i) {
+        const std::uint64_t request = request_ends_[i];
+        const std::uint64_t next = i + 1 < request_ends_.size()
+                                       ? request_ends_[i + 1]
+                                       : std::numeric_limits<std::uint64_t>::max();
+        const std::uint64_t* reply = last_at_or_before(reply_ends_, request);
+        if (reply == nullptr) continue;
+        const std::uint64_t* sampled = last_at_or_before(samples, *reply);
+        const auto write = std::upper_bound(writes.begin(), writes.end(), request);
+        if (sampled == nullptr || write == writes.end() || *write >= next) continue;
+        figures_.loop_delay_us.push_back(static_cast<double>(*write - *sampled) * 1e6 /
+                                         EmulatedBoard::kCpuHz);
+    }
+}
+
 HarnessFigures Harness::run(const std::atomic<bool>& stop) {
     const SteadyClock::time_point start = SteadyClock::now();
     const std::uint64_t start_cycle = board_.cycle();
@@ -188,6 +214,7 @@ HarnessFigures Harness::run(const std::atomic<bool>& stop) {
     } else {
         run_real_time(stop);
     }
+    measure_loop_delay();
     figures_.emulated_s = static_cast<double>(board_.cycle() - start_cycle) / EmulatedBoard::kCpuHz;
     figures_.wall_s = std::chrono::duration<double>(SteadyClock::now() - start).count();
     return figures_;

@@ -45,6 +45,11 @@ struct HarnessFigures {
     /// From a reply's last byte out to the next request's first byte onto the line: the
     /// host's turnaround, the pseudo-terminal's both ways included.
     std::vector<double> turnaround_us;
+    /// The loop delay as the board's pins show it, per command: from the sampling instant of
+    /// the counts in the last sample out before the command (the ADC's sample-and-hold) to
+    /// the firmware's first write of the motor's duty after the command's last byte
+    /// (docs/protocol.md 5.7; what haptic-tune diag reads from the board's acknowledgements).
+    std::vector<double> loop_delay_us;
     double emulated_s = 0.0;
     double wall_s = 0.0;
     double lag_max_s = 0.0;  ///< real time: how far emulated time fell behind the wall clock
@@ -89,6 +94,10 @@ class Harness {
     /// after a session that ended mid-exchange, leaves more than one in flight; emulated
     /// time runs until each has its reply (or the request is given up on).
     int unanswered_ = 0;
+    std::vector<std::uint64_t> request_ends_;  ///< each request's last byte in, cycles
+    std::vector<std::uint64_t> reply_ends_;    ///< each board frame's last byte out, cycles
+    /// figures_.loop_delay_us from the cycles above and the board's.
+    void measure_loop_delay();
     std::ofstream record_;
     double next_record_s_ = 0.0;
     MotorPins recorded_pins_{-1.0, false};
