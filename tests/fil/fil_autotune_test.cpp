@@ -18,9 +18,11 @@
 // k T (1/2 + D/T) = b, the low-frequency limit.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iostream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -105,6 +107,40 @@ TEST(FilAutotune, IdentifiesThePaddleWithTheMeasuredDelayAndSizesItsCoupling) {
     EXPECT_NEAR(*tuned.device.model_mass_kg, mass, 1e-5 * mass);
     EXPECT_DOUBLE_EQ(tuned.device.model_delay_s, 0.0005);
     board.stop();
+
+    // The config as autotune wrote it renders the demo wall (the embedded default scene:
+    // 2e4 N/m, 5 N s/m at x = 0) on a fresh board, the handle pushed into it by 1 N: it
+    // settles where the coupling in series with the wall says, and stays.
+    const ScratchDir wall_dir;
+    EmulatedHapkit pushed(
+        wall_dir, {"--clock", "lockstep", "--coulomb", std::to_string(kCoulombN), "--push", "1.0",
+                   "--push-start", "0.3", "--push-duration", "100"});
+    std::ifstream tuned_in(config);
+    std::string text((std::istreambuf_iterator<char>(tuned_in)), std::istreambuf_iterator<char>());
+    text.replace(text.find(board.port()), board.port().size(), pushed.port());
+    const DaemonRun run =
+        run_hapticd(wall_dir, {.config_toml = text, .scene_toml = "", .duration_s = 3.0});
+    pushed.stop();
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    EXPECT_EQ(fault_list(run), "");
+    const auto& t = run.log.column("t_s");
+    const auto& x = run.log.column("x0_m");
+    double x_min = 1.0, x_max = -1.0, x_sum = 0.0;
+    int n = 0;
+    for (std::size_t i = 0; i < run.log.rows(); ++i) {
+        if (t[i] < 2.0) continue;
+        x_min = std::min(x_min, x[i]);
+        x_max = std::max(x_max, x[i]);
+        x_sum += x[i];
+        ++n;
+    }
+    ASSERT_GT(n, 900);
+    const double k_c = tuned.coupling.stiffness_n_per_m;
+    std::cout << "[fil] the demo wall at autotune's " << k_c << " N/m: the pushed handle at "
+              << 1e3 * x_sum / n << " mm, " << 1e6 * (x_max - x_min) << " um peak to peak\n";
+    // 1 N less the paddle's friction, through k_c in series with the wall.
+    EXPECT_NEAR(x_sum / n, (1.0 / k_c + 1.0 / 2.0e4), kCoulombN * (1.0 / k_c + 1.0 / 2.0e4) + 1e-4);
+    EXPECT_LT(x_max - x_min, 1e-4) << "the handle did not settle at the wall";
 }
 
 // ---- 2. Where the board's loop grows -------------------------------------------------------
