@@ -345,8 +345,11 @@ TEST(SerialDaemon, StatusReportsTheLinksBadFramesAndReplyTimeouts) {
 
     const nlohmann::json after = status_when(
         d.socket,
+        // Each counter is its own relaxed atomic: wait for all three, not for two of them
+        // (a status between one read's two counts once showed read_timeouts 2).
         [](const nlohmann::json& s) {
-            return s["link"]["bad_frames"] >= 3 && s["link"]["reply_timeouts"] >= 3;
+            return s["link"]["bad_frames"] >= 3 && s["link"]["reply_timeouts"] >= 3 &&
+                   s["link"]["read_timeouts"] >= 3;
         },
         std::chrono::seconds(20));
     ASSERT_FALSE(after.is_null());
