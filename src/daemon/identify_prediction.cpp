@@ -26,6 +26,7 @@ std::string percent(double fraction) { return format(100.0 * fraction) + " %"; }
 /// `value` to 3 significant digits, rounded towards zero (`up` false) or away from it: an
 /// amplitude quoted as a limit must itself keep to it.
 std::string format_rounded(double value, bool up) {
+    if (!(value > 0.0 && std::isfinite(value))) return format(value);
     const double unit = std::pow(10.0, std::floor(std::log10(value)) - 2.0);
     return format((up ? std::ceil(value / unit) : std::floor(value / unit)) * unit);
 }
