@@ -63,15 +63,15 @@ CheckResult check_commands(ConformHost& host, const proto::Identity& identity) {
     std::string why;
     if (!host.open_long_session(why)) {
         f.fail(why);
-        return verdict("commands", "4.5, 4.6", f, "");
+        return verdict(kCommands, f, "");
     }
     proto::ReplyTracker tracker;
     tracker.start(host.session(), host.version());
-    constexpr int kCommands = 20;
+    constexpr int kCommandCount = 20;
     std::uint64_t last_time_us = 0;
     std::uint32_t last_sample = 0;
     std::uint32_t period_steps = 0;
-    for (int i = 0; i < kCommands && !f.failed; ++i) {
+    for (int i = 0; i < kCommandCount && !f.failed; ++i) {
         const proto::ForceCommand command = host.command(true);
         tracker.command_sent(command.sequence);
         host.send(command);
@@ -146,13 +146,13 @@ CheckResult check_commands(ConformHost& host, const proto::Identity& identity) {
                "): nothing is applied on an error");
     }
     std::ostringstream evidence;
-    evidence << kCommands << " zero-force commands answered in order, sample_sequence +1, "
-             << period_steps << " of " << kCommands - 1 << " clock steps one period";
+    evidence << kCommandCount << " zero-force commands answered in order, sample_sequence +1, "
+             << period_steps << " of " << kCommandCount - 1 << " clock steps one period";
     if (host.version() >= 2) {
         evidence << ", " << counts.applied_reported << " acknowledgements, none contradictory";
     }
     evidence << "; command_gap flagged; wrong axes refused (wrong_axes), nothing applied";
-    return verdict("commands", "4.5, 4.6", f, evidence.str());
+    return verdict(kCommands, f, evidence.str());
 }
 
 CheckResult check_timing(ConformHost& host, const proto::Identity& identity) {
@@ -160,7 +160,7 @@ CheckResult check_timing(ConformHost& host, const proto::Identity& identity) {
     std::string why;
     if (!host.open_long_session(why)) {
         f.fail(why);
-        return verdict("timing", "5.2, 5.7", f, "");
+        return verdict(kTiming, f, "");
     }
     proto::ReplyTracker tracker;
     tracker.start(host.session(), host.version());
@@ -242,7 +242,7 @@ CheckResult check_timing(ConformHost& host, const proto::Identity& identity) {
         evidence << "; loop delay p50 " << number(quantile(delays_periods, 0.5)) << ", p99 "
                  << number(quantile(delays_periods, 0.99)) << " periods";
     }
-    return verdict("timing", "5.2, 5.7", f, evidence.str());
+    return verdict(kTiming, f, evidence.str());
 }
 
 CheckResult check_frame_errors(ConformHost& host) {
@@ -250,7 +250,7 @@ CheckResult check_frame_errors(ConformHost& host) {
     std::string why;
     if (!host.open_long_session(why)) {
         f.fail(why);
-        return verdict("frame_errors", "3.3, 3.4", f, "");
+        return verdict(kFrameErrors, f, "");
     }
     const std::vector<std::byte> poll = encoded(host.poll());
     struct Case {
@@ -281,7 +281,7 @@ CheckResult check_frame_errors(ConformHost& host) {
     if (as<proto::EncoderSample>(last) == nullptr) {
         f.fail("after the damaged frames a poll of the session got no sample");
     }
-    return verdict("frame_errors", "3.3, 3.4", f,
+    return verdict(kFrameErrors, f,
                    "a bad CRC, a truncated frame, a bad magic, a payload_size past the frame and "
                    "garbage dropped in silence; the session answered after them");
 }
@@ -291,7 +291,7 @@ CheckResult check_message_errors(ConformHost& host, const proto::Identity& ident
     std::string why;
     if (!host.open_long_session(why)) {
         f.fail(why);
-        return verdict("message_errors", "3.4, 4.10", f, "");
+        return verdict(kMessageErrors, f, "");
     }
     host.send(host.command(true));
     const std::uint32_t applied = host.last_sequence();
@@ -340,7 +340,7 @@ CheckResult check_message_errors(ConformHost& host, const proto::Identity& ident
         f.fail("after the refused frames the sample does not name the last command applied (" +
                std::to_string(applied) + "): nothing is applied on an error (4.10)");
     }
-    return verdict("message_errors", "3.4, 4.10", f,
+    return verdict(kMessageErrors, f,
                    "unknown_type, unexpected_type, bad_length and bad_field as 3.4 orders them; "
                    "nothing applied");
 }
@@ -351,14 +351,14 @@ CheckResult check_watchdog(ConformHost& host, const proto::Identity& identity) {
     const std::uint32_t timeout_us = host.options().watchdog_timeout_us;
     if (!host.open_session(timeout_us, why)) {
         f.fail(why);
-        return verdict("watchdog", "5.4, 5.5", f, "");
+        return verdict(kWatchdog, f, "");
     }
     host.send(host.command(true));
     const std::optional<proto::Message> armed_reply = host.receive_for(host.session());
     const auto* armed = as<proto::EncoderSample>(armed_reply);
     if (armed == nullptr || armed->faults != 0) {
         f.fail("the command that arms the watchdog was not answered with a fault-free sample");
-        return verdict("watchdog", "5.4, 5.5", f, "");
+        return verdict(kWatchdog, f, "");
     }
     const std::uint64_t armed_us = armed->time_us;
     const std::uint64_t period_us = identity.period_us;
@@ -380,7 +380,7 @@ CheckResult check_watchdog(ConformHost& host, const proto::Identity& identity) {
         f.fail("no watchdog fault " + std::to_string(give_up_us / 1000) +
                " ms after the last command (timeout " + std::to_string(timeout_us / 1000) +
                " ms): the force would stay on with the host gone (5.4)");
-        return verdict("watchdog", "5.4, 5.5", f, "");
+        return verdict(kWatchdog, f, "");
     }
     if (*tripped_us + period_us < timeout_us || *tripped_us > timeout_us + 2 * period_us) {
         f.fail("the watchdog fault showed " + number(1e-3 * static_cast<double>(*tripped_us)) +
@@ -402,7 +402,7 @@ CheckResult check_watchdog(ConformHost& host, const proto::Identity& identity) {
     if (cleared == nullptr || cleared->faults != 0) {
         f.fail("clear_faults with enable clear did not clear the watchdog fault (5.5)");
     }
-    return verdict("watchdog", "5.4, 5.5", f,
+    return verdict(kWatchdog, f,
                    "watchdog fault " + number(1e-3 * static_cast<double>(*tripped_us)) +
                        " ms after the last command (timeout " + number(1e-3 * timeout_us) +
                        " ms); clear_faults ignored with enable set, honoured with it clear");

@@ -20,11 +20,10 @@ std::string hex(std::uint32_t value) {
 
 }  // namespace
 
-CheckResult verdict(const char* name, const char* section, const Finding& finding,
-                    std::string evidence) {
+CheckResult verdict(const CheckId& check, const Finding& finding, std::string evidence) {
     CheckResult result;
-    result.name = name;
-    result.section = section;
+    result.name = check.name;
+    result.section = check.section;
     result.outcome = finding.failed ? Outcome::fail : Outcome::pass;
     if (finding.failed) {
         result.detail = finding.detail;
@@ -41,7 +40,7 @@ CheckResult check_handshake(ConformHost& host, std::optional<proto::Identity>& i
     identity = host.hello(session, proto::kMinVersion, proto::kMaxVersion, why);
     if (!identity) {
         f.fail(why + " (5.1: a device answers hello with its identity, in the session's id)");
-        return verdict("handshake", "5.1, 4.2", f, "");
+        return verdict(kHandshake, f, "");
     }
     const proto::Identity& id = *identity;
     const std::uint32_t period_us = host.period_us();
@@ -65,7 +64,7 @@ CheckResult check_handshake(ConformHost& host, std::optional<proto::Identity>& i
              << " us, force limit " << 1e-6 * id.force_limit_un << " N, " << id.counts_per_meter
              << " counts/m, watchdog " << id.watchdog_timeout_us << " us, serial "
              << id.serial_number() << ", firmware " << hex(id.firmware_version);
-    return verdict("handshake", "5.1, 4.2", f, evidence.str());
+    return verdict(kHandshake, f, evidence.str());
 }
 
 CheckResult check_versions(ConformHost& host, const proto::Identity& identity) {
@@ -102,7 +101,7 @@ CheckResult check_versions(ConformHost& host, const proto::Identity& identity) {
         host.hello(host.new_session(), proto::kMinVersion, proto::kMaxVersion, why);
     if (!widest) {
         f.fail(why);
-        return verdict("versions", "3.2, 4.1", f, "");
+        return verdict(kVersions, f, "");
     }
     if (widest->version != identity.version) {
         f.fail("versions 1..3 chose version " + std::to_string(widest->version) +
@@ -121,7 +120,7 @@ CheckResult check_versions(ConformHost& host, const proto::Identity& identity) {
     }
     std::string evidence = "highest common version " + std::to_string(identity.version);
     for (const std::string& s : seen) evidence += "; " + s;
-    return verdict("versions", "3.2, 4.1", f, evidence);
+    return verdict(kVersions, f, evidence);
 }
 
 CheckResult check_sessions(ConformHost& host) {
@@ -129,7 +128,7 @@ CheckResult check_sessions(ConformHost& host) {
     std::string why;
     if (!host.hello(host.new_session(), proto::kMinVersion, proto::kMaxVersion, why)) {
         f.fail(why);
-        return verdict("sessions", "5.1", f, "");
+        return verdict(kSessions, f, "");
     }
     const std::uint32_t first = host.session();
     const std::uint8_t version = host.version();
@@ -156,7 +155,7 @@ CheckResult check_sessions(ConformHost& host) {
     // A new hello ends the old session.
     if (!host.hello(host.new_session(), proto::kMinVersion, proto::kMaxVersion, why)) {
         f.fail(why);
-        return verdict("sessions", "5.1", f, "");
+        return verdict(kSessions, f, "");
     }
     host.send(proto::Poll{first, version});
     if (as_error(host.receive_for(first), proto::ErrorCode::wrong_session) == nullptr) {
@@ -178,7 +177,7 @@ CheckResult check_sessions(ConformHost& host) {
     if (as_error(host.receive_for(second), proto::ErrorCode::no_session) == nullptr) {
         f.fail("a poll after bye was not refused with no_session");
     }
-    return verdict("sessions", "5.1", f,
+    return verdict(kSessions, f,
                    "wrong_session for a stranger's id and for the session a new hello ended; "
                    "sample_sequence 0, 1 in each new session; no_session after bye");
 }
@@ -188,7 +187,7 @@ CheckResult check_configure(ConformHost& host, const proto::Identity& identity) 
     std::string why;
     if (!host.hello(host.new_session(), proto::kMinVersion, proto::kMaxVersion, why)) {
         f.fail(why);
-        return verdict("configure", "4.3, 5.4", f, "");
+        return verdict(kConfigure, f, "");
     }
     const std::uint32_t two_periods = 2 * identity.period_us;
     for (const std::uint32_t bad : {two_periods - 1, proto::kMaxWatchdogTimeoutUs + 1}) {
@@ -212,7 +211,7 @@ CheckResult check_configure(ConformHost& host, const proto::Identity& identity) 
         f.fail("configure(watchdog " + std::to_string(wanted) + " us) answered with " +
                host.describe(reply));
     }
-    return verdict("configure", "4.3, 5.4", f,
+    return verdict(kConfigure, f,
                    "watchdog " + std::to_string(two_periods - 1) +
                        " us and 1000001 us refused "
                        "(out_of_range); " +
@@ -224,7 +223,7 @@ CheckResult check_bye(ConformHost& host) {
     std::string why;
     if (!host.open_session(host.options().watchdog_timeout_us, why)) {
         f.fail(why);
-        return verdict("bye", "4.8, 5.1", f, "");
+        return verdict(kBye, f, "");
     }
     host.send(host.command(true));
     (void)host.receive_for(host.session());
@@ -239,7 +238,7 @@ CheckResult check_bye(ConformHost& host) {
         f.fail("a command after bye answered with " + host.describe(after) +
                " (5.1: no_session, nothing applied)");
     }
-    return verdict("bye", "4.8, 5.1", f,
+    return verdict(kBye, f,
                    "bye_ack, then a command refused with no_session (that the force is zero is "
                    "for an instrument on the motor)");
 }
