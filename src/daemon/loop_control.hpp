@@ -1,9 +1,9 @@
 // The servo loop as the control socket sees it (docs/control.md; docs/architecture.md §6.1,
 // §6.2): LoopControl for the requests that touch the loop itself, and the ports of
-// scene_load, record and identify (ControlLoopPorts, run_control.hpp). Every call is one of
-// ServoLoop's lock-free ones: a seqlock read, an atomic or an atomic pointer that the tick
-// takes at its start (recent_status()'s copy and the last gains sit behind mutexes of the
-// socket's two threads, never the servo's). A template over the loop, as ServoLoop is over its
+// scene_load, record and identify (ControlLoopPorts, run_control.hpp). Every call goes to the
+// loop's inbox (servo/loop_inbox.hpp): a seqlock read, an atomic or an atomic pointer that the
+// tick takes at its start (recent_status()'s copy and the last gains sit behind mutexes of the
+// socket's two threads, never the servo's). A template over the inbox, as the inbox is over its
 // environment.
 #pragma once
 
@@ -32,27 +32,27 @@ namespace hapticd::daemon {
 /// unless an event runs late.
 inline constexpr std::chrono::milliseconds kStatusMaxAge{5};
 
-/// The servo loop as the control socket sees it: ServoLoop's lock-free calls only
-/// (servo_loop.hpp).
-template <typename Loop>
+/// The servo loop as the control socket sees it: its inbox's lock-free calls only
+/// (loop_inbox.hpp).
+template <typename Inbox>
 class LoopControl final : public control::ServoControl {
   public:
-    LoopControl(Loop& loop, const servo::CouplingGains& gains) : loop_(loop), gains_(gains) {}
-    servo::StatusSnapshot status() const noexcept override { return loop_.status(); }
+    LoopControl(Inbox& inbox, const servo::CouplingGains& gains) : inbox_(inbox), gains_(gains) {}
+    servo::StatusSnapshot status() const noexcept override { return inbox_.status(); }
     servo::StatusSnapshot recent_status() const noexcept override {
         const std::lock_guard lock(status_mutex_);  // the socket's two threads; never the servo's
         const auto now = std::chrono::steady_clock::now();
         if (!status_read_ || now - *status_read_ >= kStatusMaxAge) {
-            status_ = loop_.status();
+            status_ = inbox_.status();
             status_read_ = now;
         }
         return status_;
     }
-    void arm() noexcept override { loop_.arm(); }
-    void disarm() noexcept override { loop_.disarm(); }
+    void arm() noexcept override { inbox_.arm(); }
+    void disarm() noexcept override { inbox_.disarm(); }
     void reset() noexcept override {
         resets_requested_.fetch_add(1, std::memory_order_acq_rel);
-        loop_.request_fault_reset();
+        inbox_.request_fault_reset();
     }
     std::uint64_t resets_requested() const noexcept override {
         return resets_requested_.load(std::memory_order_acquire);
@@ -60,7 +60,7 @@ class LoopControl final : public control::ServoControl {
     void set_coupling(const servo::CouplingGains& gains) noexcept override {
         const std::lock_guard lock(gains_mutex_);  // two non-real-time threads; never the servo's
         gains_ = gains;
-        loop_.request_coupling(gains);
+        inbox_.request_coupling(gains);
     }
     servo::CouplingGains coupling() const noexcept override {
         const std::lock_guard lock(gains_mutex_);
@@ -68,7 +68,7 @@ class LoopControl final : public control::ServoControl {
     }
 
   private:
-    Loop& loop_;
+    Inbox& inbox_;
     std::atomic<std::uint64_t> resets_requested_{0};
     mutable std::mutex gains_mutex_;
     servo::CouplingGains gains_;  // the last accepted: the servo may not have taken it yet
@@ -90,35 +90,35 @@ Environment* environment_of(env::Scene& scene) noexcept {
     }
 }
 
-/// The ports of scene_load, record and identify over `loop`, a loop over `Environment`, and
+/// The ports of scene_load, record and identify over `inbox`, a loop's over `Environment`, and
 /// `control` for the rest.
-template <typename Environment, typename Loop>
-ControlLoopPorts control_loop_ports(Loop& loop, control::ServoControl& control) {
+template <typename Environment, typename Inbox>
+ControlLoopPorts control_loop_ports(Inbox& inbox, control::ServoControl& control) {
     return ControlLoopPorts{
         .control = control,
         .scenes = SceneLoopPort{.offer =
-                                    [&loop](env::Scene& next) {
+                                    [&inbox](env::Scene& next) {
                                         Environment* const e = environment_of<Environment>(next);
-                                        return e != nullptr && loop.offer_environment(*e);
+                                        return e != nullptr && inbox.offer_environment(*e);
                                     },
-                                .taken = [&loop] { return loop.offer_taken(); },
+                                .taken = [&inbox] { return inbox.offer_taken(); },
                                 .withdraw =
-                                    [&loop](env::Scene& next) {
+                                    [&inbox](env::Scene& next) {
                                         Environment* const e = environment_of<Environment>(next);
-                                        return e != nullptr && loop.withdraw_environment(*e);
+                                        return e != nullptr && inbox.withdraw_environment(*e);
                                     }},
         .attach_recording =
-            [&loop](servo::TelemetryRing* recording_ring) {
-                loop.attach_recording(recording_ring);
+            [&inbox](servo::TelemetryRing* recording_ring) {
+                inbox.attach_recording(recording_ring);
             },
-        .tick = [&loop] { return loop.status().tick; },
+        .tick = [&inbox] { return inbox.status().tick; },
         .identify = IdentifyLoopPort{.play =
-                                         [&loop](servo::OpenLoopSource& source) {
-                                             return loop.play_open_loop(source);
+                                         [&inbox](servo::OpenLoopSource& source) {
+                                             return inbox.play_open_loop(source);
                                          },
-                                     .idle = [&loop] { return loop.open_loop_idle(); },
-                                     .disarm = [&loop] { loop.disarm(); },
-                                     .status = [&loop] { return loop.status(); }}};
+                                     .idle = [&inbox] { return inbox.open_loop_idle(); },
+                                     .disarm = [&inbox] { inbox.disarm(); },
+                                     .status = [&inbox] { return inbox.status(); }}};
 }
 
 }  // namespace hapticd::daemon

@@ -28,7 +28,7 @@ namespace hapticd::daemon {
 
 /// What the watcher reads of the servo loop and its thread, lock-free.
 struct WatchedLoop {
-    std::function<servo::StatusSnapshot()> status;  ///< ServoLoop::status (the seqlock)
+    std::function<servo::StatusSnapshot()> status;  ///< LoopInbox::status (the seqlock)
     /// ServoLoop::realtime_report: read once the status says it has ticked.
     std::function<const servo::RealtimeReport&()> realtime_report;
     std::function<bool()> done;  ///< the servo thread has ended (ServoThread::done)
@@ -37,7 +37,7 @@ struct WatchedLoop {
 /// `loop` and its thread `servo` as the watcher reads them.
 template <typename Loop>
 WatchedLoop watched_loop(const Loop& loop, const ServoThread<Loop>& servo) {
-    return WatchedLoop{.status = [&loop] { return loop.status(); },
+    return WatchedLoop{.status = [&loop] { return loop.inbox().status(); },
                        .realtime_report = [&loop]() -> const servo::RealtimeReport& {
                            return loop.realtime_report();
                        },

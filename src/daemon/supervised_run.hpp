@@ -59,9 +59,9 @@ int run_loop(const RunOptions& options, const Config& config,
     FlightWriter flight(outputs_directory.get(), config.servo.rate_hz, info.axes);
     loop.attach_flight_recorder(&flight.recorder());
     // The control socket, on its own thread from here to the servo thread's end.
-    LoopControl<Loop> control_port(loop, servo_config.coupling);
+    LoopControl control_port(loop.inbox(), servo_config.coupling);
     RunControl control(config, info, scene, context,
-                       control_loop_ports<Environment>(loop, control_port), outputs.control.get(),
+                       control_loop_ports<Environment>(loop.inbox(), control_port), outputs.control.get(),
                        outputs_directory.get(), log, &device);
 
     // Run. The servo thread reads `stop` itself, so a signal (or the parent's death) ends the
@@ -85,7 +85,7 @@ int run_loop(const RunOptions& options, const Config& config,
 
     // The run's exit, then its summary.
     const servo::Summary summary = loop.summary();
-    context.final_state = std::string(servo::servo_state_name(loop.status().state));
+    context.final_state = std::string(servo::servo_state_name(loop.inbox().status().state));
     context.realtime = loop.realtime_report();
     context.run_time_s = info.lockstep ? static_cast<double>(summary.ticks) / config.servo.rate_hz
                                        : watcher.seconds_since_start();

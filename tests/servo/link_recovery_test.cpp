@@ -420,7 +420,7 @@ TEST_F(LinkRecoveryLoop, OperatorResetStillWorksAndForgetsTheProgress) {
     press_into_the_wall();
     step(Link::disconnected);
     steps(Link::good, 10);
-    loop_->request_fault_reset();
+    loop_->inbox().request_fault_reset();
     const Trace t = step(Link::good);
     EXPECT_EQ(t.faults, 0u);
     EXPECT_EQ(loop_->stats().link_recoveries, 0u);

@@ -76,12 +76,12 @@ void expect_ticks_do_not_allocate(Environment& environment, int ticks,
             TelemetryRecord popped;
             while (ring.try_pop(popped)) {
             }
-            (void)loop.status();
+            (void)loop.inbox().status();
         }
         if (n == ticks / 2) {
-            loop.disarm();
+            loop.inbox().disarm();
             loop.tick();
-            loop.arm();
+            loop.inbox().arm();
         }
     }
     const std::uint64_t allocations = guard.allocations();
@@ -121,8 +121,8 @@ TEST(ServoAllocation, ARecordingAttachedAndDetachedDoesNotAllocate) {
     TelemetryRing recording(128);
     hapticd::testing::AllocationGuard guard;
     for (int n = 0; n < 1000; ++n) {
-        if (n == 100) loop.attach_recording(&recording);
-        if (n == 900) loop.attach_recording(nullptr);
+        if (n == 100) loop.inbox().attach_recording(&recording);
+        if (n == 900) loop.inbox().attach_recording(nullptr);
         loop.tick();
     }
     EXPECT_EQ(guard.allocations(), 0u);
@@ -142,12 +142,12 @@ TEST(ServoAllocation, TakingAnOfferedEnvironmentDoesNotAllocate) {
     hapticd::testing::AllocationGuard guard;
     for (int n = 0; n < 1000; ++n) {
         if (n % 100 == 50) {
-            ASSERT_TRUE(loop.offer_environment(n % 200 == 50 ? second : first));
+            ASSERT_TRUE(loop.inbox().offer_environment(n % 200 == 50 ? second : first));
         }
         loop.tick();
     }
     EXPECT_EQ(guard.allocations(), 0u);
-    EXPECT_TRUE(loop.offer_taken());
+    EXPECT_TRUE(loop.inbox().offer_taken());
     EXPECT_EQ(second.resets, 5);
     EXPECT_GT(second.commits, 0);
 }
@@ -180,11 +180,11 @@ TEST(ServoAllocation, PlayingTheExcitationOpenLoopDoesNotAllocate) {
     env::ExcitationSource source(settings);  // its tables are built here, before the guard
     hapticd::testing::AllocationGuard guard;
     for (int n = 0; n < 10; ++n) loop.tick();
-    ASSERT_TRUE(loop.play_open_loop(source));
-    for (int n = 0; n < 1500 && !loop.open_loop_idle(); ++n) loop.tick();
-    const bool idle = loop.open_loop_idle();
+    ASSERT_TRUE(loop.inbox().play_open_loop(source));
+    for (int n = 0; n < 1500 && !loop.inbox().open_loop_idle(); ++n) loop.tick();
+    const bool idle = loop.inbox().open_loop_idle();
     const int wall_commits = wall.commits;
-    loop.arm();
+    loop.inbox().arm();
     for (int n = 0; n < 200; ++n) loop.tick();
     EXPECT_EQ(guard.allocations(), 0u);
     EXPECT_TRUE(idle);
@@ -206,15 +206,15 @@ TEST(ServoAllocation, FaultPathDoesNotAllocate) {
     for (int n = 0; n < 1000; ++n) loop.tick();
     const bool frozen_by_the_fault = recorder.frozen();
     recorder.thaw();
-    loop.request_fault_reset();
+    loop.inbox().request_fault_reset();
     // New coupling gains (the control socket's coupling request) are taken in a tick too.
-    loop.request_coupling({.stiffness_n_per_m = 1500.0, .damping_n_s_per_m = 1.0});
+    loop.inbox().request_coupling({.stiffness_n_per_m = 1500.0, .damping_n_s_per_m = 1.0});
     for (int n = 0; n < 10; ++n) loop.tick();
     EXPECT_EQ(guard.allocations(), 0u);
     EXPECT_NE(loop.faults_seen(), 0u);
     EXPECT_TRUE(frozen_by_the_fault);
     EXPECT_EQ(loop.coupling().gains().stiffness_n_per_m, 1500.0);
-    EXPECT_EQ(loop.status().stiffness_n_per_m, 1500.0);
+    EXPECT_EQ(loop.inbox().status().stiffness_n_per_m, 1500.0);
 }
 
 // The interval-unknown and stale-sample paths (docs/architecture.md §7.6, §7.1): a device

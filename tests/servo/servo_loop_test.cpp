@@ -62,8 +62,8 @@ TEST(ServoLoop, WallTickCommandsTheSeriesSpringForce) {
     ASSERT_TRUE(ring.try_pop(popped));
     EXPECT_EQ(popped.tick, 0u);
     EXPECT_NEAR(popped.f_n[0], 3.0, 1e-12);
-    EXPECT_EQ(loop.status().tick, 0u);
-    EXPECT_NEAR(loop.status().f_n[0], 3.0, 1e-12);
+    EXPECT_EQ(loop.inbox().status().tick, 0u);
+    EXPECT_NEAR(loop.inbox().status().f_n[0], 3.0, 1e-12);
 }
 
 TEST(ServoLoop, VelocityIsTheBackwardDifference) {
@@ -104,7 +104,7 @@ TEST(ServoLoop, NonFiniteEnvironmentZeroesForceInTheSameTick) {
     loop.tick();
     EXPECT_FALSE(device.last_command.enable);
     // Reset from another thread takes effect at the next tick.
-    std::thread([&] { loop.request_fault_reset(); }).join();
+    std::thread([&] { loop.inbox().request_fault_reset(); }).join();
     loop.tick();
     EXPECT_EQ(loop.faults(), 0u);
     EXPECT_TRUE(device.last_command.enable);
@@ -445,11 +445,11 @@ TEST(ServoLoop, DisarmZeroesAndArmSoftStartsAgain) {
     TestLoop<PlaneWall> loop(device, wall, config, nullptr, FakeClock{&time});
     for (int n = 0; n < 5; ++n) loop.tick();
     EXPECT_NEAR(device.last_command.force_n[0], 3.0, 1e-12);
-    loop.disarm();
+    loop.inbox().disarm();
     loop.tick();
     EXPECT_FALSE(device.last_command.enable);
     EXPECT_TRUE(loop.last_record().flags & kFlagDisarmed);
-    loop.arm();
+    loop.inbox().arm();
     loop.tick();  // still for 1 ms: zero
     EXPECT_EQ(device.last_command.force_n[0], 0.0);
     loop.tick();  // still for 2 ms: the ramp starts next tick
@@ -479,27 +479,27 @@ TEST(ServoLoop, AnOfferedEnvironmentIsTakenAtATicksStartThroughTheSoftStart) {
     const int first_commits = first.commits;
     const int first_resets = first.resets;
 
-    ASSERT_TRUE(loop.offer_environment(second));
-    EXPECT_FALSE(loop.offer_taken());
-    EXPECT_FALSE(loop.offer_environment(first)) << "a second offer while one waits";
+    ASSERT_TRUE(loop.inbox().offer_environment(second));
+    EXPECT_FALSE(loop.inbox().offer_taken());
+    EXPECT_FALSE(loop.inbox().offer_environment(first)) << "a second offer while one waits";
     loop.tick();  // taken: the soft start begins again, still for 1 ms
-    EXPECT_TRUE(loop.offer_taken());
-    EXPECT_FALSE(loop.withdraw_environment(second)) << "taken already";
+    EXPECT_TRUE(loop.inbox().offer_taken());
+    EXPECT_FALSE(loop.inbox().withdraw_environment(second)) << "taken already";
     EXPECT_EQ(second.resets, 1);
     EXPECT_EQ(device.last_command.force_n[0], 0.0);
-    EXPECT_EQ(loop.status().state, ServoState::arming);
+    EXPECT_EQ(loop.inbox().status().state, ServoState::arming);
     loop.tick();
     loop.tick();  // half the ramp: half of 1500 N/m x 4 mm
     EXPECT_NEAR(device.last_command.force_n[0], 3.0, 1e-12);
     loop.tick();
     EXPECT_NEAR(device.last_command.force_n[0], 6.0, 1e-12);
-    EXPECT_EQ(loop.status().state, ServoState::running);
+    EXPECT_EQ(loop.inbox().status().state, ServoState::running);
     EXPECT_EQ(first.commits, first_commits) << "the replaced environment was rendered again";
     EXPECT_EQ(first.resets, first_resets);
 
-    ASSERT_TRUE(loop.offer_environment(first));
-    EXPECT_TRUE(loop.withdraw_environment(first));
-    EXPECT_TRUE(loop.offer_taken());
+    ASSERT_TRUE(loop.inbox().offer_environment(first));
+    EXPECT_TRUE(loop.inbox().withdraw_environment(first));
+    EXPECT_TRUE(loop.inbox().offer_taken());
     for (int n = 0; n < 3; ++n) loop.tick();
     EXPECT_EQ(first.commits, first_commits) << "a withdrawn offer was taken";
     EXPECT_NEAR(device.last_command.force_n[0], 6.0, 1e-12) << "the soft start restarted";
@@ -540,15 +540,15 @@ TEST(ServoLoop, AnOpenLoopSourcePlaysStraightToTheHandleAndIsLetGoDisarmed) {
     config.safety.passivity.mode = PassivityMode::control;
     TestLoop<PlaneWall> loop(device, wall, config, nullptr, FakeClock{&time});
     for (int n = 0; n < 3; ++n) loop.tick();
-    EXPECT_EQ(loop.status().state, ServoState::disabled);
+    EXPECT_EQ(loop.inbox().status().state, ServoState::disabled);
     const int wall_commits = wall.commits;
     const int wall_resets = wall.resets;
 
     ConstantForceSource source;
     ConstantForceSource other;
-    ASSERT_TRUE(loop.play_open_loop(source));
-    EXPECT_FALSE(loop.play_open_loop(other)) << "a second source while one is offered";
-    EXPECT_FALSE(loop.open_loop_idle());
+    ASSERT_TRUE(loop.inbox().play_open_loop(source));
+    EXPECT_FALSE(loop.inbox().play_open_loop(other)) << "a second source while one is offered";
+    EXPECT_FALSE(loop.inbox().open_loop_idle());
     for (int n = 0; n < source.ticks; ++n) {
         const TelemetryRecord& record = loop.tick();
         EXPECT_EQ(device.last_command.force_n[0], 2.0) << n;
@@ -556,37 +556,37 @@ TEST(ServoLoop, AnOpenLoopSourcePlaysStraightToTheHandleAndIsLetGoDisarmed) {
         EXPECT_NE(record.flags & kFlagOpenLoop, 0u) << n;
         EXPECT_EQ(record.flags & (kFlagSoftStart | kFlagPassivityControl), 0u) << n;
         EXPECT_EQ(record.xe_m[0], record.x_m[0]) << "no coupling: the tool is the handle";
-        EXPECT_EQ(loop.status().state, ServoState::running);
+        EXPECT_EQ(loop.inbox().status().state, ServoState::running);
         if (n == 1) {
-            ASSERT_TRUE(loop.offer_environment(next_wall));
+            ASSERT_TRUE(loop.inbox().offer_environment(next_wall));
         }
     }
     EXPECT_EQ(source.resets, 1);
     EXPECT_EQ(source.commits, source.ticks);
-    EXPECT_LT(loop.status().energy_j, 0.0) << "the source did work on the handle";
+    EXPECT_LT(loop.inbox().status().energy_j, 0.0) << "the source did work on the handle";
     EXPECT_EQ(wall.commits, wall_commits);
     EXPECT_EQ(wall.resets, wall_resets);
-    EXPECT_FALSE(loop.offer_taken()) << "an offer waits while the source plays";
-    EXPECT_FALSE(loop.open_loop_idle());
+    EXPECT_FALSE(loop.inbox().offer_taken()) << "an offer waits while the source plays";
+    EXPECT_FALSE(loop.inbox().open_loop_idle());
 
     const TelemetryRecord& after = loop.tick();  // done: let go
-    EXPECT_TRUE(loop.open_loop_idle());
+    EXPECT_TRUE(loop.inbox().open_loop_idle());
     EXPECT_EQ(after.flags & kFlagOpenLoop, 0u);
     EXPECT_NE(after.flags & kFlagDisarmed, 0u);
     EXPECT_EQ(device.last_command.force_n[0], 0.0);
     EXPECT_FALSE(device.last_command.enable);
-    EXPECT_EQ(loop.status().state, ServoState::disabled);
-    EXPECT_EQ(loop.status().energy_j, 0.0) << "the observer counts from zero again";
-    EXPECT_TRUE(loop.offer_taken());
+    EXPECT_EQ(loop.inbox().status().state, ServoState::disabled);
+    EXPECT_EQ(loop.inbox().status().energy_j, 0.0) << "the observer counts from zero again";
+    EXPECT_TRUE(loop.inbox().offer_taken());
     EXPECT_EQ(next_wall.resets, 1) << "taken where the handle is";
     EXPECT_EQ(source.commits, source.ticks) << "played after it was done";
 
-    loop.arm();
+    loop.inbox().arm();
     loop.tick();
-    EXPECT_EQ(loop.status().state, ServoState::arming);
+    EXPECT_EQ(loop.inbox().status().state, ServoState::arming);
     EXPECT_EQ(next_wall.resets, 2) << "arming restarts it where the handle is";
     EXPECT_EQ(device.last_command.force_n[0], 0.0) << "the soft start waits for a still handle";
-    ASSERT_TRUE(loop.play_open_loop(other)) << "the loop takes a new source once idle";
+    ASSERT_TRUE(loop.inbox().play_open_loop(other)) << "the loop takes a new source once idle";
 }
 
 // A disarm ends a source before it is done, and so does a fault: the tick after lets it go,
@@ -600,19 +600,19 @@ TEST(ServoLoop, ADisarmOrAFaultEndsAnOpenLoopSource) {
     TestLoop<PlaneWall> loop(device, wall, config, nullptr, FakeClock{&time});
     ConstantForceSource source;
     source.ticks = 100;
-    ASSERT_TRUE(loop.play_open_loop(source));
+    ASSERT_TRUE(loop.inbox().play_open_loop(source));
     for (int n = 0; n < 3; ++n) loop.tick();
     EXPECT_EQ(device.last_command.force_n[0], 2.0);
-    loop.disarm();
+    loop.inbox().disarm();
     loop.tick();
-    EXPECT_TRUE(loop.open_loop_idle());
+    EXPECT_TRUE(loop.inbox().open_loop_idle());
     EXPECT_EQ(device.last_command.force_n[0], 0.0);
     EXPECT_EQ(source.commits, 3);
     EXPECT_FALSE(source.done());
 
     ConstantForceSource faulted;
     faulted.ticks = 100;
-    ASSERT_TRUE(loop.play_open_loop(faulted));
+    ASSERT_TRUE(loop.inbox().play_open_loop(faulted));
     loop.tick();
     EXPECT_EQ(device.last_command.force_n[0], 2.0);
     device.next.status |= kStatusDeviceFault;
@@ -621,11 +621,11 @@ TEST(ServoLoop, ADisarmOrAFaultEndsAnOpenLoopSource) {
     EXPECT_FALSE(device.last_command.enable);
     device.next.status &= ~kStatusDeviceFault;
     loop.tick();  // and the source is let go
-    EXPECT_TRUE(loop.open_loop_idle());
+    EXPECT_TRUE(loop.inbox().open_loop_idle());
     EXPECT_EQ(faulted.commits, 1);
-    loop.request_fault_reset();
+    loop.inbox().request_fault_reset();
     loop.tick();
-    EXPECT_EQ(loop.status().state, ServoState::disabled);
+    EXPECT_EQ(loop.inbox().status().state, ServoState::disabled);
     EXPECT_EQ(device.last_command.force_n[0], 0.0);
 }
 
@@ -642,15 +642,15 @@ TEST(ServoLoop, ADisarmBeforeTheFirstTickWithdrawsAnOpenLoopSource) {
     TestLoop<PlaneWall> loop(device, wall, config, nullptr, FakeClock{&time});
     loop.tick();
     ConstantForceSource source;
-    ASSERT_TRUE(loop.play_open_loop(source));
-    loop.disarm();
+    ASSERT_TRUE(loop.inbox().play_open_loop(source));
+    loop.inbox().disarm();
     const TelemetryRecord& withdrawn = loop.tick();
-    EXPECT_TRUE(loop.open_loop_idle());
+    EXPECT_TRUE(loop.inbox().open_loop_idle());
     EXPECT_EQ(withdrawn.flags & kFlagOpenLoop, 0u);
     EXPECT_EQ(source.resets, 0);
     EXPECT_EQ(source.commits, 0);
     EXPECT_EQ(device.last_command.force_n[0], 0.0);
-    loop.arm();
+    loop.inbox().arm();
     for (int n = 0; n < 3; ++n) {
         const TelemetryRecord& record = loop.tick();
         EXPECT_EQ(record.flags & kFlagOpenLoop, 0u) << n;
@@ -658,10 +658,10 @@ TEST(ServoLoop, ADisarmBeforeTheFirstTickWithdrawsAnOpenLoopSource) {
     EXPECT_EQ(source.commits, 0) << "an arm after the withdrawal does not play it";
 
     // An offer made after a disarm is played: the disarms before it do not withdraw it.
-    loop.disarm();
+    loop.inbox().disarm();
     loop.tick();
     ConstantForceSource later;
-    ASSERT_TRUE(loop.play_open_loop(later));
+    ASSERT_TRUE(loop.inbox().play_open_loop(later));
     loop.tick();
     EXPECT_EQ(later.commits, 1);
     EXPECT_EQ(device.last_command.force_n[0], 2.0);

@@ -5,7 +5,7 @@
 //   read the sample; counts -> metres (counts_per_meter)
 //   v_d = (x_d[n] - x_d[n-1]) / T                       backward difference, (16)
 //   coupling against the environment: (17) impedance, (22) admittance (VirtualCoupling)
-//   safety: fault latch, velocity limit, soft start, passivity, saturation (SafetySupervisor)
+//   safety: the stages of SafetySupervisor::filter, in its order (safety.hpp)
 //   write the force (the device holds it: ZOH); push one telemetry record (never blocks)
 //   link recovery: a latch of link faults only clears once the device is back (LinkRecovery)
 //
@@ -21,9 +21,9 @@
 // An OpenLoopSource (play_open_loop) may take the place of the coupling and the environment
 // for a while: its force goes straight to the handle (§3.6).
 //
-// Threads: tick() and run() belong to one thread (the servo thread). arm(), disarm(),
-// request_fault_reset(), offer_environment(), play_open_loop() and status() may be called from
-// any thread (atomics, a seqlock).
+// Threads: tick() and run() belong to one thread (the servo thread). Other threads talk to
+// the loop only through its inbox() (loop_inbox.hpp): their requests, which a tick takes at
+// its start, and the status it publishes at its end.
 // stats() and summary() are for the servo thread, or for any thread after run() returned.
 //
 // Real-time: nothing reachable from tick() allocates, locks, logs, throws or makes a system
@@ -49,11 +49,11 @@
 #include "hapticd/servo/flight_recorder.hpp"
 #include "hapticd/servo/io.hpp"
 #include "hapticd/servo/link_recovery.hpp"
+#include "hapticd/servo/loop_inbox.hpp"
 #include "hapticd/servo/open_loop_source.hpp"
 #include "hapticd/servo/pacing.hpp"
 #include "hapticd/servo/realtime.hpp"
 #include "hapticd/servo/safety.hpp"
-#include "hapticd/servo/seqlock.hpp"
 #include "hapticd/servo/servo_config.hpp"
 #include "hapticd/servo/servo_state.hpp"
 #include "hapticd/servo/status.hpp"
@@ -87,6 +87,7 @@ class ServoLoop {
               TelemetryRing* telemetry = nullptr, Clock clock = Clock{})
         : device_(device),
           environment_(&environment),
+          inbox_(config.start_armed),
           config_(validated(config)),
           period_s_(config.period_s()),
           counts_to_m_(1.0 / config.counts_per_meter),
@@ -96,9 +97,7 @@ class ServoLoop {
           telemetry_(telemetry),
           clock_(clock),
           pacer_(clock_, config.period_ns()),
-          rigid_(!config.coupling_enabled),
-          armed_(config.start_armed),
-          was_armed_(config.start_armed) {
+          rigid_(!config.coupling_enabled) {
         percentiles_every_ = static_cast<std::uint64_t>(std::max(1.0, std::round(config_.rate_hz)));
         // Before the first tick, status() says what the first will start from.
         publish_status(0.0, config.start_armed);
@@ -123,12 +122,7 @@ class ServoLoop {
     /// force), then ticks at rate_hz until `stop` is set, `max_ticks` ticks have run (0: no
     /// limit), or a fault is latched (see ServoConfig::stop_on_fault; with link recovery, a
     /// latch of link faults only ends the run when link_recovery.timeout_s runs out). Writes
-    /// zero force on return.
-    ///
-    /// When the device paces the loop, read() blocks until its next sample; but a device that
-    /// gave no sample (gone, or a timeout that returned at once) paces nothing, so before
-    /// the next tick run() sleeps to one period after the start of the one that had none:
-    /// a lost device never spins the servo thread.
+    /// zero force on return. Who paces each tick: tick_paced_by_host, tick_paced_by_device.
     RunExit run(const std::atomic<bool>& stop, std::uint64_t max_ticks = 0) {
         try {
             realtime_.apply(config_.realtime);
@@ -138,8 +132,7 @@ class ServoLoop {
         }
         pacer_.start();
         RunExit exit = RunExit::stopped;
-        bool idle = false;  // the device paces the loop but gave no sample last tick
-        std::int64_t idle_deadline_ns = 0;
+        DeviceIdle idle;
         for (std::uint64_t ticks_run = 0;; ++ticks_run) {
             if (stop.load(std::memory_order_acquire)) break;
             if (max_ticks != 0 && ticks_run >= max_ticks) {
@@ -147,20 +140,11 @@ class ServoLoop {
                 break;
             }
             if (config_.device_paces_loop) {
-                wait_for_telemetry_room(stop);
-                if (idle) clock_.sleep_until_ns(idle_deadline_ns);  // at once if it has passed
-                idle_deadline_ns = clock_.now_ns() + pacer_.period_ns();
-                idle = (tick().flags & kFlagNoSample) != 0u;
+                tick_paced_by_device(stop, idle);
             } else {
-                run_tick(pacer_.wait(), /*paced=*/true);
+                tick_paced_by_host();
             }
-            if (link_recovery_.gave_up()) {
-                exit = RunExit::fault;
-                break;
-            }
-            const std::uint32_t faults = safety_.faults();
-            if (faults != 0u && !link_recovery_.recoverable(faults) &&
-                (config_.stop_on_fault || (faults & kFaultDeviceLost) != 0u)) {
+            if (fault_ends_run()) {
                 exit = RunExit::fault;
                 break;
             }
@@ -169,78 +153,10 @@ class ServoLoop {
         return exit;
     }
 
-    // --- any thread -------------------------------------------------------------------
-    /// Forces may flow again (after a still handle and the soft-start ramp).
-    void arm() noexcept { armed_.store(true, std::memory_order_release); }
-    /// Zero force, enable = false, from the next tick on.
-    void disarm() noexcept {
-        armed_.store(false, std::memory_order_release);
-        disarms_.fetch_add(1, std::memory_order_acq_rel);  // after: see take_open_loop
-    }
-    /// Clears the fault latch at the start of the next tick; soft start begins again.
-    void request_fault_reset() noexcept { reset_requested_.store(true, std::memory_order_release); }
-
-    /// New coupling gains (16) from the start of the next tick, through the soft start: the
-    /// force drops to zero, and ramps back once the handle is still, with the coupling
-    /// restarted where the handle is. Check them first (daemon: the stability check); one
-    /// thread at a time may call this.
-    void request_coupling(const CouplingGains& gains) noexcept { pending_gains_.store(gains); }
-    /// Any thread: a second ring that every tick's record also goes to from the next tick on
-    /// (a control socket's `record start`), or null to stop. A tick that read the old ring
-    /// may still push to it: the caller keeps it alive for the run (daemon/recording.hpp).
-    void attach_recording(TelemetryRing* ring) noexcept {
-        recording_.store(ring, std::memory_order_release);
-    }
-    /// Any thread: render `next` in place of the environment from the start of a coming tick,
-    /// through the soft start (as new gains are: zero force, then the ramp once the handle is
-    /// still), with `next` reset where the handle is. False when an offer is already waiting.
-    /// The caller owns every environment: the one replaced is the servo's no more once
-    /// offer_taken() (a daemon's `scene load`: daemon/scene_switch.hpp).
-    bool offer_environment(Environment& next) noexcept {
-        Environment* none = nullptr;
-        return offered_environment_.compare_exchange_strong(none, &next, std::memory_order_acq_rel);
-    }
-    /// Any thread: the offer is no longer waiting. Every tick after the one that took it
-    /// renders it; the environment it replaced is not touched again.
-    bool offer_taken() const noexcept {
-        return offered_environment_.load(std::memory_order_acquire) == nullptr;
-    }
-    /// Any thread: takes back `next` if no tick has taken it (true), else false: it was taken.
-    bool withdraw_environment(Environment& next) noexcept {
-        Environment* offered = &next;
-        return offered_environment_.compare_exchange_strong(offered, nullptr,
-                                                            std::memory_order_acq_rel);
-    }
-    /// Any thread: play `source` on the handle open loop, in place of the coupling and the
-    /// environment, from the first tick that finds the loop armed: this call arms it. The
-    /// source brings its own still wait and fade-in, so there is no soft start, and it is
-    /// active by design, so the passivity controller leaves it alone (the observer counts
-    /// from zero); the velocity limit, the saturation and every fault apply. While it plays,
-    /// offers and new gains wait. It ends at the start of the tick after source.done(), at a
-    /// disarm() or at a fault: the loop lets go of it disarmed, with the coupling and the
-    /// environment to restart where the handle is (through the soft start once armed again).
-    /// A disarm() before a tick took it withdraws it unplayed. False when a source is already
-    /// offered or playing. One caller at a time (the daemon's IdentifySession); the caller
-    /// owns `source` and keeps it until open_loop_idle().
-    bool play_open_loop(OpenLoopSource& source) noexcept {
-        // The disarms so far go with the offer (take_open_loop), so they are stored first;
-        // an offer refused puts back the count of the one that stays.
-        const std::uint64_t kept = disarms_at_offer_.exchange(
-            disarms_.load(std::memory_order_acquire), std::memory_order_acq_rel);
-        OpenLoopSource* none = nullptr;
-        if (!open_loop_.compare_exchange_strong(none, &source, std::memory_order_acq_rel)) {
-            disarms_at_offer_.store(kept, std::memory_order_release);
-            return false;
-        }
-        arm();  // after the offer: a tick that sees it armed sees the source
-        return true;
-    }
-    /// Any thread: no source is offered or playing; the last one is the caller's again.
-    bool open_loop_idle() const noexcept {
-        return open_loop_.load(std::memory_order_acquire) == nullptr;
-    }
-    /// The latest tick's state, lock-free.
-    StatusSnapshot status() const noexcept { return status_.load(); }
+    /// Any thread: what other threads ask of the loop (arm, disarm, fault reset, gains,
+    /// environment, open loop, recording) and the status it answers with (loop_inbox.hpp).
+    LoopInbox<Environment>& inbox() noexcept { return inbox_; }
+    const LoopInbox<Environment>& inbox() const noexcept { return inbox_; }
 
     /// Every tick's record also goes to `recorder` (may be null; it must outlive the loop),
     /// which the tick that latches a new fault freezes (flight_recorder.hpp). Before run().
@@ -294,6 +210,36 @@ class ServoLoop {
         return config;
     }
 
+    // The host paces the loop: sleep to the next absolute deadline (LoopPacer), then tick.
+    void tick_paced_by_host() noexcept { (void)run_tick(pacer_.wait(), /*paced=*/true); }
+
+    // Whether the device paced the last tick: it gave no sample (gone, or a timeout that
+    // returned at once), so it paces nothing until it gives one again.
+    struct DeviceIdle {
+        bool idle = false;
+        std::int64_t deadline_ns = 0;  ///< one period after the start of the tick that had none
+    };
+
+    // The device paces the loop (ServoConfig::device_paces_loop; and lockstep, whose device
+    // is a simulation that answers each read at once): read() blocks until its next sample,
+    // and a tick after one that had none first sleeps to `idle.deadline_ns`, so that a lost
+    // device never spins the servo thread.
+    void tick_paced_by_device(const std::atomic<bool>& stop, DeviceIdle& idle) noexcept {
+        wait_for_telemetry_room(stop);
+        if (idle.idle) clock_.sleep_until_ns(idle.deadline_ns);  // at once if it has passed
+        idle.deadline_ns = clock_.now_ns() + pacer_.period_ns();
+        idle.idle = (tick().flags & kFlagNoSample) != 0u;
+    }
+
+    // A fault ends the run: link recovery gave up, or a fault it cannot recover from is
+    // latched and the config stops on faults (device_lost always stops).
+    bool fault_ends_run() const noexcept {
+        if (link_recovery_.gave_up()) return true;
+        const std::uint32_t faults = safety_.faults();
+        return faults != 0u && !link_recovery_.recoverable(faults) &&
+               (config_.stop_on_fault || (faults & kFaultDeviceLost) != 0u);
+    }
+
     // Lockstep only (ServoConfig::telemetry_backpressure): between ticks, wait for the
     // telemetry writer to make room, so that every record of a virtual-time run is logged.
     // A recording's ring (attach_recording) is waited for the same way.
@@ -302,7 +248,7 @@ class ServoLoop {
         const auto full = [](const TelemetryRing* ring) {
             return ring != nullptr && ring->size() + 1 >= ring->capacity();
         };
-        while ((full(telemetry_) || full(recording_.load(std::memory_order_acquire))) &&
+        while ((full(telemetry_) || full(inbox_.recording())) &&
                !stop.load(std::memory_order_acquire)) {
             std::this_thread::yield();
         }
@@ -503,7 +449,7 @@ class ServoLoop {
         return coupled;
     }
 
-    // Command: safety (fault latch, velocity limit, soft start, passivity, saturation), then
+    // Command: safety (SafetySupervisor::filter, its stages in the order safety.hpp lists), then
     // the write; the device holds the force until the next one (the ZOH of (13)). A fault
     // zeroes the force in the tick that raised it. Without a sample (and without a fault)
     // nothing is written: the device holds the last force for at most read_timeouts_allowed.
@@ -553,9 +499,7 @@ class ServoLoop {
         count_tick(wake, paced, compute_ns);
         fill_record(wake, paced, sample, sensed, coupled, flags, compute_ns);
         if (telemetry_ != nullptr) telemetry_->try_push(record_);
-        if (TelemetryRing* const recording = recording_.load(std::memory_order_acquire)) {
-            recording->try_push(record_);
-        }
+        if (recording_ != nullptr) recording_->try_push(record_);
         if (recorder_ != nullptr) {
             // A fault new to the records kept freezes them; one that came while they were
             // frozen freezes them at the first tick kept after the thaw.
@@ -575,84 +519,41 @@ class ServoLoop {
 
     // ---- the steps' parts ----
 
-    // The requests of other threads, at the start of a tick: a fault reset, an open-loop
-    // source, new gains, a new environment, and arming (for the last three the soft start
-    // begins again, and the coupling and the environment restart where the handle is).
-    // Returns whether the loop is armed; `open_loop`: whether a source plays this tick.
+    // What other threads asked for (LoopInbox::take), carried out at the start of a tick: a
+    // fault reset, the open-loop source starting or let go, new gains, a new environment, and
+    // arming (for the last three the soft start begins again, and the coupling and the
+    // environment restart where the handle is). Returns whether the loop is armed;
+    // `open_loop`: whether a source plays this tick.
     bool take_requests(bool& open_loop) noexcept {
-        if (reset_requested_.exchange(false, std::memory_order_acq_rel)) {
+        const LoopRequests<Environment> requests = inbox_.take(safety_.faulted());
+        recording_ = requests.recording;
+        if (requests.fault_reset) {
             clear_fault_latch();
             ++fault_resets_taken_;
         }
-        bool armed = armed_.load(std::memory_order_acquire);
-        open_loop = take_open_loop(armed);
-        if (open_loop) {  // offers and gains wait: a reset would end the source's run
-            was_armed_ = true;
-            return true;
-        }
-        // New gains: taken only when the writer is not mid-store (Seqlock::try_load), else at
-        // a later tick; the tick never waits for the control socket's thread.
-        CouplingGains gains;
-        std::uint64_t version = 0;
-        if (pending_gains_.version() != gains_version_ && pending_gains_.try_load(gains, version) &&
-            version != gains_version_) {
-            gains_version_ = version;
-            coupling_.set_gains(gains);
-            safety_.restart_soft_start();
-            initialised_ = false;  // the coupling restarts where the handle is
-        }
-        // A new environment (offer_environment): it starts where the handle is, through the
-        // soft start. The exchange releases the old one to its owner (offer_taken()).
-        if (offered_environment_.load(std::memory_order_relaxed) != nullptr) {
-            Environment* const next =
-                offered_environment_.exchange(nullptr, std::memory_order_acq_rel);
-            if (next != nullptr) {  // not withdrawn since the load
-                environment_ = next;
-                safety_.restart_soft_start();
+        switch (requests.open_loop_change) {
+            case OpenLoopChange::start:  // it starts where the handle is, observed from zero
                 initialised_ = false;
-            }
+                safety_.restart_passivity_observer();
+                break;
+            case OpenLoopChange::end:  // disarmed; the coupling restarts where the handle is
+                initialised_ = false;
+                safety_.restart_soft_start();
+                safety_.restart_passivity_observer();
+                break;
+            case OpenLoopChange::none:
+            case OpenLoopChange::plays:
+                break;
         }
-        if (armed && !was_armed_) {
+        open_loop_source_ = requests.open_loop;
+        open_loop = open_loop_source_ != nullptr;
+        if (requests.gains) coupling_.set_gains(*requests.gains);
+        if (requests.environment != nullptr) environment_ = requests.environment;
+        if (requests.gains || requests.environment != nullptr || requests.armed_now) {
             safety_.restart_soft_start();
-            initialised_ = false;  // the environment restarts where the handle is
+            initialised_ = false;  // the coupling and the environment restart where the handle is
         }
-        was_armed_ = armed;
-        return armed;
-    }
-
-    // The open-loop source (play_open_loop): taken by a tick that finds the loop armed (the
-    // acquire of armed_ sees the offer made before the arm); let go at the start of the tick
-    // after it is done, at a disarm or with a fault latched: disarmed, and the coupling and
-    // the environment start again where the handle is. True while it plays.
-    //
-    // A disarm() after the offer and before any tick took it withdraws the offer, so that
-    // no later arm() plays it: disarm() counts itself after clearing armed_, and an offer
-    // made before that count moved is let go untaken. An offer whose arm() is not yet seen
-    // (and no disarm came) waits for it.
-    bool take_open_loop(bool& armed) noexcept {
-        if (open_loop_source_ == nullptr) {
-            OpenLoopSource* const offered = open_loop_.load(std::memory_order_acquire);
-            if (offered == nullptr) return false;
-            if (disarms_.load(std::memory_order_acquire) !=
-                disarms_at_offer_.load(std::memory_order_acquire)) {
-                open_loop_.store(nullptr, std::memory_order_release);  // withdrawn, unplayed
-                armed = armed_.load(std::memory_order_acquire);
-                return false;
-            }
-            if (!armed) return false;
-            open_loop_source_ = offered;
-            initialised_ = false;  // it starts where the handle is
-            safety_.restart_passivity_observer();
-        }
-        if (armed && !safety_.faulted() && !open_loop_source_->done()) return true;
-        open_loop_source_ = nullptr;
-        initialised_ = false;
-        safety_.restart_soft_start();
-        safety_.restart_passivity_observer();
-        armed = false;
-        armed_.store(false, std::memory_order_release);
-        open_loop_.store(nullptr, std::memory_order_release);  // the caller's again
-        return false;
+        return requests.armed;
     }
 
     // The interval since the previous sample (sample_interval_s). When it is unknown,
@@ -795,15 +696,12 @@ class ServoLoop {
         // The soft start's own scale: a tick without a sample filters nothing, and must not
         // make a running loop look as if it were arming again.
         snapshot.state = servo_state(armed, record_.faults, soft_start_scale_for_state());
-        status_.store(snapshot);
+        inbox_.publish_status(snapshot);
     }
 
     Device& device_;
-    Environment* environment_;                                ///< the one the ticks render
-    std::atomic<Environment*> offered_environment_{nullptr};  ///< offer_environment()'s
-    std::atomic<OpenLoopSource*> open_loop_{nullptr};         ///< play_open_loop()'s, until let go
-    std::atomic<std::uint64_t> disarms_{0};                   ///< disarm() calls
-    std::atomic<std::uint64_t> disarms_at_offer_{0};          ///< disarms_ before the offer
+    Environment* environment_;  ///< the one the ticks render
+    LoopInbox<Environment> inbox_;
     OpenLoopSource* open_loop_source_ = nullptr;              ///< the one playing (servo thread)
     ServoConfig config_;
     double period_s_;
@@ -812,7 +710,7 @@ class ServoLoop {
     SafetySupervisor safety_;
     LinkRecovery link_recovery_;
     TelemetryRing* telemetry_;
-    std::atomic<TelemetryRing*> recording_{nullptr};  ///< attach_recording()'s
+    TelemetryRing* recording_ = nullptr;  ///< the inbox's recording ring, as this tick took it
     FlightRecorder* recorder_ = nullptr;
     std::uint32_t recorded_faults_ = 0;       ///< the faults of the last record the recorder kept
     WakeLatencySummaryUs wake_latency_us_{};  ///< refresh_percentiles()
@@ -824,13 +722,7 @@ class ServoLoop {
     RealtimeSession realtime_;
     TickStats stats_;
     TelemetryRecord record_;
-    Seqlock<StatusSnapshot> status_;
-    std::atomic<bool> armed_;
-    std::atomic<bool> reset_requested_{false};
     std::uint64_t fault_resets_taken_ = 0;  ///< servo thread only; published in the status
-    Seqlock<CouplingGains> pending_gains_;  ///< request_coupling()'s, taken at a tick's start
-    std::uint64_t gains_version_ = 0;       ///< pending_gains_.version() last taken
-    bool was_armed_;
     bool initialised_ = false;
     int consecutive_overruns_ = 0;
     int consecutive_timeouts_ = 0;
