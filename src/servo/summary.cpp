@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "hapticd/servo/faults.hpp"
+#include "hapticd/servo/servo_config.hpp"
 
 namespace hapticd::servo {
 
@@ -17,7 +18,8 @@ TickComputeSummaryUs tick_compute_summary(const DurationHistogram& compute) noex
 }
 
 Summary make_summary(const TickStats& stats, double rate_hz, std::uint32_t faults_seen,
-                     std::uint64_t telemetry_dropped, double passivity_energy_j) {
+                     std::uint64_t telemetry_dropped, double passivity_energy_j,
+                     const OverrunBudget& budget) {
     Summary summary;
     summary.ticks = stats.ticks;
     summary.overruns = stats.overruns;
@@ -34,6 +36,14 @@ Summary make_summary(const TickStats& stats, double rate_hz, std::uint32_t fault
     summary.link_recoveries = stats.link_recoveries;
     summary.passivity_energy_j = passivity_energy_j;
     summary.intervals_unknown = stats.intervals_unknown;
+    if ((faults_seen & kFaultOverrunBudget) != 0u) {
+        summary.overrun_budget = OverrunBudgetBreach{
+            .late_ms = static_cast<double>(stats.budget_overrun_late_ns) * 1e-6,
+            .missed_periods = stats.budget_overrun_missed_periods,
+            .consecutive_overruns = stats.budget_overrun_consecutive,
+            .max_missed_periods = budget.max_missed_periods,
+            .max_consecutive_overruns = budget.max_consecutive_overruns};
+    }
     return summary;
 }
 

@@ -231,5 +231,25 @@ TEST(ServoPassivity, PassiveDamperIsLeftAlone) {
     EXPECT_GT(safety.passivity().energy_j(), 0.0);
 }
 
+TEST(ReadVerdict, EachResultAndStatusBitGivesItsFaultAndOnlyAGoodReadIsASample) {
+    EXPECT_TRUE(judge_read(IoResult::ok, 0u).have_sample);
+    EXPECT_EQ(judge_read(IoResult::ok, 0u).faults, 0u);
+    EXPECT_FALSE(judge_read(IoResult::ok, kStatusDropped).have_sample);
+    EXPECT_EQ(judge_read(IoResult::ok, kStatusDropped).faults, 0u);  // a read_timeout's to count
+    EXPECT_FALSE(judge_read(IoResult::timeout, 0u).have_sample);
+    EXPECT_EQ(judge_read(IoResult::timeout, 0u).faults, 0u);
+    EXPECT_EQ(judge_read(IoResult::disconnected, 0u).faults, kFaultDeviceLost);
+    EXPECT_EQ(judge_read(IoResult::error, 0u).faults, kFaultDeviceIo);
+    const ReadVerdict gone = judge_read(IoResult::ok, kStatusDisconnected);
+    EXPECT_FALSE(gone.have_sample);
+    EXPECT_EQ(gone.faults, kFaultDeviceLost);
+    EXPECT_EQ(judge_read(IoResult::ok, kStatusDeviceFault).faults, kFaultDeviceFault);
+    EXPECT_EQ(judge_read(IoResult::ok, kStatusJump).faults, kFaultEncoderJump);
+    EXPECT_EQ(judge_read(IoResult::ok, kStatusStale).faults, kFaultEncoderStale);
+    // Stale counts in a reply that is no sample are no sensor fault: nothing is used.
+    EXPECT_EQ(judge_read(IoResult::ok, kStatusStale | kStatusDropped).faults, 0u);
+    EXPECT_TRUE(judge_read(IoResult::ok, kStatusLate).have_sample);  // late, but a sample
+}
+
 }  // namespace
 }  // namespace hapticd::servo

@@ -10,6 +10,8 @@
 #include <cstdint>
 #include <string_view>
 
+#include "hapticd/servo/io.hpp"
+
 namespace hapticd::servo {
 
 enum Fault : std::uint32_t {
@@ -39,6 +41,32 @@ inline constexpr std::uint32_t kLinkFaults = kFaultDeviceLost | kFaultReadTimeou
 /// True when `faults` is not empty and holds link faults only.
 constexpr bool only_link_faults(std::uint32_t faults) noexcept {
     return faults != 0u && (faults & ~kLinkFaults) == 0u;
+}
+
+/// What one read gave (ServoLoop's sense step): whether it is a sample to use, and the faults
+/// that the read's result and the sample's status imply. A read that says the device is gone
+/// (or failed) is device_lost (device_io); counts that repeat the last good ones while the
+/// handle may move are encoder_stale, a sensor fault like a jump, since the position and any
+/// velocity from it are wrong.
+struct ReadVerdict {
+    bool have_sample = false;  ///< a sample, neither dropped nor from a device that is gone
+    std::uint32_t faults = 0;  ///< Fault mask
+};
+constexpr ReadVerdict judge_read(IoResult result, std::uint32_t sample_status) noexcept {
+    ReadVerdict verdict;
+    if (result == IoResult::ok) verdict.have_sample = (sample_status & kStatusDropped) == 0u;
+    if (result == IoResult::disconnected) verdict.faults |= kFaultDeviceLost;
+    if (result == IoResult::error) verdict.faults |= kFaultDeviceIo;
+    if ((sample_status & kStatusDisconnected) != 0u) {
+        verdict.faults |= kFaultDeviceLost;
+        verdict.have_sample = false;
+    }
+    if ((sample_status & kStatusDeviceFault) != 0u) verdict.faults |= kFaultDeviceFault;
+    if ((sample_status & kStatusJump) != 0u) verdict.faults |= kFaultEncoderJump;
+    if (verdict.have_sample && (sample_status & kStatusStale) != 0u) {
+        verdict.faults |= kFaultEncoderStale;
+    }
+    return verdict;
 }
 
 /// The name of one fault bit ("device_lost", ...); "unknown" for anything else.

@@ -112,10 +112,7 @@ class ServoLoop {
     /// Returns this tick's telemetry record.
     const TelemetryRecord& tick() noexcept {
         const std::int64_t now = clock_.now_ns();
-        Wake wake;
-        wake.deadline_ns = now;
-        wake.wake_ns = now;
-        return run_tick(wake, /*paced=*/false);
+        return run_tick(Wake{.deadline_ns = now, .wake_ns = now}, /*paced=*/false);
     }
 
     /// Applies the real-time request (throws in enforce mode if refused, after writing zero
@@ -176,18 +173,9 @@ class ServoLoop {
     const ServoConfig& config() const noexcept { return config_; }
     const TelemetryRecord& last_record() const noexcept { return record_; }
     Summary summary() const {
-        Summary s = make_summary(stats_, config_.rate_hz, faults_seen_,
-                                 telemetry_ != nullptr ? telemetry_->dropped() : 0,
-                                 safety_.passivity().energy_j());
-        if ((faults_seen_ & kFaultOverrunBudget) != 0u) {
-            s.overrun_budget = OverrunBudgetBreach{
-                .late_ms = static_cast<double>(stats_.budget_overrun_late_ns) * 1e-6,
-                .missed_periods = stats_.budget_overrun_missed_periods,
-                .consecutive_overruns = stats_.budget_overrun_consecutive,
-                .max_missed_periods = config_.overrun.max_missed_periods,
-                .max_consecutive_overruns = config_.overrun.max_consecutive_overruns};
-        }
-        return s;
+        return make_summary(stats_, config_.rate_hz, faults_seen_,
+                            telemetry_ != nullptr ? telemetry_->dropped() : 0,
+                            safety_.passivity().energy_j(), config_.overrun);
     }
 
     /// A disabled zero-force command, now.
@@ -213,17 +201,15 @@ class ServoLoop {
     // The host paces the loop: sleep to the next absolute deadline (LoopPacer), then tick.
     void tick_paced_by_host() noexcept { (void)run_tick(pacer_.wait(), /*paced=*/true); }
 
-    // Whether the device paced the last tick: it gave no sample (gone, or a timeout that
-    // returned at once), so it paces nothing until it gives one again.
+    // The last tick had no sample (the device is gone, or timed out at once): it paced nothing.
     struct DeviceIdle {
         bool idle = false;
         std::int64_t deadline_ns = 0;  ///< one period after the start of the tick that had none
     };
 
-    // The device paces the loop (ServoConfig::device_paces_loop; and lockstep, whose device
-    // is a simulation that answers each read at once): read() blocks until its next sample,
-    // and a tick after one that had none first sleeps to `idle.deadline_ns`, so that a lost
-    // device never spins the servo thread.
+    // The device paces the loop (ServoConfig::device_paces_loop, lockstep among them): read()
+    // blocks until its next sample, and a tick after one that had none first sleeps to
+    // `idle.deadline_ns`, so that a lost device never spins the servo thread.
     void tick_paced_by_device(const std::atomic<bool>& stop, DeviceIdle& idle) noexcept {
         wait_for_telemetry_room(stop);
         if (idle.idle) clock_.sleep_until_ns(idle.deadline_ns);  // at once if it has passed
@@ -289,33 +275,14 @@ class ServoLoop {
         raised_this_tick_ |= faults;
     }
 
-    // Reads one sample; false when there is none this tick. Raises the faults it implies.
-    // A read that says the device is gone (or failed) raises device_lost (device_io) and
-    // does not also count towards read_timeout, which is for timeouts and dropped samples.
+    // Reads one sample; false when there is none this tick. Raises the faults it implies
+    // (judge_read). A read that failed the link does not also count towards read_timeout,
+    // which is for timeouts and dropped samples.
     bool read_sample(Sample& sample, std::uint32_t& flags) noexcept {
-        bool have_sample = false;
-        switch (device_.read(sample)) {
-            case IoResult::ok:
-                have_sample = (sample.status & kStatusDropped) == 0u;
-                break;
-            case IoResult::timeout:
-                break;
-            case IoResult::disconnected:
-                raise(kFaultDeviceLost);
-                break;
-            case IoResult::error:
-                raise(kFaultDeviceIo);
-                break;
-        }
-        if ((sample.status & kStatusDisconnected) != 0u) {
-            raise(kFaultDeviceLost);
-            have_sample = false;
-        }
-        if ((sample.status & kStatusDeviceFault) != 0u) raise(kFaultDeviceFault);
-        if ((sample.status & kStatusJump) != 0u) raise(kFaultEncoderJump);
-        // Counts that repeat the last good ones while the handle may move: the position, and
-        // any velocity from it, is wrong, so this is a sensor fault like a jump.
-        if (have_sample && (sample.status & kStatusStale) != 0u) raise(kFaultEncoderStale);
+        const IoResult result = device_.read(sample);
+        const ReadVerdict verdict = judge_read(result, sample.status);
+        if (verdict.faults != 0u) raise(verdict.faults);
+        const bool have_sample = verdict.have_sample;
         if (have_sample) {
             consecutive_timeouts_ = 0;
         } else {
@@ -513,7 +480,10 @@ class ServoLoop {
             clear_fault_latch();
             ++stats_.link_recoveries;
         }
-        if (stats_.ticks % percentiles_every_ == 0) refresh_percentiles();
+        if (stats_.ticks % percentiles_every_ == 0) {  // a walk of the histograms' low buckets
+            wake_latency_us_ = wake_latency_summary(stats_.wake_latency);
+            tick_compute_us_ = tick_compute_summary(stats_.compute);
+        }
         publish_status(safe.soft_start_scale, sensed.armed);
     }
 
@@ -659,13 +629,6 @@ class ServoLoop {
         return false;
     }
 
-    // The percentiles for status(), from the run's histograms (a walk of their low buckets:
-    // well under a microsecond, once a second).
-    void refresh_percentiles() noexcept {
-        wake_latency_us_ = wake_latency_summary(stats_.wake_latency);
-        tick_compute_us_ = tick_compute_summary(stats_.compute);
-    }
-
     // The soft start's scale as the safety state reads it: an open-loop source has none, and
     // runs at full scale.
     double soft_start_scale_for_state() const noexcept {
@@ -713,7 +676,7 @@ class ServoLoop {
     TelemetryRing* recording_ = nullptr;  ///< the inbox's recording ring, as this tick took it
     FlightRecorder* recorder_ = nullptr;
     std::uint32_t recorded_faults_ = 0;       ///< the faults of the last record the recorder kept
-    WakeLatencySummaryUs wake_latency_us_{};  ///< refresh_percentiles()
+    WakeLatencySummaryUs wake_latency_us_{};  ///< for status(), once a second
     TickComputeSummaryUs tick_compute_us_{};
     std::uint64_t percentiles_every_ = 1;  ///< ticks between refreshes: one second's
     Clock clock_;

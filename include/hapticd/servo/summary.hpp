@@ -56,8 +56,12 @@ struct Summary {
 /// ([safety] max_missed_periods) and 5 overruns in a row ([safety] max_consecutive_overruns)".
 std::string describe(const OverrunBudgetBreach& breach);
 
-/// `faults_seen` is a Fault mask.
+struct OverrunBudget;  // servo_config.hpp
+
+/// `faults_seen` is a Fault mask; an overrun_budget fault among them is described against
+/// `budget` (Summary::overrun_budget).
 Summary make_summary(const TickStats& stats, double rate_hz, std::uint32_t faults_seen,
-                     std::uint64_t telemetry_dropped, double passivity_energy_j);
+                     std::uint64_t telemetry_dropped, double passivity_energy_j,
+                     const OverrunBudget& budget);
 
 }  // namespace hapticd::servo
