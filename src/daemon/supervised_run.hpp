@@ -61,8 +61,8 @@ int run_loop(const RunOptions& options, const Config& config,
     // The control socket, on its own thread from here to the servo thread's end.
     LoopControl control_port(loop.inbox(), servo_config.coupling);
     RunControl control(config, info, scene, context,
-                       control_loop_ports<Environment>(loop.inbox(), control_port), outputs.control.get(),
-                       outputs_directory.get(), log, &device);
+                       control_loop_ports<Environment>(loop.inbox(), control_port),
+                       outputs.control.get(), outputs_directory.get(), log, &device);
 
     // Run. The servo thread reads `stop` itself, so a signal (or the parent's death) ends the
     // run at the next tick; the watcher sets it too when the duration ends.

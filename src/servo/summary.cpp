@@ -37,12 +37,12 @@ Summary make_summary(const TickStats& stats, double rate_hz, std::uint32_t fault
     summary.passivity_energy_j = passivity_energy_j;
     summary.intervals_unknown = stats.intervals_unknown;
     if ((faults_seen & kFaultOverrunBudget) != 0u) {
-        summary.overrun_budget = OverrunBudgetBreach{
-            .late_ms = static_cast<double>(stats.budget_overrun_late_ns) * 1e-6,
-            .missed_periods = stats.budget_overrun_missed_periods,
-            .consecutive_overruns = stats.budget_overrun_consecutive,
-            .max_missed_periods = budget.max_missed_periods,
-            .max_consecutive_overruns = budget.max_consecutive_overruns};
+        summary.overrun_budget =
+            OverrunBudgetBreach{.late_ms = static_cast<double>(stats.budget_overrun_late_ns) * 1e-6,
+                                .missed_periods = stats.budget_overrun_missed_periods,
+                                .consecutive_overruns = stats.budget_overrun_consecutive,
+                                .max_missed_periods = budget.max_missed_periods,
+                                .max_consecutive_overruns = budget.max_consecutive_overruns};
     }
     return summary;
 }

@@ -161,7 +161,8 @@ class LoopInbox {
         }
         // The exchange releases the environment replaced to its owner (offer_taken()).
         if (offered_environment_.load(std::memory_order_relaxed) != nullptr) {
-            requests.environment = offered_environment_.exchange(nullptr, std::memory_order_acq_rel);
+            requests.environment =
+                offered_environment_.exchange(nullptr, std::memory_order_acq_rel);
         }
         requests.armed_now = requests.armed && !was_armed_;
         was_armed_ = requests.armed;
@@ -209,18 +210,18 @@ class LoopInbox {
     }
 
     std::atomic<bool> armed_;
-    std::atomic<std::uint64_t> disarms_{0};           ///< disarm() calls
-    std::atomic<bool> reset_requested_{false};        ///< request_fault_reset()'s
-    Seqlock<CouplingGains> pending_gains_;            ///< request_coupling()'s
-    std::atomic<TelemetryRing*> recording_{nullptr};  ///< attach_recording()'s
+    std::atomic<std::uint64_t> disarms_{0};                   ///< disarm() calls
+    std::atomic<bool> reset_requested_{false};                ///< request_fault_reset()'s
+    Seqlock<CouplingGains> pending_gains_;                    ///< request_coupling()'s
+    std::atomic<TelemetryRing*> recording_{nullptr};          ///< attach_recording()'s
     std::atomic<Environment*> offered_environment_{nullptr};  ///< offer_environment()'s
-    std::atomic<OpenLoopSource*> open_loop_{nullptr};  ///< play_open_loop()'s, until let go
-    std::atomic<std::uint64_t> disarms_at_offer_{0};   ///< disarms_ before the offer
-    Seqlock<StatusSnapshot> status_;                   ///< publish_status()'s
+    std::atomic<OpenLoopSource*> open_loop_{nullptr};         ///< play_open_loop()'s, until let go
+    std::atomic<std::uint64_t> disarms_at_offer_{0};          ///< disarms_ before the offer
+    Seqlock<StatusSnapshot> status_;                          ///< publish_status()'s
     // The servo thread's own.
-    bool was_armed_;                      ///< armed at the last take
-    std::uint64_t gains_version_ = 0;     ///< pending_gains_.version() last taken
-    OpenLoopSource* playing_ = nullptr;   ///< the source playing
+    bool was_armed_;                     ///< armed at the last take
+    std::uint64_t gains_version_ = 0;    ///< pending_gains_.version() last taken
+    OpenLoopSource* playing_ = nullptr;  ///< the source playing
 };
 
 }  // namespace hapticd::servo

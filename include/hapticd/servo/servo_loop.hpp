@@ -665,7 +665,7 @@ class ServoLoop {
     Device& device_;
     Environment* environment_;  ///< the one the ticks render
     LoopInbox<Environment> inbox_;
-    OpenLoopSource* open_loop_source_ = nullptr;              ///< the one playing (servo thread)
+    OpenLoopSource* open_loop_source_ = nullptr;  ///< the one playing (servo thread)
     ServoConfig config_;
     double period_s_;
     double counts_to_m_;
