@@ -39,6 +39,8 @@
 #include <thread>
 #include <vector>
 
+#include "hapticd/servo/nearest_rank.hpp"
+
 namespace {
 
 std::atomic<bool> done{false};
@@ -227,14 +229,6 @@ void disarm_probe(const std::string& path, std::vector<double>& latencies_ms, lo
     }
 }
 
-double percentile(std::vector<double> values, double p) {
-    if (values.empty()) return 0.0;
-    std::sort(values.begin(), values.end());
-    const auto index =
-        static_cast<std::size_t>(std::lround(p * static_cast<double>(values.size() - 1)));
-    return values[std::min(index, values.size() - 1)];
-}
-
 struct Counts {
     std::atomic<long> flood_disconnects{0}, garbage_disconnects{0}, churn_rounds{0}, connects{0};
     std::atomic<long> replies{0}, busy_replies{0}, events{0}, unread_disconnects{0},
@@ -316,8 +310,8 @@ int main(int argc, char** argv) {
     std::printf(
         "socket_hammer: %s: disarm: %zu carried out, %ld failed; latency p50 %.2f ms, p99 %.2f "
         "ms, max %.2f ms\n",
-        storm.c_str(), disarm_ms.size(), disarm_failed, percentile(disarm_ms, 0.5),
-        percentile(disarm_ms, 0.99), percentile(disarm_ms, 1.0));
+        storm.c_str(), disarm_ms.size(), disarm_failed, hapticd::servo::quantile(disarm_ms, 0.5),
+        hapticd::servo::quantile(disarm_ms, 0.99), hapticd::servo::quantile(disarm_ms, 1.0));
     std::printf(
         "socket_hammer: %s: %.1f s: %ld status replies to the polite client, %ld to the busy "
         "clients, %ld to slow readers; %ld stream events; disconnected %ld flooders, %ld garbage "

@@ -11,6 +11,7 @@
 #include "hapticd/input/text_input.hpp"
 #include "hapticd/servo/faults.hpp"
 #include "hapticd/servo/servo_state.hpp"
+#include "percentiles_json.hpp"
 
 namespace hapticd::daemon::control {
 namespace {
@@ -254,13 +255,8 @@ nlohmann::json status_body(const servo::StatusSnapshot& s, const RunFacts& facts
     j["solver_not_converged"] = s.solver_not_converged;
     j["energy_j"] = s.energy_j;
     j["coupling"] = {{"stiffness", s.stiffness_n_per_m}, {"damping", s.damping_n_s_per_m}};
-    j["wake_latency_us"] = {{"p50", s.wake_latency_us.p50},
-                            {"p99", s.wake_latency_us.p99},
-                            {"p999", s.wake_latency_us.p999},
-                            {"max", s.wake_latency_us.max}};
-    j["tick_compute_us"] = {{"p50", s.tick_compute_us.p50},
-                            {"p99", s.tick_compute_us.p99},
-                            {"max", s.tick_compute_us.max}};
+    j["wake_latency_us"] = percentiles_json<nlohmann::json>(s.wake_latency_us);
+    j["tick_compute_us"] = percentiles_json<nlohmann::json>(s.tick_compute_us);
     j["link"] = link_body(s, facts);
     j["axes"] = facts.axes;
     j["x_m"] = first_axes(s.x_m, facts.axes);

@@ -12,7 +12,7 @@
 #include "hapticd/daemon/device_open.hpp"
 #include "hapticd/input/range.hpp"
 #include "hapticd/servo/monotonic_clock.hpp"
-#include "hapticd/servo/tick_stats.hpp"
+#include "hapticd/servo/nearest_rank.hpp"
 #include "hapticd/tune/input_checks.hpp"
 
 namespace hapticd::daemon {
@@ -25,12 +25,6 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr input::Range kDiagDuration{.lo = 0.0, .hi = 3600.0, .lo_open = true, .unit = "s"};
 /// Histogram edges, us: fine below a millisecond, where a 1 kHz loop lives.
 constexpr double kEdgesUs[] = {0, 25, 50, 100, 200, 300, 500, 750, 1000, 2000, 5000, 10000, kInf};
-
-/// The p-quantile of sorted values by the servo's rule (servo::nearest_rank); 0 for none.
-double percentile(const std::vector<double>& sorted, double p) {
-    if (sorted.empty()) return 0.0;
-    return sorted[servo::nearest_rank(p, sorted.size()) - 1];
-}
 
 /// Least squares of device time against host time: slope - 1 in ppm and the RMS residual.
 void fit_clock(const std::vector<double>& host_s, const std::vector<double>& device_s,
@@ -83,8 +77,8 @@ DelayStats stats_of(std::vector<double> values) {
     DelayStats s;
     if (values.empty()) return s;
     std::sort(values.begin(), values.end());
-    s.p50 = percentile(values, 0.50);
-    s.p99 = percentile(values, 0.99);
+    s.p50 = servo::sorted_quantile(values, 0.50);
+    s.p99 = servo::sorted_quantile(values, 0.99);
     s.max = values.back();
     return s;
 }
@@ -318,10 +312,10 @@ DiagReport run_link_diag(const Config& config, const DiagOptions& options, std::
     report.lost = report.no_reply - late_after_no_reply;
     std::vector<double> sorted = rtt_us;
     std::sort(sorted.begin(), sorted.end());
-    report.rtt_p50_us = percentile(sorted, 0.50);
-    report.rtt_p90_us = percentile(sorted, 0.90);
-    report.rtt_p99_us = percentile(sorted, 0.99);
-    report.rtt_p999_us = percentile(sorted, 0.999);
+    report.rtt_p50_us = servo::sorted_quantile(sorted, 0.50);
+    report.rtt_p90_us = servo::sorted_quantile(sorted, 0.90);
+    report.rtt_p99_us = servo::sorted_quantile(sorted, 0.99);
+    report.rtt_p999_us = servo::sorted_quantile(sorted, 0.999);
     report.rtt_max_us = sorted.empty() ? 0.0 : sorted.back();
     double sum = 0.0;
     for (const double r : sorted) sum += r;

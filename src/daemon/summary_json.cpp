@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "hapticd/tune/result_json.hpp"
+#include "percentiles_json.hpp"
 
 namespace hapticd::daemon {
 
@@ -17,13 +18,8 @@ std::string summary_json(const servo::Summary& s, const RunContext& c) {
     j["overruns"] = s.overruns;
     j["missed_periods"] = s.missed_periods;
     j["rate_hz"] = s.rate_hz;
-    j["wake_latency_us"] = {{"p50", s.wake_latency_us.p50},
-                            {"p99", s.wake_latency_us.p99},
-                            {"p999", s.wake_latency_us.p999},
-                            {"max", s.wake_latency_us.max}};
-    j["tick_compute_us"] = {{"p50", s.tick_compute_us.p50},
-                            {"p99", s.tick_compute_us.p99},
-                            {"max", s.tick_compute_us.max}};
+    j["wake_latency_us"] = percentiles_json<nlohmann::ordered_json>(s.wake_latency_us);
+    j["tick_compute_us"] = percentiles_json<nlohmann::ordered_json>(s.tick_compute_us);
     j["max_force_n"] = s.max_force_n;
     j["faults"] = s.faults;
     if (s.overrun_budget) {

@@ -281,20 +281,7 @@ ClosedLoopPoles poles_of(MatrixXd loop, const SensedPlant& plant, const Layout& 
         throw std::runtime_error(
             "exact admittance model: the closed-loop eigenvalue solver did not converge");
     }
-    ClosedLoopPoles poles;
-    double dominant_angle = 0.0;
-    const auto& values = solver.eigenvalues();
-    poles.eigenvalues.reserve(static_cast<std::size_t>(values.size()));
-    for (Index i = 0; i < values.size(); ++i) {
-        const theory::Complex lambda = values(i);
-        poles.eigenvalues.push_back(lambda);
-        if (std::abs(lambda) > poles.spectral_radius) {
-            poles.spectral_radius = std::abs(lambda);
-            dominant_angle = std::abs(std::arg(lambda));
-        }
-    }
-    poles.dominant_frequency_hz = dominant_angle / (2.0 * std::numbers::pi * period_s);
-    return poles;
+    return detail::poles_from_eigenvalues(solver.eigenvalues(), period_s);
 }
 
 void check_design(const AdmittanceDesign& d) {

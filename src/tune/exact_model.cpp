@@ -281,20 +281,7 @@ ClosedLoopPoles poles_of(Loop loop, double period_s) {
     if (solver.info() != Eigen::Success) {
         throw std::runtime_error("exact model: the closed-loop eigenvalue solver did not converge");
     }
-    ClosedLoopPoles poles;
-    const auto& values = solver.eigenvalues();
-    poles.eigenvalues.reserve(static_cast<std::size_t>(values.size()));
-    double dominant_angle = 0.0;
-    for (Eigen::Index i = 0; i < values.size(); ++i) {
-        const theory::Complex lambda = values(i);
-        poles.eigenvalues.push_back(lambda);
-        if (std::abs(lambda) > poles.spectral_radius) {
-            poles.spectral_radius = std::abs(lambda);
-            dominant_angle = std::abs(std::arg(lambda));
-        }
-    }
-    poles.dominant_frequency_hz = dominant_angle / (2.0 * std::numbers::pi * period_s);
-    return poles;
+    return detail::poles_from_eigenvalues(solver.eigenvalues(), period_s);
 }
 
 // Loops of up to 12 states (every default case) stay on the stack: the sweep's 67,522
@@ -671,6 +658,23 @@ std::pair<Eigen::MatrixXd, Eigen::VectorXd> zoh_sample(const Eigen::MatrixXd& a,
 void validate_operator(const OperatorModel& human) { check_operator(human); }
 
 void balance_loop(Eigen::MatrixXd& loop) { balance(loop); }
+
+ClosedLoopPoles poles_from_eigenvalues(const Eigen::Ref<const Eigen::VectorXcd>& eigenvalues,
+                                       double period_s) {
+    ClosedLoopPoles poles;
+    poles.eigenvalues.reserve(static_cast<std::size_t>(eigenvalues.size()));
+    double dominant_angle = 0.0;
+    for (Eigen::Index i = 0; i < eigenvalues.size(); ++i) {
+        const theory::Complex lambda = eigenvalues(i);
+        poles.eigenvalues.push_back(lambda);
+        if (std::abs(lambda) > poles.spectral_radius) {
+            poles.spectral_radius = std::abs(lambda);
+            dominant_angle = std::abs(std::arg(lambda));
+        }
+    }
+    poles.dominant_frequency_hz = dominant_angle / (2.0 * std::numbers::pi * period_s);
+    return poles;
+}
 
 std::vector<double> log_grid(double lo, double hi, int n) {
     std::vector<double> grid;

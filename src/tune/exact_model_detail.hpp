@@ -31,4 +31,9 @@ std::vector<double> log_grid(double lo, double hi, int n);
 /// Parlett-Reinsch balancing by powers of two (exact: it changes no eigenvalue).
 void balance_loop(Eigen::MatrixXd& loop);
 
+/// The closed loop's poles from its matrix's eigenvalues: the spectral radius (stable below
+/// 1) and the dominant pole's frequency for the period `period_s`.
+ClosedLoopPoles poles_from_eigenvalues(const Eigen::Ref<const Eigen::VectorXcd>& eigenvalues,
+                                       double period_s);
+
 }  // namespace hapticd::tune::detail

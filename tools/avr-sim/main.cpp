@@ -15,6 +15,7 @@
 #include <string>
 
 #include "emulated_board.hpp"
+#include "hapticd/servo/nearest_rank.hpp"
 #include "harness.hpp"
 #include "parse_command_line.hpp"
 #include "pty_link.hpp"
@@ -25,22 +26,14 @@ std::atomic<bool> g_stop{false};
 
 void on_signal(int) { g_stop.store(true); }
 
-double percentile(std::vector<double> values, double p) {
-    if (values.empty()) return 0.0;
-    std::sort(values.begin(), values.end());
-    const auto index =
-        static_cast<std::size_t>(std::lround(p * static_cast<double>(values.size() - 1)));
-    return values[std::min(index, values.size() - 1)];
-}
-
 nlohmann::json figures_json(const hapticd::avr_sim::HarnessFigures& f,
                             const hapticd::avr_sim::EmulatedBoard& board) {
     const hapticd::avr_sim::PaddlePlant& plant = board.plant();
     const auto stats = [](const std::vector<double>& values) {
         return nlohmann::json{{"count", values.size()},
-                              {"p50", percentile(values, 0.5)},
-                              {"p99", percentile(values, 0.99)},
-                              {"max", percentile(values, 1.0)}};
+                              {"p50", hapticd::servo::quantile(values, 0.5)},
+                              {"p99", hapticd::servo::quantile(values, 0.99)},
+                              {"max", hapticd::servo::quantile(values, 1.0)}};
     };
     const nlohmann::json compute = stats(f.compute_us);
     return {{"requests", f.requests},

@@ -9,16 +9,9 @@
 #include <cmath>
 #include <cstdint>
 
-namespace hapticd::servo {
+#include "hapticd/servo/nearest_rank.hpp"
 
-/// The rank of every percentile hapticd reports (nearest rank): the q-quantile of n values
-/// is the ceil(q n)-th smallest, 1-based, clamped to [1, n]; 0 when n is 0. The histogram
-/// below and the link diagnosis' sorted samples both use it.
-inline std::uint64_t nearest_rank(double q, std::uint64_t n) noexcept {
-    if (n == 0) return 0;
-    const double rank = std::ceil(std::clamp(q, 0.0, 1.0) * static_cast<double>(n));
-    return std::clamp<std::uint64_t>(static_cast<std::uint64_t>(rank), 1, n);
-}
+namespace hapticd::servo {
 
 class DurationHistogram {
   public:

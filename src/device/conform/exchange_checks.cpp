@@ -9,6 +9,7 @@
 #include "hapticd/device/protocol/crc32c.hpp"
 #include "hapticd/device/protocol/reply_tracker.hpp"
 #include "hapticd/servo/monotonic_clock.hpp"
+#include "hapticd/servo/nearest_rank.hpp"
 
 namespace hapticd::device::conform {
 
@@ -21,14 +22,6 @@ std::string number(double value, int digits = 3) {
     out.precision(digits);
     out << value;
     return out.str();
-}
-
-/// The q-quantile of `values` (nearest rank); 0 for none.
-double quantile(std::vector<double> values, double q) {
-    if (values.empty()) return 0.0;
-    std::sort(values.begin(), values.end());
-    const auto rank = static_cast<std::size_t>(std::ceil(q * static_cast<double>(values.size())));
-    return values[std::min(values.size() - 1, rank == 0 ? 0 : rank - 1)];
 }
 
 /// A frame built by hand: `header` around `payload`, the CRC good unless `bad_crc`.
@@ -202,13 +195,13 @@ CheckResult check_timing(ConformHost& host, const proto::Identity& identity) {
         f.fail(std::to_string(unanswered) + " of " + std::to_string(exchanges) +
                " commands got no sample (5.2: every command answered within the period)");
     }
-    const double step_p50 = quantile(steps_us, 0.5);
+    const double step_p50 = servo::quantile(steps_us, 0.5);
     if (std::abs(step_p50 - period_us) > 0.05 * period_us) {
         f.fail("the device's clock advanced a median " + number(step_p50, 6) +
                " us between samples one command apart; its period is " + number(period_us) +
                " us (5.2: one exchange per period)");
     }
-    const double rtt_p99 = quantile(round_trips_us, 0.99);
+    const double rtt_p99 = servo::quantile(round_trips_us, 0.99);
     if (host.device_paces()) {
         // 5.8: every answer at a period boundary of the device's own clock (a host that was
         // late for one gets the next: a step of two periods is the host's, not the device's).
@@ -234,13 +227,13 @@ CheckResult check_timing(ConformHost& host, const proto::Identity& identity) {
     if (host.options().lockstep) {
         evidence << "; round trips not judged (lockstep)";
     } else {
-        evidence << "; round trip p50 " << number(quantile(round_trips_us, 0.5), 4) << " us, p99 "
-                 << number(rtt_p99, 4) << " us"
+        evidence << "; round trip p50 " << number(servo::quantile(round_trips_us, 0.5), 4)
+                 << " us, p99 " << number(rtt_p99, 4) << " us"
                  << (host.device_paces() ? " (the device paces: not judged, its grid is)" : "");
     }
     if (!delays_periods.empty()) {
-        evidence << "; loop delay p50 " << number(quantile(delays_periods, 0.5)) << ", p99 "
-                 << number(quantile(delays_periods, 0.99)) << " periods";
+        evidence << "; loop delay p50 " << number(servo::quantile(delays_periods, 0.5)) << ", p99 "
+                 << number(servo::quantile(delays_periods, 0.99)) << " periods";
     }
     return verdict(kTiming, f, evidence.str());
 }
