@@ -23,77 +23,41 @@ nothing anchors the position (no wall, k_e = 0, and no hand with k_s > 0 and k_a
 loop has one free mode at z = 1; the search's objective drops the eigenvalue nearest 1 in
 that case (and checks it is within 1e-8 of 1), so the landscape is not flat at 1.
 
-Usage (run from the worktree root, /usr/bin/python3, numpy + scipy):
+Usage (from the repository's root, with Debian's /usr/bin/python3: numpy, scipy, mpmath):
     tools/scripts/class_adversary.py validate [--tool BIN]
         hands-off wall limits, and single-point classes compared with `haptic-tune check`
     tools/scripts/class_adversary.py limits [--tool BIN]
         the tool's class limits (size) for b_c in {0, 0.5, 1} x delay in {0, 1 ms},
         all passive environments and --scene god-object-sphere (rigid wall only)
-    tools/scripts/class_adversary.py attack [--tool BIN] [--factor 0.995] [--budget S]
+    tools/scripts/class_adversary.py attack [--tool BIN] [--factors F,...] [--budget S]
         [--cases LIST] [--seed N] [--out results.json]
-        search the class box x environments at factor x each limit; every find > 1 + 1e-8
-        is written to a single-point class file (build/class-adversary/) and re-checked
-        with `haptic-tune check --model exact --operator-class FILE`
+        search the class box x environments at each factor x each limit; every find
+        > 1 + 1e-8 is written to a single-point class file (build/class-adversary/) and
+        re-checked with `haptic-tune check --model exact --operator-class FILE`
     tools/scripts/class_adversary.py quick [--tool BIN] [--cls FILE] [--factor 0.999] [--budget S]
-        CI's quick mode (a ctest): the tool's proven class limits for b_c 0.5 and no delay, b_c 1
-        and one period, and b_c 0.5 with the rigid-wall scene, each attacked just below the
-        limit for S CPU seconds; exit 1 if any mpmath-confirmed find
+        CI's quick mode (three ctests, tests/tune/CMakeLists.txt): the tool's proven class
+        limits for b_c 0.5 and no delay, b_c 1 and one period, and b_c 0.5 with the
+        rigid-wall scene, each attacked at --factor x the limit for S CPU seconds; exit 1 if
+        any find is confirmed in mpmath
     tools/scripts/class_adversary.py point --kc K --bc B [--delay-periods D] --op ... --env ...
-        radius of one configuration (for hand checks)
-    tools/scripts/class_adversary.py mylimits [--budget S]
-        my own class limit per case: bisection on the worst configuration found, a focused
-        search just below it, repeated while that finds more, then a Nelder-Mead polish of
-        that configuration at its critical k_c (the focused search steps 2e-4)
-    tools/scripts/class_adversary.py window [--tool BIN] [--mylimits FILE]
-        where the tool's own `check --operator-class` verdict flips, against mylimits' limits
-        (bisection between my limit and the tool's rejected stiffness)
-Defaults: --tool /tmp/haptic-bin-snapshot2/haptic-tune (the fixed tool), the class
-config/operators/pen-grip.toml, m = 0.1 kg, b = 2 N s/m, 1 kHz. Scratch files (class files, the limit cache) go to
-build/class-adversary/. Every find is re-checked in mpmath before it counts: a near-defective
-pair at z = 1 (a free 1e5 kg virtual mass) or an extreme two-mode lossless environment puts
-double-precision radii up to ~3e-4 off.
+        the spectral radius of one configuration (for checks by hand)
+    tools/scripts/class_adversary.py own-limits [--budget S]
+        the adversary's own class limit per case: bisection on the worst configuration
+        found, a focused search just below it, repeated while that finds more, then a
+        Nelder-Mead polish of that configuration at its critical k_c
+    tools/scripts/class_adversary.py window [--tool BIN] [--own-limits FILE]
+        where the tool's `check --operator-class` verdict flips, against own-limits' limits
+        (bisection between the adversary's limit and the tool's rejected stiffness)
 
-Results against the fixed tool, /tmp/haptic-bin-snapshot2/haptic-tune (pen-grip class; attack
---factors 0.995,1.01 --budget 15: ~15-21 s CPU per case at 0.995, limits ~60 s of the tool's
-CPU, mylimits ~100 s, window ~65 s, validate ~16 s; about 11 min CPU for everything):
-    b_c  delay  environments   tool size   mine       mine/tool  worst (mine)
-    0    0      all passive    4007.81     4013.38    1.00139    hands-off, rigid wall
-    0    0      rigid wall     4007.81     4013.38    1.00139    hands-off, rigid wall
-    0.5  0      all passive    4820.31     4823.50    1.00066    hands-off, lossless spring (m_e -> 0, 23687 N/m)
-    0.5  0      rigid wall     4984.38     4991.95    1.00152    hands-off, rigid wall
-    1    0      all passive    5437.50     5441.43    1.00072    hands-off, lossless spring (m_e -> 0, 15232 N/m)
-    1    0      rigid wall     5953.13     5960.76    1.00128    hands-off, rigid wall
-    0    1T     all passive    1005.86     1006.64    1.00078    hands-off, lossless(0.1017 kg, k_e -> 0)
-    0    1T     rigid wall     1339.84     1340.70    1.00064    hands-off, rigid wall
-    0.5  1T     all passive    1617.19     1616.43    0.99953    hands-off, lossless(0.4205 kg, k_e -> 0)  <- 0.047 % optimistic
-    0.5  1T     rigid wall     1666.02     1666.72    1.00042    hands-off, rigid wall
-    1    1T     all passive    1988.28     1989.08    1.00040    hands-off, rigid wall
-    1    1T     rigid wall     1988.28     1989.08    1.00040    hands-off, rigid wall
-(lossless m_e, k_e at the box's ends, 1e-5 kg and 0.01 N/m: m_e = 0 and k_e = 1e-5 give the same
-limit to 3e-7.) The attack at 0.995 x every limit: no configuration above 1 + 1e-8 (only
-double-precision suspects next to z = 1, all rounding noise in mpmath). At 1.01 x every limit
-the tool's check rejects what the search finds. The fixed tool is not pessimistic anywhere (at
-most 0.15 % below my limit: its size bisection steps ~0.12-0.2 %).
-Still optimistic, but inside the 0.5 % allowance: with one period of delay the class check does
-not see the 22 Hz mode that a free lossless virtual mass (hands-off) drives unstable, until its
-radius passes ~1 + 6e-6; it reports a 7000-7700 kg, 1.4e8-1.5e8 N/m lossless spring at
-~1 + 1e-9 instead (window):
-    b_c = 0.5, delay 1 ms: check accepts k_c up to 1617.34 (0.056 % above my 1616.43), and
-        size returns 1617.1875 itself; there hands-off, lossless m_e = 0.420484 kg,
-        k_e = 0.01 N/m has radius 1.0000051486 (mpmath and a time-domain run agree)
-    b_c = 0, delay 1 ms: size 1005.86 is safe, but check accepts up to 1007.43 (0.078 % above
-        my 1006.64): hands-off, lossless m_e = 0.101682 kg, k_e = 0.01: radius 1.0000038483
-    (the same with a single-point class, build/class-adversary/point-pen-tip.toml: accepted)
-Before the fix (/tmp/haptic-bin-snapshot/haptic-tune): the same limits except with one period of
-delay, all passive, b_c = 0: 1058.59 (5.2 % optimistic) and b_c = 0.5: 1626.95 (0.65 %);
-counterexamples accepted by that tool's check (validate, step 5; the fixed tool rejects both):
-    k_c = 1053.3008, b_c = 0, delay 1 ms, hands-off, lossless trapezoidal m_e = 0.10651 kg,
-        k_e = 0.01 N/m: radius 1.00023041 (mpmath and a time-domain run agree)
-    k_c = 1618.8184, b_c = 0.5, delay 1 ms, hands-off, lossless m_e = 0.421465 kg, k_e = 0.01:
-        radius 1.00001624
-The class search (src/tune/class_check.cpp, read after these numbers) never climbed over
-lossless environments from hands-off in that snapshot: hands-off only met the fixed sweep and
-the synthesised environments, and the lossless climb started from the 3^5 grid's hand-on seeds.
+Defaults: --tool build/release/bin/haptic-tune (the build tree's, from `cmake --preset
+release`), the class config/operators/pen-grip.toml, m = 0.1 kg, b = 2 N s/m, 1 kHz. Scratch
+files (class files, the limit cache) go to build/class-adversary/. Every find is re-checked
+in mpmath before it counts: a near-defective pair at z = 1 (a free 1e5 kg virtual mass) or an
+extreme two-mode lossless environment puts double-precision radii up to ~3e-4 off.
+
+What the attacks found, and what each fix changed, is in docs/stability-models.md ("Attacked
+by an independent implementation", "In CI, against the proof"): the full attack
+(`attack --factors 0.995,1.01 --budget 15`) takes about 11 minutes of CPU.
 """
 import argparse
 import json
@@ -111,7 +75,9 @@ M_DEV = 0.1
 B_DEV = 2.0
 T = 1e-3
 TOL = 1e-8
-TOOL = "/tmp/haptic-bin-snapshot2/haptic-tune"
+# The build tree's haptic-tune, from the repository's root.
+TOOL = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "build", "release",
+                    "bin", "haptic-tune")
 CLASS_FILE = "config/operators/pen-grip.toml"
 WALL_SCENE = "config/scenes/god-object-sphere.toml"
 
@@ -787,15 +753,15 @@ def cmd_validate(a):
     for i, (op, kc, bc, d) in enumerate(pts):
         f = write_point_class("build/class-adversary/validate-%d.toml" % i, op)
         rc, js, err = tool_check(a.tool, kc, bc, d * T, f, WALL_SCENE)
-        mine = max(spectral(kc, bc, op, ("wall",), d)[0], spectral(kc, bc, None, ("wall",), d)[0])
+        own = max(spectral(kc, bc, op, ("wall",), d)[0], spectral(kc, bc, None, ("wall",), d)[0])
         tr = js.get("worst_spectral_radius") if js else None
-        ok_mine = mine <= 1 + TOL
+        ok_own = own <= 1 + TOL
         ok_tool = rc == 0
-        agree += ok_mine == ok_tool
-        diff = abs(mine - tr) if tr is not None else float("nan")
+        agree += ok_own == ok_tool
+        diff = abs(own - tr) if tr is not None else float("nan")
         worst = max(worst, diff if math.isfinite(diff) else 0)
-        log("  %2d kc=%7.1f bc=%.1f d=%d %s: mine %.12f (%s), tool %s %s, diff %.2e" % (
-            i, kc, bc, d, fmt_op(op), mine, "stable" if ok_mine else "UNSTABLE",
+        log("  %2d kc=%7.1f bc=%.1f d=%d %s: own %.12f (%s), tool %s %s, diff %.2e" % (
+            i, kc, bc, d, fmt_op(op), own, "stable" if ok_own else "UNSTABLE",
             "%.12f" % tr if tr is not None else None, "stable" if ok_tool else "UNSTABLE",
             diff))
     log("wall scene: verdicts agree on %d/%d; largest |radius difference| %.3e"
@@ -807,12 +773,12 @@ def cmd_validate(a):
         f = "build/class-adversary/validate-%d.toml" % i
         rc, js, err = tool_check(a.tool, kc, bc, d * T, f, vm)
         env = ("implicit", 0.5, 20.0, 1.0)
-        mine = max(spectral(kc, bc, op, env, d)[0], spectral(kc, bc, None, env, d)[0])
+        own = max(spectral(kc, bc, op, env, d)[0], spectral(kc, bc, None, env, d)[0])
         tr = js.get("worst_spectral_radius") if js else None
-        log("  vm %2d kc=%7.1f bc=%.1f d=%d: mine %.12f, tool %s (%s; worst env %s)" % (
-            i, kc, bc, d, mine, tr, "stable" if rc == 0 else "UNSTABLE",
+        log("  vm %2d kc=%7.1f bc=%.1f d=%d: own %.12f, tool %s (%s; worst env %s)" % (
+            i, kc, bc, d, own, tr, "stable" if rc == 0 else "UNSTABLE",
             js.get("worst_environment") if js else err.strip()))
-        agree += (mine <= 1 + TOL) == (rc == 0)
+        agree += (own <= 1 + TOL) == (rc == 0)
     log("virtual-mass scene: verdicts agree on %d/8" % agree)
     # 5. the counterexamples (see the module docstring): hands-off on a lossless trapezoidal
     # mass, one period of delay, below the tool's class limit. Double, mpmath, a time-domain
@@ -964,24 +930,24 @@ def polish(bc, dp, cls, op, env, kc, k_lo, rounds=3):
 
 
 def cmd_window(a):
-    """Where the tool's own `check --operator-class` verdict flips, against my limit
-    (mylimits' output): bisection on the tool's check between my limit and the tool's
-    rejected stiffness. A flip above my limit means check accepts gains that are unstable
-    for a member of the class (the configuration mylimits names)."""
-    with open(a.mylimits) as f:
+    """Where the tool's own `check --operator-class` verdict flips, against the adversary's limit
+    (own-limits' output): bisection on the tool's check between the adversary's limit and the tool's
+    rejected stiffness. A flip above the adversary's limit means check accepts gains that are unstable
+    for a member of the class (the configuration own-limits names)."""
+    with open(a.own_limits) as f:
         rows = json.load(f)
     lim = get_limits(a, a.cls)
     log = lambda s: (print(s), sys.stdout.flush())
     for r in rows:
         bc, dp, scene = r["b_c"], r["delay_periods"], r["scene"]
-        mine = r["mine"]
+        own = r["own"]
         js = lim[(bc, dp, scene)]
         sc = WALL_SCENE if scene else None
         ok = lambda k: tool_check(a.tool, k, bc, dp * T, a.cls, sc)[0] == 0
-        lo, hi = mine, js["rejected_stiffness"]
+        lo, hi = own, js["rejected_stiffness"]
         if not ok(lo):
-            log("b_c=%.1f d=%dT %-11s mine %.4f: the tool's check already rejects my limit"
-                % (bc, dp, "wall" if scene else "all passive", mine))
+            log("b_c=%.1f d=%dT %-11s own %.4f: the tool's check already rejects the adversary's limit"
+                % (bc, dp, "wall" if scene else "all passive", own))
             continue
         while hi - lo > 2e-5 * hi:
             mid = 0.5 * (lo + hi)
@@ -992,13 +958,13 @@ def cmd_window(a):
         op = None if r["op"] is None else tuple(r["op"])
         env = tuple(r["env"]) if isinstance(r["env"], list) else r["env"]
         rho = float(closed_loop_mp(lo, bc, op, env, dp)[1])
-        log("b_c=%.1f d=%dT %-11s mine %.4f  tool size %.4f  tool check accepts up to %.4f "
-            "(%.4f %% above mine; there %s, %s has radius %.9f)" % (
-                bc, dp, "wall" if scene else "all passive", mine, js["stiffness"], lo,
-                100 * (lo / mine - 1), fmt_op(op), fmt_env(env), rho))
+        log("b_c=%.1f d=%dT %-11s own %.4f  tool size %.4f  tool check accepts up to %.4f "
+            "(%.4f %% above own; there %s, %s has radius %.9f)" % (
+                bc, dp, "wall" if scene else "all passive", own, js["stiffness"], lo,
+                100 * (lo / own - 1), fmt_op(op), fmt_env(env), rho))
 
 
-def cmd_mylimits(a):
+def cmd_own_limits(a):
     """My own class limit for each case: start from a find at 1.01 x the tool's limit; the
     configuration's own critical k_c (bisection); a focused search just below it (corners,
     grids, every kind, Nelder-Mead from the configuration); repeat while that finds more."""
@@ -1047,10 +1013,10 @@ def cmd_mylimits(a):
             _, op, env = found
             k = probe
         kc, op, env = polish(bc, dp, cls, op, env, kc, 0.5 * k_tool)
-        row = {"b_c": bc, "delay_periods": dp, "scene": scene, "tool": k_tool, "mine": kc,
+        row = {"b_c": bc, "delay_periods": dp, "scene": scene, "tool": k_tool, "own": kc,
                "op": op, "env": env, "ratio": kc / k_tool}
         rows.append(row)
-        log("b_c=%.1f d=%dT %-11s tool %.4f  mine %.4f  (mine/tool %.5f) worst %s, %s  "
+        log("b_c=%.1f d=%dT %-11s tool %.4f  own %.4f  (own/tool %.5f) worst %s, %s  "
             "[%.1f s]" % (bc, dp, "wall" if scene else "all passive", k_tool, kc, kc / k_tool,
                           fmt_op(op), fmt_env(env), time.process_time() - t0))
     log("total CPU %.1f s" % (time.process_time() - t_all))
@@ -1112,8 +1078,8 @@ def main():
     v.add_argument("--n", type=int, default=14)
     sp.add_parser("limits")
     w = sp.add_parser("window")
-    w.add_argument("--mylimits", default="build/class-adversary/mylimits.json")
-    ml = sp.add_parser("mylimits")
+    w.add_argument("--own-limits", default="build/class-adversary/own-limits.json")
+    ml = sp.add_parser("own-limits")
     ml.add_argument("--budget", type=float, default=4.0, help="CPU seconds per probe")
     ml.add_argument("--cases", default=None)
     ml.add_argument("--seed", type=int, default=0)
@@ -1139,8 +1105,16 @@ def main():
     pt.add_argument("--op", default=None, help="m_h,k_s,b_s,k_a,b_a (omit: hands-off)")
     pt.add_argument("--env", default="wall", help="wall | implicit,me,ke,be | lossless,me,ke")
     a = p.parse_args()
+    if a.cmd != "point" and not os.access(a.tool, os.X_OK):
+        print("class_adversary.py: --tool %s is not an executable haptic-tune (build it: "
+              "cmake --preset release && cmake --build --preset release)" % a.tool, file=sys.stderr)
+        sys.exit(2)
+    if not os.path.isfile(a.cls):
+        print("class_adversary.py: --cls %s: no such class file (run from the repository's "
+              "root)" % a.cls, file=sys.stderr)
+        sys.exit(2)
     {"validate": cmd_validate, "limits": cmd_limits, "attack": cmd_attack,
-     "mylimits": cmd_mylimits, "point": cmd_point, "window": cmd_window,
+     "own-limits": cmd_own_limits, "point": cmd_point, "window": cmd_window,
      "quick": cmd_quick}[a.cmd](a)
 
 
