@@ -14,26 +14,6 @@
 #include "supervised_run.hpp"
 
 namespace hapticd::daemon {
-namespace {
-
-template <typename Error>
-bool is(const std::exception& e) {
-    return dynamic_cast<const Error*>(&e) != nullptr;
-}
-
-/// The one mapping of what ended a run to its exit code, its message on `log`: exit 2 for
-/// bad input found before the device moves (BadInput from the set-up steps; ConfigError
-/// from the readers of the config, the scene and the servo settings; ControlSocketError for
-/// a --socket not made; OutputError for a --log or --summary refused or not created), exit 1
-/// for anything else.
-int exit_on(const std::exception& e, std::ostream& log) {
-    const bool socket = is<control::ControlSocketError>(e);
-    const bool bad_input = socket || is<BadInput>(e) || is<ConfigError>(e) || is<OutputError>(e);
-    log << priority::err << "hapticd: " << (socket ? "--socket: " : "") << e.what() << "\n";
-    return bad_input ? kExitBadInput : kExitFault;
-}
-
-}  // namespace
 
 int run_daemon(const RunOptions& given, std::atomic<bool>& stop, std::ostream& out,
                std::ostream& log) {
@@ -87,8 +67,12 @@ int run_daemon(const RunOptions& given, std::atomic<bool>& stop, std::ostream& o
         }
         return run_loop(options, config, servo_config, *device, *scene.admittance, rendered,
                         context, outputs, stop, out, log);
+    } catch (const input::InputError& e) {  // found before the device moved
+        log << priority::err << "hapticd: " << e.what() << "\n";
+        return kExitBadInput;
     } catch (const std::exception& e) {
-        return exit_on(e, log);
+        log << priority::err << "hapticd: " << e.what() << "\n";
+        return kExitFault;
     }
 }
 

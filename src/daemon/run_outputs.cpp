@@ -53,7 +53,11 @@ Outputs prepare_outputs(const RunOptions& options, const Config& config) {
         opened.summary = open_output("--summary", *options.summary_path);
     }
     if (options.socket_path) {
-        opened.control = std::make_unique<control::ControlServer>(*options.socket_path);
+        try {
+            opened.control = std::make_unique<control::ControlServer>(*options.socket_path);
+        } catch (const control::ControlSocketError& e) {
+            throw input::with_context("--socket: ", e);
+        }
     }
     return opened;
 }

@@ -15,14 +15,15 @@
 #include "hapticd/daemon/summary_json.hpp"
 #include "hapticd/device/plugin_loader.hpp"
 #include "hapticd/env/scene.hpp"
+#include "hapticd/input/input_error.hpp"
 #include "hapticd/servo/realtime.hpp"
 
 namespace hapticd::daemon {
 
 /// Bad input the daemon finds itself (a command-line value, a config and scene that do not
 /// go together, a device that refuses to open): exit 2 with this message.
-struct BadInput : std::runtime_error {
-    using std::runtime_error::runtime_error;
+struct BadInput : input::InputError {
+    explicit BadInput(const std::string& message) : InputError(message) {}
 };
 
 /// Leaves the device at zero force and closes it, whatever path leaves the run.

@@ -2,13 +2,15 @@
 // anything was written. The command prints its message and exits 2.
 #pragma once
 
-#include <stdexcept>
+#include <string>
+
+#include "hapticd/input/input_error.hpp"
 
 namespace hapticd::tools {
 
-class AutotuneError : public std::runtime_error {
+class AutotuneError : public input::InputError {
   public:
-    using std::runtime_error::runtime_error;
+    explicit AutotuneError(const std::string& message) : InputError(message) {}
 };
 
 }  // namespace hapticd::tools

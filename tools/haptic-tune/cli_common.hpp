@@ -13,6 +13,7 @@
 #include "hapticd/daemon/config.hpp"
 #include "hapticd/daemon/exit_code.hpp"
 #include "hapticd/daemon/startup_check.hpp"
+#include "hapticd/input/input_error.hpp"
 #include "hapticd/input/range.hpp"
 #include "hapticd/theory/admittance.hpp"
 #include "hapticd/theory/benchmark.hpp"
@@ -30,9 +31,9 @@ struct Invocation {
 };
 
 /// Bad input found after parsing (a missing value, an inconsistent combination).
-class UsageError : public std::runtime_error {
+class UsageError : public input::InputError {
   public:
-    using std::runtime_error::runtime_error;
+    explicit UsageError(const std::string& message) : InputError(message) {}
 };
 
 /// CLI11 validators that name the allowed range and reject NaN and infinities.

@@ -45,14 +45,6 @@ struct AutotuneCliOptions {
     bool json = false;
 };
 
-std::string read_file(const std::string& path) {
-    try {
-        return input::read_text_file(path, "the config file");
-    } catch (const input::ConfigError& e) {
-        throw AutotuneError(e.what());
-    }
-}
-
 /// From the run's log (or --log) to the written config; every failure throws (the caller
 /// adds where the run's log is). Exit 0 written, 1 the exact model rejects the gains.
 int identify_size_and_write(const AutotuneCliOptions& o, const daemon::Config& config,
@@ -63,7 +55,7 @@ int identify_size_and_write(const AutotuneCliOptions& o, const daemon::Config& c
         log =
             tune::read_telemetry_log(outcome.log_path, tune::TelemetryLogOptions::identification());
     } catch (const tune::LogFormatError& e) {
-        throw AutotuneError(std::string("bad log: ") + e.what());
+        throw input::with_context("bad log: ", e);
     }
     if (log.axes != config.device.axes) {
         throw AutotuneError(outcome.log_path + " has " + std::to_string(log.axes) +
@@ -112,7 +104,7 @@ int identify_size_and_write(const AutotuneCliOptions& o, const daemon::Config& c
         }
         edited = daemon::edit_config_text(original, edits, o.config_path);
     } catch (const daemon::ConfigEditError& e) {
-        throw AutotuneError(std::string(e.what()) + "; nothing was written");
+        throw input::with_context("", e, "; nothing was written");
     }
     outcome.changes = edited.changes;
     try {
@@ -120,8 +112,7 @@ int identify_size_and_write(const AutotuneCliOptions& o, const daemon::Config& c
             daemon::parse_config(edited.text, o.config_path, config.base_dir);
         outcome.startup = daemon::check_coupling_at_startup(tuned);
     } catch (const daemon::ConfigError& e) {
-        throw AutotuneError(std::string("the edited config would not load: ") + e.what() +
-                            "; nothing was written");
+        throw input::with_context("the edited config would not load: ", e, "; nothing was written");
     }
     if (!outcome.startup->passed && !outcome.startup->skipped) {
         throw AutotuneError("the daemon's start-up check would refuse the edited config: " +
@@ -132,14 +123,10 @@ int identify_size_and_write(const AutotuneCliOptions& o, const daemon::Config& c
         // The file the config resolves to is replaced (a symlink stays one) by a temporary
         // made exclusively beside it, with its mode and owner, after an exclusive backup; a
         // config without its owner's write bit is refused (daemon/config_editor.hpp).
-        try {
-            const daemon::WrittenConfig written =
-                daemon::write_config_with_backup(o.config_path, original, edited.text);
-            outcome.backup_path = written.backup;
-            outcome.written_path = written.target;
-        } catch (const daemon::ConfigWriteError& e) {
-            throw AutotuneError(e.what());
-        }
+        const daemon::WrittenConfig written =
+            daemon::write_config_with_backup(o.config_path, original, edited.text);
+        outcome.backup_path = written.backup;
+        outcome.written_path = written.target;
     }
     // Done: the run's temporary log is not needed any more.
     outcome.log_kept = !run_log.temporary();
@@ -162,15 +149,15 @@ int run_autotune(const AutotuneCliOptions& o) {
     try {
         config = load_config_as_hapticd(o.config_path);
     } catch (const daemon::ConfigError& e) {
-        throw AutotuneError(std::string("the config does not load: ") + e.what());
+        throw input::with_context("the config does not load: ", e);
     }
-    const std::string original = read_file(o.config_path);
+    const std::string original = input::read_text_file(o.config_path, "the config file");
     if (!o.dry_run) {
         // A config that may not be replaced is refused before the run, not after it.
         try {
             daemon::check_config_writable(o.config_path);
         } catch (const daemon::ConfigWriteError& e) {
-            throw AutotuneError(std::string(e.what()) + " (--dry-run shows the changes)");
+            throw input::with_context("", e, " (--dry-run shows the changes)");
         }
     }
     if (!o.record_path.empty()) {
@@ -185,11 +172,7 @@ int run_autotune(const AutotuneCliOptions& o) {
             inputs.push_back(
                 {"the device plugin ([device] plugin in " + o.config_path + ")", plugin});
         }
-        try {
-            daemon::refuse_overlapping_paths(inputs, {{"--record", o.record_path}});
-        } catch (const daemon::OutputError& e) {
-            throw AutotuneError(e.what());
-        }
+        daemon::refuse_overlapping_paths(inputs, {{"--record", o.record_path}});
     }
     options.rate_hz = config.servo.rate_hz;
     options.velocity_filter_hz = config.coupling.velocity_filter_hz;  // checked by the config
@@ -323,7 +306,7 @@ void add_autotune_command(CLI::App& app, Invocation& invocation) {
         invocation.run = [options] {
             try {
                 return run_autotune(*options);
-            } catch (const AutotuneError& e) {
+            } catch (const input::InputError& e) {  // AutotuneError, and what it did not wrap
                 std::cerr << "haptic-tune: autotune: " << e.what() << '\n';
                 return static_cast<int>(kExitBadInput);
             }

@@ -4,8 +4,8 @@
 #include <optional>
 
 #include "commands.hpp"
+#include "hapticd/input/input_error.hpp"
 #include "hapticd/install/version.hpp"
-#include "hapticd/tune/coupling_sizing.hpp"
 #include "parse_command_line.hpp"
 
 namespace {
@@ -30,13 +30,9 @@ int run_main(int argc, char** argv) {
     if (const std::optional<int> ended = parse_command_line(app, argc, argv)) return *ended;
     try {
         return invocation.run();
-    } catch (const UsageError& error) {
-        std::cerr << "haptic-tune: error: " << error.what() << '\n';
-    } catch (const hapticd::daemon::ConfigError& error) {
-        std::cerr << "haptic-tune: config error: " << error.what() << '\n';
-    } catch (const hapticd::tune::InfeasibleCoupling& error) {
-        std::cerr << "haptic-tune: infeasible: " << error.what() << '\n';
-    } catch (const std::invalid_argument& error) {
+    } catch (const hapticd::input::InputError& error) {  // "config error", "infeasible", ...
+        std::cerr << "haptic-tune: " << error.kind() << ": " << error.what() << '\n';
+    } catch (const std::invalid_argument& error) {  // a model's own range check
         std::cerr << "haptic-tune: invalid input: " << error.what() << '\n';
     } catch (const std::exception& error) {
         // Anything else is a failure of the computation on this input, never a crash.

@@ -16,11 +16,13 @@
 #include <variant>
 #include <vector>
 
+#include "hapticd/input/input_error.hpp"
+
 namespace hapticd::daemon {
 
-class ConfigEditError : public std::runtime_error {
+class ConfigEditError : public input::InputError {
   public:
-    using std::runtime_error::runtime_error;
+    explicit ConfigEditError(const std::string& message) : InputError(message) {}
 };
 
 using ConfigValue = std::variant<double, std::string, bool>;
@@ -54,9 +56,9 @@ std::string format_config_number(double value);
 
 /// write_config_with_backup failed, or the config may not be replaced; the message names
 /// the file and the reason, and says the config was not changed.
-class ConfigWriteError : public std::runtime_error {
+class ConfigWriteError : public input::InputError {
   public:
-    using std::runtime_error::runtime_error;
+    explicit ConfigWriteError(const std::string& message) : InputError(message) {}
 };
 
 /// A config path and the file it names, resolved through symlinks.

@@ -51,13 +51,14 @@
 #include <vector>
 
 #include "hapticd/daemon/control_protocol.hpp"
+#include "hapticd/input/input_error.hpp"
 
 namespace hapticd::daemon::control {
 
 /// The socket could not be made (names the path and why).
-class ControlSocketError : public std::runtime_error {
+class ControlSocketError : public input::InputError {
   public:
-    using std::runtime_error::runtime_error;
+    explicit ControlSocketError(const std::string& message) : InputError(message) {}
 };
 
 /// The connected process, from SO_PEERCRED.

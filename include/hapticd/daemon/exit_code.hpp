@@ -3,6 +3,8 @@
 // whole. Scripts depend on them (docs/daemon.md, README.md).
 #pragma once
 
+#include "hapticd/input/input_error.hpp"
+
 namespace hapticd::daemon {
 
 enum ExitCode : int {
@@ -13,13 +15,15 @@ enum ExitCode : int {
     kExitVerdictNo = 1,  ///< haptic-tune: the verdict is no: check finds the design not
                          ///< stable, size's answer fails the exact model, diag's link is
                          ///< not fit, autotune's tuned config fails its start-up check
-    kExitBadInput = 2,   ///< usage, config, scene or device-table errors; gains refused;
-                         ///< real time refused in enforce mode (before the first tick);
-                         ///< an output path that is empty, an input, another output, locked
-                         ///< by another daemon, or cannot be created (found before the run)
-    kExitOutput = 3,     ///< the run ended without a fault, but an output is not whole: the
-                         ///< --log (disk full, a write error, records dropped), --summary, a
-                         ///< control socket's recording, or a flight record
+    kExitBadInput =
+        input::InputError::kExitCode,  ///< usage, config, scene or device-table errors; gains
+                                       ///< refused; real time refused in enforce mode (before the
+                                       ///< first tick); an output path that is empty, an input,
+                                       ///< another output, locked by another daemon, or cannot be
+                                       ///< created (found before the run)
+    kExitOutput = 3,  ///< the run ended without a fault, but an output is not whole: the
+                      ///< --log (disk full, a write error, records dropped), --summary, a
+                      ///< control socket's recording, or a flight record
 };
 
 }  // namespace hapticd::daemon

@@ -9,10 +9,13 @@
 #include <string>
 #include <vector>
 
+#include "hapticd/input/input_error.hpp"
+
 namespace hapticd::daemon {
 
-struct OutputError : std::runtime_error {
-    using std::runtime_error::runtime_error;
+/// An output path refused, or not created, before the run: bad input (exit 2).
+struct OutputError : input::InputError {
+    explicit OutputError(const std::string& message) : InputError(message) {}
 };
 
 /// A file and the option (or config key) that names it: {"--config", "lab.toml"}.

@@ -4,13 +4,15 @@
 // is allowed (table_reader.hpp has the format). Every command exits 2 on it.
 #pragma once
 
-#include <stdexcept>
+#include <string>
+
+#include "hapticd/input/input_error.hpp"
 
 namespace hapticd::input {
 
-class ConfigError : public std::runtime_error {
+class ConfigError : public InputError {
   public:
-    using std::runtime_error::runtime_error;
+    explicit ConfigError(const std::string& message) : InputError(message, "config error") {}
 };
 
 }  // namespace hapticd::input

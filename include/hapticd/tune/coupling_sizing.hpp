@@ -15,6 +15,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "hapticd/input/input_error.hpp"
 #include "hapticd/servo/rate.hpp"
 #include "hapticd/theory/admittance.hpp"
 #include "hapticd/theory/benchmark.hpp"
@@ -22,9 +23,9 @@
 namespace hapticd::tune {
 
 /// The requested coupling cannot satisfy the condition; what() says why.
-class InfeasibleCoupling : public std::runtime_error {
+class InfeasibleCoupling : public input::InputError {
   public:
-    using std::runtime_error::runtime_error;
+    explicit InfeasibleCoupling(const std::string& message) : InputError(message, "infeasible") {}
 };
 
 /// How a sizing result was obtained (in the spirit of ceres::Solver::Summary).

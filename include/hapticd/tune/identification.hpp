@@ -30,6 +30,7 @@
 #include <string_view>
 #include <vector>
 
+#include "hapticd/input/input_error.hpp"
 #include "hapticd/theory/benchmark.hpp"
 #include "hapticd/tune/telemetry_log.hpp"
 
@@ -48,10 +49,10 @@ enum class RefusalReason {
 std::string_view to_string(RefusalReason reason);
 
 /// The log cannot identify the model; what() says why, with the numbers.
-class IdentificationRefused : public std::runtime_error {
+class IdentificationRefused : public input::InputError {
   public:
     IdentificationRefused(RefusalReason reason, const std::string& what)
-        : std::runtime_error(what), reason_(reason) {}
+        : InputError(what), reason_(reason) {}
     RefusalReason reason() const { return reason_; }
 
   private:

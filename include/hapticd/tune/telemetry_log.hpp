@@ -26,13 +26,15 @@
 #include <utility>
 #include <vector>
 
+#include "hapticd/input/input_error.hpp"
+
 namespace hapticd::tune {
 
 /// The log cannot be read. what() names the file, the line and the column, e.g.
 /// "run.csv:12:4 (x0_m): 'abc' is not a number".
-class LogFormatError : public std::runtime_error {
+class LogFormatError : public input::InputError {
   public:
-    using std::runtime_error::runtime_error;
+    explicit LogFormatError(const std::string& message) : InputError(message) {}
 };
 
 /// What the reader keeps. The default keeps every column and every row's line number.
