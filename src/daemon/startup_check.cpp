@@ -79,7 +79,7 @@ tune::StabilityDesign design_but_environments(const Config& config) {
     design.device = {*config.device.model_mass_kg, *config.device.model_damping_n_s_per_m};
     design.coupling = {config.coupling.stiffness_n_per_m, config.coupling.damping_n_s_per_m,
                        config.coupling.velocity_filter_hz};
-    if (design.coupling.stiffness_n_per_m == 0.0 && design.coupling.damping_n_s_per_m == 0.0) {
+    if (design.coupling.renders_nothing()) {
         throw ConfigError(config.source +
                           ": [coupling] stiffness and damping are both 0: no coupling to "
                           "render with (size one with haptic-tune size)");

@@ -176,7 +176,7 @@ void exact_verdict(const StabilityDesign& design, double delay_periods, Stabilit
 StabilityVerdict check_stability(const StabilityDesign& design) {
     const theory::SpringDamperCoupling& coupling = design.coupling;
     check_coupling_gains(coupling);
-    if (coupling.stiffness_n_per_m == 0.0 && coupling.damping_n_s_per_m == 0.0) {
+    if (coupling.renders_nothing()) {
         throw std::invalid_argument(
             "coupling stiffness and damping are both 0: no coupling to check");
     }

@@ -9,7 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "../../src/daemon/control_requests.hpp"
+#include "control_requests.hpp"
 #include "hapticd/daemon/control_protocol.hpp"
 #include "hapticd/daemon/control_server.hpp"
 #include "run_command.hpp"

@@ -7,7 +7,7 @@
 #include <string>
 #include <utility>
 
-#include "../../src/daemon/control_requests.hpp"
+#include "control_requests.hpp"
 #include "hapticd/device/device.hpp"
 
 namespace hapticd::daemon::control {

@@ -2,7 +2,7 @@
 // most once per kStatusMaxAge, however often its clients ask, so that the status's cache lines
 // cross to the socket's core a bounded number of times a second (docs/benchmarks.md, "The
 // servo under socket abuse").
-#include "../../src/daemon/loop_control.hpp"
+#include "loop_control.hpp"
 
 #include <gtest/gtest.h>
 

@@ -14,7 +14,7 @@
 #include <string>
 #include <thread>
 
-#include "../../src/daemon/outputs_directory.hpp"
+#include "outputs_directory.hpp"
 #include "scratch_dir.hpp"
 #include "telemetry_csv.hpp"
 #include "text_file.hpp"

@@ -48,7 +48,7 @@ ImpedanceDesign resolve_impedance_design(const ChartOptions& options, const Desi
         design.source = "sized";
         design.sized_binding_frequency_hz = sizing.binding_frequency_hz;
     }
-    if (design.coupling.stiffness_n_per_m == 0.0 && design.coupling.damping_n_s_per_m == 0.0) {
+    if (design.coupling.renders_nothing()) {
         throw UsageError("--stiffness 0 with --coupling-damping 0 is no coupling at all");
     }
     return design;

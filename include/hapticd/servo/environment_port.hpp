@@ -29,24 +29,15 @@
 #include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
 
+#include "hapticd/theory/spring_damper_coupling.hpp"
+
 namespace hapticd::servo {
 
 using Vec3 = glm::dvec3;
 using Mat3 = glm::dmat3;
 
-/// The coupling (16) gains, the same on every axis.
-struct CouplingGains {
-    double stiffness_n_per_m = 0.0;  ///< k_c
-    double damping_n_s_per_m = 0.0;  ///< b_c
-    /// f_c of the first-order low-pass on the damper's velocity (theory/velocity_filter.hpp),
-    /// Hz, 0 <= f_c < rate/2; 0: none, the damper acts on v_d - v_e itself.
-    double velocity_filter_hz = 0.0;
-
-    /// k_c = b_c = 0: the coupling carries no force, whatever the tool and the device do.
-    bool renders_nothing() const noexcept {
-        return stiffness_n_per_m == 0.0 && damping_n_s_per_m == 0.0;
-    }
-};
+/// The coupling (16) gains, the same on every axis: the theory's own type, plain data.
+using CouplingGains = theory::SpringDamperCoupling;
 
 /// A penalty force on the tool and its linearisation at the evaluated state.
 struct PenaltyForce {

@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "hapticd/theory/passive_model.hpp"
+#include "hapticd/theory/spring_damper_coupling.hpp"
 #include "hapticd/theory/twoport.hpp"
 #include "hapticd/theory/unit_circle.hpp"
 #include "hapticd/theory/velocity_filter.hpp"
@@ -38,12 +39,6 @@ struct DeviceModel {
 /// Virtual coupling (16): a spring k_c in parallel with a damper b_c, the damper optionally
 /// on a first-order low-pass of the velocity (velocity_filter.hpp). Every model takes the
 /// filter through Z_c: coupling_impedance and coupling_conductance.
-struct SpringDamperCoupling {
-    double stiffness_n_per_m = 0.0;
-    double damping_n_s_per_m = 0.0;
-    double velocity_filter_hz = 0.0;  ///< f_c of the damper's velocity filter; 0: none
-};
-
 /// Which hold term stands in for (13).
 enum class HoldModel { paper, encoder, passive };
 
