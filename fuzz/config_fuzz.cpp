@@ -23,7 +23,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                    c.coupling.stiffness_n_per_m >= 0.0);
         FUZZ_CHECK(std::isfinite(c.coupling.damping_n_s_per_m) &&
                    c.coupling.damping_n_s_per_m >= 0.0);
-        FUZZ_CHECK(c.safety.max_missed_periods >= 0 && c.safety.max_consecutive_overruns >= 0);
+        FUZZ_CHECK(c.safety.overrun.max_missed_periods >= 0 &&
+                   c.safety.overrun.max_consecutive_overruns >= 0);
     } catch (const hapticd::daemon::ConfigError&) {
         // refused, with a message: what bad input must get
     }

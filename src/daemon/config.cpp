@@ -41,31 +41,24 @@ class Section {
 
 // [servo]
 void read_servo(TableReader& servo, ServoSection& out) {
-    out.rate_hz = servo.read(schema::kRate);
-    out.realtime = servo.read(schema::kRealtime);
-    out.priority = static_cast<int>(servo.read(schema::kPriority));
-    if (const auto cpu = servo.read_optional(schema::kCpu)) out.cpu = static_cast<int>(*cpu);
+    input::read_fields(servo, out, kServoFields);
     servo.finish();
 }
 
 // [device.model], after [servo] (the delay is bounded in periods of the rate).
-void read_model(TableReader& model, double rate_hz, DeviceSection& out) {
-    out.model_mass_kg = model.read_optional(schema::kModelMass);
-    out.model_damping_n_s_per_m = model.read_optional(schema::kModelDamping);
-    out.model_coulomb_n = model.read_optional(schema::kModelCoulomb);
-    out.model_delay_stated = model.has(schema::kModelDelay.key);
+void read_model(TableReader& model, double rate_hz, DeviceModel& out) {
+    input::read_fields(model, out, kDeviceModelFields);
+    out.delay_stated = model.has(schema::kModelDelay.key);
     // In periods, as every model checks it.
-    out.model_delay_s =
-        model.read_periods(schema::kModelDelay.key, tune::kMaxDelayPeriods, rate_hz);
+    out.delay_s = model.read_periods(schema::kModelDelay.key, tune::kMaxDelayPeriods, rate_hz);
     model.finish();
 }
 
 // [device]: the plugin's own table stays where it is, for the plugin to read.
 void read_device(TableReader& device, std::string_view text, double rate_hz, DeviceSection& out) {
-    out.plugin = device.read(schema::kPlugin);
-    out.axes = static_cast<int>(device.read(schema::kAxes));
+    input::read_fields(device, out, kDeviceFields);
     Section model(device, "model");
-    read_model(*model, rate_hz, out);
+    read_model(*model, rate_hz, out.model);
     const std::string plugin_key = std::filesystem::path(out.plugin).stem().string();
     (void)device.subtable(plugin_key);  // a table, if present; its keys are the plugin's
     out.plugin_table_toml = std::string(text);
@@ -86,13 +79,9 @@ void check_velocity_filter(TableReader& coupling, double f_c, double rate_hz) {
 
 // [coupling]
 void read_coupling(TableReader& coupling, double rate_hz, CouplingSection& out) {
-    out.enabled = coupling.read(schema::kCouplingEnabled);
-    out.stiffness_n_per_m = coupling.read(schema::kCouplingStiffness);
-    out.damping_n_s_per_m = coupling.read(schema::kCouplingDamping);
-    out.velocity_filter_hz = coupling.read(schema::kVelocityFilter);
+    input::read_fields(coupling, out, kCouplingFields);
+    out.velocity_filter_hz = coupling.read(schema::kVelocityFilter);  // a rule: read here
     check_velocity_filter(coupling, out.velocity_filter_hz, rate_hz);
-    out.check = coupling.read(schema::kCheck);
-    out.environments = coupling.read(schema::kEnvironments);
     if (out.environments == EnvironmentClass::scene &&
         !(out.check && tune::is_guarantee(*out.check))) {
         coupling.fail("environments",
@@ -119,8 +108,10 @@ void read_coupling(TableReader& coupling, double rate_hz, CouplingSection& out) 
 
 // [scene]: the file, resolved against the config's folder.
 void read_scene(TableReader& scene, const std::string& base_dir, std::string& out) {
-    if (const auto file = scene.read_optional(schema::kSceneFile)) {
-        const std::filesystem::path p(*file);
+    SceneSection section;
+    input::read_fields(scene, section, kSceneFields);
+    if (section.file) {
+        const std::filesystem::path p(*section.file);
         out = p.is_absolute() || base_dir.empty()
                   ? p.string()
                   : (std::filesystem::path(base_dir) / p).lexically_normal().string();
@@ -130,19 +121,9 @@ void read_scene(TableReader& scene, const std::string& base_dir, std::string& ou
 
 // [safety]
 void read_safety(TableReader& safety, SafetySection& out) {
-    out.max_force_n = safety.read(schema::kMaxForce);
-    out.max_speed_mps = safety.read(schema::kMaxSpeed);
-    out.soft_start_ramp_s = safety.read(schema::kSoftStartRamp);
-    out.passivity = safety.read(schema::kPassivity);
-    out.reconnect = safety.read(schema::kReconnect);
-    out.arm_at_start = safety.read(schema::kArmAtStart);
-    out.reconnect_settle_s = safety.read(schema::kReconnectSettle);
-    out.reconnect_timeout_s = safety.read(schema::kReconnectTimeout);
-    // The overrun budget: a stall of up to max_missed_periods periods (20 ms at 1 kHz by
-    // default) or max_consecutive_overruns late ticks in a row is ridden out.
-    out.max_missed_periods = safety.read(schema::kMaxMissedPeriods);
-    out.max_consecutive_overruns = static_cast<int>(safety.read(schema::kMaxConsecutiveOverruns));
-    if (!out.reconnect) {
+    input::read_fields(safety, out, kSafetyFields);
+    const servo::LinkRecoverySettings& reconnect = out.reconnect;
+    if (!reconnect.enabled) {
         for (const char* key : {"reconnect_settle", "reconnect_timeout"}) {
             if (safety.has(key)) {
                 safety.fail(key,
@@ -151,9 +132,9 @@ void read_safety(TableReader& safety, SafetySection& out) {
             }
         }
     }
-    if (out.reconnect_timeout_s != 0.0 && out.reconnect_timeout_s <= out.reconnect_settle_s) {
+    if (reconnect.timeout_s != 0.0 && reconnect.timeout_s <= reconnect.settle_s) {
         safety.fail("reconnect_timeout", "is out of range",
-                    "> reconnect_settle = " + input::format_number(out.reconnect_settle_s) +
+                    "> reconnect_settle = " + input::format_number(reconnect.settle_s) +
                         " (s: the device must be back and settled within it), or 0 to wait "
                         "for ever");
     }
@@ -163,16 +144,9 @@ void read_safety(TableReader& safety, SafetySection& out) {
 // [identify], after [servo] and [safety], which bound it.
 void read_identify(TableReader& identify, const Config& config, IdentifySection& out) {
     const double rate_hz = config.servo.rate_hz;
-    out.force_amplitude_n = identify.read_optional(schema::kForceAmplitude);
-    out.workspace_m = identify.read(schema::kWorkspace);
-    out.band_low_hz = identify.read_optional(schema::band_edge("band_low", rate_hz));
-    out.band_high_hz = identify.read_optional(schema::band_edge("band_high", rate_hz));
-    out.lines_per_decade = identify.read(schema::kLinesPerDecade);
-    out.period_s = identify.read_optional(schema::kPeriod);
-    if (const auto periods = identify.read_optional(schema::kPeriods)) {
-        out.periods = static_cast<int>(*periods);
-    }
-    out.fade_s = identify.read_optional(schema::kFade);
+    input::read_fields(identify, out, kIdentifyFields);
+    out.band_low_hz = identify.read_optional(schema::band_edge(schema::kBandLow, rate_hz));
+    out.band_high_hz = identify.read_optional(schema::band_edge(schema::kBandHigh, rate_hz));
     if (out.force_amplitude_n && *out.force_amplitude_n > config.safety.max_force_n) {
         identify.fail("force_amplitude", "is out of range",
                       "<= [safety] max_force = " + input::format_number(config.safety.max_force_n) +

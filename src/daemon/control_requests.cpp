@@ -242,6 +242,7 @@ nlohmann::json link_body(const servo::StatusSnapshot& s, const RunFacts& facts) 
 
 nlohmann::json status_body(const servo::StatusSnapshot& s, const RunFacts& facts) {
     nlohmann::json j;
+    j["name"] = facts.name;
     j["state"] = state_of(s);
     j["armed"] = s.armed;
     j["tick"] = s.tick;

@@ -54,6 +54,7 @@ struct CouplingVerdict {
 
 /// What does not change during a run, for `status`.
 struct RunFacts {
+    std::string name;  ///< [servo] name
     int axes = 1;
     double rate_hz = 1000.0;  ///< [servo] rate_hz
     std::string device;       ///< the device line ("sim device, 3 axes, lockstep clock")

@@ -57,14 +57,14 @@ PlannedForces planned_forces(const env::ExcitationEnvironment& excitation, doubl
 /// The worst axis: the largest excursion and the largest stuck fraction, the forces scaled
 /// by `scale`.
 tune::OpenLoopPrediction predict(const PlannedForces& forces, double scale,
-                                 const DeviceSection& model) {
+                                 const DeviceModel& model) {
     tune::OpenLoopPrediction worst;
     for (const std::vector<double>& axis : forces.per_axis) {
         std::vector<double> scaled(axis);
         for (double& f : scaled) f *= scale;
         const tune::OpenLoopPrediction p =
-            tune::predict_open_loop(scaled, *model.model_mass_kg, *model.model_damping_n_s_per_m,
-                                    model.model_coulomb_n.value_or(0.0), forces.period_s);
+            tune::predict_open_loop(scaled, *model.mass_kg, *model.damping_n_s_per_m,
+                                    model.coulomb_n.value_or(0.0), forces.period_s);
         worst.max_excursion_m = std::max(worst.max_excursion_m, p.max_excursion_m);
         worst.stuck_fraction = std::max(worst.stuck_fraction, p.stuck_fraction);
     }
@@ -86,8 +86,8 @@ double boundary(double low, double high, Good good) {
 }  // namespace
 
 void predict_identify_run(const Config& config, IdentifyPlan& plan, double tail_s) {
-    const DeviceSection& model = config.device;
-    if (!(model.model_mass_kg && model.model_damping_n_s_per_m)) return;
+    const DeviceModel& model = config.device.model;
+    if (!(model.mass_kg && model.damping_n_s_per_m)) return;
     const env::ExcitationSettings& s = plan.excitation;
     std::optional<env::ExcitationEnvironment> excitation;
     try {
@@ -98,15 +98,14 @@ void predict_identify_run(const Config& config, IdentifyPlan& plan, double tail_
     const PlannedForces forces = planned_forces(*excitation, config.servo.rate_hz, tail_s);
     const tune::OpenLoopPrediction planned = predict(forces, 1.0, model);
     plan.predicted_excursion_m = planned.max_excursion_m;
-    if (model.model_coulomb_n) plan.predicted_stuck_fraction = planned.stuck_fraction;
+    if (model.coulomb_n) plan.predicted_stuck_fraction = planned.stuck_fraction;
 
     const double amplitude_n = s.signal.peak_force_n;
     const std::string where =
         config.source + ": [identify] force_amplitude = " + format(amplitude_n) +
-        " N: [device.model] (m = " + format(*model.model_mass_kg) +
-        " kg, b = " + format(*model.model_damping_n_s_per_m) + " N s/m" +
-        (model.model_coulomb_n ? ", coulomb = " + format(*model.model_coulomb_n) + " N"
-                               : std::string()) +
+        " N: [device.model] (m = " + format(*model.mass_kg) +
+        " kg, b = " + format(*model.damping_n_s_per_m) + " N s/m" +
+        (model.coulomb_n ? ", coulomb = " + format(*model.coulomb_n) + " N" : std::string()) +
         ") predicts ";
     // The largest scale the force limit allows (the plan already holds the amplitude to it).
     const double force_scale = s.force_limit_n / excitation->signal().peak_vector_norm_n();
@@ -128,7 +127,7 @@ void predict_identify_run(const Config& config, IdentifyPlan& plan, double tail_
     const auto moving = [&](double scale) {
         return predict(forces, scale, model).stuck_fraction <= max_stuck;
     };
-    if (model.model_coulomb_n && !moving(1.0)) {
+    if (model.coulomb_n && !moving(1.0)) {
         const double room = inside(force_scale) ? force_scale : boundary(1.0, force_scale, inside);
         std::string remedy;
         if (moving(room)) {

@@ -67,7 +67,8 @@ int run_identify(const RunOptions& options, const RunStamp& stamp, std::atomic<b
     }
     RunOptions run_options = options;
     if (!run_options.duration_s) run_options.duration_s = plan.duration_s;
-    log << "hapticd: " << device_line(info) << "; identify; " << config.servo.rate_hz << " Hz\n";
+    log << start_line_prefix(config) << device_line(info) << "; identify; " << config.servo.rate_hz
+        << " Hz\n";
     describe_identify(config, plan, *excitation, run_options, log);
 
     auto report = [&](int& code, RunContext& ctx) {

@@ -151,7 +151,7 @@ DiagReport run_link_diag(const Config& config, const DiagOptions& options, std::
     report.samples_at_read = info.samples_at_read;
     report.paced = info.paces_loop;
     report.protocol_version = info.protocol_version;
-    report.configured_delay_s = config.device.model_delay_s;
+    report.configured_delay_s = config.device.model.delay_s;
     const auto period_ns = static_cast<std::int64_t>(std::llround(1e9 / config.servo.rate_hz));
     const auto exchanges =
         static_cast<std::uint64_t>(std::llround(options.duration_s * config.servo.rate_hz));

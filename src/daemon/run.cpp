@@ -51,7 +51,7 @@ int run_daemon(const RunOptions& given, std::atomic<bool>& stop, std::ostream& o
         const device::DeviceInfo info = device->info();
         context.device = info.name;
         context.lockstep = info.lockstep;
-        log << "hapticd: " << device_line(info) << "; scene " << scene.name << " ("
+        log << start_line_prefix(config) << device_line(info) << "; scene " << scene.name << " ("
             << context.causality << "); " << config.servo.rate_hz << " Hz\n";
         servo::ServoConfig servo_config =
             make_servo_config(config, info, options.log_path.has_value());

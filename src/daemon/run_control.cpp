@@ -36,6 +36,7 @@ RunControl::RunControl(const Config& config, const device::DeviceInfo& info, con
         scenes_.emplace(config_, *scene.scene, scene.source, ports.scenes);
     }
     facts_ = control::RunFacts{
+        .name = config_.servo.name,
         .axes = info.axes,
         .rate_hz = config_.servo.rate_hz,
         .device = device_line(info),

@@ -30,7 +30,7 @@ int exit_of(const Config& config, const ServoEnd& end, const servo::Summary& sum
         if (end.link_gave_up) {
             log << priority::err
                 << "hapticd: the device did not come back within [safety] reconnect_timeout = "
-                << config.safety.reconnect_timeout_s << " s; stopped on the fault, force zero "
+                << config.safety.reconnect.timeout_s << " s; stopped on the fault, force zero "
                 << "since the tick that saw it:";
         } else {
             log << priority::err << "hapticd: stopped on a fault, force zeroed in the same tick:";

@@ -23,6 +23,11 @@ std::string format_vector_mm(const std::array<double, servo::kMaxAxes>& v, int a
 
 }  // namespace
 
+std::string start_line_prefix(const Config& config) {
+    // The reader refused control characters in it (input::Text).
+    return config.servo.name.empty() ? "hapticd: " : "hapticd: " + config.servo.name + ": ";
+}
+
 std::string device_line(const device::DeviceInfo& info) {
     return info.name + " device, " + servo::axes_text(info.axes) + ", " +
            (info.lockstep ? "lockstep" : "real-time") + " clock";
@@ -83,15 +88,15 @@ std::string fault_change_line(std::uint32_t before, const servo::StatusSnapshot&
     }
     if (now.faults == 0u) {
         out << "link recovered (the device sent good samples for "
-            << config.safety.reconnect_settle_s
+            << config.safety.reconnect.settle_s
             << " s): fault latch cleared, force returns through the soft start";
         return out.str();
     }
     out << "fault " << fault_names(now.faults & ~before) << ", force zeroed";
-    if (config.safety.reconnect && servo::only_link_faults(now.faults)) {
+    if (config.safety.reconnect.enabled && servo::only_link_faults(now.faults)) {
         out << "; waiting for the device to come back";
-        if (config.safety.reconnect_timeout_s > 0.0) {
-            out << " (at most " << config.safety.reconnect_timeout_s
+        if (config.safety.reconnect.timeout_s > 0.0) {
+            out << " (at most " << config.safety.reconnect.timeout_s
                 << " s, [safety] reconnect_timeout)";
         }
     }

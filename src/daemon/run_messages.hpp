@@ -14,6 +14,9 @@
 
 namespace hapticd::daemon {
 
+/// "hapticd: " and the [servo] name, if any ("hapticd: left arm: "): how the run's first
+/// line begins, so that the journal of several instances tells them apart.
+std::string start_line_prefix(const Config& config);
 /// "sim device, 3 axes, lockstep clock": what the run's first line says of the device.
 std::string device_line(const device::DeviceInfo& info);
 /// "hapticd: t 1.00 s  x [..] mm  xe [..] mm  f [..] N  running  overruns 0  faults none"

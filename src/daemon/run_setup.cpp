@@ -70,13 +70,13 @@ StartupCheck run_startup_check(const Config& config, std::ostream& log) {
           << config.servo.rate_hz << " Hz: worst margin " << check.worst_margin << " at "
           << check.worst_frequency_hz << " Hz";
         if (!check.worst_case.empty()) m << " (" << check.worst_case << ")";
-        if (config.device.model_delay_s > 0.0) {
-            m << " with a loop delay of " << config.device.model_delay_s << " s";
+        if (config.device.model.delay_s > 0.0) {
+            m << " with a loop delay of " << config.device.model.delay_s << " s";
         }
-        m << "; size them with haptic-tune size --mass " << *config.device.model_mass_kg
-          << " --damping " << *config.device.model_damping_n_s_per_m << " --rate "
+        m << "; size them with haptic-tune size --mass " << *config.device.model.mass_kg
+          << " --damping " << *config.device.model.damping_n_s_per_m << " --rate "
           << config.servo.rate_hz;
-        if (config.device.model_delay_s > 0.0) m << " --delay " << config.device.model_delay_s;
+        if (config.device.model.delay_s > 0.0) m << " --delay " << config.device.model.delay_s;
         if (config.coupling.velocity_filter_hz > 0.0) {
             m << " --velocity-filter " << config.coupling.velocity_filter_hz;
         }
@@ -123,6 +123,7 @@ RunOptions with_start(RunOptions options, const RunStamp& stamp) {
 RunContext begin_context(const RunOptions& options, const Config& config, const RunStamp& stamp) {
     RunContext context;
     context.stamp = stamp;
+    context.name = config.servo.name;
     context.config_source = config.source;
     if (options.config_path) {
         std::error_code error;

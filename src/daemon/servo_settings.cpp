@@ -35,7 +35,7 @@ servo::ServoConfig servo_config_of(const Config& config, const device::DeviceInf
                                    : config.safety.max_force_n;
     servo.safety.max_speed_mps = config.safety.max_speed_mps;
     servo.safety.encoder_jump_m = 10.0 * config.safety.max_speed_mps / config.servo.rate_hz;
-    servo.safety.soft_start.ramp_time_s = config.safety.soft_start_ramp_s;
+    servo.safety.soft_start = config.safety.soft_start;
     servo.safety.passivity.mode = config.safety.passivity;
     servo.realtime.mode = info.lockstep ? servo::RealtimeMode::off : config.servo.realtime;
     servo.realtime.priority = config.servo.priority;
@@ -43,12 +43,9 @@ servo::ServoConfig servo_config_of(const Config& config, const device::DeviceInf
     servo.device_paces_loop = info.paces_loop;
     servo.telemetry_backpressure = lossless_log && info.lockstep && info.paces_loop;
     servo.stop_on_fault = true;
-    servo.overrun = {.max_consecutive_overruns = config.safety.max_consecutive_overruns,
-                     .max_missed_periods = config.safety.max_missed_periods};
-    servo.link_recovery = {.enabled = config.safety.reconnect,
-                           .settle_s = config.safety.reconnect_settle_s,
-                           .timeout_s = config.safety.reconnect_timeout_s};
-    servo.start_armed = config.safety.arm_at_start;
+    servo.overrun = config.safety.overrun;
+    servo.link_recovery = config.safety.reconnect;
+    servo.arm_at_start = config.safety.arm_at_start;
     return servo;
 }
 
@@ -76,7 +73,7 @@ servo::ServoConfig make_identify_servo_config(const Config& config, const device
     servo.safety.soft_start.ramp_time_s = 0.0;
     servo.safety.passivity.mode = servo::PassivityMode::observe;
     servo.link_recovery.enabled = false;
-    servo.start_armed = true;  // the excitation is what was asked for: it plays at once
+    servo.arm_at_start = true;  // the excitation is what was asked for: it plays at once
     return checked(servo, config);
 }
 
@@ -98,8 +95,8 @@ constexpr double kTail_s = 0.5;
 IdentifyPlan make_identify_plan(const Config& config, const device::DeviceInfo& info) {
     const IdentifySection& identify = config.identify;
     const double rate_hz = config.servo.rate_hz;
-    const std::optional<double> mass = config.device.model_mass_kg;
-    const std::optional<double> damping = config.device.model_damping_n_s_per_m;
+    const std::optional<double> mass = config.device.model.mass_kg;
+    const std::optional<double> damping = config.device.model.damping_n_s_per_m;
     const bool have_model = mass && damping;
     const std::string where = config.source + ": [identify] ";
     IdentifyPlan plan;

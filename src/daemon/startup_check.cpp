@@ -45,7 +45,7 @@ tune::EnvironmentAssumption scene_environments(const env::Scene& scene,
 }
 
 void require_device_model(const Config& config) {
-    if (!config.device.model_mass_kg || !config.device.model_damping_n_s_per_m) {
+    if (!config.device.model.mass_kg || !config.device.model.damping_n_s_per_m) {
         throw ConfigError(config.source +
                           ": [device.model] mass and damping are required: the start-up "
                           "stability check sizes nothing without them (measure them with "
@@ -76,7 +76,7 @@ tune::StabilityDesign design_but_environments(const Config& config) {
     }
     require_device_model(config);
     tune::StabilityDesign design;
-    design.device = {*config.device.model_mass_kg, *config.device.model_damping_n_s_per_m};
+    design.device = {*config.device.model.mass_kg, *config.device.model.damping_n_s_per_m};
     design.coupling = {config.coupling.stiffness_n_per_m, config.coupling.damping_n_s_per_m,
                        config.coupling.velocity_filter_hz};
     if (design.coupling.renders_nothing()) {
@@ -85,7 +85,7 @@ tune::StabilityDesign design_but_environments(const Config& config) {
                           "render with (size one with haptic-tune size)");
     }
     design.rate_hz = config.servo.rate_hz;
-    design.delay_s = config.device.model_delay_s;
+    design.delay_s = config.device.model.delay_s;
     design.model = *config.coupling.check;
     design.assumption.operators = config.operators;
     return design;

@@ -14,6 +14,7 @@ std::string summary_json(const servo::Summary& s, const RunContext& c) {
     j["version"] = c.stamp.version;
     j["started_at"] = c.stamp.started_at;
     j["host"] = c.stamp.host;
+    j["name"] = c.name;
     j["ticks"] = s.ticks;
     j["overruns"] = s.overruns;
     j["missed_periods"] = s.missed_periods;

@@ -140,6 +140,11 @@ std::optional<std::string> TableReader::read_optional(const Text& field) {
     const auto* text = node->as_string();
     if (text == nullptr) fail(field.key, "is not a string", field.allowed);
     if (text->get().empty() && !field.allow_empty) fail(field.key, "is empty", field.allowed);
+    if (field.max_bytes != 0 && text->get().size() > field.max_bytes) {
+        fail(field.key, "is too long (" + std::to_string(text->get().size()) + " bytes)",
+             std::string(field.allowed) + " of at most " + std::to_string(field.max_bytes) +
+                 " bytes");
+    }
     // No name, path or label needs one, and each is shown in the journal and on terminals.
     if (const std::size_t at = find_control(text->get()); at != std::string::npos) {
         fail(field.key, "holds a control character at byte " + std::to_string(at + 1),

@@ -149,9 +149,9 @@ double passive_bound(double mass_kg, double damping_n_s_per_m, double rate_hz,
 /// significant digits written), b_c = 0; the start-up check and the exact model pass it.
 void expect_tuned(const std::string& path, double margin, double tolerance) {
     const daemon::Config config = daemon::load_config(path);
-    ASSERT_TRUE(config.device.model_mass_kg && config.device.model_damping_n_s_per_m);
-    const double mass = *config.device.model_mass_kg;
-    const double damping = *config.device.model_damping_n_s_per_m;
+    ASSERT_TRUE(config.device.model.mass_kg && config.device.model.damping_n_s_per_m);
+    const double mass = *config.device.model.mass_kg;
+    const double damping = *config.device.model.damping_n_s_per_m;
     EXPECT_NEAR(mass, 0.1, tolerance * 0.1);
     EXPECT_NEAR(damping, 2.0, tolerance * 2.0);
     const double bound = passive_bound(mass, damping, config.servo.rate_hz);
@@ -336,10 +336,10 @@ TEST(AutotuneCli, TheLoopDelaySizesTheGainsAndIsWrittenBeside) {
     const json j = json::parse(r.out);
     EXPECT_EQ(j.at("delay_s").get<double>(), 0.001);
     const daemon::Config config = daemon::load_config(bench.config);
-    EXPECT_EQ(config.device.model_delay_s, 0.001);
-    const double bound = passive_bound(*config.device.model_mass_kg,
-                                       *config.device.model_damping_n_s_per_m, 1000.0, 1.0);
-    EXPECT_NEAR(bound, *config.device.model_damping_n_s_per_m / (2.0 * 1e-3), 1e-3);
+    EXPECT_EQ(config.device.model.delay_s, 0.001);
+    const double bound = passive_bound(*config.device.model.mass_kg,
+                                       *config.device.model.damping_n_s_per_m, 1000.0, 1.0);
+    EXPECT_NEAR(bound, *config.device.model.damping_n_s_per_m / (2.0 * 1e-3), 1e-3);
     EXPECT_NEAR(config.coupling.stiffness_n_per_m, 0.9 * bound, 5e-6 * bound);
     const daemon::StartupCheck startup = daemon::check_coupling_at_startup(config);
     EXPECT_TRUE(startup.passed) << startup.describe();
@@ -659,10 +659,10 @@ TEST(AutotuneCli, MeasuresTheLoopDelayAndSizesTheGainsForIt) {
     EXPECT_TRUE(j.at("delay_measurement").at("measured").get<bool>());
     EXPECT_NEAR(j.at("delay_measurement").at("p99_s").get<double>(), 0.00025, 1e-12);
     const daemon::Config config = daemon::load_config(bench.config);
-    EXPECT_DOUBLE_EQ(config.device.model_delay_s, 0.00025);
+    EXPECT_DOUBLE_EQ(config.device.model.delay_s, 0.00025);
     // Sized with the quarter period, for the device it identified.
-    const double bound = passive_bound(*config.device.model_mass_kg,
-                                       *config.device.model_damping_n_s_per_m, 1000.0, 0.25);
+    const double bound = passive_bound(*config.device.model.mass_kg,
+                                       *config.device.model.damping_n_s_per_m, 1000.0, 0.25);
     EXPECT_NEAR(config.coupling.stiffness_n_per_m, 0.9 * bound, 5e-6 * 0.9 * bound);
     EXPECT_TRUE(daemon::check_coupling_at_startup(config).passed);
 

@@ -75,3 +75,21 @@ TEST(HapticctlStatusText, ADeviceWithoutCountsHasNoFramesLine) {
 
 }  // namespace
 }  // namespace hapticd::ctl
+
+namespace hapticd::ctl {
+namespace {
+
+// [servo] name heads the text when the daemon has one; a daemon without one (or of an
+// earlier release, which sends no name) shows no line for it.
+TEST(HapticctlStatusText, TheInstanceNameHeadsTheText) {
+    nlohmann::json status = status_with_link(abi4_link());
+    EXPECT_EQ(status_text(status).rfind("state     running", 0), 0u);
+    status["name"] = "";
+    EXPECT_EQ(status_text(status).rfind("state     running", 0), 0u);
+    status["name"] = "left arm";
+    EXPECT_EQ(status_text(status).rfind("name      left arm\nstate     running", 0), 0u)
+        << status_text(status);
+}
+
+}  // namespace
+}  // namespace hapticd::ctl

@@ -54,15 +54,16 @@ TEST(DaemonConfigSchema, EachDefaultIsTheServosOwn) {
     const servo::ServoConfig servo;
     EXPECT_EQ(defaults.safety.max_force_n, 10.0);
     EXPECT_EQ(defaults.safety.max_force_n, servo.safety.max_force_n);
-    EXPECT_TRUE(defaults.safety.reconnect);
-    EXPECT_EQ(defaults.safety.reconnect, servo.link_recovery.enabled);
-    EXPECT_EQ(defaults.safety.reconnect_settle_s, servo.link_recovery.settle_s);
-    EXPECT_EQ(defaults.safety.reconnect_timeout_s, servo.link_recovery.timeout_s);
+    EXPECT_TRUE(defaults.safety.reconnect.enabled);
+    EXPECT_EQ(defaults.safety.reconnect.enabled, servo.link_recovery.enabled);
+    EXPECT_EQ(defaults.safety.reconnect.settle_s, servo.link_recovery.settle_s);
+    EXPECT_EQ(defaults.safety.reconnect.timeout_s, servo.link_recovery.timeout_s);
     EXPECT_EQ(defaults.safety.max_speed_mps, servo.safety.max_speed_mps);
-    EXPECT_EQ(defaults.safety.soft_start_ramp_s, servo.safety.soft_start.ramp_time_s);
+    EXPECT_EQ(defaults.safety.soft_start.ramp_time_s, servo.safety.soft_start.ramp_time_s);
     EXPECT_EQ(defaults.safety.passivity, servo.safety.passivity.mode);
-    EXPECT_EQ(defaults.safety.max_missed_periods, servo.overrun.max_missed_periods);
-    EXPECT_EQ(defaults.safety.max_consecutive_overruns, servo.overrun.max_consecutive_overruns);
+    EXPECT_EQ(defaults.safety.overrun.max_missed_periods, servo.overrun.max_missed_periods);
+    EXPECT_EQ(defaults.safety.overrun.max_consecutive_overruns,
+              servo.overrun.max_consecutive_overruns);
     EXPECT_EQ(defaults.servo.rate_hz, servo.rate_hz);
     EXPECT_EQ(defaults.servo.realtime, servo.realtime.mode);
     EXPECT_EQ(defaults.servo.priority, servo.realtime.priority);
@@ -70,7 +71,7 @@ TEST(DaemonConfigSchema, EachDefaultIsTheServosOwn) {
     // A Config that was never parsed holds the same defaults.
     const Config unparsed;
     EXPECT_EQ(unparsed.safety.max_force_n, defaults.safety.max_force_n);
-    EXPECT_EQ(unparsed.safety.reconnect, defaults.safety.reconnect);
+    EXPECT_EQ(unparsed.safety.reconnect.enabled, defaults.safety.reconnect.enabled);
     EXPECT_EQ(unparsed.servo.rate_hz, defaults.servo.rate_hz);
     EXPECT_EQ(unparsed.coupling.check, defaults.coupling.check);
     // And the servo loop gets them: the force limit of a device without one of its own.

@@ -56,8 +56,8 @@ reconnect_timeout = 30
     EXPECT_EQ(c.servo.cpu, 1);
     EXPECT_EQ(c.device.plugin, "sim");
     EXPECT_EQ(c.device.axes, 3);
-    EXPECT_EQ(c.device.model_mass_kg, 0.2);
-    EXPECT_EQ(c.device.model_damping_n_s_per_m, 3.5);
+    EXPECT_EQ(c.device.model.mass_kg, 0.2);
+    EXPECT_EQ(c.device.model.damping_n_s_per_m, 3.5);
     EXPECT_NE(c.device.plugin_table_toml.find("mass = 0.25"), std::string::npos);
     EXPECT_EQ(c.coupling.stiffness_n_per_m, 5000.0);
     EXPECT_EQ(c.coupling.damping_n_s_per_m, 0.5);
@@ -66,37 +66,38 @@ reconnect_timeout = 30
     EXPECT_EQ(c.scene_file, "/etc/hapticd/scenes/box.toml");
     EXPECT_EQ(c.safety.max_force_n, 12.0);
     EXPECT_EQ(c.safety.max_speed_mps, 0.5);
-    EXPECT_EQ(c.safety.soft_start_ramp_s, 0.25);
+    EXPECT_EQ(c.safety.soft_start.ramp_time_s, 0.25);
     EXPECT_EQ(c.safety.passivity, servo::PassivityMode::control);
-    EXPECT_TRUE(c.safety.reconnect);
-    EXPECT_EQ(c.safety.reconnect_settle_s, 1.5);
-    EXPECT_EQ(c.safety.reconnect_timeout_s, 30.0);
+    EXPECT_TRUE(c.safety.reconnect.enabled);
+    EXPECT_EQ(c.safety.reconnect.settle_s, 1.5);
+    EXPECT_EQ(c.safety.reconnect.timeout_s, 30.0);
     EXPECT_TRUE(c.coupling.enabled);
 }
 
 TEST(DaemonConfig, ReconnectIsOnByDefaultAndCanBeTurnedOffOrMadePatient) {
     const Config defaults = parse_config("", "lab.toml", "");
-    EXPECT_TRUE(defaults.safety.reconnect);
-    EXPECT_EQ(defaults.safety.reconnect_settle_s, 0.5);
-    EXPECT_EQ(defaults.safety.reconnect_timeout_s, 5.0);
-    EXPECT_FALSE(parse_config("[safety]\nreconnect = false\n", "lab.toml", "").safety.reconnect);
+    EXPECT_TRUE(defaults.safety.reconnect.enabled);
+    EXPECT_EQ(defaults.safety.reconnect.settle_s, 0.5);
+    EXPECT_EQ(defaults.safety.reconnect.timeout_s, 5.0);
+    EXPECT_FALSE(
+        parse_config("[safety]\nreconnect = false\n", "lab.toml", "").safety.reconnect.enabled);
     EXPECT_EQ(parse_config("[safety]\nreconnect_timeout = 0\n", "lab.toml", "")
-                  .safety.reconnect_timeout_s,
+                  .safety.reconnect.timeout_s,
               0.0);  // wait for ever
     EXPECT_EQ(
         parse_config("[safety]\nreconnect_settle = 60\nreconnect_timeout = 61\n", "lab.toml", "")
-            .safety.reconnect_settle_s,
+            .safety.reconnect.settle_s,
         60.0);
 }
 
 TEST(DaemonConfig, TheOverrunBudgetIsASafetyKeyWithItsDefault) {
     const Config defaults = parse_config("", "lab.toml", "");
-    EXPECT_EQ(defaults.safety.max_missed_periods, 20);
-    EXPECT_EQ(defaults.safety.max_consecutive_overruns, 5);
+    EXPECT_EQ(defaults.safety.overrun.max_missed_periods, 20);
+    EXPECT_EQ(defaults.safety.overrun.max_consecutive_overruns, 5);
     const Config patient = parse_config(
         "[safety]\nmax_missed_periods = 100\nmax_consecutive_overruns = 0\n", "lab.toml", "");
-    EXPECT_EQ(patient.safety.max_missed_periods, 100);
-    EXPECT_EQ(patient.safety.max_consecutive_overruns, 0);
+    EXPECT_EQ(patient.safety.overrun.max_missed_periods, 100);
+    EXPECT_EQ(patient.safety.overrun.max_consecutive_overruns, 0);
 }
 
 TEST(DaemonConfig, NoCouplingMustBeDeliberate) {
@@ -113,7 +114,7 @@ TEST(DaemonConfig, DefaultsFillWhatIsMissing) {
     EXPECT_EQ(c.device.plugin, "sim");
     EXPECT_EQ(c.coupling.check, tune::StabilityModel::passive);
     EXPECT_EQ(c.coupling.velocity_filter_hz, 0.0);  // no filter: the damper on v_d - v_e
-    EXPECT_EQ(c.device.model_delay_s, 0.0);
+    EXPECT_EQ(c.device.model.delay_s, 0.0);
     EXPECT_TRUE(c.scene_file.empty());
 }
 
@@ -140,8 +141,8 @@ INSTANTIATE_TEST_SUITE_P(
         Bad{"[servo]\nrealtime = \"always\"\n", "[servo] realtime = \"always\" is not allowed"},
         Bad{"[servo]\npriority = 0\n", "[servo] priority = 0 is out of range: allowed 1..99"},
         Bad{"[servo]\nrate = 1000\n",
-            "lab.toml:2: [servo] rate = 1000 is not a known key: allowed rate_hz, realtime, "
-            "priority, cpu"},
+            "lab.toml:2: [servo] rate = 1000 is not a known key: allowed name, rate_hz, "
+            "realtime, priority, cpu"},
         Bad{"[device]\naxes = 4\n", "[device] axes = 4 is out of range: allowed 1..3"},
         Bad{"[device]\nplugin = \"sim\"\n[device.usb]\nvid = 1\n",
             "lab.toml:3: [device.usb] is not a known table: allowed plugin, axes, [device.model], "

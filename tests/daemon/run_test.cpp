@@ -330,6 +330,20 @@ TEST_F(DaemonRun, TheSummarySaysWhatRanWhenWhereAndFromWhichFile) {
     const Outcome default_run = run(embedded);
     ASSERT_EQ(default_run.exit_code, kExitOk) << default_run.log;
     EXPECT_TRUE(default_run.summary()["config_path"].is_null());
+    EXPECT_EQ(default_run.summary()["name"], "");  // [servo] name unset
+}
+
+// [servo] name labels the instance: in the summary and on the journal's start line.
+TEST_F(DaemonRun, TheServoNameLabelsTheSummaryAndTheStartLine) {
+    RunOptions options;
+    options.config_path = config(kEncoderGains, "[servo]\nname = \"left arm\"\n");
+    options.lockstep = true;
+    options.duration_s = 0.05;
+    options.summary_path = "-";
+    const Outcome outcome = run(options);
+    ASSERT_EQ(outcome.exit_code, kExitOk) << outcome.log;
+    EXPECT_EQ(outcome.summary()["name"], "left arm");
+    EXPECT_NE(outcome.log.find("hapticd: left arm: sim device"), std::string::npos) << outcome.log;
 }
 
 TEST_F(DaemonRun, EachStartWritesFilesOfItsOwnWhereThePathsSayStart) {

@@ -104,8 +104,8 @@ TEST(FilAutotune, IdentifiesThePaddleWithTheMeasuredDelayAndSizesItsCoupling) {
     EXPECT_NEAR(bound, 400.0, 0.03 * 400.0) << "the true paddle's bound at half a period";
     const daemon::Config tuned = daemon::load_config(config);
     EXPECT_DOUBLE_EQ(tuned.coupling.stiffness_n_per_m, j.at("stiffness").get<double>());
-    EXPECT_NEAR(*tuned.device.model_mass_kg, mass, 1e-5 * mass);
-    EXPECT_DOUBLE_EQ(tuned.device.model_delay_s, 0.0005);
+    EXPECT_NEAR(*tuned.device.model.mass_kg, mass, 1e-5 * mass);
+    EXPECT_DOUBLE_EQ(tuned.device.model.delay_s, 0.0005);
     board.stop();
 
     // The config as autotune wrote it renders the demo wall (the embedded default scene:

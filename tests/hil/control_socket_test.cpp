@@ -32,11 +32,15 @@ using namespace std::chrono_literals;
 TEST(HilControlSocket, StatusDisarmArmAFaultItsRefusalAndResetThroughHapticctl) {
     const ScratchDir dir;
     // An encoder jump (0.2 m) at 2.5 s: a fault that needs an operator.
-    Daemon d(dir, "lab", "[device.sim.faults]\njump_at = 2.5\njump_counts = 20000\n");
+    Daemon d(
+        dir, "lab",
+        ConfigText{config_with_room("[device.sim.faults]\njump_at = 2.5\njump_counts = 20000\n",
+                                    "name = \"rig 2\"\n")});
     ASSERT_TRUE(d.process.wait_for_socket(d.socket)) << d.process.messages();
 
     const nlohmann::json first = status_of(d.socket);
     ASSERT_FALSE(first.is_null());
+    EXPECT_EQ(first["name"], "rig 2");                // [servo] name
     EXPECT_TRUE(armed_state(first)) << first.dump();  // the daemon starts armed
     EXPECT_EQ(first["rate_hz"], 1000.0);
     EXPECT_EQ(first["axes"], 1);

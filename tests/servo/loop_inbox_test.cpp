@@ -35,7 +35,7 @@ class CountdownSource final : public OpenLoopSource {
 };
 
 TEST(LoopInbox, ATakeWithNothingAskedChangesNothing) {
-    Inbox inbox(/*start_armed=*/true);
+    Inbox inbox(/*arm_at_start=*/true);
     const auto requests = inbox.take(/*faulted=*/false);
     EXPECT_TRUE(requests.armed);
     EXPECT_FALSE(requests.armed_now);  // armed from the start: no edge
@@ -48,7 +48,7 @@ TEST(LoopInbox, ATakeWithNothingAskedChangesNothing) {
 }
 
 TEST(LoopInbox, ArmingIsAnEdgeOnceAndDisarmingIsSeenAtTheNextTake) {
-    Inbox inbox(/*start_armed=*/false);
+    Inbox inbox(/*arm_at_start=*/false);
     EXPECT_FALSE(inbox.take(false).armed);
     inbox.arm();
     const auto first = inbox.take(false);

@@ -160,7 +160,7 @@ TEST(ServoAllocation, PlayingTheExcitationOpenLoopDoesNotAllocate) {
     SweepingDevice device;
     fakes::PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 8000.0, .damping_n_s_per_m = 5.0};
     ServoConfig config = alloc_config();
-    config.start_armed = false;
+    config.arm_at_start = false;
     ServoLoop<SweepingDevice, fakes::PlaneWall, FakeClock> loop(device, wall, config, nullptr,
                                                                 FakeClock{&time});
     env::ExcitationSettings settings;

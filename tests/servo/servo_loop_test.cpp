@@ -534,7 +534,7 @@ TEST(ServoLoop, AnOpenLoopSourcePlaysStraightToTheHandleAndIsLetGoDisarmed) {
     PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 6000.0};
     PlaneWall next_wall{.wall_m = 0.0, .stiffness_n_per_m = 6000.0};
     ServoConfig config = test_config();
-    config.start_armed = false;
+    config.arm_at_start = false;
     config.safety.soft_start = {
         .still_speed_mps = 1.0, .still_time_s = 0.002, .ramp_time_s = 0.002};
     config.safety.passivity.mode = PassivityMode::control;
@@ -596,7 +596,7 @@ TEST(ServoLoop, ADisarmOrAFaultEndsAnOpenLoopSource) {
     FakeDevice device;
     PlaneWall wall{.wall_m = 0.0};
     ServoConfig config = test_config();
-    config.start_armed = false;
+    config.arm_at_start = false;
     TestLoop<PlaneWall> loop(device, wall, config, nullptr, FakeClock{&time});
     ConstantForceSource source;
     source.ticks = 100;
@@ -638,7 +638,7 @@ TEST(ServoLoop, ADisarmBeforeTheFirstTickWithdrawsAnOpenLoopSource) {
     device.set_position_counts(-2000);
     PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 6000.0};
     ServoConfig config = test_config();
-    config.start_armed = false;
+    config.arm_at_start = false;
     TestLoop<PlaneWall> loop(device, wall, config, nullptr, FakeClock{&time});
     loop.tick();
     ConstantForceSource source;

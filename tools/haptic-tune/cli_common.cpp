@@ -5,6 +5,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "hapticd/daemon/config_schema.hpp"
 #include "hapticd/daemon/device_open.hpp"
 #include "hapticd/servo/rate.hpp"
 #include "hapticd/tune/input_checks.hpp"
@@ -62,25 +63,31 @@ void add_device_options(CLI::App& command, DeviceOptions& options) {
         ->check(positive_finite("kg"));
     command.add_option("--damping", options.damping_n_s_per_m, "device damping b (N s/m)")
         ->check(positive_finite("N s/m"));
-    command.add_option("--rate", options.rate_hz, "servo rate 1/T (Hz), as [servo] rate_hz")
-        ->check(in_range(servo::kRateRange));
+    // The options that stand for config keys say so, with the key's own range and help
+    // (daemon/config_schema.hpp).
+    const input::Number& rate = daemon::schema::kRate;
+    command
+        .add_option("--rate", options.rate_hz,
+                    "as [servo] " + std::string(rate.key) + ": " + std::string(rate.help) + ", " +
+                        rate.describe())
+        ->check(in_range(rate.range));
 }
 
 void add_delay_option(CLI::App& command, DeviceOptions& options) {
+    const input::Number& delay = daemon::schema::kModelDelay;
     command
         .add_option("--delay", options.delay_s,
-                    "loop delay (s) from the encoder sample to the force taking effect, "
-                    "beyond the zero-order hold; 0 <= delay < 10 periods (default "
-                    "[device.model] delay, else 0; haptic-tune diag measures it)")
+                    "as [device.model] " + std::string(delay.key) + " (the default, else 0): " +
+                        std::string(delay.help) + "; " + delay.describe())
         ->check(non_negative_finite("s"));
 }
 
 void add_velocity_filter_option(CLI::App& command, DeviceOptions& options) {
+    const input::Number& filter = daemon::schema::kVelocityFilter;
     command
         .add_option("--velocity-filter", options.velocity_filter_hz,
-                    "cutoff (Hz) of a first-order low-pass on the coupling damper's velocity, "
-                    "in Z_c of every model: 0 (none, the default unless [coupling] "
-                    "velocity_filter), or 1 Hz up to below rate/2")
+                    "as [coupling] " + std::string(filter.key) + " (the default, else 0): " +
+                        std::string(filter.help) + "; " + filter.describe())
         ->check(non_negative_finite("Hz"));
 }
 
@@ -126,8 +133,8 @@ DesignInput resolve_design_input(const DeviceOptions& options) {
     DesignInput input;
     if (!options.config_path.empty()) input.config = load_config_as_hapticd(options.config_path);
     const daemon::Config* config = input.config ? &*input.config : nullptr;
-    if (config && !((options.mass_kg || config->device.model_mass_kg) &&
-                    (options.damping_n_s_per_m || config->device.model_damping_n_s_per_m))) {
+    if (config && !((options.mass_kg || config->device.model.mass_kg) &&
+                    (options.damping_n_s_per_m || config->device.model.damping_n_s_per_m))) {
         daemon::require_device_model(*config);  // what the config lacks, in hapticd's words
     }
     const auto pick = [](const std::optional<double>& flag, const std::optional<double>& cfg,
@@ -137,10 +144,10 @@ DesignInput resolve_design_input(const DeviceOptions& options) {
         throw UsageError(std::string("missing ") + what);
     };
     input.device.mass_kg =
-        pick(options.mass_kg, config ? config->device.model_mass_kg : std::nullopt,
+        pick(options.mass_kg, config ? config->device.model.mass_kg : std::nullopt,
              "--mass (or [device.model] mass in --config)");
     input.device.damping_n_s_per_m = pick(
-        options.damping_n_s_per_m, config ? config->device.model_damping_n_s_per_m : std::nullopt,
+        options.damping_n_s_per_m, config ? config->device.model.damping_n_s_per_m : std::nullopt,
         "--damping (or [device.model] damping in --config)");
     input.rate_hz =
         pick(options.rate_hz, config ? std::optional<double>(config->servo.rate_hz) : std::nullopt,
@@ -151,7 +158,7 @@ DesignInput resolve_design_input(const DeviceOptions& options) {
         }
         input.coupling_damping_n_s_per_m = config->coupling.damping_n_s_per_m;
     }
-    input.delay_s = options.delay_s.value_or(config ? config->device.model_delay_s : 0.0);
+    input.delay_s = options.delay_s.value_or(config ? config->device.model.delay_s : 0.0);
     input.velocity_filter_hz =
         options.velocity_filter_hz.value_or(config ? config->coupling.velocity_filter_hz : 0.0);
     try {

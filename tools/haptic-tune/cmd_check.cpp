@@ -47,10 +47,10 @@ tune::StabilityDesign design_of(const CheckOptions& o) {
     const DesignInput input = resolve_design_input(o.device);
     daemon::Config config = input.config ? *input.config : daemon::Config{};
     if (!input.config) config.source = "the command line";
-    config.device.model_mass_kg = input.device.mass_kg;
-    config.device.model_damping_n_s_per_m = input.device.damping_n_s_per_m;
+    config.device.model.mass_kg = input.device.mass_kg;
+    config.device.model.damping_n_s_per_m = input.device.damping_n_s_per_m;
     config.servo.rate_hz = input.rate_hz;
-    config.device.model_delay_s = input.delay_s;
+    config.device.model.delay_s = input.delay_s;
     config.coupling.velocity_filter_hz = input.velocity_filter_hz;
     if (o.stiffness) {
         config.coupling.stiffness_n_per_m = *o.stiffness;

@@ -33,7 +33,7 @@ LoopDelay find_sizing_delay(std::optional<double> delay_option, bool from_log,
                             const daemon::Config& config, bool lockstep) {
     LoopDelay out;
     const double rate_hz = config.servo.rate_hz;
-    const bool stated = config.device.model_delay_stated;
+    const bool stated = config.device.model.delay_stated;
     if (delay_option) {
         out.delay_s = *delay_option;
         out.source = DelaySource::option;
@@ -42,7 +42,7 @@ LoopDelay find_sizing_delay(std::optional<double> delay_option, bool from_log,
         return out;
     }
     if (from_log) {
-        out.delay_s = config.device.model_delay_s;
+        out.delay_s = config.device.model.delay_s;
         out.source = stated ? DelaySource::config : DelaySource::none;
         out.note = stated ? "loop delay " + number_text(out.delay_s) + " s (" +
                                 periods_text(out.delay_s, rate_hz) +
@@ -85,15 +85,15 @@ LoopDelay find_sizing_delay(std::optional<double> delay_option, bool from_log,
                    ", p99 " + periods_text(m.delay_s.p99, rate_hz) + "; sized for " +
                    number_text(out.delay_s) + " s (" + periods_text(out.delay_s, rate_hz) +
                    ": the p99 rounded up to the next 0.05 period)";
-        if (stated && config.device.model_delay_s != out.delay_s) {
+        if (stated && config.device.model.delay_s != out.delay_s) {
             out.note +=
-                ", replacing [device.model] delay = " + number_text(config.device.model_delay_s);
+                ", replacing [device.model] delay = " + number_text(config.device.model.delay_s);
         }
         std::cerr << "haptic-tune: autotune: " << out.note << '\n';  // before the long run
         return out;
     }
     if (stated) {
-        out.delay_s = config.device.model_delay_s;
+        out.delay_s = config.device.model.delay_s;
         out.source = DelaySource::config;
         out.note = "loop delay " + number_text(out.delay_s) + " s (" +
                    periods_text(out.delay_s, rate_hz) +

@@ -37,7 +37,7 @@ struct LoopDelay {
 
 /// --delay (delay_option), else the link's measurement (unless from_log), else the
 /// config's [device.model] delay when the file states one
-/// (daemon::DeviceSection::model_delay_stated). `lockstep`: the device keeps virtual time
+/// (daemon::DeviceModel::delay_stated). `lockstep`: the device keeps virtual time
 /// with the host (diag --lockstep). Throws AutotuneError when the delay is unknown or the
 /// device fails.
 LoopDelay find_loop_delay(std::optional<double> delay_option, bool from_log,

@@ -51,6 +51,11 @@ std::string device_link_text(const nlohmann::json& link) {
 std::string status_text(const nlohmann::json& s) {
     std::ostringstream out;
     out << std::fixed << std::setprecision(1);
+    // [servo] name; the daemon's reader refused control characters in it, and hapticctl's
+    // stdout filters them besides (PrintableFilter).
+    if (const auto name = s.find("name"); name != s.end() && !name->get<std::string>().empty()) {
+        out << "name      " << name->get<std::string>() << "\n";
+    }
     out << "state     " << s.at("state").get<std::string>();
     if (s.at("state") == "arming") {
         out << " (soft start " << std::setprecision(0)

@@ -16,6 +16,7 @@
 #include <string>
 #include <thread>
 
+#include "hapticd/daemon/config.hpp"
 #include "hapticd/daemon/exit_code.hpp"
 #include "hapticd/daemon/journal.hpp"
 #include "hapticd/daemon/run.hpp"
@@ -179,6 +180,10 @@ int run_main(int argc, char** argv) {
                  "run the device on virtual time, as fast as the CPU goes (the sim plugin)");
     app.add_flag("--no-status", no_status, "do not print the status line each second");
     app.add_flag("--list-plugins", show_plugins, "list the device plugins found, then exit");
+    bool show_config_keys = false;
+    app.add_flag("--config-keys", show_config_keys,
+                 "print the reference of the config file's keys (allowed values, defaults, "
+                 "meaning; a Markdown table, as in docs/daemon.md), then exit");
     app.add_option("--parent-lifeline", lifeline_fd,
                    "FD: the read end of a pipe whose write end the parent holds; when it closes "
                    "(the parent died) the run stops as on SIGTERM (haptic-tune autotune passes "
@@ -187,6 +192,10 @@ int run_main(int argc, char** argv) {
         return *ended;
     }
     if (show_plugins) return list_plugins();
+    if (show_config_keys) {
+        std::cout << hapticd::daemon::config_keys_markdown();
+        return hapticd::daemon::kExitOk;
+    }
     // Given but empty is an error (run_daemon says so), not "not given".
     if (app.count("--config") != 0) options.config_path = config_path;
     if (app.count("--summary") != 0) options.summary_path = summary_path;

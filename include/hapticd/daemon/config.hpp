@@ -1,50 +1,12 @@
-// hapticd's configuration file (TOML), with the keys docs/architecture.md §5.3 names (their units,
-// ranges and defaults: config_schema.hpp; the table of them: docs/daemon.md "Config"):
-//
-//   [servo]        rate_hz, realtime ("enforce"|"warn"|"off"), priority (SCHED_FIFO),
-//                  cpu (the core to pin the servo thread to)
-//   [device]       plugin (a name such as "sim", or a path to a .so), axes
-//   [device.model] mass, damping: the model the start-up check uses; delay: the time from
-//                  the encoder sample to the force taking effect, beyond the hold, below
-//                  10 periods (haptic-tune diag measures it)
-//   [device.<plugin>]  the plugin's own table, left where it is in the file for the plugin
-//                  to read and validate (device/plugin_table.hpp)
-//   [coupling]     stiffness, damping, velocity_filter (0: none, or from 1 Hz to below
-//                  Nyquist: the cutoff of a first-order low-pass on the damper's velocity),
-//                  check ("passive"|"exact"|"paper"|"encoder"|"off", the start-up stability
-//                  model; paper and encoder are not a guarantee and say so),
-//                  enabled (false: no coupling, the scene's forces act on the device
-//                  directly: the conventional design, for experiments; needs check = "off"
-//                  and no gains),
-//                  environments ("every-passive" | "scene": check against the scene's own
-//                  linearised objects instead of every passive environment; check passive
-//                  or exact; a scene with a detent or friction is refused)
-//   [scene]        file (a scene TOML, relative to this file's folder)
-//   [safety]       max_force, max_speed, soft_start_ramp (force ramp after a still handle),
-//                  passivity ("observe" | "control": Hannaford and Ryu's time-domain
-//                  passivity controller adds damping when the observed energy goes negative),
-//                  reconnect (true: a latch of link faults only, device_lost, read_timeout,
-//                  device_io, clears by itself once the device has sent good samples for
-//                  reconnect_settle s; if it has not within reconnect_timeout s of the fault
-//                  (0: wait for ever; else above the settle), the run ends on the fault;
-//                  false: any fault ends the run), max_missed_periods,
-//                  max_consecutive_overruns (the overrun budget)
-//   [identify]     the excitation of `hapticd --identify` (docs/daemon.md; ignored otherwise):
-//                  force_amplitude (each axis's peak, at most [safety] max_force), workspace
-//                  (half-width of the box about the start), band_low, band_high (at most
-//                  rate_hz/10, low < high), lines_per_decade, period, periods, fade. Unset
-//                  values are chosen at start-up from [device.model] (make_identify_plan,
-//                  daemon/servo_settings.hpp); without [device.model], force_amplitude is
-//                  required
-//   [operator]     a declared operator class for check = "exact" (tune/operator_class.hpp):
-//                  hand_mass, grip_stiffness, arm_stiffness, grip_damping, arm_damping, each
-//                  a number or [min, max], all required; max_resonance (Hz, optional): the
-//                  hand's own highest resonance. Absent: every passive operator
-//
-// Every key is declared once, with its unit, range and default, in config_schema.hpp, and
-// read with the one field reader (input/table_reader.hpp): unknown keys and tables are
-// errors, and each message names the file, the line, the key, the value and the allowed
-// range. Mode strings end here: the sections hold enums.
+// hapticd's configuration file (TOML): [servo], [device], [device.model], [device.<plugin>]
+// (the plugin's own table, read by the plugin: device/plugin_table.hpp), [coupling],
+// [operator] (a declared operator class: tune/operator_class.hpp), [scene], [safety] and
+// [identify]. Every key is declared once, with its unit, range, default and help, in
+// config_schema.hpp, bound to its member by the field lists below, and read with the one
+// field reader (input/table_reader.hpp): unknown keys and tables are errors, and each
+// message names the file, the line, the key, the value and the allowed range. Mode strings
+// end here: the sections hold enums. The reference of the keys is config_keys_markdown()
+// (docs/daemon.md, "Config"; `hapticd --config-keys`).
 #pragma once
 
 #include <cstdint>
@@ -54,6 +16,7 @@
 
 #include "hapticd/daemon/config_schema.hpp"
 #include "hapticd/input/config_error.hpp"
+#include "hapticd/input/field_list.hpp"
 #include "hapticd/tune/operator_class.hpp"
 
 namespace hapticd::daemon {
@@ -61,30 +24,54 @@ namespace hapticd::daemon {
 /// Bad input in a config, a scene, an operator class or a plugin's table (exit 2).
 using input::ConfigError;
 
+// Each table's struct, and beside it its field list (input/field_list.hpp): which key sets
+// which member. The reader fills the structs from the lists; `hapticd --config-keys` and
+// docs/daemon.md's table print them. Where the servo has a settings struct of its own
+// (LinkRecoverySettings, OverrunBudget, SoftStartSettings), the section holds it.
+
 struct ServoSection {
+    std::string name = std::string(*schema::kName.default_value);
     double rate_hz = *schema::kRate.default_value;
     servo::RealtimeMode realtime = schema::kRealtime.default_value;
     int priority = static_cast<int>(*schema::kPriority.default_value);
     std::optional<int> cpu;
 };
+inline constexpr auto kServoFields =
+    input::fields<ServoSection>("servo", input::bind(schema::kName, &ServoSection::name),
+                                input::bind(schema::kRate, &ServoSection::rate_hz),
+                                input::bind(schema::kRealtime, &ServoSection::realtime),
+                                input::bind(schema::kPriority, &ServoSection::priority),
+                                input::bind(schema::kCpu, &ServoSection::cpu));
+
+/// [device.model]: the device model the start-up check uses.
+struct DeviceModel {
+    std::optional<double> mass_kg;
+    std::optional<double> damping_n_s_per_m;
+    std::optional<double> coulomb_n;                      ///< the identify plan uses it
+    double delay_s = *schema::kModelDelay.default_value;  ///< sample to force, beyond the hold
+    /// delay is written in the file (delay_s is its value); false: delay_s is the default.
+    /// haptic-tune autotune tells a stated delay from none.
+    bool delay_stated = false;
+};
+inline constexpr auto kDeviceModelFields = input::fields<DeviceModel>(
+    "device.model", input::bind(schema::kModelMass, &DeviceModel::mass_kg),
+    input::bind(schema::kModelDamping, &DeviceModel::damping_n_s_per_m),
+    input::bind(schema::kModelCoulomb, &DeviceModel::coulomb_n),
+    input::bind(schema::kModelDelay, &DeviceModel::delay_s));
 
 struct DeviceSection {
     std::string plugin = std::string(*schema::kPlugin.default_value);
     int axes = static_cast<int>(*schema::kAxes.default_value);
-    std::optional<double> model_mass_kg;
-    std::optional<double> model_damping_n_s_per_m;
-    std::optional<double> model_coulomb_n;  ///< Coulomb friction; the identify plan uses it
-    double model_delay_s =
-        *schema::kModelDelay.default_value;  ///< sample to force, beyond the hold
-    /// [device.model] delay is written in the file (model_delay_s is its value); false:
-    /// model_delay_s is the default. haptic-tune autotune tells a stated delay from none.
-    bool model_delay_stated = false;
+    DeviceModel model;
     /// The TOML document that holds the plugin's own table (the config's own text, so that
     /// the plugin's messages carry its lines), and where in it: "device.<plugin>". The
     /// plugin reads and validates it (device/plugin_table.hpp).
     std::string plugin_table_toml;
     std::string plugin_table_path;
 };
+inline constexpr auto kDeviceFields =
+    input::fields<DeviceSection>("device", input::bind(schema::kPlugin, &DeviceSection::plugin),
+                                 input::bind(schema::kAxes, &DeviceSection::axes));
 
 struct CouplingSection {
     bool enabled = schema::kCouplingEnabled.default_value;
@@ -95,21 +82,50 @@ struct CouplingSection {
     CheckModel check = schema::kCheck.default_value;  ///< none: check = "off"
     EnvironmentClass environments = schema::kEnvironments.default_value;
 };
+inline constexpr auto kCouplingFields = input::fields<CouplingSection>(
+    "coupling", input::bind(schema::kCouplingEnabled, &CouplingSection::enabled),
+    input::bind(schema::kCouplingStiffness, &CouplingSection::stiffness_n_per_m),
+    input::bind(schema::kCouplingDamping, &CouplingSection::damping_n_s_per_m),
+    input::bind(schema::kVelocityFilter, &CouplingSection::velocity_filter_hz),
+    input::bind(schema::kCheck, &CouplingSection::check),
+    input::bind(schema::kEnvironments, &CouplingSection::environments));
+
+/// [scene]: the file as written; Config::scene_file is it resolved.
+struct SceneSection {
+    std::optional<std::string> file;
+};
+inline constexpr auto kSceneFields =
+    input::fields<SceneSection>("scene", input::bind(schema::kSceneFile, &SceneSection::file));
 
 struct SafetySection {
     double max_force_n = *schema::kMaxForce.default_value;
     double max_speed_mps = *schema::kMaxSpeed.default_value;
-    double soft_start_ramp_s = *schema::kSoftStartRamp.default_value;
+    servo::SoftStartSettings soft_start;  ///< soft_start_ramp: its ramp_time_s
     servo::PassivityMode passivity = schema::kPassivity.default_value;
-    bool reconnect = schema::kReconnect.default_value;
     bool arm_at_start = schema::kArmAtStart.default_value;
-    double reconnect_settle_s = *schema::kReconnectSettle.default_value;
-    double reconnect_timeout_s = *schema::kReconnectTimeout.default_value;  ///< 0: wait for ever
-    /// The overrun budget (servo::OverrunBudget): one overrun that misses more periods, or
-    /// more overrunning ticks in a row, latches overrun_budget.
-    std::int64_t max_missed_periods = *schema::kMaxMissedPeriods.default_value;
-    int max_consecutive_overruns = static_cast<int>(*schema::kMaxConsecutiveOverruns.default_value);
+    /// reconnect, reconnect_settle, reconnect_timeout (0: wait for ever).
+    servo::LinkRecoverySettings reconnect;
+    /// max_missed_periods, max_consecutive_overruns: one overrun that misses more periods,
+    /// or more overrunning ticks in a row, latches overrun_budget.
+    servo::OverrunBudget overrun;
 };
+inline constexpr auto kSafetyFields = input::fields<SafetySection>(
+    "safety", input::bind(schema::kMaxForce, &SafetySection::max_force_n),
+    input::bind(schema::kMaxSpeed, &SafetySection::max_speed_mps),
+    input::bind(schema::kSoftStartRamp, &SafetySection::soft_start,
+                &servo::SoftStartSettings::ramp_time_s),
+    input::bind(schema::kPassivity, &SafetySection::passivity),
+    input::bind(schema::kReconnect, &SafetySection::reconnect,
+                &servo::LinkRecoverySettings::enabled),
+    input::bind(schema::kArmAtStart, &SafetySection::arm_at_start),
+    input::bind(schema::kReconnectSettle, &SafetySection::reconnect,
+                &servo::LinkRecoverySettings::settle_s),
+    input::bind(schema::kReconnectTimeout, &SafetySection::reconnect,
+                &servo::LinkRecoverySettings::timeout_s),
+    input::bind(schema::kMaxMissedPeriods, &SafetySection::overrun,
+                &servo::OverrunBudget::max_missed_periods),
+    input::bind(schema::kMaxConsecutiveOverruns, &SafetySection::overrun,
+                &servo::OverrunBudget::max_consecutive_overruns));
 
 /// [identify]: what the config says; make_identify_plan() fills what it leaves unset.
 struct IdentifySection {
@@ -123,6 +139,15 @@ struct IdentifySection {
     std::optional<int> periods;
     std::optional<double> fade_s;
 };
+inline constexpr auto kIdentifyFields = input::fields<IdentifySection>(
+    "identify", input::bind(schema::kForceAmplitude, &IdentifySection::force_amplitude_n),
+    input::bind(schema::kWorkspace, &IdentifySection::workspace_m),
+    input::bind(schema::kBandLow, &IdentifySection::band_low_hz),
+    input::bind(schema::kBandHigh, &IdentifySection::band_high_hz),
+    input::bind(schema::kLinesPerDecade, &IdentifySection::lines_per_decade),
+    input::bind(schema::kPeriod, &IdentifySection::period_s),
+    input::bind(schema::kPeriods, &IdentifySection::periods),
+    input::bind(schema::kFade, &IdentifySection::fade_s));
 
 struct Config {
     std::string source;    ///< the file name, or "<embedded default>"
@@ -130,12 +155,17 @@ struct Config {
     ServoSection servo;
     DeviceSection device;
     CouplingSection coupling;
-    std::string scene_file;  ///< resolved path; empty means the embedded demo scene
+    std::string scene_file;  ///< [scene] file resolved; empty means the embedded demo scene
     SafetySection safety;
     IdentifySection identify;
     /// [operator]: a declared operator class; none means every passive operator.
     std::optional<tune::OperatorClass> operators;
 };
+
+/// The reference of every key (but [operator]'s and the plugins' tables) as a Markdown
+/// table: key, allowed, default, meaning. docs/daemon.md holds it; `hapticd --config-keys`
+/// prints it.
+std::string config_keys_markdown();
 
 /// Parses and validates config text. `source` names it in messages; `base_dir` resolves
 /// the scene path. Throws ConfigError. haptic-tune reads a config with this too.

@@ -34,6 +34,7 @@ struct IdentifiedRun {
 
 struct RunContext {
     RunStamp stamp;             ///< version, start time, host
+    std::string name;           ///< [servo] name, "" when unset
     std::string config_source;  ///< file name or "<embedded default>"
     std::string config_path;    ///< the config's absolute path; empty: the embedded default
     std::string device;         ///< the plugin's name

@@ -1,10 +1,13 @@
-// The declaration of one key of a TOML table: its name, its unit and range (or its choices)
-// and its default. Each key of the config, a scene or a plugin's table is declared once,
-// next to the code it configures, and read with TableReader (table_reader.hpp); a default
-// given here is the only one. std only: a header that declares fields needs no TOML.
+// The declaration of one key of a TOML table: its name, its unit and range (or its choices),
+// its default and one line of help. Each key of the config, a scene or a plugin's table is
+// declared once, next to the code it configures, and read with TableReader
+// (table_reader.hpp); a default given here is the only one, and the help is what the
+// reference tables print (field_list.hpp). std only: a header that declares fields needs no
+// TOML.
 //
 //     inline constexpr input::Number kMaxForce{
-//         "max_force", {.lo = 0.0, .hi = 1e4, .lo_open = true, .unit = "N"}, 10.0};
+//         "max_force", {.lo = 0.0, .hi = 1e4, .lo_open = true, .unit = "N"}, 10.0,
+//         "force saturation (vector norm)"};
 #pragma once
 
 #include <cstdint>
@@ -22,6 +25,15 @@ struct Number {
     std::string_view key;
     Range range;
     std::optional<double> default_value = std::nullopt;
+    std::string_view help = "";
+    /// The allowed values in words, where they depend on another key ("0, or >= 1 and <
+    /// rate_hz/2 (Hz)") and `range` holds only the unit: the reader checks them itself.
+    std::string_view rule = "";
+
+    /// `rule`, or the range: ">= 100 and <= 20000 (Hz)".
+    [[nodiscard]] std::string describe() const {
+        return rule.empty() ? range.describe() : std::string(rule);
+    }
 };
 
 /// An integer from lo to hi. Messages print the range as "lo..hi".
@@ -31,6 +43,7 @@ struct Integer {
     std::int64_t hi = 0;
     std::optional<std::int64_t> default_value = std::nullopt;
     std::string_view unit = "";
+    std::string_view help = "";
 
     [[nodiscard]] bool contains(std::int64_t value) const noexcept {
         return value >= lo && value <= hi;
@@ -43,6 +56,7 @@ struct Integer {
 struct Flag {
     std::string_view key;
     bool default_value = false;
+    std::string_view help = "";
 };
 
 /// A string; `allowed` says what it must be in messages ("a plugin name or a path").
@@ -51,6 +65,8 @@ struct Text {
     std::optional<std::string_view> default_value = std::nullopt;
     bool allow_empty = false;
     std::string_view allowed = "a string";
+    std::string_view help = "";
+    std::size_t max_bytes = 0;  ///< 0: only the file's own bounds (text_input.hpp)
 };
 
 /// One of a few names, read as the enum (or other small type) `E` that the code uses: a
@@ -62,6 +78,7 @@ struct Choice {
     std::span<const E> values;
     std::string_view (*name)(E) = nullptr;
     E default_value{};
+    std::string_view help = "";
 
     [[nodiscard]] std::optional<E> parse(std::string_view text) const {
         for (const E& value : values) {

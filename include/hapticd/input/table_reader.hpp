@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "hapticd/input/config_error.hpp"
+#include "hapticd/input/field_list.hpp"
 #include "hapticd/input/fields.hpp"
 
 namespace hapticd::input {
@@ -123,6 +124,45 @@ class TableReader {
     std::string doc_;
     std::vector<std::pair<std::string, Kind>> known_;
 };
+
+namespace detail {
+
+inline void read_into(TableReader& r, const Number& f, double& out) { out = r.read(f); }
+inline void read_into(TableReader& r, const Number& f, std::optional<double>& out) {
+    out = r.read_optional(f);
+}
+inline void read_into(TableReader& r, const Integer& f, std::int64_t& out) { out = r.read(f); }
+inline void read_into(TableReader& r, const Integer& f, int& out) {
+    out = static_cast<int>(r.read(f));  // every Integer the lists bind to an int is an int's
+}
+inline void read_into(TableReader& r, const Integer& f, std::optional<int>& out) {
+    const std::optional<std::int64_t> value = r.read_optional(f);
+    out = value ? std::optional(static_cast<int>(*value)) : std::nullopt;
+}
+inline void read_into(TableReader& r, const Flag& f, bool& out) { out = r.read(f); }
+inline void read_into(TableReader& r, const Text& f, std::string& out) { out = r.read(f); }
+inline void read_into(TableReader& r, const Text& f, std::optional<std::string>& out) {
+    out = r.read_optional(f);
+}
+template <typename E>
+void read_into(TableReader& r, const Choice<E>& f, E& out) {
+    out = r.read(f);
+}
+
+}  // namespace detail
+
+/// Reads every field of `list` into `out`, in the list's order, but those the section reads
+/// itself (read_by_section). Does not finish() the table: the section's own checks follow.
+template <typename Struct, typename... Bounds>
+void read_fields(TableReader& reader, Struct& out, const FieldList<Struct, Bounds...>& list) {
+    std::apply(
+        [&](const auto&... bound) {
+            ((read_by_section(bound.field) ? void()
+                                           : detail::read_into(reader, bound.field, bound.in(out))),
+             ...);
+        },
+        list.fields);
+}
 
 /// The document of a file: held to the bounds of text_input.hpp, then parsed. A syntax
 /// error is "SOURCE:LINE:COLUMN: TOML syntax error: ..." (ConfigError).

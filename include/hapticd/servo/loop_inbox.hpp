@@ -54,7 +54,8 @@ struct LoopRequests {
 template <typename Environment>
 class LoopInbox {
   public:
-    explicit LoopInbox(bool start_armed) noexcept : armed_(start_armed), was_armed_(start_armed) {}
+    explicit LoopInbox(bool arm_at_start) noexcept
+        : armed_(arm_at_start), was_armed_(arm_at_start) {}
 
     LoopInbox(const LoopInbox&) = delete;
     LoopInbox& operator=(const LoopInbox&) = delete;

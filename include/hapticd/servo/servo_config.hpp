@@ -50,7 +50,7 @@ struct ServoConfig {
     bool stop_on_fault = true;
     /// Clears a latch of link faults only by itself once the device is back (LinkRecovery).
     LinkRecoverySettings link_recovery{};
-    bool start_armed = true;  ///< false: zero force until arm()
+    bool arm_at_start = true;  ///< false: zero force until arm()
     /// Virtual time only (a lockstep device that paces the loop): before each tick run()
     /// waits, outside the tick, until the telemetry ring has room, so that a log of a
     /// lockstep run is complete however fast the loop goes. Rejected without

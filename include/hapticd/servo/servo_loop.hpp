@@ -87,7 +87,7 @@ class ServoLoop {
               TelemetryRing* telemetry = nullptr, Clock clock = Clock{})
         : device_(device),
           environment_(&environment),
-          inbox_(config.start_armed),
+          inbox_(config.arm_at_start),
           config_(validated(config)),
           period_s_(config.period_s()),
           counts_to_m_(1.0 / config.counts_per_meter),
@@ -100,7 +100,7 @@ class ServoLoop {
           rigid_(!config.coupling_enabled) {
         percentiles_every_ = static_cast<std::uint64_t>(std::max(1.0, std::round(config_.rate_hz)));
         // Before the first tick, status() says what the first will start from.
-        publish_status(0.0, config.start_armed);
+        publish_status(0.0, config.arm_at_start);
     }
 
     ~ServoLoop() { write_zero_force(); }
