@@ -2,20 +2,20 @@
 // name, a path or a refusal is shown with its control characters written out, so that no
 // reply can clear the screen, move the cursor or fake a state (issue 28: a scene named with
 // escape sequences made other operators' `hapticctl status` show "state disabled" while the
-// daemon ran). The daemon here is a ControlServer whose handler replies what a hostile
+// daemon ran). The daemon here is a SocketServer whose handler replies what a hostile
 // scene file or client would have made it say.
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "control_requests.hpp"
 #include "hapticd/daemon/control_protocol.hpp"
-#include "hapticd/daemon/control_server.hpp"
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
+#include "socket/requests.hpp"
+#include "socket/server.hpp"
 
-namespace hapticd::daemon::control {
+namespace hapticd::daemon::control_socket {
 namespace {
 
 using hapticd::testing::CommandResult;
@@ -41,7 +41,7 @@ nlohmann::json hostile_status() {
 TEST(HapticctlOutput, ADaemonsStringsReachTheTerminalWithTheirControlCharactersWrittenOut) {
     const ScratchDir dir;
     const std::string socket = dir.file("hostile.sock");
-    ControlServer server(socket, Limits{}, /*group=*/"");
+    SocketServer server(socket, Limits{}, /*group=*/"");
     server.start([](const Request& request, const Peer&) {
         if (request.kind == RequestKind::status) {
             return Answer{.reply = ok_reply(request.id, {{"status", hostile_status()}})};
@@ -73,4 +73,4 @@ TEST(HapticctlOutput, ADaemonsStringsReachTheTerminalWithTheirControlCharactersW
 }
 
 }  // namespace
-}  // namespace hapticd::daemon::control
+}  // namespace hapticd::daemon::control_socket

@@ -7,10 +7,10 @@
 #include <string>
 #include <utility>
 
-#include "control_requests.hpp"
 #include "hapticd/device/device.hpp"
+#include "socket/requests.hpp"
 
-namespace hapticd::daemon::control {
+namespace hapticd::daemon::control_socket {
 namespace {
 
 TEST(DaemonControlProtocol, EachRequestParsesWithItsId) {
@@ -382,4 +382,4 @@ TEST(DaemonControlCoupling, ZeroGainsAreRefusedEvenWithTheCheckOff) {
 }
 
 }  // namespace
-}  // namespace hapticd::daemon::control
+}  // namespace hapticd::daemon::control_socket

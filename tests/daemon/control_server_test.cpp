@@ -1,7 +1,5 @@
 // The control socket's server against hostile and careless clients (docs/control.md,
 // "Limits"): every row of that table, with a handler that counts what reached it.
-#include "hapticd/daemon/control_server.hpp"
-
 #include <gtest/gtest.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
@@ -24,9 +22,10 @@
 #include <vector>
 
 #include "scratch_dir.hpp"
+#include "socket/server.hpp"
 #include "unix_client.hpp"
 
-namespace hapticd::daemon::control {
+namespace hapticd::daemon::control_socket {
 namespace {
 
 using hapticd::testing::ScratchDir;
@@ -35,7 +34,7 @@ using hapticd::testing::UnixClient;
 // A server whose handler answers status with the number of requests it has seen.
 struct Served {
     explicit Served(const std::string& path, Limits limits = {})
-        : server(std::make_unique<ControlServer>(path, limits, /*group=*/"")) {
+        : server(std::make_unique<SocketServer>(path, limits, /*group=*/"")) {
         server->start([this](const Request& request, const Peer& peer) {
             if (request.kind == RequestKind::coupling) {  // through the worker
                 return Answer{.later = [id = request.id] {
@@ -55,7 +54,7 @@ struct Served {
     }
     std::atomic<int> requests{0};
     std::atomic<pid_t> last_peer_pid{0};
-    std::unique_ptr<ControlServer> server;
+    std::unique_ptr<SocketServer> server;
 };
 
 nlohmann::json reply_of(UnixClient& client) {
@@ -172,7 +171,7 @@ TEST(DaemonControlServer, ADisarmBehindTheClientsOwnSlowRequestIsCarriedOutAtOnc
     std::promise<void> release;
     std::shared_future<void> released = release.get_future().share();
     std::atomic<int> disarms{0};
-    ControlServer server(dir.file("c.sock"), Limits{}, /*group=*/"");
+    SocketServer server(dir.file("c.sock"), Limits{}, /*group=*/"");
     server.start([&](const Request& request, const Peer&) {
         if (request.kind == RequestKind::coupling) {
             return Answer{.later = [id = request.id, released] {
@@ -468,7 +467,7 @@ TEST(DaemonControlServer, ASilentClientCostsNothingAndOthersAreServed) {
 // lets it go; status answers at once.
 struct SlowServed {
     explicit SlowServed(const std::string& path)
-        : server(std::make_unique<ControlServer>(path, Limits{}, /*group=*/"")) {
+        : server(std::make_unique<SocketServer>(path, Limits{}, /*group=*/"")) {
         server->start([this](const Request& request, const Peer&) {
             if (request.kind != RequestKind::coupling) {
                 return Answer{.reply = ok_reply(request.id, {{"quick", true}})};
@@ -486,7 +485,7 @@ struct SlowServed {
     }
     std::atomic<bool> release{false};
     std::atomic<int> started{0};
-    std::unique_ptr<ControlServer> server;
+    std::unique_ptr<SocketServer> server;
 };
 
 const std::string kCoupling = R"({"v":1,"id":7,"request":"coupling","stiffness":100})"
@@ -692,7 +691,7 @@ TEST(DaemonControlServer, OutOfDescriptorsPausesAcceptingAndThenServes) {
 // as the daemon's handler does.
 struct Streaming {
     explicit Streaming(const std::string& path, Limits limits = {}, std::size_t padding = 0)
-        : server(std::make_unique<ControlServer>(path, limits, /*group=*/"")) {
+        : server(std::make_unique<SocketServer>(path, limits, /*group=*/"")) {
         server->start(
             [](const Request& request, const Peer&) {
                 if (request.kind == RequestKind::subscribe) {
@@ -709,7 +708,7 @@ struct Streaming {
             });
     }
     std::atomic<int> events{0};
-    std::unique_ptr<ControlServer> server;
+    std::unique_ptr<SocketServer> server;
 };
 
 // Events come at the rate asked, keep coming though the subscriber sends nothing for longer
@@ -809,7 +808,7 @@ TEST(DaemonControlServer, AStaleSocketIsReplacedALiveOneAndOtherFilesRefused) {
     client.send(kStatus);
     EXPECT_EQ(reply_of(client)["ok"], true);
     try {
-        ControlServer second(path, {}, "");
+        SocketServer second(path, {}, "");
         ADD_FAILURE() << "a second server on a live socket was not refused";
     } catch (const ControlSocketError& e) {
         EXPECT_NE(std::string(e.what()).find("is in use: another hapticd answers on it"),
@@ -822,7 +821,7 @@ TEST(DaemonControlServer, AStaleSocketIsReplacedALiveOneAndOtherFilesRefused) {
     const std::string file = dir.file("plain");
     std::ofstream(file) << "not a socket\n";
     try {
-        ControlServer on_file(file, {}, "");
+        SocketServer on_file(file, {}, "");
         ADD_FAILURE() << "a server on a regular file was not refused";
     } catch (const ControlSocketError& e) {
         EXPECT_NE(std::string(e.what()).find("exists and is not a socket"), std::string::npos);
@@ -830,7 +829,7 @@ TEST(DaemonControlServer, AStaleSocketIsReplacedALiveOneAndOtherFilesRefused) {
     EXPECT_TRUE(std::filesystem::exists(file));  // and it is left alone
     const std::string long_path = dir.file(std::string(200, 'p'));
     try {
-        ControlServer too_long(long_path, {}, "");
+        SocketServer too_long(long_path, {}, "");
         ADD_FAILURE() << "a path longer than sun_path was not refused";
     } catch (const ControlSocketError& e) {
         EXPECT_NE(std::string(e.what()).find("a path of 1 to 107 bytes"), std::string::npos)
@@ -840,7 +839,7 @@ TEST(DaemonControlServer, AStaleSocketIsReplacedALiveOneAndOtherFilesRefused) {
 
 TEST(DaemonControlServer, AMissingGroupIsSaidOnceAndTheSocketStillServes) {
     const ScratchDir dir;
-    ControlServer server(dir.file("c.sock"), {}, "no-such-group-hapticd-test");
+    SocketServer server(dir.file("c.sock"), {}, "no-such-group-hapticd-test");
     server.start([](const Request& r, const Peer&) { return Answer{.reply = ok_reply(r.id)}; });
     const std::vector<std::string> messages = server.take_messages();
     EXPECT_TRUE(any_message_has(messages, "no group \"no-such-group-hapticd-test\""));
@@ -850,4 +849,4 @@ TEST(DaemonControlServer, AMissingGroupIsSaidOnceAndTheSocketStillServes) {
 }
 
 }  // namespace
-}  // namespace hapticd::daemon::control
+}  // namespace hapticd::daemon::control_socket

@@ -1,7 +1,7 @@
 // The flight recorder's file (src/daemon/flight_file.hpp): a new file in the run's outputs
 // directory, never over a file and never through a link planted under its name (issue 28:
 // a planted link made it overwrite another file, which it truncated first).
-#include "flight_file.hpp"
+#include "outputs/flight_file.hpp"
 
 #include <gtest/gtest.h>
 
@@ -10,9 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "flight_writer.hpp"
 #include "hapticd/daemon/exit_code.hpp"
-#include "run_ending.hpp"
+#include "outputs/flight_writer.hpp"
+#include "run/run_ending.hpp"
 #include "scratch_dir.hpp"
 #include "telemetry_csv.hpp"
 #include "text_file.hpp"

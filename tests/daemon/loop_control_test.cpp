@@ -1,18 +1,18 @@
-// LoopControl (src/daemon/loop_control.hpp): the control socket reads the servo's status at
-// most once per kStatusMaxAge, however often its clients ask, so that the status's cache lines
+// InboxServoControl (src/daemon/socket/loop_ports.hpp): the control socket reads the servo's status
+// at most once per kStatusMaxAge, however often its clients ask, so that the status's cache lines
 // cross to the socket's core a bounded number of times a second (docs/benchmarks.md, "The
 // servo under socket abuse").
-#include "loop_control.hpp"
-
 #include <gtest/gtest.h>
 
 #include <chrono>
 #include <thread>
 
+#include "socket/loop_ports.hpp"
+
 namespace hapticd::daemon {
 namespace {
 
-/// What LoopControl calls on a loop, counting the status reads.
+/// What InboxServoControl calls on a loop, counting the status reads.
 struct CountingLoop {
     mutable int status_reads = 0;
     std::uint64_t tick = 0;
@@ -30,7 +30,7 @@ struct CountingLoop {
 
 TEST(DaemonLoopControl, ServesOneStatusReadToEveryAskerWithinItsMaxAgeThenReadsAgain) {
     CountingLoop loop;
-    LoopControl<CountingLoop> control(loop, servo::CouplingGains{});
+    InboxServoControl<CountingLoop> control(loop, servo::CouplingGains{});
     loop.tick = 7;
     const auto first = std::chrono::steady_clock::now();
     EXPECT_EQ(control.recent_status().tick, 7u);
@@ -48,7 +48,7 @@ TEST(DaemonLoopControl, ServesOneStatusReadToEveryAskerWithinItsMaxAgeThenReadsA
 
 TEST(DaemonLoopControl, StatusForARequestThatDecidesIsTheLoopsLatest) {
     CountingLoop loop;
-    LoopControl<CountingLoop> control(loop, servo::CouplingGains{});
+    InboxServoControl<CountingLoop> control(loop, servo::CouplingGains{});
     loop.tick = 7;
     EXPECT_EQ(control.recent_status().tick, 7u);
     loop.tick = 8;

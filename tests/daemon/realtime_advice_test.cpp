@@ -1,7 +1,7 @@
 // What hapticd says to do about a refused real-time request (realtime_advice.hpp): in a
 // unit's words inside a service, in a shell's outside, and a kernel's refusal told apart from
 // a resource limit's.
-#include "hapticd/daemon/realtime_advice.hpp"
+#include "run/realtime_advice.hpp"
 
 #include <gtest/gtest.h>
 

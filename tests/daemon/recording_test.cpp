@@ -1,8 +1,8 @@
-// record start / record stop (daemon/recording.hpp) against a stand-in servo thread that ticks
-// and pushes to whatever ring is attached, as ServoLoop::record does: every tick from the start
-// to the stop is in the file, once and in order, in the --log format the product's own reader
+// record start / record stop (src/daemon/socket/recording.hpp) against a stand-in servo thread that
+// ticks and pushes to whatever ring is attached, as ServoLoop::record does: every tick from the
+// start to the stop is in the file, once and in order, in the --log format the product's own reader
 // reads; and each refusal says why.
-#include "hapticd/daemon/recording.hpp"
+#include "socket/recording.hpp"
 
 #include <gtest/gtest.h>
 #include <sys/stat.h>
@@ -14,7 +14,7 @@
 #include <string>
 #include <thread>
 
-#include "outputs_directory.hpp"
+#include "outputs/outputs_directory.hpp"
 #include "scratch_dir.hpp"
 #include "telemetry_csv.hpp"
 #include "text_file.hpp"

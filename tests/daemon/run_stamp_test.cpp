@@ -1,6 +1,6 @@
 // The stamp of a run (run_stamp.hpp): its start time as ISO 8601 and as a file name, and the
 // `{start}` placeholder of --log and --summary.
-#include "hapticd/daemon/run_stamp.hpp"
+#include "run/run_stamp.hpp"
 
 #include <gtest/gtest.h>
 

@@ -2,7 +2,7 @@
 // manager (NOTIFY_SOCKET, a datagram socket this test binds) look by look. The control socket
 // runs on its own thread, so the loop's status can change between any two of the watcher's
 // reads of it within one look; STATUS= must still tell each change of faults at once.
-#include "run_watcher.hpp"
+#include "run/run_watcher.hpp"
 
 #include <gtest/gtest.h>
 #include <sys/socket.h>

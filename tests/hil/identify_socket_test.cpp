@@ -17,9 +17,9 @@
 #include <string>
 #include <thread>
 
+#include "config_editor.hpp"
 #include "control_daemon.hpp"
 #include "hapticd/daemon/config.hpp"
-#include "hapticd/daemon/config_editor.hpp"
 #include "hapticd/daemon/servo_settings.hpp"
 #include "hapticd/env/excitation.hpp"
 #include "hapticd/servo/telemetry.hpp"

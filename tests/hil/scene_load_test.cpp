@@ -10,8 +10,8 @@
 #include <string>
 #include <thread>
 
+#include "config_editor.hpp"
 #include "control_daemon.hpp"
-#include "hapticd/daemon/config_editor.hpp"
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
 #include "text_file.hpp"

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "hapticd/daemon/config_editor.hpp"
+#include "config_editor.hpp"
 #include "hapticd/daemon/startup_check.hpp"
 #include "hapticd/tune/autotune.hpp"
 #include "loop_delay.hpp"

@@ -3,7 +3,7 @@
 // tune::autotune (hapticd/tune/autotune.hpp). This file orders the steps and holds the
 // command line: the config is read and checked, the run's log placed (autotune_run_log.hpp),
 // the loop delay found (loop_delay.hpp), `hapticd --identify` run when no --log is given
-// (identification_run.hpp), the gains identified, sized and verified, the config edited
+// (excitation_child.hpp), the gains identified, sized and verified, the config edited
 // keeping its comments, checked as the daemon checks it at start-up and written with a
 // backup, and the outcome reported (autotune_report.hpp).
 //
@@ -19,14 +19,14 @@
 #include "autotune_run_log.hpp"
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "config_editor.hpp"
+#include "excitation_child.hpp"
 #include "hapticd/daemon/config.hpp"
-#include "hapticd/daemon/config_editor.hpp"
 #include "hapticd/daemon/output_files.hpp"
 #include "hapticd/daemon/startup_check.hpp"
 #include "hapticd/input/text_input.hpp"
 #include "hapticd/tune/autotune.hpp"
 #include "hapticd/tune/input_checks.hpp"
-#include "identification_run.hpp"
 #include "loop_delay.hpp"
 
 namespace hapticd::tools {
@@ -122,7 +122,7 @@ int identify_size_and_write(const AutotuneCliOptions& o, const daemon::Config& c
     if (!o.dry_run) {
         // The file the config resolves to is replaced (a symlink stays one) by a temporary
         // made exclusively beside it, with its mode and owner, after an exclusive backup; a
-        // config without its owner's write bit is refused (daemon/config_editor.hpp).
+        // config without its owner's write bit is refused (tools/haptic-tune/config_editor.hpp).
         const daemon::WrittenConfig written =
             daemon::write_config_with_backup(o.config_path, original, edited.text);
         outcome.backup_path = written.backup;

@@ -1,7 +1,7 @@
 // haptic-tune diag: the first command a lab runs on new hardware. Drives the configured
 // device at zero force and reports round-trip times, lost and late frames, the device
 // clock's drift, and the loop delay from the encoder sample to the force taking effect when
-// the device says when its commands take effect (hapticd/daemon/link_diag.hpp,
+// the device says when its commands take effect (tools/haptic-tune/link_diag.hpp,
 // docs/link-diagnostics.md).
 #include <iostream>
 #include <memory>
@@ -9,7 +9,7 @@
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "hapticd/daemon/config.hpp"
-#include "hapticd/daemon/link_diag.hpp"
+#include "link_diag.hpp"
 
 namespace hapticd::tools {
 namespace {

@@ -1,6 +1,6 @@
 // The loop delay autotune sizes the gains for (docs/autotune.md): --delay; else, when it
 // runs the device, the delay measured over the link at zero force before the
-// identification run (daemon/link_diag.hpp, as `haptic-tune diag`), when the device
+// identification run (tools/haptic-tune/link_diag.hpp, as `haptic-tune diag`), when the device
 // reports when its commands take effect; else [device.model] delay. A device that cannot
 // report it with no delay stated anywhere is refused (a guess of none would size gains past
 // the limit of every real device). From --log there is no device: [device.model] delay,
@@ -11,7 +11,7 @@
 #include <string>
 
 #include "hapticd/daemon/config.hpp"
-#include "hapticd/daemon/link_diag.hpp"
+#include "link_diag.hpp"
 
 namespace hapticd::tools {
 

@@ -35,7 +35,7 @@ ControlConnection::ControlConnection(std::string socket_path, std::chrono::milli
     : path_(std::move(socket_path)), timeout_(timeout) {
     sockaddr_un address{};
     address.sun_family = AF_UNIX;
-    using daemon::control::kMaxSocketPathBytes;
+    using daemon::control_socket::kMaxSocketPathBytes;
     if (path_.empty() || path_.size() > kMaxSocketPathBytes) {
         throw ConnectionError("socket \"" + path_ + "\": a path of 1 to " +
                               std::to_string(kMaxSocketPathBytes) + " bytes is needed");
@@ -55,14 +55,14 @@ ControlConnection::~ControlConnection() {
     if (fd_ >= 0) ::close(fd_);
 }
 
-nlohmann::json ControlConnection::request(daemon::control::RequestKind kind) {
-    return request(daemon::control::Request{.kind = kind});
+nlohmann::json ControlConnection::request(daemon::control_socket::RequestKind kind) {
+    return request(daemon::control_socket::Request{.kind = kind});
 }
 
-nlohmann::json ControlConnection::request(daemon::control::Request request) {
+nlohmann::json ControlConnection::request(daemon::control_socket::Request request) {
     const std::int64_t id = next_id_++;
     request.id = id;
-    const std::string line = daemon::control::request_line(request);
+    const std::string line = daemon::control_socket::request_line(request);
     for (std::size_t sent = 0; sent < line.size();) {
         const ssize_t n = ::send(fd_, line.data() + sent, line.size() - sent, MSG_NOSIGNAL);
         if (n < 0 && errno == EINTR) continue;

@@ -38,8 +38,8 @@ class ControlConnection {
 
     /// Sends one request and returns its reply (ok or not); throws ConnectionError when the
     /// daemon goes away, is silent for the timeout, or replies outside the protocol.
-    nlohmann::json request(daemon::control::RequestKind kind);
-    nlohmann::json request(daemon::control::Request request);
+    nlohmann::json request(daemon::control_socket::RequestKind kind);
+    nlohmann::json request(daemon::control_socket::Request request);
     /// The next event line of a subscription (docs/control.md, "subscribe"); throws
     /// ConnectionError as request() does.
     nlohmann::json next_event();

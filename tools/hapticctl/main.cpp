@@ -54,18 +54,20 @@ CLI::Validator non_empty_path(const std::string& what) {
 /// --socket PATH: what a Unix socket address holds, 1 to 107 bytes.
 CLI::Validator socket_path_length() {
     return {[](const std::string& path) -> std::string {
-                if (!path.empty() && path.size() <= hapticd::daemon::control::kMaxSocketPathBytes)
+                if (!path.empty() &&
+                    path.size() <= hapticd::daemon::control_socket::kMaxSocketPathBytes)
                     return {};
                 return "\"" + path.substr(0, 40) + (path.size() > 40 ? "...\"" : "\"") + " is " +
                        std::to_string(path.size()) + " bytes: a socket path is 1 to " +
-                       std::to_string(hapticd::daemon::control::kMaxSocketPathBytes) + " bytes";
+                       std::to_string(hapticd::daemon::control_socket::kMaxSocketPathBytes) +
+                       " bytes";
             },
             "PATH"};
 }
 
 using hapticd::ctl::ConnectionError;
 using hapticd::ctl::ControlConnection;
-using hapticd::daemon::control::RequestKind;
+using hapticd::daemon::control_socket::RequestKind;
 
 volatile std::sig_atomic_t interrupted = 0;
 
@@ -143,7 +145,7 @@ int change_state(ControlConnection& daemon, RequestKind kind) {
     std::cout << "state " << state << " (was " << before << ")\n";
     if (!settled()) {
         std::cerr << "hapticctl: the servo is still " << state << " a second after "
-                  << hapticd::daemon::control::request_name(kind)
+                  << hapticd::daemon::control_socket::request_name(kind)
                   << " (a latched fault that returns at once, or a stalled servo thread)\n";
         return hapticd::daemon::kExitFault;
     }
@@ -154,10 +156,10 @@ int change_state(ControlConnection& daemon, RequestKind kind) {
 // says why when it refuses them.
 int set_coupling(ControlConnection& daemon, double stiffness, std::optional<double> damping) {
     const nlohmann::json reply =
-        daemon.request(hapticd::daemon::control::Request{.kind = RequestKind::coupling,
-                                                         .id = nullptr,
-                                                         .stiffness_n_per_m = stiffness,
-                                                         .damping_n_s_per_m = damping});
+        daemon.request(hapticd::daemon::control_socket::Request{.kind = RequestKind::coupling,
+                                                                .id = nullptr,
+                                                                .stiffness_n_per_m = stiffness,
+                                                                .damping_n_s_per_m = damping});
     if (!reply.at("ok").get<bool>()) {
         std::cerr << "hapticctl: " << reply.value("error", std::string("refused")) << "\n";
         return hapticd::daemon::kExitFault;
@@ -207,7 +209,7 @@ std::string client_file(const std::string& file) {
 // record start FILE, record stop: the daemon creates and closes the file; hapticctl says
 // where it is and what it holds.
 int record(ControlConnection& daemon, const std::optional<std::string>& path) {
-    hapticd::daemon::control::Request request{
+    hapticd::daemon::control_socket::Request request{
         .kind = path ? RequestKind::record_start : RequestKind::record_stop, .id = nullptr};
     if (path) request.path = client_file(*path);
     const nlohmann::json reply = daemon.request(request);
@@ -238,7 +240,8 @@ int record(ControlConnection& daemon, const std::optional<std::string>& path) {
 // scene FILE (made absolute here): the daemon reads, builds and checks it, and the servo takes
 // it at the start of a tick, through the soft start.
 int load_scene(ControlConnection& daemon, const std::string& path) {
-    hapticd::daemon::control::Request request{.kind = RequestKind::scene_load, .id = nullptr};
+    hapticd::daemon::control_socket::Request request{.kind = RequestKind::scene_load,
+                                                     .id = nullptr};
     request.path = shell_absolute(path);
     const nlohmann::json reply = daemon.request(request);
     if (!reply.at("ok").get<bool>()) {
@@ -257,7 +260,7 @@ int load_scene(ControlConnection& daemon, const std::string& path) {
 // for its end and prints how it ended: exit 0 only when it ran to its end. Interrupting
 // hapticctl stops the waiting, not the excitation (hapticctl disarm does that).
 int identify(ControlConnection& daemon, const std::optional<std::string>& path, bool wait) {
-    hapticd::daemon::control::Request request{.kind = RequestKind::identify, .id = nullptr};
+    hapticd::daemon::control_socket::Request request{.kind = RequestKind::identify, .id = nullptr};
     if (path) request.path = client_file(*path);
     const nlohmann::json reply = daemon.request(request);
     if (!reply.at("ok").get<bool>()) {
@@ -311,7 +314,7 @@ int stream(ControlConnection& daemon, double rate_hz, int count) {
     std::signal(SIGINT, on_interrupt);
     std::signal(SIGTERM, on_interrupt);
     std::signal(SIGPIPE, SIG_IGN);
-    const nlohmann::json reply = daemon.request(hapticd::daemon::control::Request{
+    const nlohmann::json reply = daemon.request(hapticd::daemon::control_socket::Request{
         .kind = RequestKind::subscribe, .id = nullptr, .rate_hz = rate_hz});
     if (!reply.at("ok").get<bool>()) {
         std::cerr << "hapticctl: " << reply.value("error", std::string("refused")) << "\n";
@@ -380,7 +383,7 @@ int run_main(int argc, char** argv) {
         coupling->add_option("B", damping, "b_c, N s/m (default: the damping in force)")
             ->check(finite_non_negative());
 
-    double stream_rate_hz = hapticd::daemon::control::kDefaultSubscribeRateHz;
+    double stream_rate_hz = hapticd::daemon::control_socket::kDefaultSubscribeRateHz;
     int stream_count = 0;
     auto* stream_command = app.add_subcommand(
         "stream",
@@ -388,7 +391,7 @@ int run_main(int argc, char** argv) {
         "faults), decimated to --rate, for a live plot");
     stream_command
         ->add_option("--rate", stream_rate_hz, "rows a second, > 0 and <= 100 (default 10)")
-        ->check(CLI::Range(0.001, hapticd::daemon::control::kMaxSubscribeRateHz));
+        ->check(CLI::Range(0.001, hapticd::daemon::control_socket::kMaxSubscribeRateHz));
     stream_command->add_option("--count", stream_count, "stop after N rows (0: until interrupted)")
         ->check(CLI::Range(0, 100000000));
 

@@ -1,7 +1,7 @@
 // The control protocol (docs/control.md): one JSON object per line each way on hapticd's
 // control socket. This file is the protocol's one statement in code: its version, its
 // limits, its requests and how a line becomes a request or an error. The daemon's server
-// (control_server.hpp) and hapticctl both use it.
+// (socket/server.hpp) and hapticctl both use it.
 #pragma once
 
 #include <sys/un.h>
@@ -12,7 +12,7 @@
 #include <string>
 #include <string_view>
 
-namespace hapticd::daemon::control {
+namespace hapticd::daemon::control_socket {
 
 /// The `v` of every request and reply; a request of another version is refused.
 inline constexpr int kProtocolVersion = 1;
@@ -96,4 +96,4 @@ std::string error_reply(const nlohmann::json& id, std::string_view message);
 /// "event": name added. Events carry "event" and never "ok", replies the other way round.
 std::string event_line(std::string_view name, nlohmann::json body);
 
-}  // namespace hapticd::daemon::control
+}  // namespace hapticd::daemon::control_socket

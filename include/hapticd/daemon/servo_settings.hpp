@@ -64,7 +64,7 @@ struct IdentifyPlan {
     double duration_s = 0.0;
     /// What [device.model] predicts for the swing about the start, m (none without it):
     /// the identification's model driven from rest by the planned run
-    /// (identify_prediction.hpp).
+    /// (excitation_prediction.hpp).
     std::optional<double> predicted_excursion_m;
     /// The fraction of the periods after which [device.model] coulomb would hold the handle
     /// still (none without it).

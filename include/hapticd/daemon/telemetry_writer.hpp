@@ -46,7 +46,7 @@ class TelemetryWriter {
     TelemetryWriter& operator=(const TelemetryWriter&) = delete;
 
     /// Before start(): records of earlier ticks are taken from the ring and not written (a
-    /// recording's, whose file begins at a tick: daemon/recording.hpp).
+    /// recording's, whose file begins at a tick: src/daemon/socket/recording.hpp).
     void skip_ticks_before(std::uint64_t tick) noexcept { first_tick_ = tick; }
     /// Starts the writer thread.
     void start();

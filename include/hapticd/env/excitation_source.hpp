@@ -1,5 +1,5 @@
 // The excitation of excitation.hpp as a servo::OpenLoopSource: what the control socket's
-// `identify` plays through ServoLoop::play_open_loop (daemon/identify_session.hpp), with its
+// `identify` plays through ServoLoop::play_open_loop (daemon/excitation_session.hpp), with its
 // progress published for the threads that watch it. Everything the servo thread calls is
 // real-time safe: the excitation's own calls, then two atomic stores.
 #pragma once

@@ -79,7 +79,7 @@ class LoopInbox {
 
     /// A second ring that every tick's record also goes to from the next tick on (a control
     /// socket's `record start`), or null to stop. A tick that read the old ring may still push
-    /// to it: the caller keeps it alive for the run (daemon/recording.hpp).
+    /// to it: the caller keeps it alive for the run (src/daemon/socket/recording.hpp).
     void attach_recording(TelemetryRing* ring) noexcept {
         recording_.store(ring, std::memory_order_release);
     }
@@ -88,7 +88,7 @@ class LoopInbox {
     /// soft start (as new gains are: zero force, then the ramp once the handle is still), with
     /// `next` reset where the handle is. False when an offer is already waiting. The caller
     /// owns every environment: the one replaced is the servo's no more once offer_taken() (a
-    /// daemon's `scene load`: daemon/scene_switch.hpp).
+    /// daemon's `scene load`: src/daemon/socket/scene_switch.hpp).
     bool offer_environment(Environment& next) noexcept {
         Environment* none = nullptr;
         return offered_environment_.compare_exchange_strong(none, &next, std::memory_order_acq_rel);
@@ -114,7 +114,7 @@ class LoopInbox {
     /// loop lets go of it disarmed, with the coupling and the environment to restart where the
     /// handle is (through the soft start once armed again). A disarm() before a tick took it
     /// withdraws it unplayed. False when a source is already offered or playing. One caller at
-    /// a time (the daemon's IdentifySession); the caller owns `source` and keeps it until
+    /// a time (the daemon's ExcitationSession); the caller owns `source` and keeps it until
     /// open_loop_idle().
     bool play_open_loop(OpenLoopSource& source) noexcept {
         // The disarms so far go with the offer (take_open_loop), so they are stored first;

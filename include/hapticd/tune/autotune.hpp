@@ -10,7 +10,7 @@
 //   4. hold that coupling against the `exact` model on every axis's identified device.
 //
 // Writing [device.model] and [coupling] into a config is the caller's job (haptic-tune's
-// cmd_autotune.cpp, through daemon/config_editor.hpp): the tune layer does not know the
+// cmd_autotune.cpp, through tools/haptic-tune/config_editor.hpp): the tune layer does not know the
 // daemon's config (docs/architecture.md §2.9).
 #pragma once
 

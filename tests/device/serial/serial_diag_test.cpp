@@ -1,8 +1,8 @@
-// haptic-tune diag's measurement (daemon/link_diag.hpp) through the serial plugin and a real
-// tty (a pty pair) against the reference device: the faults injected at known requests are
-// the faults it reports, the device's clock is fitted against the host's, and the loop delay
-// it measures from protocol version 2's acknowledgements is the device's processing delay;
-// a version-1 firmware gets "not measured", and bad acknowledgements are counted.
+// haptic-tune diag's measurement (tools/haptic-tune/link_diag.hpp) through the serial plugin and a
+// real tty (a pty pair) against the reference device: the faults injected at known requests are the
+// faults it reports, the device's clock is fitted against the host's, and the loop delay it
+// measures from protocol version 2's acknowledgements is the device's processing delay; a version-1
+// firmware gets "not measured", and bad acknowledgements are counted.
 #include <gtest/gtest.h>
 
 #include <iostream>
@@ -11,7 +11,7 @@
 #include <string>
 
 #include "hapticd/daemon/config.hpp"
-#include "hapticd/daemon/link_diag.hpp"
+#include "link_diag.hpp"
 #include "pty_device.hpp"
 
 namespace hapticd::testing {
