@@ -78,6 +78,7 @@ from class_adversary_model import (
     OP_KEYS,
     T,
     TOL,
+    parse_class,
     closed_loop_mp,
     simulate_lossless,
     spectral,
@@ -103,31 +104,6 @@ CLASS = {
     "arm_stiffness": (0.0, 1000.0),
     "arm_damping": (0.0, 20.0),
 }
-
-
-def parse_class(path):
-    """A minimal reader for the [operator] table (numbers or [min, max])."""
-    out = {}
-    section = None
-    with open(path) as f:
-        for line in f:
-            line = line.split("#", 1)[0].strip()
-            if not line:
-                continue
-            if line.startswith("["):
-                section = line.strip("[]").strip()
-                continue
-            if section != "operator" or "=" not in line:
-                continue
-            k, v = [s.strip() for s in line.split("=", 1)]
-            if v.startswith("["):
-                lo, hi = [float(s) for s in v.strip("[]").split(",")]
-            else:
-                lo = hi = float(v)
-            out[k] = (lo, hi)
-    return out
-
-
 
 
 # ---------------------------------------------------------------------------- the tool

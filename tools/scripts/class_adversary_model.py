@@ -14,6 +14,32 @@ TOL = 1e-8
 OP_KEYS = ["hand_mass", "grip_stiffness", "grip_damping", "arm_stiffness", "arm_damping"]
 
 
+# ---------------------------------------------------------------------------- the class
+
+
+def parse_class(path):
+    """A minimal reader for the [operator] table (numbers or [min, max])."""
+    out = {}
+    section = None
+    with open(path) as f:
+        for line in f:
+            line = line.split("#", 1)[0].strip()
+            if not line:
+                continue
+            if line.startswith("["):
+                section = line.strip("[]").strip()
+                continue
+            if section != "operator" or "=" not in line:
+                continue
+            k, v = [s.strip() for s in line.split("=", 1)]
+            if v.startswith("["):
+                lo, hi = [float(s) for s in v.strip("[]").split(",")]
+            else:
+                lo = hi = float(v)
+            out[k] = (lo, hi)
+    return out
+
+
 # ---------------------------------------------------------------------------- the model
 
 _zoh_cache = {}
