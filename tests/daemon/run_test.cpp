@@ -18,6 +18,7 @@
 #include <thread>
 #include <vector>
 
+#include "hapticd/tune/telemetry_log.hpp"
 #include "scratch_dir.hpp"
 #include "telemetry_csv.hpp"
 
@@ -340,10 +341,19 @@ TEST_F(DaemonRun, TheServoNameLabelsTheSummaryAndTheStartLine) {
     options.lockstep = true;
     options.duration_s = 0.05;
     options.summary_path = "-";
+    options.log_path = dir_.file("named.csv");
     const Outcome outcome = run(options);
     ASSERT_EQ(outcome.exit_code, kExitOk) << outcome.log;
     EXPECT_EQ(outcome.summary()["name"], "left arm");
     EXPECT_NE(outcome.log.find("hapticd: left arm: sim device"), std::string::npos) << outcome.log;
+    // And the log: its first line names the instance, and haptic-tune's reader reads past it.
+    std::ifstream in(*options.log_path);
+    std::string first;
+    ASSERT_TRUE(std::getline(in, first));
+    EXPECT_EQ(first, "# name: left arm");
+    const tune::TelemetryLog log = tune::read_telemetry_log(*options.log_path);
+    EXPECT_EQ(log.rows(), 50u);
+    EXPECT_EQ(log.line(0), 3u);  // after the name and the header
 }
 
 TEST_F(DaemonRun, EachStartWritesFilesOfItsOwnWhereThePathsSayStart) {

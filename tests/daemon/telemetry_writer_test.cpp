@@ -145,5 +145,43 @@ TEST(DaemonTelemetryWriter, AFullDeviceCountsOnlyTheRecordsOnDisk) {
     EXPECT_FALSE(writer.complete());
 }
 
+// A named instance's files begin with "# name: NAME" (telemetry_preamble()); the preamble
+// is no record, on a disk that takes everything and on one that fails mid-way.
+TEST(DaemonTelemetryWriter, APreambleComesFirstAndIsNoRecord) {
+    EXPECT_EQ(telemetry_preamble(""), "");
+    EXPECT_EQ(telemetry_preamble("left arm"), "# name: left arm\n");
+    servo::TelemetryRing ring(1024);
+    const ScratchDir dir;
+    const std::string path = dir.file("named.csv");
+    const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+    ASSERT_GE(fd, 0);
+    TelemetryWriter writer(ring, fd, path, 1, std::chrono::milliseconds{0},
+                           telemetry_preamble("left arm"));
+    writer.start();
+    for (std::uint64_t n = 0; n < 20; ++n) {
+        servo::TelemetryRecord record;
+        record.tick = n;
+        ASSERT_TRUE(ring.try_push(record));
+    }
+    writer.finish();
+    EXPECT_EQ(writer.records_written(), 20u);
+    std::ifstream in(path, std::ios::binary);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_EQ(text.rfind("# name: left arm\n" + servo::csv_header(1) + "\n", 0), 0u) << text;
+    EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 22);
+
+    servo::TelemetryRing full_ring(1024);
+    const int full = ::open("/dev/full", O_WRONLY | O_CLOEXEC);
+    ASSERT_GE(full, 0);
+    TelemetryWriter failing(full_ring, full, "/dev/full", 1, std::chrono::milliseconds{0},
+                            telemetry_preamble("left arm"));
+    failing.start();
+    for (std::uint64_t n = 0; n < 10; ++n) {
+        ASSERT_TRUE(full_ring.try_push(servo::TelemetryRecord{}));
+    }
+    EXPECT_THROW(failing.finish(), std::runtime_error);
+    EXPECT_EQ(failing.records_written(), 0u);
+}
+
 }  // namespace
 }  // namespace hapticd::daemon

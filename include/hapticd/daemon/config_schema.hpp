@@ -50,7 +50,8 @@ inline constexpr Text kName{
     true,
     "free text without control characters",
     "a label for this instance (\"left arm\", \"rig 2\"): the summary's and the control "
-    "socket's status' `name`, and the journal's start line",
+    "socket's status' `name`, the journal's start line, and the first line of its logs and "
+    "recordings, `# name: NAME`",
     64};
 inline constexpr Number kRate{"rate_hz", servo::kRateRange, servo::ServoConfig{}.rate_hz,
                               "servo rate, T = 1/rate"};

@@ -22,12 +22,19 @@
 #include <chrono>
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <thread>
 #include <vector>
 
 #include "hapticd/servo/telemetry_ring.hpp"
 
 namespace hapticd::daemon {
+
+/// The comment lines a log or a recording begins with, before its header row: "# name:
+/// NAME\n" for an instance with a [servo] name (control characters were refused when the
+/// config was read), none otherwise. Readers skip lines that begin with '#'
+/// (tune/telemetry_log.hpp; pandas: comment="#").
+std::string telemetry_preamble(std::string_view instance_name);
 
 class TelemetryWriter {
   public:
@@ -38,9 +45,11 @@ class TelemetryWriter {
     /// naming the path and the system's reason when the file cannot be created.
     TelemetryWriter(servo::TelemetryRing& ring, const std::string& path, int axes);
     /// Writes to `fd` (an open, empty file; the writer owns and closes it); `path` is for
-    /// messages. `sync_interval` > 0: fdatasync() at most that often (0: never).
+    /// messages. `sync_interval` > 0: fdatasync() at most that often (0: never). `preamble`:
+    /// whole comment lines ("# ...\n", telemetry_preamble()) written before the header row.
     TelemetryWriter(servo::TelemetryRing& ring, int fd, std::string path, int axes,
-                    std::chrono::milliseconds sync_interval = std::chrono::milliseconds{0});
+                    std::chrono::milliseconds sync_interval = std::chrono::milliseconds{0},
+                    std::string_view preamble = {});
     ~TelemetryWriter();
     TelemetryWriter(const TelemetryWriter&) = delete;
     TelemetryWriter& operator=(const TelemetryWriter&) = delete;
@@ -85,7 +94,8 @@ class TelemetryWriter {
     std::size_t used_ = 0;
     std::uint64_t buffered_records_ = 0;  ///< lines in buffer_ (the header is not one)
     std::uint64_t file_bytes_ = 0;        ///< bytes on disk: whole lines only
-    bool header_pending_ = true;          ///< the header row is still in buffer_
+    /// Lines before the first record (the preamble and the header row) still in buffer_.
+    std::uint64_t header_lines_pending_ = 1;
     std::atomic<int> write_errno_{0};     // the writer thread's; read by complete() from any
     std::uint64_t first_tick_ = 0;
     std::chrono::steady_clock::time_point oldest_buffered_{};

@@ -38,15 +38,22 @@ int create_log(const std::string& path) {
 TelemetryWriter::TelemetryWriter(servo::TelemetryRing& ring, const std::string& path, int axes)
     : TelemetryWriter(ring, create_log(path), path, axes) {}
 
+std::string telemetry_preamble(std::string_view instance_name) {
+    return instance_name.empty() ? std::string() : "# name: " + std::string(instance_name) + "\n";
+}
+
 TelemetryWriter::TelemetryWriter(servo::TelemetryRing& ring, int fd, std::string path, int axes,
-                                 std::chrono::milliseconds sync_interval)
+                                 std::chrono::milliseconds sync_interval,
+                                 std::string_view preamble)
     : ring_(ring),
       path_(std::move(path)),
       axes_(axes),
       fd_(fd),
       sync_interval_(sync_interval),
       buffer_(kBufferBytes) {
-    const std::string header = servo::csv_header(axes) + "\n";
+    const std::string header = std::string(preamble) + servo::csv_header(axes) + "\n";
+    header_lines_pending_ = 1 + static_cast<std::uint64_t>(
+                                    std::count(preamble.begin(), preamble.end(), '\n'));
     std::memcpy(buffer_.data(), header.data(), header.size());
     used_ = header.size();
     oldest_buffered_ = last_sync_ = Clock::now();
@@ -135,7 +142,7 @@ void TelemetryWriter::flush_buffer() noexcept {
         if (write_errno_ == 0) {
             file_bytes_ += used_;
             records_written_.fetch_add(buffered_records_, std::memory_order_relaxed);
-            header_pending_ = false;
+            header_lines_pending_ = 0;
         } else if (done > 0) {
             // The whole lines of what was written stay; a cut last line goes (a device such
             // as /dev/full has no length to cut, and kept nothing).
@@ -144,10 +151,9 @@ void TelemetryWriter::flush_buffer() noexcept {
             const std::size_t keep = last_newline == std::string_view::npos ? 0 : last_newline + 1;
             auto lines = static_cast<std::uint64_t>(std::count(
                 written.begin(), written.begin() + static_cast<std::ptrdiff_t>(keep), '\n'));
-            if (header_pending_ && lines > 0) {
-                --lines;  // the header is not a record
-                header_pending_ = false;
-            }
+            const std::uint64_t header_lines = std::min(header_lines_pending_, lines);
+            lines -= header_lines;  // the preamble and the header are not records
+            header_lines_pending_ -= header_lines;
             records_written_.fetch_add(lines, std::memory_order_relaxed);
             file_bytes_ += keep;
             (void)::ftruncate(fd_, static_cast<off_t>(file_bytes_));

@@ -53,7 +53,8 @@ RunControl::RunControl(const Config& config, const device::DeviceInfo& info, con
         .link_source = device};
     // record start/stop (recording.hpp): a ring for the run, only with a control socket.
     if (server_ != nullptr) {
-        recording_.emplace(ports.attach_recording, ports.tick, info.axes, info.lockstep, outputs);
+        recording_.emplace(ports.attach_recording, ports.tick, info.axes, info.lockstep, outputs,
+                           telemetry_preamble(config_.servo.name));
         facts_.recording = &*recording_;
     }
     // identify (excitation_session.hpp): the excitation played open loop on a disarmed run that

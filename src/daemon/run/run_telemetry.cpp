@@ -9,7 +9,7 @@
 namespace hapticd::daemon {
 
 RunTelemetry::RunTelemetry(const RunOptions& options, const device::DeviceInfo& info,
-                           Outputs& outputs) {
+                           Outputs& outputs, std::string_view instance_name) {
     if (!options.log_path) return;
     ring_ = std::make_unique<servo::TelemetryRing>(info.lockstep ? kLockstepRingRecords
                                                                  : kRealtimeRingRecords);
@@ -17,7 +17,8 @@ RunTelemetry::RunTelemetry(const RunOptions& options, const device::DeviceInfo& 
     // run (a test, a simulation) waits for its writer, so it does not sync.
     writer_ = std::make_unique<TelemetryWriter>(
         *ring_, outputs.log.release(), *options.log_path, info.axes,
-        info.lockstep ? std::chrono::milliseconds{0} : std::chrono::milliseconds{1000});
+        info.lockstep ? std::chrono::milliseconds{0} : std::chrono::milliseconds{1000},
+        telemetry_preamble(instance_name));
     writer_->start();
 }
 

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <iosfwd>
 #include <memory>
+#include <string_view>
 
 #include "hapticd/daemon/run.hpp"
 #include "hapticd/daemon/telemetry_writer.hpp"
@@ -25,7 +26,9 @@ class RunTelemetry {
   public:
     /// With --log: the ring, and the writer on `outputs.log` (begun) started; without,
     /// nothing.
-    RunTelemetry(const RunOptions& options, const device::DeviceInfo& info, Outputs& outputs);
+    /// `instance_name`: [servo] name, for the log's preamble (telemetry_preamble()).
+    RunTelemetry(const RunOptions& options, const device::DeviceInfo& info, Outputs& outputs,
+                 std::string_view instance_name);
     RunTelemetry(const RunTelemetry&) = delete;
     RunTelemetry& operator=(const RunTelemetry&) = delete;
 

@@ -51,7 +51,7 @@ int run_loop(const RunOptions& options, const Config& config,
     // outlive a run that is killed), kept whatever happens.
     outputs.log.begin();  // throws OutputError
     outputs.summary.begin();
-    RunTelemetry telemetry(options, info, outputs);
+    RunTelemetry telemetry(options, info, outputs, config.servo.name);
     Loop loop(device, environment, servo_config, telemetry.ring());
     // The directory of the flight records and a client's recordings, opened once.
     const std::unique_ptr<OutputsDirectory> outputs_directory =

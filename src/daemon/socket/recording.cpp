@@ -17,13 +17,14 @@ constexpr std::size_t kRecordingRingRecords = std::size_t{1} << 16;
 
 Recording::Recording(std::function<void(servo::TelemetryRing*)> attach,
                      std::function<std::uint64_t()> tick, int axes, bool lockstep,
-                     const OutputsDirectory* directory)
+                     const OutputsDirectory* directory, std::string preamble)
     : ring_(kRecordingRingRecords),
       attach_(std::move(attach)),
       tick_(std::move(tick)),
       axes_(axes),
       lockstep_(lockstep),
-      directory_(directory) {}
+      directory_(directory),
+      preamble_(std::move(preamble)) {}
 
 Recording::~Recording() { attach_(nullptr); }
 
@@ -58,7 +59,8 @@ RecordingResult Recording::start(const std::string& requested) {
     try {
         writer_ = std::make_unique<TelemetryWriter>(
             ring_, fd, path, axes_,
-            lockstep_ ? std::chrono::milliseconds{0} : std::chrono::milliseconds{1000});
+            lockstep_ ? std::chrono::milliseconds{0} : std::chrono::milliseconds{1000},
+            preamble_);
         writer_->skip_ticks_before(first_tick);
         writer_->start();
     } catch (const std::exception& e) {

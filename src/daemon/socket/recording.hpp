@@ -44,9 +44,10 @@ class Recording {
     /// `attach` hands the ring (or null) to the servo loop; `tick` is the servo's last
     /// published tick. `lockstep`: the loop waits for the writer (no fdatasync either). The
     /// files go in `directory` (the run's outputs directory; null: none, and start refuses).
+    /// Each file begins with `preamble` (telemetry_preamble()).
     Recording(std::function<void(servo::TelemetryRing*)> attach,
               std::function<std::uint64_t()> tick, int axes, bool lockstep,
-              const OutputsDirectory* directory);
+              const OutputsDirectory* directory, std::string preamble = {});
     ~Recording();
     Recording(const Recording&) = delete;
     Recording& operator=(const Recording&) = delete;
@@ -84,6 +85,7 @@ class Recording {
     int axes_;
     bool lockstep_;
     const OutputsDirectory* directory_;
+    std::string preamble_;  ///< each file's first lines (telemetry_preamble())
 };
 
 }  // namespace hapticd::daemon
