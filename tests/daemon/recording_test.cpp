@@ -100,8 +100,8 @@ TEST(DaemonRecording, ANamedInstancesRecordingBeginsWithItsName) {
     const OutputsDirectory outputs(dir.path().string());
     FakeServo servo;
     Recording recording([&servo](servo::TelemetryRing* ring) { servo.attach(ring); },
-                        [&servo] { return servo.tick(); }, /*axes=*/1, /*lockstep=*/false,
-                        &outputs, telemetry_preamble("rig 2"));
+                        [&servo] { return servo.tick(); }, /*axes=*/1, /*lockstep=*/false, &outputs,
+                        telemetry_preamble("rig 2"));
     const std::string file = dir.file("named.csv");
     ASSERT_TRUE(recording.start(file).ok);
     std::this_thread::sleep_for(50ms);

@@ -96,7 +96,7 @@ class TelemetryWriter {
     std::uint64_t file_bytes_ = 0;        ///< bytes on disk: whole lines only
     /// Lines before the first record (the preamble and the header row) still in buffer_.
     std::uint64_t header_lines_pending_ = 1;
-    std::atomic<int> write_errno_{0};     // the writer thread's; read by complete() from any
+    std::atomic<int> write_errno_{0};  // the writer thread's; read by complete() from any
     std::uint64_t first_tick_ = 0;
     std::chrono::steady_clock::time_point oldest_buffered_{};
     std::chrono::steady_clock::time_point last_sync_{};

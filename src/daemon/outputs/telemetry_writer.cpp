@@ -43,8 +43,7 @@ std::string telemetry_preamble(std::string_view instance_name) {
 }
 
 TelemetryWriter::TelemetryWriter(servo::TelemetryRing& ring, int fd, std::string path, int axes,
-                                 std::chrono::milliseconds sync_interval,
-                                 std::string_view preamble)
+                                 std::chrono::milliseconds sync_interval, std::string_view preamble)
     : ring_(ring),
       path_(std::move(path)),
       axes_(axes),
@@ -52,8 +51,8 @@ TelemetryWriter::TelemetryWriter(servo::TelemetryRing& ring, int fd, std::string
       sync_interval_(sync_interval),
       buffer_(kBufferBytes) {
     const std::string header = std::string(preamble) + servo::csv_header(axes) + "\n";
-    header_lines_pending_ = 1 + static_cast<std::uint64_t>(
-                                    std::count(preamble.begin(), preamble.end(), '\n'));
+    header_lines_pending_ =
+        1 + static_cast<std::uint64_t>(std::count(preamble.begin(), preamble.end(), '\n'));
     std::memcpy(buffer_.data(), header.data(), header.size());
     used_ = header.size();
     oldest_buffered_ = last_sync_ = Clock::now();

@@ -59,8 +59,7 @@ RecordingResult Recording::start(const std::string& requested) {
     try {
         writer_ = std::make_unique<TelemetryWriter>(
             ring_, fd, path, axes_,
-            lockstep_ ? std::chrono::milliseconds{0} : std::chrono::milliseconds{1000},
-            preamble_);
+            lockstep_ ? std::chrono::milliseconds{0} : std::chrono::milliseconds{1000}, preamble_);
         writer_->skip_ticks_before(first_tick);
         writer_->start();
     } catch (const std::exception& e) {
