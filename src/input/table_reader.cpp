@@ -128,7 +128,7 @@ bool TableReader::read(const Flag& field) {
 std::string TableReader::read(const Text& field) {
     std::optional<std::string> value = read_optional(field);
     if (value) return std::move(*value);
-    fail(field.key, "is missing: required, allowed " + std::string(field.allowed));
+    fail(field.key, "is missing: required, allowed " + field.describe());
 }
 
 std::optional<std::string> TableReader::read_optional(const Text& field) {
@@ -138,17 +138,16 @@ std::optional<std::string> TableReader::read_optional(const Text& field) {
         return std::nullopt;
     }
     const auto* text = node->as_string();
-    if (text == nullptr) fail(field.key, "is not a string", field.allowed);
-    if (text->get().empty() && !field.allow_empty) fail(field.key, "is empty", field.allowed);
+    if (text == nullptr) fail(field.key, "is not a string", field.describe());
+    if (text->get().empty() && !field.allow_empty) fail(field.key, "is empty", field.describe());
     if (field.max_bytes != 0 && text->get().size() > field.max_bytes) {
         fail(field.key, "is too long (" + std::to_string(text->get().size()) + " bytes)",
-             std::string(field.allowed) + " of at most " + std::to_string(field.max_bytes) +
-                 " bytes");
+             field.describe());
     }
     // No name, path or label needs one, and each is shown in the journal and on terminals.
     if (const std::size_t at = find_control(text->get()); at != std::string::npos) {
         fail(field.key, "holds a control character at byte " + std::to_string(at + 1),
-             std::string(field.allowed) + " without control characters");
+             field.describe() + " without control characters");
     }
     return text->get();
 }

@@ -140,6 +140,13 @@ INSTANTIATE_TEST_SUITE_P(
             "[servo] rate_hz = \"fast\" is not a number: allowed >= 100 and <= 20000 (Hz)"},
         Bad{"[servo]\nrealtime = \"always\"\n", "[servo] realtime = \"always\" is not allowed"},
         Bad{"[servo]\npriority = 0\n", "[servo] priority = 0 is out of range: allowed 1..99"},
+        Bad{"[servo]\nname = \"" + std::string(65, 'x') + "\"\n",
+            "[servo] name = \"" + std::string(65, 'x') +
+                "\" is too long (65 bytes): allowed free text, at most 64 bytes"},
+        Bad{"[servo]\nname = \"left\\narm\"\n",
+            "[servo] name = \"left\\x0aarm\" holds a control character at byte 5: allowed free "
+            "text, at most 64 bytes without control characters"},
+        Bad{"[servo]\nname = 3\n", "[servo] name = 3 is not a string: allowed free text"},
         Bad{"[servo]\nrate = 1000\n",
             "lab.toml:2: [servo] rate = 1000 is not a known key: allowed name, rate_hz, "
             "realtime, priority, cpu"},

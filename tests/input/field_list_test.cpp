@@ -92,7 +92,7 @@ TEST(InputFieldList, RefusesAsTheReaderDoes) {
     EXPECT_EQ(error("[t]\naxes = 1\nsettle = 0\n"),
               "lab.toml:3: [t] settle = 0 is out of range: allowed > 0 and <= 60 (s)");
     EXPECT_EQ(error("[t]\naxes = 1\nlabel = \"123456789\"\n"),
-              "lab.toml:3: [t] label = \"123456789\" is too long (9 bytes): allowed free text of "
+              "lab.toml:3: [t] label = \"123456789\" is too long (9 bytes): allowed free text, "
               "at most 8 bytes");
 }
 
@@ -106,7 +106,7 @@ TEST(InputFieldList, RowsSayKeyAllowedDefaultAndHelp) {
     EXPECT_EQ(r[0].help, "rate");
     EXPECT_EQ(r[1].default_value, "none");      // an optional member without a default
     EXPECT_EQ(r[2].default_value, "required");  // a plain member without a default
-    EXPECT_EQ(r[3].allowed, "free text, at most 8 bytes");
+    EXPECT_EQ(r[3].allowed, "free text, at most 8 bytes, without control characters");
     EXPECT_EQ(r[3].default_value, "\"\"");
     EXPECT_EQ(r[4].allowed, "\"fast\" or \"slow\"");
     EXPECT_EQ(r[4].default_value, "\"slow\"");

@@ -5,7 +5,7 @@
 #include <iostream>
 #include <sstream>
 
-#include "hapticd/daemon/config_schema.hpp"
+#include "hapticd/daemon/config.hpp"
 #include "hapticd/daemon/device_open.hpp"
 #include "hapticd/servo/rate.hpp"
 #include "hapticd/tune/input_checks.hpp"
@@ -31,6 +31,15 @@ CLI::Validator numeric_range(const std::string& allowed, const std::function<boo
             return {};
         },
         allowed + " " + unit);
+}
+
+/// The help of an option that stands for a config key, from the key's own declaration and
+/// its table's field list: "as [TABLE] KEY[ ABSENT]: HELP; ALLOWED".
+template <typename Fields>
+std::string key_option_help(const Fields& list, const input::Number& key,
+                            std::string_view absent = "") {
+    return "as [" + std::string(list.table) + "] " + std::string(key.key) + std::string(absent) +
+           ": " + std::string(key.help) + "; " + key.describe();
 }
 
 }  // namespace
@@ -63,31 +72,24 @@ void add_device_options(CLI::App& command, DeviceOptions& options) {
         ->check(positive_finite("kg"));
     command.add_option("--damping", options.damping_n_s_per_m, "device damping b (N s/m)")
         ->check(positive_finite("N s/m"));
-    // The options that stand for config keys say so, with the key's own range and help
-    // (daemon/config_schema.hpp).
     const input::Number& rate = daemon::schema::kRate;
-    command
-        .add_option("--rate", options.rate_hz,
-                    "as [servo] " + std::string(rate.key) + ": " + std::string(rate.help) + ", " +
-                        rate.describe())
+    command.add_option("--rate", options.rate_hz, key_option_help(daemon::kServoFields, rate))
         ->check(in_range(rate.range));
 }
 
 void add_delay_option(CLI::App& command, DeviceOptions& options) {
-    const input::Number& delay = daemon::schema::kModelDelay;
     command
         .add_option("--delay", options.delay_s,
-                    "as [device.model] " + std::string(delay.key) + " (the default, else 0): " +
-                        std::string(delay.help) + "; " + delay.describe())
+                    key_option_help(daemon::kDeviceModelFields, daemon::schema::kModelDelay,
+                                    " (the default, else 0)"))
         ->check(non_negative_finite("s"));
 }
 
 void add_velocity_filter_option(CLI::App& command, DeviceOptions& options) {
-    const input::Number& filter = daemon::schema::kVelocityFilter;
     command
         .add_option("--velocity-filter", options.velocity_filter_hz,
-                    "as [coupling] " + std::string(filter.key) + " (the default, else 0): " +
-                        std::string(filter.help) + "; " + filter.describe())
+                    key_option_help(daemon::kCouplingFields, daemon::schema::kVelocityFilter,
+                                    " (the default, else 0)"))
         ->check(non_negative_finite("Hz"));
 }
 

@@ -48,7 +48,7 @@ inline constexpr Text kName{
     "name",
     "",
     true,
-    "free text without control characters",
+    "free text",
     "a label for this instance (\"left arm\", \"rig 2\"): the summary's and the control "
     "socket's status' `name`, the journal's start line, and the first line of its logs and "
     "recordings, `# name: NAME`",

@@ -93,8 +93,7 @@ inline std::string allowed(const Number& f) { return f.describe(); }
 inline std::string allowed(const Integer& f) { return f.describe(); }
 inline std::string allowed(const Flag& /*f*/) { return "true, false"; }
 inline std::string allowed(const Text& f) {
-    return std::string(f.allowed) +
-           (f.max_bytes != 0 ? ", at most " + std::to_string(f.max_bytes) + " bytes" : "");
+    return f.describe() + ", without control characters";  // the reader refuses them in any
 }
 template <typename E>
 std::string allowed(const Choice<E>& f) {

@@ -67,6 +67,12 @@ struct Text {
     std::string_view allowed = "a string";
     std::string_view help = "";
     std::size_t max_bytes = 0;  ///< 0: only the file's own bounds (text_input.hpp)
+
+    /// `allowed`, and the length bound if any: "free text, at most 64 bytes".
+    [[nodiscard]] std::string describe() const {
+        return std::string(allowed) +
+               (max_bytes != 0 ? ", at most " + std::to_string(max_bytes) + " bytes" : "");
+    }
 };
 
 /// One of a few names, read as the enum (or other small type) `E` that the code uses: a
