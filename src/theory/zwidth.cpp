@@ -3,21 +3,21 @@
 namespace hapticd::theory {
 
 Complex perceived_impedance(const DeviceModel& device, const SpringDamperCoupling& coupling,
-                            HoldModel model, Complex environment_impedance, double theta,
+                            const LoopModel& model, Complex environment_impedance, double theta,
                             double sample_period_s) {
     const Complex zc = coupling_impedance(coupling, theta, sample_period_s);
-    return device_impedance(device, model, theta, sample_period_s) +
+    return device_impedance(device, model.hold, theta, sample_period_s) +
            zc * hold_term(model, theta) * environment_impedance / (zc + environment_impedance);
 }
 
-Complex impedance_display_zmin(const DeviceModel& device, HoldModel model, double theta,
+Complex impedance_display_zmin(const DeviceModel& device, const LoopModel& model, double theta,
                                double sample_period_s) {
-    return device_impedance(device, model, theta, sample_period_s);
+    return device_impedance(device, model.hold, theta, sample_period_s);
 }
 
 Complex impedance_display_zmax(const DeviceModel& device, const SpringDamperCoupling& coupling,
-                               HoldModel model, double theta, double sample_period_s) {
-    return device_impedance(device, model, theta, sample_period_s) +
+                               const LoopModel& model, double theta, double sample_period_s) {
+    return device_impedance(device, model.hold, theta, sample_period_s) +
            coupling_impedance(coupling, theta, sample_period_s) * hold_term(model, theta);
 }
 

@@ -179,6 +179,22 @@ TEST(plotCommand, MarginArrayAndBindingMarkerAreConsistent) {
                 worst, 1e-9);
 }
 
+TEST(plotCommand, EveryBindingMarkerIsOnTheChartsFrequencyAxis) {
+    // The pen display sized with the passive model binds at 0.007 Hz, below the chart's
+    // lowest frequency (0.1 Hz): its marker sits at the left edge, not off the axes.
+    const json j = run_json("plot " + kDevice + " --json");
+    const std::vector<double> f = doubles(j.at("frequency_hz"));
+    const json& passive = j.at("models").at("passive");
+    EXPECT_GT(passive.at("worst_frequency_hz").get<double>(), 0.0);
+    EXPECT_LT(passive.at("worst_frequency_hz").get<double>(), f.front());
+    for (const auto& [name, model] : j.at("models").items()) {
+        const double marker_hz = model.at("marker").at("frequency_hz").get<double>();
+        EXPECT_GE(marker_hz, f.front()) << name;
+        EXPECT_LE(marker_hz, f.back()) << name;
+    }
+    EXPECT_EQ(passive.at("marker").at("frequency_hz").get<double>(), f.front());
+}
+
 TEST(plotCommand, ModelsOptionSelectsAndOrdersTheCurves) {
     const json j = run_json("plot " + kDesign + " --models encoder --json --points 20");
     ASSERT_EQ(j.at("models").size(), 1u);
@@ -272,7 +288,71 @@ TEST(plotFiles, ZwidthWritesPngAndSvg) {
     EXPECT_NE(read_file(dir.file("z.svg")).find("<svg"), std::string::npos);
 }
 
+/// The number in `text` right after `key` (e.g. ` width="` in an SVG's root element).
+double number_after(const std::string& text, const std::string& key) {
+    const std::size_t at = text.find(key);
+    if (at == std::string::npos) return std::nan("");
+    return std::stod(text.substr(at + key.size()));
+}
+
+TEST(plotFiles, WritesAPdfAtTheSizeAsked) {
+    const ScratchDir dir;
+    const std::string out = dir.file("design.pdf");
+    const auto result =
+        run_command(tune("plot " + kDesign + " --size 3.5x2.8in --font-size 7 --out " + out));
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    const std::string pdf = read_file(out);
+    EXPECT_EQ(pdf.substr(0, 5), "%PDF-");
+    // The page is the figure, 3.5 x 2.8 in = 252 x 201.6 pt, not cropped.
+    EXPECT_NE(pdf.find("/MediaBox [ 0 0 252 201.6 ]"), std::string::npos);
+}
+
+TEST(plotFiles, SvgTextIsTextAtTheSizeAndFontAsked) {
+    const ScratchDir dir;
+    const std::string out = dir.file("z.svg");
+    const auto result =
+        run_command("SOURCE_DATE_EPOCH=86400 " +
+                    tune("zwidth " + kDesign + " --size 90x60mm --font-size 11 --out " + out));
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    const std::string svg = read_file(out);
+    // 90 x 60 mm = 255.1 x 170.1 pt.
+    EXPECT_NEAR(number_after(svg, " width=\""), 90.0 / 25.4 * 72.0, 0.1);
+    EXPECT_NEAR(number_after(svg, " height=\""), 60.0 / 25.4 * 72.0, 0.1);
+    // Editable text: the labels are <text> elements with their words, not glyph paths.
+    EXPECT_NE(svg.find("<text"), std::string::npos);
+    EXPECT_NE(svg.find("frequency f (Hz)</text>"), std::string::npos);
+    EXPECT_NE(svg.find("font: 11px"), std::string::npos);
+    // The caption line (wrapped at the figure's width) names the command, the models, the
+    // device and the date (SOURCE_DATE_EPOCH's when it is set).
+    for (const char* words : {"haptic-tune zwidth", "the impedance display;", "passive; device",
+                              "m = 0.1 kg", "\u00b7 1970-01-02</text>"}) {
+        EXPECT_NE(svg.find(words), std::string::npos) << words;
+    }
+}
+
 // ---- zwidth -----------------------------------------------------------------------
+
+TEST(plotZwidth, TheLoopDelayTurnsTheCouplingsShareAndLeavesZminAlone) {
+    // (25) with d periods of delay: Z_max = Z_d + Z_c H e^{-jdθ}; Z_min = Z_d (24).
+    const double delay_periods = 1.5;
+    const json prompt = run_json("zwidth " + kDesign + " --models encoder --points 40 --json");
+    const json delayed =
+        run_json("zwidth " + kDesign + " --models encoder --points 40 --delay 0.0015 --json");
+    EXPECT_EQ(delayed.at("delay_s").get<double>(), 0.0015);
+    const std::vector<double> f = doubles(delayed.at("frequency_hz"));
+    const json& model = delayed.at("models").at("encoder");
+    EXPECT_EQ(doubles(model.at("zmin_magnitude")),
+              doubles(prompt.at("models").at("encoder").at("zmin_magnitude")));
+    const std::vector<double> zmax = doubles(model.at("zmax_magnitude"));
+    for (const std::size_t i : {std::size_t{5}, std::size_t{25}, std::size_t{38}}) {
+        const double theta = theta_at(f[i]);
+        const Complex expected =
+            encoder_device(theta) + coupling_impedance(theta) * encoder_hold(theta) *
+                                        std::polar(1.0, -delay_periods * theta);
+        EXPECT_NEAR(zmax[i], std::abs(expected), 1e-9 * zmax[i]) << "f = " << f[i];
+    }
+    EXPECT_NE(zmax, doubles(prompt.at("models").at("encoder").at("zmax_magnitude")));
+}
 
 TEST(plotZwidth, ImpedanceDisplayIs24And25PerModel) {
     const json j = run_json("zwidth " + kDesign + " --points 80 --json");
@@ -365,7 +445,15 @@ INSTANTIATE_TEST_SUITE_P(
                       "no coupling"},
         BadChartInput{"plot --mass 0.1 --damping 2 --json", "--rate"},
         BadChartInput{"zwidth " + kDevice + " --display admittance --kp 20 --json", "--ki"},
-        BadChartInput{"zwidth " + kDesign + " --kp 20 --json", "--display admittance"}));
+        BadChartInput{"zwidth " + kDesign + " --kp 20 --json", "--display admittance"},
+        BadChartInput{
+            "zwidth " + kDevice + " --display admittance --kp 20 --ki 500 --delay 0.001 --json",
+            "no loop delay"},
+        BadChartInput{"plot " + kDesign + " --size 3x --json", "--size 3x"},
+        BadChartInput{"plot " + kDesign + " --size 7x4.8ft --json", "--size 7x4.8ft"},
+        BadChartInput{"plot " + kDesign + " --size 0.5x3 --json", "1 to 40 in"},
+        BadChartInput{"plot " + kDesign + " --size 200x100cm --json", "78.74 in"},
+        BadChartInput{"plot " + kDesign + " --font-size 2 --json", "--font-size"}));
 
 TEST(plotRenderer, MissingPythonSaysWhatToInstall) {
     const ScratchDir dir;

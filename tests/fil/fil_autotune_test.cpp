@@ -30,8 +30,8 @@
 #include "emulated_hapkit.hpp"
 #include "hapticd/daemon/config.hpp"
 #include "hapticd/tune/exact_model.hpp"
+#include "hapticd/tune/oscillation.hpp"
 #include "hapticd_run.hpp"
-#include "oscillation.hpp"
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
 
@@ -233,13 +233,14 @@ Contact kicked_contact(double stiffness_n_per_m, double delay_periods) {
     const auto window =
         static_cast<std::size_t>(std::lround(2.0 * kRateHz / out.predicted.frequency_hz));
     const double floor_m = 3.0 * kCountM;
-    const OscillationTrend trend = oscillation_trend(x, kPeriodS, first, window, floor_m);
+    const tune::OscillationTrend trend =
+        tune::oscillation_trend(x, kPeriodS, first, window, floor_m);
     // Linear while the tool stays in the wall (2 N / k_c each way) and the force swings over
     // several of the PWM's steps (a duty step is 31 mN: 5 of them peak to peak).
     const double contact_p2p_m = 2.0 * 2.0 / stiffness_n_per_m;
     const double duty_step_m = 7.975 / 256 / stiffness_n_per_m;
-    out.growth_per_s = linear_phase_growth_per_s(trend, std::max(5.0 * duty_step_m, 10 * floor_m),
-                                                 0.8 * contact_p2p_m, out.windows);
+    out.growth_per_s = tune::linear_phase_growth_per_s(
+        trend, std::max(5.0 * duty_step_m, 10 * floor_m), 0.8 * contact_p2p_m, out.windows);
     out.peak_m = trend.peak_amplitude_m;
     double min_depth = 1.0;
     for (std::size_t i = first; i < xe.size(); ++i) min_depth = std::min(min_depth, xe[i]);

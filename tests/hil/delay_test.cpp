@@ -133,8 +133,8 @@ DelayedContact run_delayed_contact(double stiffness_n_per_m, double delay_period
     if (run.log.rows() == 0) return out;
     EXPECT_EQ(run.log.column("xe0_m"), run.log.column("x0_m"));  // no coupling
     out.judged = judge_wall_contact(run.log, kJudgeFromS, window_s);
-    out.growth_per_s = linear_phase_growth_per_s(out.judged.trend, 3.0 * kQuantisationFloorM,
-                                                 2.0 * 0.8 * rest_depth_m, out.windows);
+    out.growth_per_s = tune::linear_phase_growth_per_s(out.judged.trend, 3.0 * kQuantisationFloorM,
+                                                       2.0 * 0.8 * rest_depth_m, out.windows);
     std::cout << "[hil] delay " << delay_periods << " T, K = " << stiffness_n_per_m << " N/m ("
               << stiffness_n_per_m / bound_n_per_m(delay_periods) << " K*): linear-phase growth "
               << out.growth_per_s << " /s over " << out.windows << " windows; predicted "

@@ -82,10 +82,10 @@
 #include <vector>
 
 #include "hapticd/tune/exact_model.hpp"
+#include "hapticd/tune/oscillation.hpp"
 #include "hapticd_run.hpp"
 #include "nyquist_grasp.hpp"
 #include "operators.hpp"
-#include "oscillation.hpp"
 #include "pen_display.hpp"
 #include "run_command.hpp"
 #include "wall_contact.hpp"
@@ -154,7 +154,7 @@ struct DelayedContact {
     DaemonRun run;
     Prediction predicted;        ///< the penalty wall in series
     Prediction predicted_rigid;  ///< a rigid wall, for comparison
-    OscillationTrend trend;
+    tune::OscillationTrend trend;
     double growth_per_s = 0.0;  ///< over the linear phase
     std::size_t windows = 0;    ///< in the linear phase
     double contact_lost_at_s = -1.0;
@@ -183,10 +183,10 @@ DelayedContact run_delayed_contact(const std::string& label, const CouplingGains
     // Two whole periods of the predicted oscillation per window.
     const auto window =
         static_cast<std::size_t>(std::lround(2.0 * kRateHz / out.predicted.frequency_hz));
-    out.trend = oscillation_trend(x, kPeriodS, first, window, kFineFloorM);
+    out.trend = tune::oscillation_trend(x, kPeriodS, first, window, kFineFloorM);
     const double contact_range_p2p_m = 2.0 * 0.5 / gains.stiffness_n_per_m;
-    out.growth_per_s = linear_phase_growth_per_s(out.trend, 10.0 * kFineFloorM,
-                                                 0.8 * contact_range_p2p_m, out.windows);
+    out.growth_per_s = tune::linear_phase_growth_per_s(out.trend, 10.0 * kFineFloorM,
+                                                       0.8 * contact_range_p2p_m, out.windows);
     for (std::size_t i = first; i < xe.size() && out.contact_lost_at_s < 0.0; ++i) {
         if (xe[i] < 0.0) out.contact_lost_at_s = static_cast<double>(i) * kPeriodS;
     }

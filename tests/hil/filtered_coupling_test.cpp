@@ -50,10 +50,10 @@
 #include <vector>
 
 #include "hapticd/tune/exact_model.hpp"
+#include "hapticd/tune/oscillation.hpp"
 #include "hapticd_run.hpp"
 #include "nyquist_grasp.hpp"
 #include "operators.hpp"
-#include "oscillation.hpp"
 #include "pen_display.hpp"
 #include "wall_contact.hpp"
 

@@ -41,8 +41,8 @@
 #include "hapticd/theory/passive_model.hpp"
 #include "hapticd/tune/exact_model.hpp"
 #include "hapticd/tune/operator_synthesis.hpp"
+#include "hapticd/tune/oscillation.hpp"
 #include "hapticd_run.hpp"
-#include "oscillation.hpp"
 #include "pen_display.hpp"
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
@@ -128,7 +128,7 @@ Demodulated demodulate(const std::vector<double>& x, double frequency_hz, double
     const auto n = static_cast<std::size_t>(std::lround(kDemodulationWindowS * kRateHz));
     for (auto begin = static_cast<std::size_t>(std::lround(from_s * kRateHz));
          begin + n <= x.size(); begin += n) {
-        const std::vector<double> residual = detail::detrended(x, begin, n);
+        const std::vector<double> residual = tune::detrended(x, begin, n);
         double in_phase = 0.0, quadrature = 0.0, weights = 0.0;
         for (std::size_t i = 0; i < n; ++i) {
             const double hann =
@@ -208,8 +208,8 @@ WitnessRun grasp_in_the_wall(const OperatorModel& grasp, double stiffness_n_per_
     }
     const Demodulated component = demodulate(x, out.predicted.frequency_hz, kFitFromS);
     out.windows = component.mid_s.size();
-    out.growth_per_s =
-        detail::slope(component.mid_s, component.log_amplitude, 0, component.mid_s.size());
+    out.growth_per_s = tune::least_squares_slope(component.mid_s, component.log_amplitude, 0,
+                                                 component.mid_s.size());
     std::cout << "[hil] shaped grasp (" << grasp.modes.size() << " absorbers) in a 1e7 N/m wall, "
               << delay_periods << " periods of delay, k_c = " << stiffness_n_per_m << " N/m: the "
               << out.predicted.frequency_hz << " Hz component grows at " << out.growth_per_s

@@ -17,8 +17,8 @@
 #include <vector>
 
 #include "hapticd/tune/exact_model.hpp"
+#include "hapticd/tune/oscillation.hpp"
 #include "hapticd_run.hpp"
-#include "oscillation.hpp"
 #include "pen_display.hpp"
 
 namespace hapticd::testing {
@@ -130,7 +130,7 @@ inline NyquistFit fit_nyquist_growth(const DaemonRun& run, const std::string& la
     }
     out.windows = mid_s.size();
     if (out.windows >= 2) {
-        out.growth_per_s = detail::slope(mid_s, log_rms, 0, out.windows);
+        out.growth_per_s = tune::least_squares_slope(mid_s, log_rms, 0, out.windows);
         out.first_rms_m = std::exp(log_rms.front());
         out.last_rms_m = std::exp(log_rms.back());
     }

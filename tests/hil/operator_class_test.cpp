@@ -35,10 +35,10 @@
 #include <vector>
 
 #include "hapticd/tune/class_check.hpp"
+#include "hapticd/tune/oscillation.hpp"
 #include "hapticd_run.hpp"
 #include "operator_classes.hpp"
 #include "operators.hpp"
-#include "oscillation.hpp"
 #include "pen_display.hpp"
 #include "run_command.hpp"
 #include "wall_contact.hpp"
@@ -145,7 +145,7 @@ TEST(HilOperatorClass, ClassSizedGainsArmForTheClassAndHoldItsHands) {
             << run.err;
         EXPECT_EQ(fault_list(run), "");
         const auto& x = run.log.column("x0_m");
-        const OscillationTrend trend = oscillation_trend(x, kPeriodS, 250, 100, 3e-9);
+        const tune::OscillationTrend trend = tune::oscillation_trend(x, kPeriodS, 250, 100, 3e-9);
         std::cout << "[hil] class hand " << hand.describe() << ": exact |z| = " << predicted
                   << ", envelope " << trend.first_amplitude_m * 1e9 << " -> "
                   << trend.last_amplitude_m * 1e9 << " nm p-p\n";
@@ -206,7 +206,7 @@ TEST(HilOperatorClass, AGripOutsideTheClassGrowsAtNyquist) {
         log_rms.push_back(std::log(rms));
     }
     ASSERT_GE(mid_s.size(), 10u);
-    const double growth_per_s = detail::slope(mid_s, log_rms, 0, mid_s.size());
+    const double growth_per_s = tune::least_squares_slope(mid_s, log_rms, 0, mid_s.size());
     std::cout << "[hil] steel grip outside the class (k_h = " << steel_n_per_m
               << " N/m) at k_c = " << gains.stiffness_n_per_m << " N/m: Nyquist component grows at "
               << growth_per_s << " /s over " << mid_s.size() << " windows; exact "
@@ -268,10 +268,10 @@ HandsOffContact hands_off_in_the_wall(double stiffness_n_per_m, std::string_view
     if (out.run.exit_code != 0 || out.run.log.rows() == 0) return out;
     const auto window =
         static_cast<std::size_t>(std::lround(2.0 * kRateHz / out.predicted.dominant_frequency_hz));
-    const OscillationTrend trend =
-        oscillation_trend(out.run.log.column("x0_m"), kPeriodS, 300, window, 3e-9);
-    out.growth_per_s =
-        linear_phase_growth_per_s(trend, 30e-9, 2.0 * 0.5 / stiffness_n_per_m * 0.8, out.windows);
+    const tune::OscillationTrend trend =
+        tune::oscillation_trend(out.run.log.column("x0_m"), kPeriodS, 300, window, 3e-9);
+    out.growth_per_s = tune::linear_phase_growth_per_s(
+        trend, 30e-9, 2.0 * 0.5 / stiffness_n_per_m * 0.8, out.windows);
     std::cout << "[hil] hands-off in a 1e7 N/m wall, one period of delay, k_c = "
               << stiffness_n_per_m << " N/m: growth " << out.growth_per_s << " /s over "
               << out.windows << " windows; exact "

@@ -20,7 +20,7 @@
 #include <string>
 #include <vector>
 
-#include "oscillation.hpp"
+#include "hapticd/tune/oscillation.hpp"
 #include "pen_display.hpp"
 #include "telemetry_csv.hpp"
 
@@ -49,7 +49,7 @@ inline constexpr double kQuantisationFloorM = 3.0 * kCountM;
 struct ContactJudgement {
     /// The handle position x0 in windows (0.1 s by default), each detrended: the oscillation
     /// about the operating point, never below kQuantisationFloorM.
-    OscillationTrend trend;
+    tune::OscillationTrend trend;
     /// When the tool first left the wall (xe0 < 0) after `settle_s`; < 0: it never did,
     /// i.e. contact was kept in every tick.
     double contact_lost_at_s = -1.0;
@@ -75,11 +75,11 @@ inline ContactJudgement judge_wall_contact(const TelemetryLog& log, double settl
     const auto first = static_cast<std::size_t>(
         std::lower_bound(t.begin(), t.end(), settle_s - 0.5 * kPeriodS) - t.begin());
     const auto window = static_cast<std::size_t>(std::lround(window_s / kPeriodS));
-    judgement.trend = oscillation_trend(x, kPeriodS, first, window, kQuantisationFloorM);
+    judgement.trend = tune::oscillation_trend(x, kPeriodS, first, window, kQuantisationFloorM);
     const std::vector<double> before_settling(x.begin(),
                                               x.begin() + static_cast<std::ptrdiff_t>(first));
     judgement.transient_peak_m =
-        oscillation_trend(before_settling, kPeriodS, 0, window, kQuantisationFloorM)
+        tune::oscillation_trend(before_settling, kPeriodS, 0, window, kQuantisationFloorM)
             .peak_amplitude_m;
 
     judgement.min_tool_depth_m = first < xe.size() ? xe[first] : -1.0;

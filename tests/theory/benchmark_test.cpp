@@ -98,6 +98,25 @@ TEST_P(EveryFrequency, ZWidthIsTheCouplingImpedanceThroughTheHold) {
     EXPECT_NEAR(std::abs(rigid - zmax), 0.0, 1e-6 * std::abs(zmax));
 }
 
+TEST_P(EveryFrequency, DelayTurnsTheZWidthsCouplingTermByDelayTimesTheta) {
+    // With d periods of delay, H carries e^{-jdθ}: the coupling's share of Z_max keeps its
+    // magnitude and turns by -dθ; Z_min (free space) does not see the delay.
+    const double theta = GetParam();
+    const SpringDamperCoupling coupling{3000.0, 0.7};
+    const double delay_periods = 1.5;
+    const LoopModel delayed{HoldModel::encoder, delay_periods};
+    const LoopModel prompt{HoldModel::encoder};
+    const Complex zmin = impedance_display_zmin(kDevice, delayed, theta, kT);
+    EXPECT_EQ(zmin, impedance_display_zmin(kDevice, prompt, theta, kT));
+    const Complex delayed_term =
+        impedance_display_zmax(kDevice, coupling, delayed, theta, kT) - zmin;
+    const Complex prompt_term = impedance_display_zmax(kDevice, coupling, prompt, theta, kT) - zmin;
+    EXPECT_NEAR(std::abs(delayed_term - prompt_term * std::polar(1.0, -delay_periods * theta)), 0.0,
+                1e-9 * std::abs(prompt_term));
+    const Complex rigid = perceived_impedance(kDevice, coupling, delayed, 1e12, theta, kT);
+    EXPECT_NEAR(std::abs(rigid - zmin - delayed_term), 0.0, 1e-6 * std::abs(rigid));
+}
+
 TEST(CouplingCheck, EncoderModelReproducesColgateAndSchenkelsWallBound) {
     // b_c = 0: (21) with e^{-jθ} sinc²(θ/2) reads 2b/(k_c T) >= sinc²(θ/2), tightest as
     // θ -> 0, so k_c <= 2b/T: Colgate and Schenkel's bound for a wall without damping.

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "hapticd/install/version.hpp"
 #include "hapticd/theory/unit_circle.hpp"
 #include "hapticd/tune/coupling_sizing.hpp"
 #include "hapticd/tune/input_checks.hpp"
@@ -83,6 +84,26 @@ std::string describe_device(const DesignInput& input) {
     return "m = " + number_text(input.device.mass_kg, 4) +
            " kg, b = " + number_text(input.device.damping_n_s_per_m, 4) + " N s/m, " +
            number_text(input.rate_hz, 4) + " Hz servo";
+}
+
+std::string model_names(const std::vector<theory::HoldModel>& models) {
+    std::string names;
+    for (const theory::HoldModel model : models) {
+        names += (names.empty() ? "" : ", ") + std::string(theory::to_string(model));
+    }
+    return names;
+}
+
+std::string chart_caption(const std::string& what, const std::string& models,
+                          const DesignInput& input) {
+    const std::string delay = input.delay_s > 0.0
+                                  ? "loop delay " + number_text(input.delay_s * 1e3, 4) + " ms (" +
+                                        number_text(input.delay_periods(), 4) + " periods)"
+                                  : "no loop delay";
+    const std::string source =
+        input.config ? " (" + input.config->source + ")" : std::string(" (flags)");
+    return what + "; models " + models + "; device " + describe_device(input) + ", " + delay +
+           source + "; hapticd " + install::kVersion;
 }
 
 }  // namespace hapticd::tools

@@ -38,4 +38,14 @@ std::string describe_design(const ImpedanceDesign& design);
 /// "m = 0.1 kg, b = 2 N s/m, 1000 Hz servo".
 std::string describe_device(const DesignInput& input);
 
+/// The names of `models`, comma separated: "paper, encoder, passive".
+std::string model_names(const std::vector<theory::HoldModel>& models);
+
+/// A chart's caption line (the chart script adds the date): what is drawn, the models, the
+/// device with its loop delay and where it came from, and the version:
+/// "haptic-tune plot; models paper, passive; device m = 0.1 kg, b = 2 N s/m, 1000 Hz servo,
+/// no loop delay (config/devices/pen-display.toml); hapticd 0.1.0".
+std::string chart_caption(const std::string& what, const std::string& models,
+                          const DesignInput& input);
+
 }  // namespace hapticd::tools

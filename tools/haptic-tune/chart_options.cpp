@@ -5,8 +5,11 @@
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
+#include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <optional>
 #include <sstream>
 
 namespace hapticd::tools {
@@ -18,7 +21,35 @@ std::string to_lower(std::string text) {
     return text;
 }
 
+/// The whole of `text` as a finite number; nothing for anything else ("", "3.5.1", "inf").
+std::optional<double> parse_finite(const std::string& text) {
+    if (text.empty() || std::isspace(static_cast<unsigned char>(text.front())) != 0) return {};
+    char* end = nullptr;
+    errno = 0;
+    const double value = std::strtod(text.c_str(), &end);
+    if (errno != 0 || end != text.c_str() + text.size() || !std::isfinite(value)) return {};
+    return value;
+}
+
 }  // namespace
+
+void add_chart_file_options(CLI::App& command, ChartLook& look, const std::string& out_flag,
+                            const std::string& out_help) {
+    look.out_flag = out_flag;
+    command.add_option(out_flag, look.out, out_help);
+    command.add_option("--size", look.size,
+                       "figure width x height, in inches unless cm or mm follows, each 1 to "
+                       "40 in: 3.5x2.6in for a journal column (default 7x4.8in)");
+    command.add_option("--font-size", look.font_size_pt, "font size in points (default 9)")
+        ->check(CLI::Range(4.0, 30.0));
+}
+
+void add_chart_look_options(CLI::App& command, ChartLook& look) {
+    add_chart_file_options(command, look, "--out",
+                           "chart file to write: .png, .svg (text kept as text) or .pdf "
+                           "(required unless --json)");
+    command.add_flag("--json", look.json, "print the charted data as JSON");
+}
 
 void add_chart_options(CLI::App& command, ChartOptions& options) {
     add_device_options(command, options.device);
@@ -35,50 +66,98 @@ void add_chart_options(CLI::App& command, ChartOptions& options) {
     command.add_option("--models", options.models,
                        "comma-separated stability models to draw: paper, encoder, passive "
                        "(default paper,encoder,passive)");
-    command.add_option("--out", options.out,
-                       "chart file to write, .png or .svg (required unless --json)");
+    add_chart_look_options(command, options.look);
     command.add_option("--points", options.points, "frequencies on the chart (default 400)")
         ->check(CLI::Range(10, 100000));
-    command.add_flag("--json", options.json, "print the plotted data as JSON");
 }
 
-void check_chart_output(const ChartOptions& options) {
-    if (options.out.empty()) {
-        if (!options.json) throw UsageError("--out FILE (.png or .svg) is required unless --json");
+std::pair<double, double> chart_size_in(const std::string& size) {
+    constexpr double kMinIn = 1.0;
+    constexpr double kMaxIn = 40.0;
+    const std::string allowed =
+        "WxH with an optional unit in, cm or mm (e.g. 3.5x2.6in, "
+        "90x60mm), each 1 to 40 in";
+    std::string text = to_lower(trimmed(size));
+    double inches_per_unit = 1.0;
+    for (const auto& [unit, factor] :
+         {std::pair{"mm", 1.0 / 25.4}, std::pair{"cm", 1.0 / 2.54}, std::pair{"in", 1.0}}) {
+        const std::string suffix(unit);
+        if (text.size() > suffix.size() && text.ends_with(suffix)) {
+            text.resize(text.size() - suffix.size());
+            inches_per_unit = factor;
+            break;
+        }
+    }
+    const std::size_t cross = text.find('x');
+    std::optional<double> width;
+    std::optional<double> height;
+    if (cross != std::string::npos) {
+        width = parse_finite(text.substr(0, cross));
+        height = parse_finite(text.substr(cross + 1));
+    }
+    if (!width || !height) throw UsageError("--size " + size + ": not " + allowed);
+    const std::pair<double, double> inches{*width * inches_per_unit, *height * inches_per_unit};
+    for (const double side : {inches.first, inches.second}) {
+        if (!(side >= kMinIn && side <= kMaxIn)) {
+            throw UsageError("--size " + size + ": " + number_text(side, 4) +
+                             " in is out of range (" + allowed + ")");
+        }
+    }
+    return inches;
+}
+
+nlohmann::ordered_json chart_output_json(const ChartLook& look) {
+    const auto [width_in, height_in] = chart_size_in(look.size);
+    return {{"path", look.out},
+            {"format", chart_format(look.out, look.out_flag)},
+            {"size_in", {width_in, height_in}},
+            {"font_size_pt", look.font_size_pt}};
+}
+
+void check_chart_output(const ChartLook& look) {
+    chart_size_in(look.size);
+    if (look.out.empty()) {
+        if (!look.json) {
+            throw UsageError(look.out_flag +
+                             " FILE (.png, .svg or .pdf) is required unless --json");
+        }
         return;
     }
-    chart_format(options.out);
-    check_writable(options.out);
+    chart_format(look.out, look.out_flag);
+    check_writable(look.out, look.out_flag);
 }
 
-std::string chart_format(const std::string& path) {
+std::string chart_format(const std::string& path, const std::string& flag) {
     const std::string extension = to_lower(std::filesystem::path(path).extension().string());
-    if (extension == ".png") return "png";
-    if (extension == ".svg") return "svg";
-    throw UsageError("--out " + path + ": unsupported file extension '" +
-                     std::filesystem::path(path).extension().string() + "' (allowed: .png, .svg)");
+    for (const char* format : {"png", "svg", "pdf"}) {
+        if (extension == std::string(".") + format) return format;
+    }
+    throw UsageError(flag + " " + path + ": unsupported file extension '" +
+                     std::filesystem::path(path).extension().string() +
+                     "' (allowed: .png, .svg, .pdf)");
 }
 
-void check_writable(const std::string& path) {
+void check_writable(const std::string& path, const std::string& flag) {
     namespace fs = std::filesystem;
     std::error_code error;
     const fs::file_status status = fs::status(path, error);
     if (fs::exists(status)) {
         if (!fs::is_regular_file(status)) {
-            throw UsageError("--out " + path + ": exists and is not a regular file");
+            throw UsageError(flag + " " + path + ": exists and is not a regular file");
         }
         if (::access(path.c_str(), W_OK) != 0) {
-            throw UsageError("--out " + path + ": not writable (" + std::strerror(errno) + ")");
+            throw UsageError(flag + " " + path + ": not writable (" + std::strerror(errno) + ")");
         }
         return;
     }
     fs::path directory = fs::path(path).parent_path();
     if (directory.empty()) directory = ".";
     if (!fs::is_directory(directory, error)) {
-        throw UsageError("--out " + path + ": directory " + directory.string() + " does not exist");
+        throw UsageError(flag + " " + path + ": directory " + directory.string() +
+                         " does not exist");
     }
     if (::access(directory.c_str(), W_OK | X_OK) != 0) {
-        throw UsageError("--out " + path + ": directory " + directory.string() +
+        throw UsageError(flag + " " + path + ": directory " + directory.string() +
                          " is not writable (" + std::strerror(errno) + ")");
     }
 }

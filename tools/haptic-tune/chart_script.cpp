@@ -42,12 +42,12 @@ std::string find_chart_script() {
 
 }  // namespace
 
-void render_chart(nlohmann::ordered_json chart, const std::string& out_path,
-                  const std::string& format) {
+void render_chart(nlohmann::ordered_json chart, const ChartLook& look) {
+    const std::string& out_path = look.out;
     std::string python = env_or_empty("HAPTICD_PYTHON");
     if (python.empty()) python = kDefaultPython;
     const std::string script = find_chart_script();
-    chart["output"] = {{"path", out_path}, {"format", format}};
+    chart["output"] = chart_output_json(look);
     ChildOptions options;
     options.capture = true;  // its stdout too: haptic-tune's own stdout may carry --json
     options.input = chart.dump();

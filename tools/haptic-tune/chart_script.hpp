@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "chart_options.hpp"
 #include "cli_common.hpp"
 
 namespace hapticd::tools {
@@ -18,9 +19,10 @@ class ChartError : public UsageError {
     using UsageError::UsageError;
 };
 
-/// Draws `chart` (its "kind" selects the chart: "design-procedure" or "zwidth") into
-/// `out_path` in `format`. Throws ChartError when the chart cannot be drawn.
-void render_chart(nlohmann::ordered_json chart, const std::string& out_path,
-                  const std::string& format);
+/// Draws `chart` (its "kind" selects the chart: "design-procedure", "zwidth", "run" or
+/// "identify-fit"; its "caption" names the model and the device) into look.out, in the
+/// format its extension names, at look's size and font size. Throws ChartError when the
+/// chart cannot be drawn.
+void render_chart(nlohmann::ordered_json chart, const ChartLook& look);
 
 }  // namespace hapticd::tools

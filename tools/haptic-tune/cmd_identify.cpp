@@ -7,9 +7,13 @@
 #include <limits>
 #include <memory>
 
+#include "chart_options.hpp"
+#include "chart_script.hpp"
 #include "commands.hpp"
+#include "hapticd/install/version.hpp"
 #include "hapticd/tune/identification.hpp"
 #include "hapticd/tune/result_json.hpp"
+#include "identify_chart.hpp"
 
 namespace hapticd::tools {
 namespace {
@@ -24,9 +28,30 @@ struct IdentifyOptions {
     double max_relative_std_error = tune::IdentificationOptions{}.max_relative_std_error;
     double max_stuck_fraction = tune::IdentificationOptions{}.max_stuck_fraction;
     bool json = false;
+    ChartLook chart;  ///< --chart: the fit chart (identify_chart.hpp)
 };
 
+/// Draws the fit chart of `axes` and adds each axis' free-run numbers to its result.
+void draw_fit_chart(const IdentifyOptions& o, const tune::TelemetryLog& log,
+                    const std::vector<tune::IdentifiedAxis>& axes,
+                    std::vector<nlohmann::ordered_json>& results) {
+    std::vector<FreeRunFit> fits;
+    nlohmann::ordered_json chart = identify_fit_chart(log, axes, fits);
+    chart["title"] =
+        "haptic-tune identify: measured velocity against the identified model "
+        "run free under the logged force";
+    chart["caption"] = "model (10) with Coulomb friction and offset, exact zero-order hold; " +
+                       o.log_path + "; hapticd " + install::kVersion;
+    render_chart(chart, o.chart);
+    for (std::size_t i = 0; i < results.size(); ++i) {
+        results[i]["chart"] = o.chart.out;
+        results[i]["free_run_velocity_rms_error_mps"] = fits[i].velocity_rms_error_mps;
+        results[i]["free_run_explained_fraction"] = fits[i].explained_fraction;
+    }
+}
+
 int run_identify(const IdentifyOptions& o) {
+    if (!o.chart.out.empty()) check_chart_output(o.chart);
     tune::TelemetryLog log;
     try {
         log = tune::read_telemetry_log(o.log_path, tune::TelemetryLogOptions::identification());
@@ -60,21 +85,20 @@ int run_identify(const IdentifyOptions& o) {
                       << a.report.termination << "); check the residual\n";
         }
     }
-    if (axes.size() == 1) {
-        nlohmann::ordered_json out = nlohmann::ordered_json(axes.front());
-        out["log"] = o.log_path;
-        print_result(out, o.json);
+    std::vector<nlohmann::ordered_json> results(axes.begin(), axes.end());
+    if (!o.chart.out.empty()) draw_fit_chart(o, log, axes, results);
+    if (results.size() == 1) {
+        results.front()["log"] = o.log_path;
+        print_result(results.front(), o.json);
         return kExitOk;
     }
     if (o.json) {
-        nlohmann::ordered_json list = nlohmann::ordered_json::array();
-        for (const tune::IdentifiedAxis& a : axes) list.push_back(a);
-        print_result({{"log", o.log_path}, {"axes", list}}, true);
+        print_result({{"log", o.log_path}, {"axes", results}}, true);
         return kExitOk;
     }
-    for (std::size_t i = 0; i < axes.size(); ++i) {
+    for (std::size_t i = 0; i < results.size(); ++i) {
         if (i > 0) std::cout << '\n';
-        print_result(axes[i], false);
+        print_result(results[i], false);
     }
     return kExitOk;
 }
@@ -122,6 +146,9 @@ void add_identify_command(CLI::App& app, Invocation& invocation) {
                      "this fraction of the periods (default 0.25)")
         ->check(CLI::Range(0.0, 1.0));
     command->add_flag("--json", options->json, "print the result as JSON");
+    add_chart_file_options(*command, options->chart, "--chart",
+                           "draw the fit: the measured velocity against the identified model run "
+                           "free under the logged force (.png, .svg or .pdf)");
     command->callback(
         [options, &invocation] { invocation.run = [options] { return run_identify(*options); }; });
 }

@@ -2,6 +2,7 @@
 // (21) versus frequency, then synthesize 1/Z_c so that its real part is positive and
 // exceeds this lower bound": one bound curve per stability model, the coupling's
 // conductance Re(1/Z_c) of (16), and each model's binding (worst) frequency.
+#include <algorithm>
 #include <memory>
 
 #include "chart_design.hpp"
@@ -32,9 +33,8 @@ nlohmann::ordered_json model_curve(const DesignInput& input, const ImpedanceDesi
     const theory::CouplingCheck check =
         theory::check_coupling(input.device, design.coupling, model, input.rate_hz);
     // Where to mark the binding point: the worst frequency, or the chart's left edge when
-    // (21) binds in the limit f -> 0 (worst_frequency_hz = 0).
-    const double marker_hz =
-        check.worst_frequency_hz > 0.0 ? check.worst_frequency_hz : frequencies.front();
+    // (21) binds below it (worst_frequency_hz = 0 is the limit f -> 0).
+    const double marker_hz = std::max(check.worst_frequency_hz, frequencies.front());
     const double marker_theta = theory::normalized_frequency(marker_hz, period);
     nlohmann::ordered_json curve = {{"bound", bound}, {"margin", margin}};
     curve.update(nlohmann::ordered_json(check));
@@ -47,7 +47,7 @@ nlohmann::ordered_json model_curve(const DesignInput& input, const ImpedanceDesi
 
 int run_plot(const ChartOptions& o) {
     const std::vector<theory::HoldModel> models = parse_model_list(o.models);
-    check_chart_output(o);
+    check_chart_output(o.look);
     const DesignInput input = resolve_design_input(o.device);
     const ImpedanceDesign design = resolve_impedance_design(o, input);
     const double period = 1.0 / input.rate_hz;
@@ -75,14 +75,16 @@ int run_plot(const ChartOptions& o) {
     chart["frequency_hz"] = frequencies;
     chart["coupling_conductance"] = conductance;
     chart["models"] = per_model;
-    if (!o.out.empty()) render_chart(chart, o.out, chart_format(o.out));
+    chart["caption"] =
+        chart_caption("haptic-tune plot, the design procedure of (21)", model_names(models), input);
+    if (!o.look.out.empty()) render_chart(chart, o.look);
 
-    if (o.json) {
+    if (o.look.json) {
         print_result(chart, true);
         return kExitOk;
     }
     nlohmann::ordered_json summary = {
-        {"chart", o.out},
+        {"chart", o.look.out},
         {"stiffness", design.coupling.stiffness_n_per_m},
         {"damping", design.coupling.damping_n_s_per_m},
         {"coupling_source", design.source == "sized"

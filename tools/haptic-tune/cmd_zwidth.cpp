@@ -1,6 +1,7 @@
 // haptic-tune zwidth: the range of impedances the interface can present to the operator,
 // |Z_min| and |Z_max| against frequency, per stability model.
-//   impedance display, (24)-(25):  Z_min = Z_d,  Z_max = Z_d + Z_c H   (so (26) holds);
+//   impedance display, (24)-(25):  Z_min = Z_d,  Z_max = Z_d + Z_c H   (so (26) holds),
+//                                  with the loop delay in H (--delay, [device.model] delay);
 //   admittance display, (42)-(43): Z_min = Z_cA / (T + Z_cA/Z_dA),  Z_max = Z_dA.
 // Z_d and H are the model's device impedance and hold term (theory/benchmark.hpp).
 #include <cmath>
@@ -49,6 +50,12 @@ nlohmann::ordered_json chart_json(const DesignInput& input, const char* display,
                                   const std::vector<double>& frequencies,
                                   nlohmann::ordered_json per_model) {
     nlohmann::ordered_json chart = {{"kind", "zwidth"}, {"display", display}, {"title", title}};
+    std::string names;  // the models, in the order drawn
+    for (const auto& [name, curves] : per_model.items()) {
+        names += (names.empty() ? "" : ", ") + name;
+    }
+    chart["caption"] =
+        chart_caption(std::string("haptic-tune zwidth, the ") + display + " display", names, input);
     add_input_fields(input, chart);
     chart["nyquist_hz"] = theory::nyquist_hz(1.0 / input.rate_hz);
     chart["design"] = std::move(design);
@@ -59,16 +66,14 @@ nlohmann::ordered_json chart_json(const DesignInput& input, const char* display,
 }
 
 int finish(const ZwidthOptions& o, nlohmann::ordered_json chart) {
-    if (!o.chart.out.empty()) render_chart(chart, o.chart.out, chart_format(o.chart.out));
-    if (o.chart.json) {
+    if (!o.chart.look.out.empty()) render_chart(chart, o.chart.look);
+    if (o.chart.look.json) {
         print_result(chart, true);
         return kExitOk;
     }
-    nlohmann::ordered_json summary = {{"chart", o.chart.out},
-                                      {"display", chart["display"]},
-                                      {"design", chart["design"]},
-                                      {"device", chart["device"]},
-                                      {"rate_hz", chart["rate_hz"]}};
+    nlohmann::ordered_json summary = {{"chart", o.chart.look.out},   {"display", chart["display"]},
+                                      {"design", chart["design"]},   {"device", chart["device"]},
+                                      {"rate_hz", chart["rate_hz"]}, {"delay_s", chart["delay_s"]}};
     // The Z-width as one number per model: |Z_max|/|Z_min| at the lowest charted frequency.
     const std::vector<double> f = chart["frequency_hz"];
     for (const auto& [name, curves] : chart["models"].items()) {
@@ -90,8 +95,9 @@ int run_impedance(const ZwidthOptions& o, const std::vector<theory::HoldModel>& 
     const double period = 1.0 / input.rate_hz;
     const std::vector<double> frequencies = chart_frequencies_hz(input.rate_hz, o.chart.points);
     nlohmann::ordered_json per_model = nlohmann::ordered_json::object();
-    for (const theory::HoldModel model : models) {
-        per_model[std::string(theory::to_string(model))] = magnitudes(
+    for (const theory::HoldModel hold : models) {
+        const theory::LoopModel model{hold, input.delay_periods()};
+        per_model[std::string(theory::to_string(hold))] = magnitudes(
             frequencies, period,
             [&](double theta) {
                 return theory::impedance_display_zmin(input.device, model, theta, period);
@@ -110,6 +116,11 @@ int run_impedance(const ZwidthOptions& o, const std::vector<theory::HoldModel>& 
 int run_admittance(const ZwidthOptions& o, const std::vector<theory::HoldModel>& models,
                    const DesignInput& input) {
     const theory::PiVelocityLoop loop = o.display.pi_loop();
+    if (input.delay_s > 0.0) {
+        throw UsageError("--delay " + number_text(input.delay_s) +
+                         " s: the admittance display's models (27)-(43) have no loop delay; "
+                         "chart it with --delay 0 (or a config whose [device.model] delay is 0)");
+    }
     if (o.chart.stiffness) {
         throw UsageError(
             "--stiffness is the impedance display's coupling; the admittance "
@@ -179,7 +190,7 @@ int run_admittance(const ZwidthOptions& o, const std::vector<theory::HoldModel>&
 
 int run_zwidth(const ZwidthOptions& o) {
     const std::vector<theory::HoldModel> models = parse_model_list(o.chart.models);
-    check_chart_output(o.chart);
+    check_chart_output(o.chart.look);
     const DesignInput input = resolve_design_input(o.chart.device);
     if (o.display.admittance()) return run_admittance(o, models, input);
     return run_impedance(o, models, input);
@@ -200,6 +211,8 @@ void add_zwidth_command(CLI::App& app, Invocation& invocation) {
             "damping from --config, else 0; admittance display: the series damper "
             "of (32), default none (a pure mass)");
     add_display_options(*command, options->display);
+    add_delay_option(*command, options->chart.device);
+    add_velocity_filter_option(*command, options->chart.device);
     command
         ->add_option("--coupling-mass", options->coupling_mass,
                      "admittance display: coupling mass m_c (kg); default sized from (37) "

@@ -12,6 +12,7 @@ void add_size_command(CLI::App& app, Invocation& invocation);
 void add_check_command(CLI::App& app, Invocation& invocation);
 void add_plot_command(CLI::App& app, Invocation& invocation);
 void add_zwidth_command(CLI::App& app, Invocation& invocation);
+void add_plot_run_command(CLI::App& app, Invocation& invocation);
 void add_diag_command(CLI::App& app, Invocation& invocation);
 void add_identify_command(CLI::App& app, Invocation& invocation);
 void add_autotune_command(CLI::App& app, Invocation& invocation);

@@ -23,6 +23,7 @@ int run_main(int argc, char** argv) {
     add_check_command(app, invocation);
     add_plot_command(app, invocation);
     add_zwidth_command(app, invocation);
+    add_plot_run_command(app, invocation);
     add_diag_command(app, invocation);
     add_identify_command(app, invocation);
     add_autotune_command(app, invocation);

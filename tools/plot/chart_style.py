@@ -14,6 +14,7 @@ Raises ImportError when matplotlib or numpy is missing, ValueError for an unknow
 
 import datetime
 import os
+import textwrap
 
 FORMATS = {".png": "png", ".svg": "svg", ".pdf": "pdf"}
 DEFAULT_SIZE_IN = (7.0, 4.8)
@@ -67,20 +68,52 @@ def grid(ax):
     ax.grid(True, which="minor", alpha=0.15)
 
 
-def save(figure, path, caption):
-    """Lays the figure out with the caption line (and the date) below everything, and writes
-    it in the format its extension names, at its own size (never cropped: a paper's column
-    width stays the width asked for)."""
+def wrap(text, width_in, font_pt):
+    """`text` wrapped at `width_in`: a character of a sans-serif font is about 0.55 of its
+    size wide."""
+    chars = max(20, int(width_in * 72.0 / (0.55 * font_pt)))
+    return "\n".join(textwrap.fill(part, width=chars) for part in text.split("\n"))
+
+
+def title(ax, text):
+    """The axes' title, wrapped at the width of the axes (about 80 % of the figure's)."""
     import matplotlib
-    line = f"{caption} \u00b7 {today()}" if caption else today()
-    font_pt = matplotlib.rcParams["font.size"] * 0.8
-    text = figure.text(0.005, 0.005, line, ha="left", va="bottom", fontsize=font_pt,
-                       color="0.35", wrap=True)
-    height_in = figure.get_size_inches()[1]
-    lines = 1 + line.count("\n")
-    reserved = min(0.3, (lines * 1.5 * font_pt / 72.0 + 0.04) / height_in)
-    figure.tight_layout(rect=(0.0, reserved, 1.0, 1.0))
-    text.set_wrap(False)
+    width_in = 0.8 * ax.figure.get_size_inches()[0]
+    ax.set_title(wrap(text, width_in, matplotlib.rcParams["font.size"]))
+
+
+def save(figure, path, caption, legend_from=()):
+    """Lays the figure out and writes it in the format its extension names, at its own size
+    (never cropped: a paper's column width stays the width asked for). Below the axes, from
+    the bottom: the caption line with the date, then one legend of every entry of the axes
+    in `legend_from` (their own legends removed), so that no legend covers a curve."""
+    import matplotlib
+    font_pt = matplotlib.rcParams["font.size"]
+    width_in, height_in = figure.get_size_inches()
+    renderer = figure.canvas.get_renderer()
+    gap = 0.03 / height_in
+    columns = 2 if width_in >= 6.0 else 1
+
+    def height_of(artist):
+        return artist.get_window_extent(renderer).height / figure.dpi / height_in
+
+    line = wrap(f"{caption} \u00b7 {today()}" if caption else today(), width_in, 0.8 * font_pt)
+    text = figure.text(0.005, 0.005, line, ha="left", va="bottom", fontsize=0.8 * font_pt,
+                       color="0.35")
+    bottom = 0.005 + height_of(text) + gap
+    handles, labels = [], []
+    for ax in legend_from:
+        for handle, label in zip(*ax.get_legend_handles_labels()):
+            if not label.startswith("_"):
+                handles.append(handle)
+                labels.append(wrap(label, 0.9 * width_in / columns - 0.5, 0.83 * font_pt))
+        if ax.get_legend() is not None:
+            ax.get_legend().remove()
+    if handles:
+        legend = figure.legend(handles, labels, loc="lower left", bbox_to_anchor=(0.005, bottom),
+                               frameon=False, fontsize="small", borderaxespad=0.0, ncol=columns)
+        bottom += height_of(legend) + gap
+    figure.tight_layout(pad=0.6, rect=(0.0, min(bottom, 0.6), 1.0, 1.0))
     image = image_format(path)
     metadata = {"Creator": "hapticd"} if image in ("svg", "pdf") else {"Software": "hapticd"}
     if image == "svg":

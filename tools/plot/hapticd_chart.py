@@ -1,31 +1,30 @@
 #!/usr/bin/python3
-"""Draws hapticd's design charts. haptic-tune computes every number and sends one JSON
-document on standard input; this script only draws it (matplotlib, Agg backend).
+"""Draws haptic-tune's charts. haptic-tune computes every number and sends one JSON
+document on standard input; this script only draws it (matplotlib, Agg backend), in the
+look every hapticd chart shares (chart_style.py).
 
-Input: {"kind": "design-procedure" | "zwidth", "title": str, "frequency_hz": [...],
-        "models": {name: {...}}, ..., "output": {"path": str, "format": "png" | "svg"}}
-  design-procedure: "coupling_conductance": [...], "nyquist_hz", "design",
-                    models[name] = {"bound": [...], "margin": [...],
-                                    "worst_margin", "worst_frequency_hz",
-                                    "marker": {"frequency_hz", "bound", "conductance"}}
-  zwidth:           "display": "impedance" | "admittance", "nyquist_hz",
-                    models[name] = {"zmin_magnitude": [...], "zmax_magnitude": [...]}
+Input: {"kind": str, "title": str, "caption": str, ...the kind's data...,
+        "output": {"path": str, "format": "png" | "svg" | "pdf",
+                   "size_in": [width, height], "font_size_pt": number}}
+Kinds: "design-procedure" and "zwidth" (design_charts.py), "run" (run_chart.py),
+"identify-fit" (fit_chart.py); each module's docstring has its data.
 
 Exit codes: 0 drawn; 2 bad input; 3 matplotlib (or numpy) cannot be imported.
 """
 
 import json
-import math
 import sys
+
+import chart_style
+import design_charts
+import fit_chart
+import run_chart
 
 EXIT_BAD_INPUT = 2
 EXIT_NO_MATPLOTLIB = 3
 
-MODEL_STYLE = {
-    "paper": {"color": "tab:blue", "label": "paper: ZOH (13) as printed"},
-    "encoder": {"color": "tab:red", "label": "encoder: exact ZOH and backward difference"},
-}
-FALLBACK_COLORS = ["tab:green", "tab:purple", "tab:brown"]
+DRAW = {**design_charts.DRAW, **run_chart.DRAW, **fit_chart.DRAW}
+BAD_DATA = (KeyError, TypeError, ValueError, IndexError, design_charts.BadChart)
 
 
 def fail(message, code=EXIT_BAD_INPUT):
@@ -33,180 +32,22 @@ def fail(message, code=EXIT_BAD_INPUT):
     sys.exit(code)
 
 
-def style_for(name, index):
-    style = MODEL_STYLE.get(name)
-    if style is not None:
-        return style
-    return {"color": FALLBACK_COLORS[index % len(FALLBACK_COLORS)], "label": name}
-
-
-def as_array(np, values, what):
-    if not isinstance(values, list):
-        fail(f"{what} must be an array")
-    # JSON null stands for a non-finite number; a log axis cannot show it.
-    return np.array([math.nan if v is None else float(v) for v in values], dtype=float)
-
-
-def positive(np, values):
-    """The values with everything a log axis cannot show (<= 0, non-finite) masked."""
-    return np.where(np.isfinite(values) & (values > 0.0), values, np.nan)
-
-
-def format_hz(frequency):
-    return f"{frequency:.4g} Hz"
-
-
-def finish_axes(ax, frequency, nyquist, label_nyquist=True):
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlim(frequency[0], nyquist * 1.15)
-    ax.axvline(nyquist, color="0.4", linestyle=":", linewidth=1.0)
-    if label_nyquist:
-        ax.annotate(f"Nyquist {format_hz(nyquist)}", xy=(nyquist, 0.5), xycoords=("data", "axes fraction"),
-                    rotation=90, ha="right", va="center", fontsize=8, color="0.3",
-                    xytext=(-3, 0), textcoords="offset points")
-    ax.set_xlabel("frequency f (Hz)")
-    ax.grid(True, which="major", alpha=0.45)
-    ax.grid(True, which="minor", alpha=0.15)
-
-
-def y_limits(np, curves, low_band_mask=None):
-    """A y range that shows every curve over most of the band: curves that dive towards
-    zero (the paper bound at Nyquist) or shoot to infinity (Tustin's warping) leave the
-    frame instead of squeezing everything else into a sliver."""
-    pooled = []
-    for values in curves:
-        shown = values if low_band_mask is None else values[low_band_mask]
-        shown = shown[np.isfinite(shown) & (shown > 0.0)]
-        if shown.size:
-            pooled.append(shown)
-    if not pooled:
-        return None
-    pooled = np.concatenate(pooled)
-    top = float(pooled.max())
-    bottom = max(float(pooled.min()), top * 1e-12)
-    return bottom / 2.0, top * 2.0
-
-
-def verdict_text(margin):
-    # Margins within rounding of zero mean (21) holds with equality: a design sized to
-    # the bound lands there, on either side of zero by a few ulps.
-    if abs(margin) < 1e-9:
-        return "(21) holds with equality"
-    return "(21) holds" if margin > 0.0 else "(21) FAILS"
-
-
-def draw_design_procedure(plt, np, chart, figure):
-    frequency = as_array(np, chart["frequency_hz"], "frequency_hz")
-    conductance = as_array(np, chart["coupling_conductance"], "coupling_conductance")
-    nyquist = float(chart["nyquist_hz"])
-    design = chart.get("design", {})
-    models = chart.get("models", {})
-    if not models:
-        fail("no models to draw")
-    ax, ax_margin = figure.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [3, 1.25]})
-    below_nyquist = frequency <= 0.9 * nyquist
-
-    curves = [conductance]
-    margins = []
-    ax.plot(frequency, positive(np, conductance), color="black", linewidth=2.2,
-            label="left side of (21): Re(1/Z_c) of the coupling (16), "
-                  f"k_c = {design.get('stiffness', float('nan')):.4g} N/m, "
-                  f"b_c = {design.get('damping', float('nan')):.4g} N s/m")
-    for index, (name, model) in enumerate(models.items()):
-        style = style_for(name, index)
-        bound = as_array(np, model["bound"], f"models.{name}.bound")
-        margin = as_array(np, model["margin"], f"models.{name}.margin")
-        curves.append(bound)
-        margins.append(margin)
-        ax.plot(frequency, positive(np, bound), color=style["color"], linewidth=1.6,
-                linestyle="--", label=f"right side of (21), {style['label']}")
-        # Where the coupling falls short of this model's bound, (21) fails.
-        short = np.isfinite(bound) & (conductance < bound * (1.0 - 1e-9))
-        if short.any():
-            ax.fill_between(frequency, positive(np, conductance), positive(np, bound),
-                            where=short, color=style["color"], alpha=0.2, linewidth=0)
-        marker = model["marker"]
-        worst_hz = float(model["worst_frequency_hz"])
-        worst = float(model["worst_margin"])
-        where = format_hz(worst_hz) if worst_hz > 0.0 else "f \u2192 0"
-        ax.plot([marker["frequency_hz"]], [marker["bound"]], marker="o", markersize=8,
-                markerfacecolor="white", markeredgecolor=style["color"], markeredgewidth=2,
-                linestyle="none", clip_on=False, zorder=5,
-                label=f"{name}: binds at {where}, worst margin {worst:+.3g}, {verdict_text(worst)}")
-        ax_margin.plot(frequency, margin, color=style["color"], linewidth=1.6, label=name)
-        ax_margin.plot([marker["frequency_hz"]], [worst], marker="o", markersize=7,
-                       markerfacecolor="white", markeredgecolor=style["color"],
-                       markeredgewidth=2, linestyle="none", clip_on=False, zorder=5)
-        if worst_hz > 0.0:
-            for axes in (ax, ax_margin):
-                axes.axvline(worst_hz, color=style["color"], linestyle=":", linewidth=1.0)
-
-    limits = y_limits(np, curves, low_band_mask=below_nyquist)
-    if limits:
-        ax.set_ylim(*limits)
-    finish_axes(ax, frequency, nyquist)
-    ax.set_xlabel("")
-    ax.set_ylabel("conductance Re(1/Z) (m/(N s))")
-    ax.legend(loc="upper left", fontsize=8, framealpha=0.92)
-
-    # Lower panel: the relative margin Re(1/Z_c)/bound - 1; (21) holds where it is >= 0.
-    # Linear near zero, where the verdict is, logarithmic beyond 1 (the margin grows without
-    # bound where a model's bound falls to zero).
-    ax_margin.axhline(0.0, color="black", linewidth=1.0)
-    for index, (name, margin) in enumerate(zip(models, margins)):
-        failing = np.isfinite(margin) & (margin < -1e-9)
-        if failing.any():
-            ax_margin.fill_between(frequency, margin, 0.0, where=failing,
-                                   color=style_for(name, index)["color"], alpha=0.3,
-                                   linewidth=0)
-    finish_axes(ax_margin, frequency, nyquist, label_nyquist=False)
-    ax_margin.set_yscale("symlog", linthresh=1.0, linscale=1.5)
-    shown = np.concatenate([m[below_nyquist & np.isfinite(m)] for m in margins])
-    if shown.size:
-        ax_margin.set_ylim(min(-0.25, float(shown.min()) * 1.3),
-                           max(1.0, float(shown.max()) * 2.0))
-    ax_margin.set_ylabel("margin of (21)\nRe(1/Z_c)/bound \u2212 1")
-    ax_margin.legend(loc="upper left", fontsize=8, framealpha=0.92)
-    return ax
-
-
-def draw_zwidth(plt, np, chart, figure):
-    ax = figure.subplots()
-    frequency = as_array(np, chart["frequency_hz"], "frequency_hz")
-    nyquist = float(chart["nyquist_hz"])
-    models = chart.get("models", {})
-    if not models:
-        fail("no models to draw")
-    admittance = chart.get("display") == "admittance"
-    zmin_eq, zmax_eq = ("(42)", "(43)") if admittance else ("(24)", "(25)")
-
-    curves = []
-    for index, (name, model) in enumerate(models.items()):
-        style = style_for(name, index)
-        zmin = as_array(np, model["zmin_magnitude"], f"models.{name}.zmin_magnitude")
-        zmax = as_array(np, model["zmax_magnitude"], f"models.{name}.zmax_magnitude")
-        curves += [zmin, zmax]
-        ax.plot(frequency, positive(np, zmax), color=style["color"], linewidth=1.8,
-                label=f"|Z_max| {zmax_eq}, {style['label']}")
-        ax.plot(frequency, positive(np, zmin), color=style["color"], linewidth=1.4,
-                linestyle="--", label=f"|Z_min| {zmin_eq}, {style['label']}")
-        ax.fill_between(frequency, positive(np, zmin), positive(np, zmax),
-                        color=style["color"], alpha=0.08, linewidth=0)
-
-    # Tustin's rule (12) sends |Z_dI| to infinity at Nyquist; scale to the band below it.
-    limits = y_limits(np, curves, low_band_mask=frequency <= 0.9 * nyquist)
-    if limits:
-        ax.set_ylim(limits[0], limits[1] * 5.0)
-    finish_axes(ax, frequency, nyquist)
-    ax.set_ylabel("impedance magnitude |Z| (N s/m)")
-    ax.legend(loc="best", fontsize=8, framealpha=0.92)
-    ax.text(0.99, 0.01, "shaded: the Z-width, from |Z_min| to |Z_max|",
-            transform=ax.transAxes, ha="right", va="bottom", fontsize=8, color="0.3")
-    return ax
-
-
-DRAW = {"design-procedure": draw_design_procedure, "zwidth": draw_zwidth}
+def read_output(chart):
+    output = chart.get("output") or {}
+    path = output.get("path")
+    image_format = output.get("format")
+    if not path or image_format not in chart_style.FORMATS.values():
+        fail("output.path and output.format (png, svg or pdf) are required")
+    try:
+        size_in = tuple(float(side) for side in output.get("size_in", chart_style.DEFAULT_SIZE_IN))
+        font_size_pt = float(output.get("font_size_pt", chart_style.DEFAULT_FONT_SIZE_PT))
+    except (TypeError, ValueError) as error:
+        fail(f"output.size_in and output.font_size_pt must be numbers: {error}")
+    if len(size_in) != 2 or not all(1.0 <= side <= 40.0 for side in size_in):
+        fail(f"output.size_in {size_in} must be [width, height], each 1 to 40 in")
+    if not 4.0 <= font_size_pt <= 30.0:
+        fail(f"output.font_size_pt {font_size_pt} must be 4 to 30")
+    return path, image_format, size_in, font_size_pt
 
 
 def main():
@@ -219,30 +60,23 @@ def main():
     kind = chart.get("kind")
     if kind not in DRAW:
         fail(f"unknown chart kind {kind!r} (allowed: {', '.join(DRAW)})")
-    output = chart.get("output") or {}
-    path = output.get("path")
-    image_format = output.get("format")
-    if not path or image_format not in ("png", "svg"):
-        fail("output.path and output.format (png or svg) are required")
-
+    path, image_format, size_in, font_size_pt = read_output(chart)
+    if chart_style.image_format(path) != image_format:
+        fail(f"output.format {image_format} does not match {path}")
     try:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-        import numpy as np
+        plt, np = chart_style.pyplot(font_size_pt)
     except ImportError as error:
         fail(f"cannot import matplotlib with {sys.executable}: {error}; "
              "install python3-matplotlib", EXIT_NO_MATPLOTLIB)
 
-    figure = plt.figure(figsize=(10, 7.2 if kind == "design-procedure" else 6.2))
+    figure = chart_style.new_figure(plt, size_in)
     try:
-        top_axes = DRAW[kind](plt, np, chart, figure)
-    except (KeyError, TypeError, ValueError) as error:
+        axes = DRAW[kind](plt, np, chart, figure)
+    except BAD_DATA as error:
         fail(f"malformed {kind} chart data: {error!r}")
-    top_axes.set_title(chart.get("title", ""), fontsize=10)
-    figure.tight_layout()
+    chart_style.title(axes[0], chart.get("title", ""))
     try:
-        figure.savefig(path, format=image_format, dpi=130)
+        chart_style.save(figure, path, chart.get("caption", ""), legend_from=axes)
     except OSError as error:
         fail(f"cannot write {path}: {error}")
     return 0

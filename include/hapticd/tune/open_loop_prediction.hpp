@@ -9,6 +9,8 @@
 
 #include <vector>
 
+#include "hapticd/tune/identification_model.hpp"
+
 namespace hapticd::tune {
 
 struct OpenLoopPrediction {
@@ -22,5 +24,23 @@ struct OpenLoopPrediction {
 /// coulomb >= 0, period > 0 (std::invalid_argument otherwise).
 OpenLoopPrediction predict_open_loop(const std::vector<double>& force_n, double mass_kg,
                                      double damping_n_s_per_m, double coulomb_n, double period_s);
+
+/// The model (10)+ m dv/dt + b v = F - F_c sign(v) + F_0 run free under a logged force:
+/// period n, [nT, (n+1)T), holds F[n - q - 1] for its first `delay.fraction` of T and
+/// F[n - q] for the rest (forces before the log are 0), from position 0 and `start_velocity`.
+/// Returns the position at the start of every period, x[0] = 0: the backward difference of
+/// it is the average velocity the model predicts over each period, the quantity a logged
+/// position's difference measures. What `haptic-tune identify --chart` draws against the
+/// log (simulation error: no state is refitted along the way). Throws std::invalid_argument
+/// for mass <= 0, damping < 0, coulomb < 0 or period <= 0.
+struct FreeRunModel {
+    double mass_kg = 0.0;
+    double damping_n_s_per_m = 0.0;
+    double coulomb_n = 0.0;
+    double offset_n = 0.0;
+};
+std::vector<double> free_run_positions(const std::vector<double>& force_n,
+                                       const FreeRunModel& model, double period_s, HoldDelay delay,
+                                       double start_velocity_mps);
 
 }  // namespace hapticd::tune
