@@ -1,0 +1,95 @@
+#!/usr/bin/python3
+"""The evidence's quick mode end to end on this build (tools/evidence/make_evidence.py
+--quick, into a scratch directory): every section writes its data and charts, the page
+renders from them with every fact filled, and the closed-loop claims RESULTS.md makes hold
+on the fresh runs:
+
+  - the passive model's gains are stable for every operator the quick map runs;
+  - the paper's gains are unstable hands-off (its hold (13) is optimistic);
+  - the encoder model's gains are unstable for the steel grip tuned to Nyquist;
+  - without a coupling the stiffest stable wall is within a grid step of 2b/T, and with the
+    passive model's coupling every wall on the grid is stable;
+  - the passive model is never optimistic about the loop delay.
+
+    evidence_quick_test.py --build BUILD_DIR
+"""
+
+import argparse
+import json
+import pathlib
+import shutil
+import subprocess
+import sys
+import tempfile
+import unittest
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+BUILD = None
+OUT = None
+
+
+def setUpModule():
+    global OUT
+    OUT = pathlib.Path(tempfile.mkdtemp(prefix="hapticd-evidence-quick-"))
+    done = subprocess.run([sys.executable, str(ROOT / "tools/evidence/make_evidence.py"),
+                           "--quick", "--build", str(BUILD), "--out", str(OUT)],
+                          capture_output=True, text=True, check=False)
+    if done.returncode != 0:
+        raise RuntimeError(f"make_evidence.py --quick failed ({done.returncode}):\n"
+                           f"{done.stdout}\n{done.stderr}")
+
+
+def tearDownModule():
+    shutil.rmtree(OUT, ignore_errors=True)
+
+
+def section(name):
+    with open(OUT / f"{name}.json", encoding="utf-8") as f:
+        return json.load(f)
+
+
+class EvidenceQuick(unittest.TestCase):
+    def test_every_section_wrote_its_charts_and_the_page_is_whole(self):
+        maps = section("stability-maps")
+        self.assertEqual(maps["mode"], "quick")
+        self.assertGreater(len(maps["charts"]), 0)
+        for chart in maps["charts"]:
+            path = OUT / chart
+            self.assertTrue(path.is_file(), chart)
+            self.assertGreater(path.stat().st_size, 1000, chart)
+        page = (OUT / "RESULTS.md").read_text(encoding="utf-8")
+        self.assertNotIn("{{", page)
+        self.assertIn("| passive | 2,000 N/m |", page)
+
+    def test_the_models_gains_against_the_operators(self):
+        designs = {d["design"]: d for d in section("stability-maps")["operators"]["designs"]}
+        self.assertEqual(designs["passive"]["unstable_for"], [])
+        self.assertIn("hands-off", designs["paper"]["unstable_for"])
+        self.assertIn("nyquist-grip", designs["encoder"]["unstable_for"])
+        self.assertGreater(designs["paper"]["verdicts"]["hands-off"]["rise_growth_per_s"], 1.0)
+
+    def test_the_coupling_makes_the_stiffest_wall_the_grids_stiffest(self):
+        walls = section("stability-maps")["walls"]
+        rows = {r["design"]: r for r in walls["rows"]}
+        grid = walls["walls_n_per_m"]
+        colgate = walls["colgate_bound_n_per_m"]
+        step = grid[1] / grid[0]
+        self.assertLessEqual(rows["none"]["stiffest_stable_wall_n_per_m"], colgate)
+        self.assertGreater(rows["none"]["stiffest_stable_wall_n_per_m"], colgate / step)
+        self.assertEqual(rows["passive"]["stiffest_stable_wall_n_per_m"], grid[-1])
+
+    def test_the_passive_model_is_never_optimistic_about_the_delay(self):
+        block = section("stability-maps")["delay"]
+        for row in block["rows"]:
+            limit = row["predicted_n_per_m"]["passive"]
+            for k, verdict in zip(block["stiffness_n_per_m"], row["verdicts"]):
+                if k <= limit:
+                    self.assertTrue(verdict["stable"], (row["delay_periods"], k))
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--build", type=pathlib.Path, required=True)
+    args, rest = parser.parse_known_args()
+    BUILD = args.build
+    unittest.main(argv=[sys.argv[0]] + rest, verbosity=2)
