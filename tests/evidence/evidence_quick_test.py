@@ -9,7 +9,11 @@ on the fresh runs:
   - the encoder model's gains are unstable for the steel grip tuned to Nyquist;
   - without a coupling the stiffest stable wall is within a grid step of 2b/T, and with the
     passive model's coupling every wall on the grid is stable;
-  - the passive model is never optimistic about the loop delay.
+  - the passive model is never optimistic about the loop delay;
+  - at every servo rate the bisected limit, hands-off, is within a factor 2 of the passive
+    model's 2b/T, and the paper's 8b/T is at or past the first unstable run;
+  - the timing benches measured both programs under both loads, and an axis costs
+    instructions.
 
     evidence_quick_test.py --build BUILD_DIR
 """
@@ -50,13 +54,14 @@ def section(name):
 
 class EvidenceQuick(unittest.TestCase):
     def test_every_section_wrote_its_charts_and_the_page_is_whole(self):
-        maps = section("stability-maps")
-        self.assertEqual(maps["mode"], "quick")
-        self.assertGreater(len(maps["charts"]), 0)
-        for chart in maps["charts"]:
-            path = OUT / chart
-            self.assertTrue(path.is_file(), chart)
-            self.assertGreater(path.stat().st_size, 1000, chart)
+        for name in ("stability-maps", "rate", "timing"):
+            data = section(name)
+            self.assertEqual(data["mode"], "quick")
+            self.assertGreater(len(data["charts"]), 0, name)
+            for chart in data["charts"]:
+                path = OUT / chart
+                self.assertTrue(path.is_file(), chart)
+                self.assertGreater(path.stat().st_size, 1000, chart)
         page = (OUT / "RESULTS.md").read_text(encoding="utf-8")
         self.assertNotIn("{{", page)
         self.assertIn("| passive | 2,000 N/m |", page)
@@ -85,6 +90,31 @@ class EvidenceQuick(unittest.TestCase):
             for k, verdict in zip(block["stiffness_n_per_m"], row["verdicts"]):
                 if k <= limit:
                     self.assertTrue(verdict["stable"], (row["delay_periods"], k))
+
+    def test_the_rate_buys_stiffness_as_the_passive_model_says(self):
+        for row in section("rate")["rows"]:
+            passive = row["predicted_n_per_m"]["passive"]
+            self.assertAlmostEqual(passive, 4.0 * row["rate_hz"], delta=1e-6 * passive)  # 2b/T
+            coupling = row["coupling"]
+            self.assertIsNotNone(coupling["stiffest_stable_n_per_m"], row["rate_hz"])
+            self.assertGreaterEqual(coupling["stiffest_stable_n_per_m"], 0.5 * passive)
+            self.assertLessEqual(coupling["first_unstable_n_per_m"], 2.0 * passive)
+            self.assertGreaterEqual(row["predicted_n_per_m"]["paper"],
+                                    coupling["first_unstable_n_per_m"])
+
+    def test_the_timing_benches_measured_both_programs_and_the_axes_cost(self):
+        timing = section("timing")
+        for load in ("idle", "stress"):
+            for program in ("cyclictest", "hapticd"):
+                p50 = timing["wake_latency"]["loads"][load]["programs"][program][
+                    "wake_latency_us"]["p50"]
+                self.assertIsNotNone(p50, (load, program))
+                self.assertGreater(p50, 0.0)
+        demo = {c["axes"]: c["instructions_per_tick"] for c in timing["instructions"]["configs"]
+                if c["scene_name"] == "demo-wall"}
+        self.assertLess(demo[1], demo[2])
+        self.assertLess(demo[2], demo[3])
+        self.assertGreater(timing["servo_tick"]["demo_wall_1axis"]["cpu_time_ns"], 0.0)
 
 
 if __name__ == "__main__":

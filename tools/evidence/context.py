@@ -30,16 +30,16 @@ class Context:
                                 f"(cmake --build --preset release)")
         return str(path)
 
-    def run(self, args, what, env=None, timeout_s=600):
+    def run(self, args, what, env=None, timeout_s=600, exits=(0,)):
         """Runs `args`; returns its standard output. EvidenceError naming `what`, the command
-        and its messages when it exits other than 0."""
+        and its messages when its exit status is not one of `exits`."""
         merged = dict(os.environ, **(env or {}))
         try:
             done = subprocess.run(args, capture_output=True, text=True, env=merged,
                                   timeout=timeout_s, check=False)
         except subprocess.TimeoutExpired as error:
             raise EvidenceError(f"{what}: timed out after {timeout_s} s: {' '.join(args)}") from error
-        if done.returncode != 0:
+        if done.returncode not in exits:
             raise EvidenceError(f"{what}: exit {done.returncode}: {' '.join(args)}\n"
                                 f"{done.stderr.strip()}")
         return done.stdout

@@ -43,9 +43,15 @@ def designs(ctx, scene_path):
 
 def sized_stiffness(ctx, device, design, coupling_damping_n_s_per_m):
     """k_c (N/m) the design's model sizes for the device at b_c."""
+    return size(ctx, device, design, coupling_damping_n_s_per_m)["stiffness"]
+
+
+def size(ctx, device, design, coupling_damping_n_s_per_m):
+    """haptic-tune size's whole answer. Its exit 1 (the exact model's cross-check refused the
+    answer) is an answer too: the JSON says why (exact_check)."""
     args = [ctx.program("haptic-tune"), "size", "--mass", number(device.mass_kg), "--damping",
             number(device.damping_n_s_per_m), "--rate", number(device.rate_hz),
             "--coupling-damping", number(coupling_damping_n_s_per_m), "--json", *design.options]
     if device.delay_s > 0:
         args += ["--delay", number(device.delay_s)]
-    return ctx.run_json(args, f"haptic-tune size ({design.name})")["stiffness"]
+    return ctx.run_json(args, f"haptic-tune size ({design.name})", exits=(0, 1))

@@ -12,6 +12,7 @@ bounces off the wall (the wall only pushes).
 """
 
 import dataclasses
+import json
 import math
 
 # The sim's encoder at 1 nm, not the pen display's 10 um: a stiff grip holds the handle
@@ -137,10 +138,12 @@ def run_point(ctx, point, tag):
                            "--from", number(JUDGE_FROM_S), "--window", number(WINDOW_S),
                            "--floor", number(FLOOR_M)], f"haptic-tune plot-run for {tag}")
     log.unlink()
+    summary = json.loads((work / "summary.json").read_text())
     rose = judged["peak_amplitude_m"] >= RISE_FACTOR * FLOOR_M and judged["rise_growth_per_s"] > 0
     stable = judged["growth_per_s"] <= GROWTH_LIMIT_PER_S and not rose
     return {"growth_per_s": judged["growth_per_s"],
             "rise_growth_per_s": judged["rise_growth_per_s"],
             "peak_amplitude_m": judged["peak_amplitude_m"],
             "faults": [f["fault"] for f in judged["faults"]],
+            "tick_compute_us_p50": summary["tick_compute_us"]["p50"],
             "stable": bool(stable)}

@@ -28,11 +28,16 @@ sys.path.insert(0, str(HERE.parent / "plot"))
 import context  # noqa: E402
 import maps  # noqa: E402
 import maps_charts  # noqa: E402
+import rate  # noqa: E402
+import rate_charts  # noqa: E402
 import results_doc  # noqa: E402
+import timing  # noqa: E402
 
 # Each section: run(ctx) -> its data (written as NAME.json), and
 # draw(data, out_dir, caption) -> the chart files it wrote.
-SECTIONS = {"stability-maps": (maps.run, maps_charts.draw)}
+SECTIONS = {"stability-maps": (maps.run, maps_charts.draw),
+            "rate": (rate.run, rate_charts.draw),
+            "timing": (timing.run, timing.draw)}
 
 
 def arguments():

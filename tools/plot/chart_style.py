@@ -116,6 +116,9 @@ def save(figure, path, caption, legend_from=()):
     figure.tight_layout(pad=0.6, rect=(0.0, min(bottom, 0.6), 1.0, 1.0))
     image = image_format(path)
     metadata = {"Creator": "hapticd"} if image in ("svg", "pdf") else {"Software": "hapticd"}
+    # No time stamp in the file: the same chart, the same bytes.
     if image == "svg":
-        metadata["Date"] = None  # no time stamp in the file: the same chart, the same bytes
+        metadata["Date"] = None
+    if image == "pdf":
+        metadata["CreationDate"] = None
     figure.savefig(path, format=image, dpi=PNG_DPI, metadata=metadata)
