@@ -13,7 +13,9 @@ on the fresh runs:
   - at every servo rate the bisected limit, hands-off, is within a factor 2 of the passive
     model's 2b/T, and the paper's 8b/T is at or past the first unstable run;
   - the timing benches measured both programs under both loads, and an axis costs
-    instructions.
+    instructions;
+  - on the emulated board the firmware's share of the loop delay is at most half a period,
+    the passive model's k_c with that delay is stable and without it unstable.
 
     evidence_quick_test.py --build BUILD_DIR
 """
@@ -54,7 +56,7 @@ def section(name):
 
 class EvidenceQuick(unittest.TestCase):
     def test_every_section_wrote_its_charts_and_the_page_is_whole(self):
-        for name in ("stability-maps", "rate", "timing"):
+        for name in ("stability-maps", "rate", "timing", "firmware"):
             data = section(name)
             self.assertEqual(data["mode"], "quick")
             self.assertGreater(len(data["charts"]), 0, name)
@@ -115,6 +117,16 @@ class EvidenceQuick(unittest.TestCase):
         self.assertLess(demo[1], demo[2])
         self.assertLess(demo[2], demo[3])
         self.assertGreater(timing["servo_tick"]["demo_wall_1axis"]["cpu_time_ns"], 0.0)
+
+    def test_on_the_board_the_delay_aware_coupling_holds_and_the_naive_one_grows(self):
+        fil = section("firmware")
+        self.assertLessEqual(fil["delay"]["p99_periods"], 0.5)
+        self.assertGreater(fil["delay"]["p50_periods"], 0.3)
+        measured = fil["measured"]
+        self.assertIsNotNone(measured["stiffest_stable_n_per_m"])
+        self.assertLessEqual(fil["passive_with_delay_n_per_m"], measured["stiffest_stable_n_per_m"])
+        self.assertGreaterEqual(fil["passive_without_delay_n_per_m"],
+                                measured["first_unstable_n_per_m"])
 
 
 if __name__ == "__main__":

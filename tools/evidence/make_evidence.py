@@ -26,6 +26,7 @@ sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(HERE.parent / "plot"))
 
 import context  # noqa: E402
+import firmware  # noqa: E402
 import maps  # noqa: E402
 import maps_charts  # noqa: E402
 import rate  # noqa: E402
@@ -37,7 +38,8 @@ import timing  # noqa: E402
 # draw(data, out_dir, caption) -> the chart files it wrote.
 SECTIONS = {"stability-maps": (maps.run, maps_charts.draw),
             "rate": (rate.run, rate_charts.draw),
-            "timing": (timing.run, timing.draw)}
+            "timing": (timing.run, timing.draw),
+            "firmware": (firmware.run, firmware.draw)}
 
 
 def arguments():

@@ -22,7 +22,7 @@ sys.path.insert(0, str(HERE))
 
 import facts  # noqa: E402
 
-TOKEN = re.compile(r"\{\{([a-z_.]+)\}\}")
+TOKEN = re.compile(r"\{\{([a-z0-9_.]+)\}\}")
 CHART = re.compile(r"\]\((results/[^)]+)\)")
 
 
