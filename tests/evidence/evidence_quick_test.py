@@ -14,6 +14,8 @@ on the fresh runs:
     model's 2b/T, and the paper's 8b/T is at or past the first unstable run;
   - the timing benches measured both programs under both loads, and an axis costs
     instructions;
+  - a sphere primitive has no surface error and holds the handle where the grasp and the
+    coupling in series put it; tangent planes err less as they multiply;
   - on the emulated board the firmware's share of the loop delay is at most half a period,
     the passive model's k_c with that delay is stable and without it unstable.
 
@@ -56,7 +58,7 @@ def section(name):
 
 class EvidenceQuick(unittest.TestCase):
     def test_every_section_wrote_its_charts_and_the_page_is_whole(self):
-        for name in ("stability-maps", "rate", "timing", "firmware"):
+        for name in ("stability-maps", "rate", "timing", "firmware", "scene-detail"):
             data = section(name)
             self.assertEqual(data["mode"], "quick")
             self.assertGreater(len(data["charts"]), 0, name)
@@ -127,6 +129,21 @@ class EvidenceQuick(unittest.TestCase):
         self.assertLessEqual(fil["passive_with_delay_n_per_m"], measured["stiffest_stable_n_per_m"])
         self.assertGreaterEqual(fil["passive_without_delay_n_per_m"],
                                 measured["first_unstable_n_per_m"])
+
+    def test_a_finer_model_of_the_cavity_errs_less_and_the_sphere_not_at_all(self):
+        scene = section("scene-detail")
+        rows = {r["planes"]: r for r in scene["rows"]}
+        self.assertLess(rows[0]["surface_error_max_m"], 1e-6)
+        # At rest the grasp's spring (500 N/m, set 0.5 R past the wall) and the coupling
+        # share the push: depth = k_g push / (k_g + k_c).
+        push_m = 0.5 * scene["radius_m"]
+        expected = 500.0 * push_m / (500.0 + scene["coupling_n_per_m"])
+        self.assertAlmostEqual(rows[0]["handle_depth_mean_m"], expected, delta=0.02 * expected)
+        faceted = sorted(p for p in rows if p > 0)
+        self.assertGreater(rows[faceted[0]]["surface_error_max_m"],
+                           rows[faceted[-1]]["surface_error_max_m"])
+        for planes in faceted:
+            self.assertEqual(rows[planes]["solver_not_converged"], 0, planes)
 
 
 if __name__ == "__main__":

@@ -32,6 +32,7 @@ import maps_charts  # noqa: E402
 import rate  # noqa: E402
 import rate_charts  # noqa: E402
 import results_doc  # noqa: E402
+import scene_detail  # noqa: E402
 import timing  # noqa: E402
 
 # Each section: run(ctx) -> its data (written as NAME.json), and
@@ -39,7 +40,8 @@ import timing  # noqa: E402
 SECTIONS = {"stability-maps": (maps.run, maps_charts.draw),
             "rate": (rate.run, rate_charts.draw),
             "timing": (timing.run, timing.draw),
-            "firmware": (firmware.run, firmware.draw)}
+            "firmware": (firmware.run, firmware.draw),
+            "scene-detail": (scene_detail.run, scene_detail.draw)}
 
 
 def arguments():
