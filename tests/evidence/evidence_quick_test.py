@@ -16,6 +16,8 @@ on the fresh runs:
     instructions;
   - a sphere primitive has no surface error and holds the handle where the grasp and the
     coupling in series put it; tangent planes err less as they multiply;
+  - the check of (21) finds the same worst margin on a sparse grid as on a dense one, and a
+    thinned operator sweep misses the encoder model's instability that the whole one finds;
   - on the emulated board the firmware's share of the loop delay is at most half a period,
     the passive model's k_c with that delay is stable and without it unstable.
 
@@ -58,7 +60,7 @@ def section(name):
 
 class EvidenceQuick(unittest.TestCase):
     def test_every_section_wrote_its_charts_and_the_page_is_whole(self):
-        for name in ("stability-maps", "rate", "timing", "firmware", "scene-detail"):
+        for name in ("stability-maps", "rate", "timing", "firmware", "scene-detail", "effort"):
             data = section(name)
             self.assertEqual(data["mode"], "quick")
             self.assertGreater(len(data["charts"]), 0, name)
@@ -144,6 +146,17 @@ class EvidenceQuick(unittest.TestCase):
                            rows[faceted[-1]]["surface_error_max_m"])
         for planes in faceted:
             self.assertEqual(rows[planes]["solver_not_converged"], 0, planes)
+
+    def test_the_refinement_finds_the_bound_and_a_thin_sweep_misses_it(self):
+        effort = section("effort")
+        for study in effort["grid"]:
+            margins = [r["worst_margin"] for r in study["rows"]]
+            self.assertLess(max(margins) - min(margins), 1e-12, study["design"])
+        encoder = effort["sweep"][0]["rows"]
+        self.assertTrue(encoder[0]["stable"], encoder[0]["sweep"])  # one operator in 16
+        self.assertFalse(encoder[-1]["stable"])  # the whole sweep and the adversaries
+        self.assertGreater(encoder[-1]["worst_spectral_radius"], 1.001)
+        self.assertTrue(effort["sweep"][1]["rows"][-1]["stable"])  # the passive model's k_c
 
 
 if __name__ == "__main__":

@@ -26,6 +26,7 @@ sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(HERE.parent / "plot"))
 
 import context  # noqa: E402
+import effort  # noqa: E402
 import firmware  # noqa: E402
 import maps  # noqa: E402
 import maps_charts  # noqa: E402
@@ -41,7 +42,8 @@ SECTIONS = {"stability-maps": (maps.run, maps_charts.draw),
             "rate": (rate.run, rate_charts.draw),
             "timing": (timing.run, timing.draw),
             "firmware": (firmware.run, firmware.draw),
-            "scene-detail": (scene_detail.run, scene_detail.draw)}
+            "scene-detail": (scene_detail.run, scene_detail.draw),
+            "effort": (effort.run, effort.draw)}
 
 
 def arguments():
