@@ -18,13 +18,12 @@ Each point is one `haptic-tune size --json` run. Writes a PNG and prints the tab
 """
 import argparse
 import json
+import pathlib
 import subprocess
 import sys
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "plot"))
+import chart_style  # noqa: E402
 
 
 def size(tool, args, damping, delay, extra):
@@ -48,8 +47,9 @@ def main():
     parser.add_argument("--scene", required=True)
     parser.add_argument("--dampings", default="0,0.25,0.5,0.75,1,1.25,1.5")
     parser.add_argument("--delays", default="0,0.5,1", help="in periods")
-    parser.add_argument("--out", required=True)
+    parser.add_argument("--out", required=True, help="the chart: .png, .svg or .pdf")
     args = parser.parse_args()
+    plt, _ = chart_style.pyplot()
     dampings = [float(v) for v in args.dampings.split(",")]
     delays = [float(v) for v in args.delays.split(",")]
     assumptions = {
@@ -60,9 +60,8 @@ def main():
         "class + scene": ["--model", "exact", "--operator-class", args.operator_class,
                           "--scene", args.scene],
     }
-    figure, axes = plt.subplots(1, len(delays), figsize=(6 * len(delays), 4.5), sharey=True)
-    if len(delays) == 1:
-        axes = [axes]
+    figure = chart_style.new_figure(plt, (3.3 * len(delays), 4.2))
+    axes = figure.subplots(1, len(delays), sharey=True, squeeze=False)[0]
     for axis, delay_periods in zip(axes, delays):
         delay_s = delay_periods / args.rate
         print(f"delay {delay_periods:g} periods ({delay_s * 1e3:g} ms)")
@@ -79,14 +78,16 @@ def main():
             axis.plot(dampings, values, marker="o", label=name)
         axis.set_title(f"loop delay {delay_periods:g} period(s)")
         axis.set_xlabel("coupling damping b_c (N s/m)")
-        axis.grid(True, alpha=0.3)
+        chart_style.grid(axis)
     axes[0].set_ylabel("largest stable k_c (N/m)")
-    axes[0].legend(fontsize=8)
-    figure.suptitle(f"Limits by assumption: m = {args.mass:g} kg, b = {args.damping:g} N s/m, "
-                    f"{args.rate:g} Hz; class {args.operator_class}, scene {args.scene}",
-                    fontsize=9)
-    figure.tight_layout()
-    figure.savefig(args.out, dpi=110)
+    # One legend (the same lines in every panel) below the axes.
+    for axis in axes[1:]:
+        for line in axis.get_lines():
+            line.set_label("_" + line.get_label())
+    chart_style.save(figure, args.out,
+                     f"Limits by assumption, haptic-tune size: m = {args.mass:g} kg, "
+                     f"b = {args.damping:g} N s/m, {args.rate:g} Hz; class {args.operator_class}, "
+                     f"scene {args.scene}", legend_from=list(axes))
 
 
 if __name__ == "__main__":
