@@ -19,7 +19,13 @@ on the fresh runs:
   - the check of (21) finds the same worst margin on a sparse grid as on a dense one, and a
     thinned operator sweep misses the encoder model's instability that the whole one finds;
   - on the emulated board the firmware's share of the loop delay is at most half a period,
-    the passive model's k_c with that delay is stable and without it unstable.
+    the passive model's k_c with that delay is stable and without it unstable;
+  - in free motion the hand feels the device alone, (24): the fitted mass and damping are the
+    device's within 1 %, with or without a loop delay; in contact it is held with the
+    coupling in series with the wall, k_c K/(k_c + K), within 1 %; the contact's damping is
+    b + b_c - k_c (T/2 + D) (the spring's force late by the hold's half period and the
+    delay), not the paper's b + b_c - k_c D; the encoder model's (25) is the felt |Z| within
+    2 % at every frequency measured, and the paper's is off at the resonance.
 
     evidence_quick_test.py --build BUILD_DIR
 """
@@ -60,7 +66,8 @@ def section(name):
 
 class EvidenceQuick(unittest.TestCase):
     def test_every_section_wrote_its_charts_and_the_page_is_whole(self):
-        for name in ("stability-maps", "rate", "timing", "firmware", "scene-detail", "effort"):
+        for name in ("stability-maps", "rate", "zwidth", "timing", "firmware", "scene-detail",
+                     "effort"):
             data = section(name)
             self.assertEqual(data["mode"], "quick")
             self.assertGreater(len(data["charts"]), 0, name)
@@ -157,6 +164,81 @@ class EvidenceQuick(unittest.TestCase):
         self.assertFalse(encoder[-1]["stable"])  # the whole sweep and the adversaries
         self.assertGreater(encoder[-1]["worst_spectral_radius"], 1.001)
         self.assertTrue(effort["sweep"][1]["rows"][-1]["stable"])  # the passive model's k_c
+
+
+class ZWidthQuick(unittest.TestCase):
+    """What the hand felt in HIL (tools/evidence/zwidth.py) against the physics."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.data = section("zwidth")
+        cls.rows = cls.data["delays"]
+
+    def runs(self, row):
+        return [row["free"]] + row["contact"] + row["soft_wall"]
+
+    def test_every_run_is_clean_and_starts_and_ends_at_rest(self):
+        # The transform of the record is the transient's only if the handle is still at both
+        # ends (a count per period is 1e-7 m/s); and a fault would have cut the run.
+        self.assertEqual([r["delay_periods"] for r in self.rows], [0.0, 1.0])
+        for row in self.rows:
+            for run in self.runs(row):
+                self.assertEqual(run["faults"], [])
+                self.assertLess(max(run["speed_at_start_mps"], run["speed_at_end_mps"]),
+                                3e-5 * run["peak_speed_mps"])
+
+    def test_in_free_motion_the_hand_feels_the_device_alone(self):
+        for row in self.rows:
+            free = row["free"]
+            self.assertAlmostEqual(free["fit"]["mass_kg"], 0.1, delta=0.001)
+            self.assertAlmostEqual(free["fit"]["damping_n_s_per_m"], 2.0, delta=0.02)
+            self.assertLess(abs(free["fit"]["stiffness_n_per_m"]), 1.0)
+            for deviation in free["deviation_from_zmin"]["passive"]:
+                self.assertLess(abs(deviation), 0.01)
+            self.assertLessEqual(max(free["frequency_hz"]), 100.0)
+
+    def test_in_contact_the_coupling_is_in_series_with_the_wall(self):
+        for row in self.rows:
+            for contact in row["contact"]:
+                series = contact["expected"]["series_stiffness_n_per_m"]
+                self.assertAlmostEqual(contact["static_stiffness_n_per_m"], series,
+                                       delta=0.01 * series)
+                self.assertAlmostEqual(contact["fit"]["stiffness_n_per_m"], series,
+                                       delta=0.01 * series)
+            for soft in row["soft_wall"]:
+                k_c = soft["coupling_stiffness_n_per_m"]
+                series = soft["series_stiffness_n_per_m"]
+                self.assertLess(series, 0.9 * k_c)  # the soft wall tells series from k_c
+                self.assertAlmostEqual(soft["static_stiffness_n_per_m"], series,
+                                       delta=0.01 * series)
+
+    def test_the_hold_and_the_delay_take_the_contacts_damping(self):
+        period = 0.001
+        for row in self.rows:
+            for contact in row["contact"]:
+                k_c = contact["coupling_stiffness_n_per_m"]
+                fit = contact["fit"]
+                felt = 2.0 + 1.0 - k_c * (period / 2.0 + row["delay_s"])
+                self.assertAlmostEqual(fit["damping_n_s_per_m"], felt, delta=0.02)
+                self.assertGreater(contact["expected"]["paper_damping_n_s_per_m"] -
+                                   fit["damping_n_s_per_m"], 0.2)  # k_c T/2 >= 0.25 N s/m
+                self.assertAlmostEqual(fit["mass_kg"], 0.1, delta=0.002)
+
+    def test_the_encoder_models_zmax_is_what_the_hand_feels(self):
+        for row in self.rows:
+            for contact in row["contact"]:
+                for deviation in contact["deviation_from_zmax"]["encoder"]:
+                    self.assertLess(abs(deviation), 0.02)
+                dip = contact["dip"]
+                felt = dip["felt_magnitude_n_s_per_m"]
+                self.assertLess(abs(dip["zmax_magnitude_n_s_per_m"]["encoder"] / felt - 1.0), 0.03)
+                # The hand-side estimate agrees with the device side's (f0_n and m, b).
+                for hand, device in zip(contact["felt_magnitude_n_s_per_m"],
+                                        contact["device_side_magnitude_n_s_per_m"]):
+                    self.assertLess(abs(device / hand - 1.0), 0.005)
+        stiffest_delayed = self.rows[1]["contact"][-1]["dip"]
+        self.assertGreater(stiffest_delayed["zmax_magnitude_n_s_per_m"]["paper"],
+                           3.0 * stiffest_delayed["felt_magnitude_n_s_per_m"])
 
 
 if __name__ == "__main__":

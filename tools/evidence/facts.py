@@ -5,6 +5,8 @@ suite checks that RESULTS.md is the template rendered from docs/results/.
 Each fact is a function of the loaded data ({section: its JSON}) returning text.
 """
 
+import zwidth_facts
+
 
 def n_per_m(value):
     return "none" if value is None else f"{value:,.0f} N/m"
@@ -379,4 +381,6 @@ FACTS = {
     "timing.wake_table": wake_table,
     "timing.instructions_table": instructions_table,
     "timing.servo_tick_table": servo_tick_table,
+    "zwidth.run": lambda d: run_info(d, "zwidth"),
+    **zwidth_facts.FACTS,
 }

@@ -35,15 +35,18 @@ import rate_charts  # noqa: E402
 import results_doc  # noqa: E402
 import scene_detail  # noqa: E402
 import timing  # noqa: E402
+import zwidth  # noqa: E402
+import zwidth_charts  # noqa: E402
 
 # Each section: run(ctx) -> its data (written as NAME.json), and
 # draw(data, out_dir, caption) -> the chart files it wrote.
 SECTIONS = {"stability-maps": (maps.run, maps_charts.draw),
             "rate": (rate.run, rate_charts.draw),
-            "timing": (timing.run, timing.draw),
-            "firmware": (firmware.run, firmware.draw),
+            "zwidth": (zwidth.run, zwidth_charts.draw),
             "scene-detail": (scene_detail.run, scene_detail.draw),
-            "effort": (effort.run, effort.draw)}
+            "effort": (effort.run, effort.draw),
+            "firmware": (firmware.run, firmware.draw),
+            "timing": (timing.run, timing.draw)}
 
 
 def arguments():
