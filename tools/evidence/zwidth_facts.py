@@ -1,6 +1,8 @@
 """The Z-width numbers docs/RESULTS.md quotes (facts.py's FACTS holds them), each computed
 from zwidth.py's data: what the hand felt in HIL beside (24), (25) and the physics."""
 
+from fact_text import run_info
+
 
 def block(data):
     return data["zwidth"]
@@ -123,6 +125,7 @@ def paper_dip(data):
 
 
 FACTS = {
+    "zwidth.run": lambda d: run_info(d, "zwidth"),
     "zwidth.device": lambda d: block(d)["device"],
     "zwidth.hand": lambda d: block(d)["hand"],
     "zwidth.stiffness_table": stiffness_table,
