@@ -15,5 +15,13 @@ import scene_facts
 import timing_facts
 import zwidth_facts
 
-FACTS = {**maps_facts.FACTS, **rate_facts.FACTS, **zwidth_facts.FACTS, **scene_facts.FACTS,
+def total_time(data):
+    """The sections' own run times summed, and the modes they ran in."""
+    seconds = sum(block["seconds"] for block in data.values())
+    modes = sorted({block["mode"] for block in data.values()})
+    return f"{seconds:,.0f} s for {len(data)} sections ({', '.join(modes)} mode)"
+
+
+FACTS = {"evidence.total_time": total_time,
+         **maps_facts.FACTS, **rate_facts.FACTS, **zwidth_facts.FACTS, **scene_facts.FACTS,
          **effort_facts.FACTS, **firmware_facts.FACTS, **timing_facts.FACTS}
