@@ -13,8 +13,15 @@
 //        (tune::check_exact's default). The worst |z| found, the verdict and the time, for
 //        the encoder model's k_c at b_c = 1 N s/m (unstable only for lossless grips on the
 //        aliases of Nyquist, six operators of 637) and the passive model's (stable).
+// rates  the exact model's verdict on the passive model's own k_c (b_c = 0) from 1 to 20 kHz:
+//        the worst |z| - 1 per tick, the same case with k_c 1 % lower, and how many of the
+//        loop's eigenvalues sit within 1e-4 rad of the worst one (a cluster: the operator's
+//        lossless modes folded onto one alias). An excess that does not move when the gains
+//        do is not the design's: it is the rounding of a cluster of eigenvalues on |z| = 1.
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <complex>
 #include <cstdlib>
 #include <fstream>
 #include <functional>
@@ -117,10 +124,49 @@ ordered_json sweep_study(const std::string& name, const SpringDamperCoupling& co
             {"rows", rows}};
 }
 
-double sized(HoldModel model, double coupling_damping, double delay_periods) {
+double sized(HoldModel model, double coupling_damping, double delay_periods, double rate_hz);
+
+ordered_json rate_study(bool quick) {
+    ordered_json rows = ordered_json::array();
+    const std::vector<double> rates =
+        quick ? std::vector<double>{1000.0, 20000.0}
+              : std::vector<double>{1000.0, 2000.0, 5000.0, 10000.0, 15000.0, 20000.0};
+    for (const double rate_hz : rates) {
+        const double k = sized(HoldModel::passive, 0.0, 0.0, rate_hz);
+        const hapticd::tune::ExactCheck check =
+            hapticd::tune::check_exact(kPenDisplay, {k, 0.0}, rate_hz);
+        const hapticd::tune::ClosedLoopPoles at_bound = hapticd::tune::closed_loop_poles(
+            kPenDisplay, {k, 0.0}, rate_hz, check.worst_operator, check.worst_environment);
+        const hapticd::tune::ClosedLoopPoles inside = hapticd::tune::closed_loop_poles(
+            kPenDisplay, {0.99 * k, 0.0}, rate_hz, check.worst_operator, check.worst_environment);
+        double worst_arg = 0.0;
+        double worst_modulus = 0.0;
+        for (const auto& z : at_bound.eigenvalues) {
+            if (std::abs(z) > worst_modulus) {
+                worst_modulus = std::abs(z);
+                worst_arg = std::abs(std::arg(z));
+            }
+        }
+        int cluster = 0;
+        for (const auto& z : at_bound.eigenvalues) {
+            cluster += std::abs(std::abs(std::arg(z)) - worst_arg) < 1e-4 ? 1 : 0;
+        }
+        rows.push_back({{"rate_hz", rate_hz},
+                        {"stiffness_n_per_m", k},
+                        {"stable", check.stable},
+                        {"worst_excess_per_tick", check.worst_spectral_radius - 1.0},
+                        {"excess_at_99_percent_per_tick", inside.spectral_radius - 1.0},
+                        {"cluster_eigenvalues", cluster},
+                        {"operator_modes", check.worst_operator.modes.size()},
+                        {"tolerance_per_tick", hapticd::tune::kMarginalTolerance}});
+    }
+    return rows;
+}
+
+double sized(HoldModel model, double coupling_damping, double delay_periods, double rate_hz) {
     hapticd::tune::ImpedanceSizingRequest request;
     request.device = kPenDisplay;
-    request.rate_hz = kRateHz;
+    request.rate_hz = rate_hz;
     request.model = {model, delay_periods};
     request.coupling_damping_n_s_per_m = coupling_damping;
     return hapticd::tune::size_impedance_coupling(request).coupling.stiffness_n_per_m;
@@ -147,9 +193,9 @@ int main(int argc, char** argv) {
         return 2;
     }
     try {
-        const double passive_half = sized(HoldModel::passive, 0.0, 0.5);
-        const double encoder = sized(HoldModel::encoder, 1.0, 0.0);
-        const double passive = sized(HoldModel::passive, 1.0, 0.0);
+        const double passive_half = sized(HoldModel::passive, 0.0, 0.5, kRateHz);
+        const double encoder = sized(HoldModel::encoder, 1.0, 0.0, kRateHz);
+        const double passive = sized(HoldModel::passive, 1.0, 0.0, kRateHz);
         const ordered_json table = {
             {"kind", "effort"},
             {"device",
@@ -165,7 +211,8 @@ int main(int argc, char** argv) {
                          LoopModel{HoldModel::encoder, 4.5}, quick)}},
             {"sweep",
              {sweep_study("the encoder model's k_c at b_c 1 N s/m", {encoder, 1.0}, quick),
-              sweep_study("the passive model's k_c at b_c 1 N s/m", {passive, 1.0}, quick)}}};
+              sweep_study("the passive model's k_c at b_c 1 N s/m", {passive, 1.0}, quick)}},
+            {"rates", rate_study(quick)}};
         std::ofstream file(out);
         file << table.dump(1) << '\n';
         if (!file) {

@@ -62,6 +62,31 @@ def effort_full_time(data):
     return f"{full['seconds']:.2f} s for {full['cases']:,} cases"
 
 
+def tolerance_table(data):
+    lines = ["| rate | the passive model's k_c | the exact model's worst \\|z\\| - 1 | "
+             "the same case at 0.99 k_c | eigenvalues in its cluster | verdict (tolerance "
+             "1e-8) |", "|---|---|---|---|---|---|"]
+    for r in data["effort"]["rates"]:
+        lines.append(f"| {r['rate_hz']:,.0f} Hz | {r['stiffness_n_per_m']:,.0f} N/m | "
+                     f"{r['worst_excess_per_tick']:.3g} | "
+                     f"{r['excess_at_99_percent_per_tick']:.3g} | {r['cluster_eigenvalues']} | "
+                     f"{'accepted' if r['stable'] else 'REFUSED'} |")
+    return "\n".join(lines)
+
+
+def tolerance_refused(data):
+    refused = [r for r in data["effort"]["rates"] if not r["stable"]]
+    return ("no rate" if not refused else
+            ", ".join(f"{r['rate_hz']:,.0f} Hz" for r in refused))
+
+
+def tolerance_moved(data):
+    """The largest relative change of the worst excess when k_c drops by 1 %."""
+    change = max(abs(r["excess_at_99_percent_per_tick"] - r["worst_excess_per_tick"]) /
+                 abs(r["worst_excess_per_tick"]) for r in data["effort"]["rates"])
+    return f"{100.0 * change:.2g} %"
+
+
 FACTS = {
     "effort.run": lambda d: run_info(d, "effort"),
     "effort.device": lambda d: d["effort"]["device"],
@@ -73,4 +98,7 @@ FACTS = {
     "effort.thinned": effort_thinned,
     "effort.sweep_missed": effort_sweep_missed,
     "effort.full_time": effort_full_time,
+    "effort.tolerance_table": tolerance_table,
+    "effort.tolerance_refused": tolerance_refused,
+    "effort.tolerance_moved": tolerance_moved,
 }
