@@ -20,6 +20,9 @@ on the fresh runs:
     thinned operator sweep misses the encoder model's instability that the whole one finds;
   - on the emulated board the firmware's share of the loop delay is at most half a period,
     the passive model's k_c with that delay is stable and without it unstable;
+  - the admittance display's exact loop is stable for heavy couplings and not for light
+    ones, (37) sizes a pure mass heavier than the exact limit, and (37)'s best pair is
+    unstable in the exact loop;
   - in free motion the hand feels the device alone, (24): the fitted mass and damping are the
     device's within 1 %, with or without a loop delay; in contact it is held with the
     coupling in series with the wall, k_c K/(k_c + K), within 1 %; the contact's damping is
@@ -67,7 +70,7 @@ def section(name):
 class EvidenceQuick(unittest.TestCase):
     def test_every_section_wrote_its_charts_and_the_page_is_whole(self):
         for name in ("stability-maps", "rate", "zwidth", "timing", "firmware", "scene-detail",
-                     "effort"):
+                     "effort", "admittance"):
             data = section(name)
             self.assertEqual(data["mode"], "quick")
             self.assertGreater(len(data["charts"]), 0, name)
@@ -245,6 +248,14 @@ class ZWidthQuick(unittest.TestCase):
         stiffest_delayed = self.rows[1]["contact"][-1]["dip"]
         self.assertGreater(stiffest_delayed["zmax_magnitude_n_s_per_m"]["paper"],
                            3.0 * stiffest_delayed["felt_magnitude_n_s_per_m"])
+
+    def test_the_admittance_displays_pair_from_37_fails_in_the_exact_loop(self):
+        for row in section("admittance")["rows"]:
+            self.assertTrue(row["grid"][-1]["stable"])
+            self.assertFalse(row["grid"][0]["stable"])
+            self.assertGreater(row["encoder_mass_kg"], row["exact_limit_kg"])
+            self.assertFalse(row["encoder_pair"]["verdict"]["stable"])
+            self.assertGreater(row["encoder_pair"]["verdict"]["worst_spectral_radius"], 1.001)
 
 
 if __name__ == "__main__":

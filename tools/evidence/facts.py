@@ -7,6 +7,7 @@ section's facts are in its own module, named by the section's prefix ("maps.", "
 and fact_text.py writes the units.
 """
 
+import admittance_facts
 import effort_facts
 import firmware_facts
 import maps_facts
@@ -24,4 +25,5 @@ def total_time(data):
 
 FACTS = {"evidence.total_time": total_time,
          **maps_facts.FACTS, **rate_facts.FACTS, **zwidth_facts.FACTS, **scene_facts.FACTS,
-         **effort_facts.FACTS, **firmware_facts.FACTS, **timing_facts.FACTS}
+         **effort_facts.FACTS, **admittance_facts.FACTS, **firmware_facts.FACTS,
+         **timing_facts.FACTS}

@@ -25,6 +25,7 @@ HERE = pathlib.Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(HERE.parent / "plot"))
 
+import admittance  # noqa: E402
 import context  # noqa: E402
 import effort  # noqa: E402
 import firmware  # noqa: E402
@@ -45,6 +46,7 @@ SECTIONS = {"stability-maps": (maps.run, maps_charts.draw),
             "zwidth": (zwidth.run, zwidth_charts.draw),
             "scene-detail": (scene_detail.run, scene_detail.draw),
             "effort": (effort.run, effort.draw),
+            "admittance": (admittance.run, admittance.draw),
             "firmware": (firmware.run, firmware.draw),
             "timing": (timing.run, timing.draw)}
 
