@@ -26,6 +26,8 @@ sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(HERE.parent / "plot"))
 
 import context  # noqa: E402
+import identification  # noqa: E402
+import identification_charts  # noqa: E402
 import maps  # noqa: E402
 import maps_charts  # noqa: E402
 import rate  # noqa: E402
@@ -37,6 +39,7 @@ import timing  # noqa: E402
 # draw(data, out_dir, caption) -> the chart files it wrote.
 SECTIONS = {"stability-maps": (maps.run, maps_charts.draw),
             "rate": (rate.run, rate_charts.draw),
+            "identification": (identification.run, identification_charts.draw),
             "timing": (timing.run, timing.draw)}
 
 
