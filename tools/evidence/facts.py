@@ -432,7 +432,8 @@ FACTS = {
     "rate.within_passive": rate_within_passive,
     "rate.paper_unstable": rate_paper_unstable,
     "rate.exact_finding": rate_exact_finding,
-    "ident.run": lambda d: run_info(d, "identification"),
+    "ident.run": lambda d: (f"{run_info(d, 'identification')}; the load average at the start "
+                            f"{d['identification']['load_average_1_5_15'][0]:.2f}"),
     "ident.device": lambda d: d["identification"]["device"],
     "ident.excitation": lambda d: "{kind} of {lines} lines from {low_hz:g} to {high_hz:g} Hz".format(
         **ident_sweep(d)["excitation"]),

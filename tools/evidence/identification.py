@@ -19,6 +19,7 @@ its medians are single runs, not the published ones.
 """
 
 import json
+import os
 
 from context import EvidenceError
 
@@ -34,6 +35,7 @@ def plan(quick):
 
 def run(ctx):
     steps = plan(ctx.quick)
+    load = os.getloadavg()  # the solve times are CPU times, but a shared machine slows them
     program = ctx.program("identify_sweep")
     scratch = ctx.scratch("identification")
     jobs = [("sweep", ["--seeds", str(steps["sweep_seeds"])]),
@@ -57,7 +59,8 @@ def run(ctx):
     return {"device": describe_device(sweep["device"]),
             "default_amplitude_rms_n": DEFAULT_AMPLITUDE_RMS_N,
             "default_segment_s": sweep.get("segment_s", DEFAULT_SEGMENT_S),
-            "requirement": REQUIREMENT, "sweep": sweep, "segments": segments}
+            "requirement": REQUIREMENT, "load_average_1_5_15": list(load),
+            "sweep": sweep, "segments": segments}
 
 
 def describe_device(device):
