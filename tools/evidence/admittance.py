@@ -48,7 +48,8 @@ def draw(data, out_dir, caption):
         xs = [p["coupling_mass_kg"] for p in rows[0]["grid"]]
         colors = maps_charts.verdict_grid(
             plt, ax, xs, [[as_verdict(p, data["rate_hz"]) for p in r["grid"]] for r in rows],
-            [f"k_p = {r['kp_n_s_per_m']:g} N s/m" for r in rows])
+            [f"k_p = {r['kp_n_s_per_m']:g} N s/m" for r in rows],
+            judge="the exact loop's eigenvalues over its sweep")
         for key, (color, label) in MODEL_STYLE.items():
             ax.plot([r[key] for r in rows], range(len(rows)), color=color, marker="|",
                     markersize=16, markeredgewidth=2.0, linewidth=1.2, label=label)

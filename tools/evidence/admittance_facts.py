@@ -14,7 +14,7 @@ def admittance_table(data):
         pair = r["encoder_pair"]
         verdict = pair["verdict"]
         said = ("stable" if verdict["stable"] else
-                f"UNSTABLE, \\\\|z\\\\| = {verdict['worst_spectral_radius']:.5f} per tick at "
+                f"UNSTABLE, \\|z\\| = {verdict['worst_spectral_radius']:.5f} per tick at "
                 f"{verdict['worst_frequency_hz']:.0f} Hz")
         lines.append(f"| {r['kp_n_s_per_m']:g} N s/m | {kg(r['encoder_mass_kg'])} | "
                      f"{kg(r['paper_mass_kg'])} | {kg(r['exact_limit_kg'])} | "

@@ -10,6 +10,7 @@ and fact_text.py writes the units.
 import admittance_facts
 import effort_facts
 import firmware_facts
+import identification_facts
 import maps_facts
 import rate_facts
 import scene_facts
@@ -24,6 +25,7 @@ def total_time(data):
 
 
 FACTS = {"evidence.total_time": total_time,
-         **maps_facts.FACTS, **rate_facts.FACTS, **zwidth_facts.FACTS, **scene_facts.FACTS,
+         **maps_facts.FACTS, **rate_facts.FACTS, **identification_facts.FACTS,
+         **zwidth_facts.FACTS, **scene_facts.FACTS,
          **effort_facts.FACTS, **admittance_facts.FACTS, **firmware_facts.FACTS,
          **timing_facts.FACTS}

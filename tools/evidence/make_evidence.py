@@ -6,7 +6,8 @@ programs, each section's numbers in a JSON file beside its charts.
                                     [--only SECTION,...] [--jobs N]
 
 --quick runs few points and short runs (CI runs it, so that the evidence cannot rot); its
-numbers are not the published ones. Without --only every section runs. At the end the page
+numbers are not the published ones. Without --only every section runs. --redraw runs
+nothing and redraws the charts from the data files already in the output directory. At the end the page
 is rendered from the template and every data file in the output directory: into
 docs/RESULTS.md when the output is docs/results, else into OUT/RESULTS.md. Exit 0 done; 1 a
 program failed (the message names it); 2 bad arguments or a template the data cannot fill.
@@ -29,6 +30,8 @@ import admittance  # noqa: E402
 import context  # noqa: E402
 import effort  # noqa: E402
 import firmware  # noqa: E402
+import identification  # noqa: E402
+import identification_charts  # noqa: E402
 import maps  # noqa: E402
 import maps_charts  # noqa: E402
 import rate  # noqa: E402
@@ -43,12 +46,20 @@ import zwidth_charts  # noqa: E402
 # draw(data, out_dir, caption) -> the chart files it wrote.
 SECTIONS = {"stability-maps": (maps.run, maps_charts.draw),
             "rate": (rate.run, rate_charts.draw),
+            "identification": (identification.run, identification_charts.draw),
             "zwidth": (zwidth.run, zwidth_charts.draw),
             "scene-detail": (scene_detail.run, scene_detail.draw),
             "effort": (effort.run, effort.draw),
             "admittance": (admittance.run, admittance.draw),
             "firmware": (firmware.run, firmware.draw),
             "timing": (timing.run, timing.draw)}
+
+
+def caption_for(name, data):
+    """The caption line's common part: the run, its device, the machine."""
+    quick = " (quick mode)" if data["mode"] == "quick" else ""
+    return (f"hapticd {data['hapticd']} evidence, {name}{quick}; {data.get('device', '')}; "
+            f"{context.describe_machine(data['machine'])}")
 
 
 def arguments():
@@ -62,6 +73,9 @@ def arguments():
     parser.add_argument("--only", default="", help="comma-separated sections: " +
                         ", ".join(SECTIONS))
     parser.add_argument("--jobs", type=int, default=2, help="programs run at once (default 2)")
+    parser.add_argument("--redraw", action="store_true",
+                        help="run nothing: redraw the sections' charts from the data files in "
+                             "--out (after a change to a chart) and render the page")
     args = parser.parse_args()
     only = [name for name in args.only.split(",") if name]
     unknown = [name for name in only if name not in SECTIONS]
@@ -84,16 +98,21 @@ def main():
         version = ctx.run([ctx.program("hapticd"), "--version"], "hapticd --version").split()[-1]
         for name in sections:
             run, draw = SECTIONS[name]
+            if args.redraw:
+                path = args.out / f"{name}.json"
+                if path.is_file():
+                    data = json.loads(path.read_text())
+                    data["charts"] = draw(data, args.out, caption_for(name, data))
+                    path.write_text(json.dumps(data, indent=1) + "\n")
+                    print(f"make_evidence: {name}: redrew {len(data['charts'])} charts")
+                continue
             started = time.monotonic()
             data = run(ctx)
             data.update({"section": name, "mode": "quick" if args.quick else "full",
                          "machine": machine, "hapticd": version,
                          "date": datetime.date.today().isoformat(),
                          "seconds": round(time.monotonic() - started, 1)})
-            caption = (f"hapticd {version} evidence, {name}"
-                       f"{' (quick mode)' if args.quick else ''}; {data.get('device', '')}; "
-                       f"{context.describe_machine(machine)}")
-            data["charts"] = draw(data, args.out, caption)
+            data["charts"] = draw(data, args.out, caption_for(name, data))
             path = args.out / f"{name}.json"
             path.write_text(json.dumps(data, indent=1) + "\n")
             print(f"make_evidence: {name}: {path} and {len(data['charts'])} charts "

@@ -17,8 +17,9 @@ def growth_shown(verdict):
     return verdict["growth_per_s"]
 
 
-def verdict_grid(plt, ax, xs, rows, row_labels):
-    """Markers at (x, row) for rows[i] = verdicts along xs; returns the colour mapping."""
+def verdict_grid(plt, ax, xs, rows, row_labels, judge="the trajectory judge"):
+    """Markers at (x, row) for rows[i] = verdicts along xs (`judge` says what decided them);
+    returns the colour mapping."""
     import matplotlib
     norm = matplotlib.colors.TwoSlopeNorm(vmin=-GROWTH_SCALE_PER_S, vcenter=0.0,
                                           vmax=GROWTH_SCALE_PER_S)
@@ -31,8 +32,8 @@ def verdict_grid(plt, ax, xs, rows, row_labels):
             ax.plot([x], [i], marker=marker, markersize=8 if verdict["stable"] else 9,
                     markerfacecolor=color, markeredgecolor="0.25", markeredgewidth=0.5,
                     linestyle="none")
-    ax.plot([], [], "o", color="0.6", label="stable: the oscillation dies out")
-    ax.plot([], [], "X", color="0.6", label="unstable: it grows (trajectory judge)")
+    ax.plot([], [], "o", color="0.6", label=f"stable ({judge})")
+    ax.plot([], [], "X", color="0.6", label=f"unstable: it grows ({judge})")
     ax.set_yticks(range(len(row_labels)))
     ax.set_yticklabels(row_labels)
     ax.set_ylim(len(row_labels) - 0.5, -0.5)
