@@ -15,7 +15,8 @@ on the fresh runs:
   - the timing benches measured both programs under both loads, and an axis costs
     instructions;
   - a sphere primitive has no surface error and holds the handle where the grasp and the
-    coupling in series put it; tangent planes err less as they multiply;
+    coupling in series put it; tangent planes err less as they multiply; on a flat wall a
+    penalty wall's tool sinks by F/K and the constraint's not at all;
   - the check of (21) finds the same worst margin on a sparse grid as on a dense one, and a
     thinned operator sweep misses the encoder model's instability that the whole one finds;
   - on the emulated board the firmware's share of the loop delay is at most half a period,
@@ -162,6 +163,17 @@ class EvidenceQuick(unittest.TestCase):
                            rows[faceted[-1]]["surface_error_max_m"])
         for planes in faceted:
             self.assertEqual(rows[planes]["solver_not_converged"], 0, planes)
+        # The flat wall: a penalty wall's tool sinks by F/K, the constraint's not at all; the
+        # handle sits F/k_c past the tool either way.
+        for r in scene["flat_wall"]:
+            give = r["force_n"] / scene["coupling_n_per_m"]
+            self.assertAlmostEqual(r["handle_depth_m"] - r["tool_depth_m"], give,
+                                   delta=0.01 * give)
+            if r["wall"] == "penalty":
+                sink = r["force_n"] / r["wall_n_per_m"]
+                self.assertAlmostEqual(r["tool_depth_m"], sink, delta=0.01 * sink)
+            else:
+                self.assertLess(abs(r["tool_depth_m"]), 1e-9)
 
     def test_the_refinement_finds_the_bound_and_a_thin_sweep_misses_it(self):
         effort = section("effort")

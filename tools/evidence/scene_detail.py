@@ -123,7 +123,9 @@ def run(ctx):
             "solver_not_converged": sum(c["solver_not_converged"] for c in cells),
             "runs": cells})
     push_force_n = GRASP_N_PER_M * PUSH_PAST_M
-    return {"device": "the simulated pen display on 3 axes, m = 0.1 kg, b = 2 N s/m per axis, "
+    import penalty_constraint  # it reuses this module's settings
+    return {"flat_wall": penalty_constraint.run(ctx),
+            "device": "the simulated pen display on 3 axes, m = 0.1 kg, b = 2 N s/m per axis, "
                       "1000 Hz, 1 nm encoder counts",
             "radius_m": RADIUS_M, "coupling_n_per_m": COUPLING_N_PER_M,
             "push_force_n": push_force_n,
