@@ -353,6 +353,40 @@ class IdentificationQuick(unittest.TestCase):
             self.assertGreater(residual[-1], 10.0 * residual[0], noise)
 
 
+class EvidenceRefusals(unittest.TestCase):
+    """Bad arguments and a template the data cannot fill: exit 2, naming the value."""
+
+    def run_script(self, script, *args):
+        return subprocess.run([sys.executable, str(ROOT / "tools/evidence" / script), *args],
+                              capture_output=True, text=True, check=False)
+
+    def test_an_unknown_section_and_a_bad_job_count_are_named(self):
+        unknown = self.run_script("make_evidence.py", "--only", "maps,nosuch")
+        self.assertEqual(unknown.returncode, 2)
+        self.assertIn("nosuch", unknown.stderr)
+        self.assertIn("stability-maps", unknown.stderr)  # the allowed names
+        jobs = self.run_script("make_evidence.py", "--jobs", "0")
+        self.assertEqual(jobs.returncode, 2)
+        self.assertIn("--jobs 0", jobs.stderr)
+
+    def test_a_template_naming_an_unknown_fact_or_missing_data_is_refused(self):
+        scratch = pathlib.Path(tempfile.mkdtemp(prefix="hapticd-results-doc-"))
+        try:
+            template = scratch / "page.md.in"
+            template.write_text("{{maps.no_such_fact}}\n")
+            unknown = self.run_script("results_doc.py", "--data", str(scratch),
+                                      "--template", str(template))
+            self.assertEqual(unknown.returncode, 2)
+            self.assertIn("maps.no_such_fact", unknown.stderr)
+            template.write_text("{{maps.passive_kc}}\n")
+            missing = self.run_script("results_doc.py", "--data", str(scratch),
+                                      "--template", str(template))
+            self.assertEqual(missing.returncode, 2)
+            self.assertIn("stability-maps", missing.stderr)
+        finally:
+            shutil.rmtree(scratch, ignore_errors=True)
+
+
 if __name__ == "__main__":
     parser = argparse.ArgumentParser()
     parser.add_argument("--build", type=pathlib.Path, required=True)

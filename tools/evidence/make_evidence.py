@@ -9,8 +9,9 @@ programs, each section's numbers in a JSON file beside its charts.
 numbers are not the published ones. Without --only every section runs. --redraw runs
 nothing and redraws the charts from the data files already in the output directory. At the end the page
 is rendered from the template and every data file in the output directory: into
-docs/RESULTS.md when the output is docs/results, else into OUT/RESULTS.md. Exit 0 done; 1 a
-program failed (the message names it); 2 bad arguments or a template the data cannot fill.
+docs/RESULTS.md when the output is docs/results, else into OUT/RESULTS.md (not when the
+directory lacks a section's data, which it says). Exit 0 done; 1 a program failed (the
+message names it); 2 bad arguments or a template the data cannot fill.
 """
 
 import argparse
@@ -124,10 +125,17 @@ def main():
         shutil.rmtree(work, ignore_errors=True)
     published = args.out.resolve() == (HERE.parent.parent / "docs/results").resolve()
     page = HERE.parent.parent / "docs/RESULTS.md" if published else args.out / "RESULTS.md"
+    data = results_doc.load(args.out)
+    missing = [name for name in SECTIONS if name not in data]
+    if missing:
+        # --only into a directory without the other sections' data: what was asked is whole,
+        # the page (which quotes every section) is not made.
+        print(f"make_evidence: {page} not rendered: {args.out} has no data of "
+              f"{', '.join(missing)} (run those sections there, or every section)")
+        return 0 if set(missing).isdisjoint(sections) else 1
     try:
         template = (HERE / "RESULTS.md.in").read_text(encoding="utf-8")
-        page.write_text(results_doc.render(template, results_doc.load(args.out)),
-                        encoding="utf-8")
+        page.write_text(results_doc.render(template, data), encoding="utf-8")
     except results_doc.TemplateError as error:
         print(f"make_evidence: {page}: {error}", file=sys.stderr)
         return 2
