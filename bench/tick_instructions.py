@@ -231,9 +231,10 @@ def measure_config(hapticd, source_dir, scene, axes, short_s, long_s):
     }
 
 
-def measure(hapticd=DEFAULT_HAPTICD, source_dir=SOURCE_DIR, quick=False):
-    """Counts every (scene, axes) configuration, one per CPU at a time; returns the data
-    file's dict. Raises BenchError."""
+def measure(hapticd=DEFAULT_HAPTICD, source_dir=SOURCE_DIR, quick=False, scene_names=None):
+    """Counts every (scene, axes) configuration, one per CPU at a time (only the scenes named
+    in `scene_names`, by their [scene] name, when it is given); returns the data file's dict.
+    Raises BenchError."""
     valgrind = run_info.tool_version(["valgrind", "--version"])
     if valgrind is None:
         raise BenchError("valgrind not found on PATH (Debian package valgrind: "
@@ -243,6 +244,10 @@ def measure(hapticd=DEFAULT_HAPTICD, source_dir=SOURCE_DIR, quick=False):
     short_s = SHORT_S
     long_s = SHORT_S + COUNTED_S["quick" if quick else "full"]
     scenes = sorted(shipped_scenes(source_dir), key=lambda scene: (scene[2], scene[1]))
+    if scene_names is not None:
+        scenes = [scene for scene in scenes if scene[1] in scene_names]
+        if not scenes:
+            raise BenchError(f"no shipped scene is named {', '.join(scene_names)}", 2)
     jobs = [(scene, axes) for scene in scenes
             for axes in range(scene[2], SIM_MAX_AXES + 1)]
     data = {

@@ -87,7 +87,7 @@ ordered_json row(double kp, bool quick) {
             {"grid", grid},
             {"encoder_mass_kg", encoder.mass_kg},
             {"paper_mass_kg", paper.mass_kg},
-            {"exact_limit_kg", exact_limit(loop, 400.0, 1.0, quick ? 8 : 14)},
+            {"exact_limit_kg", exact_limit(loop, 400.0, 1.0, quick ? 5 : 14)},
             {"encoder_pair",
              {{"coupling_mass_kg", pair.mass_kg},
               {"coupling_damping_n_s_per_m", pair.damping_n_s_per_m},
