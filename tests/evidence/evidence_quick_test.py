@@ -191,6 +191,7 @@ class EvidenceQuick(unittest.TestCase):
             self.assertLess(abs(row["excess_at_99_percent_per_tick"] - row["worst_excess_per_tick"]),
                             1e-3 * abs(row["worst_excess_per_tick"]) + 1e-13, row["rate_hz"])
             self.assertGreaterEqual(row["cluster_eigenvalues"], 2, row["rate_hz"])
+            self.assertTrue(row["stable"], row["rate_hz"])  # so the exact model says marginal
 
 
 class ZWidthQuick(unittest.TestCase):

@@ -311,6 +311,31 @@ TEST(exactColgate, JustBelowTwoBOverTIsStableForTheWholeSweep) {
     EXPECT_GE(check.worst_margin, -kMarginalTolerance);
 }
 
+// At 20 kHz the passive model's own k_c, 2b/T = 80000 N/m, meets a synthesised lossless
+// operator whose modes fold onto z = -1: a cluster of eigenvalues whose moduli scatter on both
+// sides of 1 by about 2e-8 per tick, past the 1e-8 tolerance. That excess does not move when
+// the coupling's gains drop by 1 %, so it is no growth of the design: the check says marginal.
+// A real growth nearly as small (k_c a tenth of a percent past 2b/T at 1 kHz: |z| - 1 under
+// the 1e-6 of a decisive growth) moves with the gains, and stays unstable.
+TEST(exactColgate, AnExcessTheGainsDoNotMoveIsRoundingAndARealOneIsNot) {
+    constexpr double kFastRateHz = 20000.0;
+    const double bound = 2.0 * kDevice.damping_n_s_per_m * kFastRateHz;
+    const ExactCheck at_bound = check_exact(kDevice, {bound * (1.0 - 1e-11), 0.0}, kFastRateHz);
+    EXPECT_GT(at_bound.worst_spectral_radius, 1.0 + kMarginalTolerance);
+    EXPECT_TRUE(at_bound.stable);
+    EXPECT_TRUE(at_bound.marginal());
+    const double moved = closed_loop_poles(kDevice, {0.99 * bound, 0.0}, kFastRateHz,
+                                           at_bound.worst_operator, at_bound.worst_environment)
+                             .spectral_radius;
+    EXPECT_NEAR(moved, at_bound.worst_spectral_radius,
+                1e-3 * (at_bound.worst_spectral_radius - 1.0));
+
+    const ExactCheck past = check_exact(kDevice, {1.001 * kColgateStiffness, 0.0}, kRateHz);
+    EXPECT_FALSE(past.stable) << past.worst_operator.describe();
+    EXPECT_LT(past.worst_spectral_radius, 1.0 + kDecisiveGrowthPerTick);
+    EXPECT_GT(past.worst_spectral_radius, 1.0 + kMarginalTolerance);
+}
+
 // The paper's model: (21) with ZOH = (1/2)(z+1)/z has |ZOH| = cos(θ/2), ∠ZOH = -θ/2, so its
 // right side is sin²(θ/4) cos(θ/2)/b, while at b_c = 0, Re(1/Z_c) = 2 sin²(θ/2)/(k_c T).
 // Their ratio 8b cos²(θ/4)/(k_c T cos(θ/2)) is smallest at θ -> 0, where it is 8b/(k_c T):
