@@ -4,7 +4,8 @@
 renders from them with every fact filled, and the closed-loop claims RESULTS.md makes hold
 on the fresh runs:
 
-  - the passive model's gains are stable for every operator the quick map runs;
+  - the passive model's gains are stable for every operator the quick map runs, with and
+    without a period of loop delay;
   - the paper's gains are unstable hands-off (its hold (13) is optimistic);
   - the encoder model's gains are unstable for the steel grip tuned to Nyquist;
   - without a coupling the stiffest stable wall is within a grid step of 2b/T, and with the
@@ -90,6 +91,10 @@ class EvidenceQuick(unittest.TestCase):
         self.assertIn("| passive | 2,000 N/m |", page)
 
     def test_the_models_gains_against_the_operators(self):
+        delayed = {d["design"]: d
+                   for d in section("stability-maps")["operators_delayed"]["designs"]}
+        self.assertEqual(delayed["passive"]["unstable_for"], [])  # with a period of delay
+        self.assertIn("hands-off", delayed["paper"]["unstable_for"])
         designs = {d["design"]: d for d in section("stability-maps")["operators"]["designs"]}
         self.assertEqual(designs["passive"]["unstable_for"], [])
         self.assertIn("hands-off", designs["paper"]["unstable_for"])

@@ -3,7 +3,8 @@ with the simulated pen display (hil.py), beside what each stability model predic
 (designs.py).
 
   operators  coupling stiffness k_c against operator, b_c = 1 N s/m, a 1e5 N/m wall; each
-             model's k_c, and each model's own gains run against every operator
+             model's k_c, and each model's own gains run against every operator; the same
+             with a period of loop delay (operators_delayed)
   walls      wall stiffness against design: no coupling (the conventional design) and the
              couplings the passive and paper models size, hands-off
   delay      coupling stiffness against the loop delay (whole and fractional periods),
@@ -58,7 +59,9 @@ def stiffest_stable(values, judged):
     return best
 
 
-def operators_map(ctx, steps, device, scene_path):
+def operators_map(ctx, steps, device, scene_path, label="operators"):
+    """Each model's gains for `device` (its loop delay included) against every operator, and
+    the grid of k_c against operator."""
     models = design_models.designs(ctx, scene_path)
     sized = {d.name: design_models.sized_stiffness(ctx, device, d, COUPLING_DAMPING)
              for d in models}
@@ -67,7 +70,7 @@ def operators_map(ctx, steps, device, scene_path):
             for op in ops for k in steps["stiffness"]]
     own = [hil.Point(device, op, (sized[d.name], COUPLING_DAMPING), WALL, steps["duration_s"])
            for d in models for op in ops]
-    judged = run_points(ctx, "operators", grid + own)
+    judged = run_points(ctx, label, grid + own)
     n = len(steps["stiffness"])
     rows = []
     for i, op in enumerate(ops):
@@ -85,6 +88,7 @@ def operators_map(ctx, steps, device, scene_path):
             "verdicts": {op.name: cell for op, cell in zip(ops, cells)},
             "unstable_for": [op.name for op, cell in zip(ops, cells) if not cell["stable"]]})
     return {"coupling_damping_n_s_per_m": COUPLING_DAMPING, "wall_n_per_m": WALL,
+            "delay_periods": device.delay_s * device.rate_hz,
             "stiffness_n_per_m": steps["stiffness"], "rows": rows, "designs": design_rows}
 
 
@@ -156,5 +160,9 @@ def run(ctx):
                       "floor_m": hil.FLOOR_M, "growth_limit_per_s": hil.GROWTH_LIMIT_PER_S,
                       "rise_factor": hil.RISE_FACTOR},
             "operators": operators_map(ctx, steps, device, scene_path),
+            # The same with a period of loop delay, every model sizing for it.
+            "operators_delayed": operators_map(
+                ctx, steps, hil.Device(delay_s=1.0 / device.rate_hz), scene_path,
+                "operators-delayed"),
             "walls": walls_map(ctx, steps, device),
             "delay": delay_map(ctx, steps, device)}

@@ -48,8 +48,8 @@ def colorbar(figure, ax, colors):
     bar.set_label("growth (1/s)")
 
 
-def draw_operators(plt, data, figure):
-    block = data["operators"]
+def draw_operators(plt, data, figure, key="operators"):
+    block = data[key]
     ax = figure.subplots()
     colors = verdict_grid(plt, ax, block["stiffness_n_per_m"], [r["verdicts"] for r in block["rows"]],
                           [r["label"] + (" *" if r["in_pen_grip_class"] else "")
@@ -67,12 +67,22 @@ def draw_operators(plt, data, figure):
     return [ax]
 
 
-def what_operators(data):
-    block = data["operators"]
+def what_operators(data, key="operators"):
+    block = data[key]
+    delay = block.get("delay_periods", 0.0)
+    delayed = f", {delay:g} period of loop delay" if delay > 0 else ""
     return ("Stability of the virtual coupling against the operator, measured "
             f"(b_c = {block['coupling_damping_n_s_per_m']:g} N s/m, a "
-            f"{block['wall_n_per_m']:.0e} N/m wall) and each model's k_c (* in the pen-grip "
-            "class)")
+            f"{block['wall_n_per_m']:.0e} N/m wall{delayed}) and each model's k_c (* in the "
+            "pen-grip class)")
+
+
+def draw_operators_delayed(plt, data, figure):
+    return draw_operators(plt, data, figure, "operators_delayed")
+
+
+def what_operators_delayed(data):
+    return what_operators(data, "operators_delayed")
 
 
 def draw_walls(plt, data, figure):
@@ -117,6 +127,8 @@ def what_delay(data):
 
 
 CHARTS = [("stability-map-operators", draw_operators, what_operators, (7.5, 6.0)),
+          ("stability-map-operators-delayed", draw_operators_delayed, what_operators_delayed,
+           (7.5, 6.0)),
           ("stability-map-walls", draw_walls, what_walls, (7.5, 4.2)),
           ("stability-map-delay", draw_delay, what_delay, (7.5, 5.2))]
 

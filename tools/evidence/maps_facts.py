@@ -9,8 +9,8 @@ def growth(verdict):
     return f"{'stable' if verdict['stable'] else 'UNSTABLE'} ({rate:+.1f}/s)"
 
 
-def design(data, name):
-    return next(d for d in data["stability-maps"]["operators"]["designs"] if d["design"] == name)
+def design(data, name, key="operators"):
+    return next(d for d in data["stability-maps"][key]["designs"] if d["design"] == name)
 
 
 def wall_row(data, name):
@@ -22,9 +22,9 @@ def operator_label(data, name):
                 if r["operator"] == name)
 
 
-def design_table(data):
+def design_table(data, key="operators"):
     """Each model's own gains against every operator: the verdict and the fitted growth."""
-    block = data["stability-maps"]["operators"]
+    block = data["stability-maps"][key]
     names = [r["operator"] for r in block["rows"]]
     lines = ["| model | k_c | holds for | " + " | ".join(
         r["label"] for r in block["rows"]) + " |",
@@ -66,8 +66,8 @@ def delay_table(data):
     return "\n".join(lines)
 
 
-def unstable_for(data, name):
-    names = design(data, name)["unstable_for"]
+def unstable_for(data, name, key="operators"):
+    names = design(data, name, key)["unstable_for"]
     return ", ".join(operator_label(data, n) for n in names) if names else "no operator"
 
 
@@ -94,10 +94,33 @@ def delays_where_optimistic(data, model):
     return ", ".join(f"{p:g}" for p in picked) if picked else "none"
 
 
+def class_members_among(data, name, key):
+    """How many of the operators `name`'s gains were unstable for are in the pen-grip class."""
+    rows = {r["operator"]: r for r in data["stability-maps"][key]["rows"]}
+    unstable = design(data, name, key)["unstable_for"]
+    members = sum(1 for n in unstable if rows[n]["in_pen_grip_class"])
+    return f"{members} of them in the class"
+
+
+def delayed_kc(data, name):
+    return n_per_m(design(data, name, "operators_delayed")["stiffness_n_per_m"])
+
+
 FACTS = {
     "maps.run": lambda d: run_info(d, "stability-maps"),
     "maps.device": lambda d: d["stability-maps"]["device"],
     "maps.design_table": design_table,
+    "maps.delayed_design_table": lambda d: design_table(d, "operators_delayed"),
+    "maps.delayed_passive_kc": lambda d: delayed_kc(d, "passive"),
+    "maps.delayed_class_kc": lambda d: delayed_kc(d, "class"),
+    "maps.delayed_paper_unstable_for": lambda d: unstable_for(d, "paper", "operators_delayed"),
+    "maps.delayed_encoder_unstable_for": lambda d: unstable_for(d, "encoder",
+                                                                "operators_delayed"),
+    "maps.delayed_passive_unstable_for": lambda d: unstable_for(d, "passive",
+                                                                "operators_delayed"),
+    "maps.delayed_class_unstable_for": lambda d: unstable_for(d, "class", "operators_delayed"),
+    "maps.delayed_class_members": lambda d: class_members_among(d, "class", "operators_delayed"),
+    "maps.class_members": lambda d: class_members_among(d, "class", "operators"),
     "maps.operator_limits_table": operator_limits_table,
     "maps.wall_table": wall_table,
     "maps.delay_table": delay_table,
