@@ -72,6 +72,24 @@ TEST(plotRun, TheFittedGrowthIsTheEnvelopesAndTheVerdictFollowsIt) {
     }
 }
 
+TEST(plotRun, ByDefaultAnEncodersDitherIsNoGrowth) {
+    // A 10 um encoder: the handle still, then dithering by one count from 1 s on (a
+    // quantised loop at rest). The floor is 3 counts of the smallest position step.
+    std::ostringstream csv;
+    csv << "t_s,x0_m,f0_n\n";
+    for (int i = 0; i < 3000; ++i) {
+        const double x = (i >= 1000 && i % 2 == 1) ? 1e-5 : 0.0;
+        csv << i * kPeriodS << ',' << x << ",0\n";
+    }
+    const ScratchDir dir;
+    const json j = judge(dir, csv.str());
+    EXPECT_EQ(j.at("verdict"), "steady");
+    EXPECT_NEAR(j.at("floor_m").get<double>(), 3e-5, 1e-12);
+    EXPECT_EQ(j.at("floor_source"), "3 counts of the smallest position step");
+    // Told a floor under the count, the same log rises from it.
+    EXPECT_EQ(judge(dir, csv.str(), "--floor 1e-6").at("verdict"), "grows");
+}
+
 TEST(plotRun, TheCouplingsEnergyIsItsSpringsAndFaultsAndFlagsAreCounted) {
     const ScratchDir dir;
     const json j =

@@ -32,7 +32,7 @@ struct PlotRunOptions {
     std::string config_path;
     double judge_from_s = 0.2;
     double window_s = 0.1;
-    double floor_m = 1e-6;
+    std::optional<double> floor_m;  ///< default: kFloorCounts of the log's encoder count
     double growth_threshold_per_s = 0.5;
 };
 
@@ -46,6 +46,21 @@ constexpr std::pair<servo::TickFlag, const char*> kMarkedFlags[] = {
 };
 /// Times of marked ticks kept per flag for the chart (the counts are whole).
 constexpr std::size_t kMaxMarks = 2000;
+/// The amplitude floor by default: dither up to this many encoder counts is quantisation.
+constexpr double kFloorCounts = 3.0;
+/// The floor when the log shows no encoder count (its positions never step).
+constexpr double kFallbackFloorM = 1e-6;
+
+/// The encoder count the log shows: its smallest nonzero step between positions (as
+/// haptic-tune identify estimates the resolution); 0 when the position never moves.
+double smallest_step_m(const std::vector<double>& x) {
+    double step = 0.0;
+    for (std::size_t i = 1; i < x.size(); ++i) {
+        const double d = std::abs(x[i] - x[i - 1]);
+        if (d > 0.0 && (step == 0.0 || d < step)) step = d;
+    }
+    return step;
+}
 
 const std::vector<double>& required_column(const tune::TelemetryLog& log, const std::string& name) {
     const std::vector<double>* column = log.column(name);
@@ -106,8 +121,11 @@ int run_plot_run(const PlotRunOptions& o) {
     const auto first = static_cast<std::size_t>(
         std::lower_bound(t.begin(), t.end(), t.front() + o.judge_from_s) - t.begin());
     const auto window = static_cast<std::size_t>(std::max(2.0, std::round(o.window_s / period_s)));
+    const double count_m = smallest_step_m(x);
+    const double floor_m =
+        o.floor_m.value_or(count_m > 0.0 ? kFloorCounts * count_m : kFallbackFloorM);
     const tune::OscillationTrend trend =
-        tune::oscillation_trend(x, period_s, first, window, o.floor_m);
+        tune::oscillation_trend(x, period_s, first, window, floor_m);
 
     nlohmann::ordered_json chart = {{"kind", "run"}, {"axis", o.axis}};
     chart["position"] = chart_series(t, x);
@@ -194,7 +212,10 @@ int run_plot_run(const PlotRunOptions& o) {
         {"last_amplitude_m", trend.last_amplitude_m},
         {"windows", trend.amplitude_m.size()},
         {"window_s", trend.window_s},
-        {"floor_m", o.floor_m},
+        {"floor_m", floor_m},
+        {"floor_source", o.floor_m       ? "--floor"
+                         : count_m > 0.0 ? "3 counts of the smallest position step"
+                                         : "1e-6 m: the position never steps"},
         {"faults", fault_events},
         {"flag_counts", flag_counts},
     };
@@ -244,7 +265,8 @@ void add_plot_run_command(CLI::App& app, Invocation& invocation) {
         ->check(positive_finite("s"));
     command
         ->add_option("--floor", options->floor_m,
-                     "amplitude floor, m peak to peak: a few encoder counts (default 1e-6)")
+                     "amplitude floor, m peak to peak (default 3 encoder counts: 3 times the "
+                     "smallest step between the log's positions)")
         ->check(positive_finite("m"));
     command
         ->add_option("--growth-threshold", options->growth_threshold_per_s,
