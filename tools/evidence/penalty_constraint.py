@@ -5,7 +5,7 @@ the handle into it. At rest: the tool's depth (the wall's own error), the handle
 the hand feels: that plus the coupling's give) and the tick's compute."""
 
 from hil import number
-from scene_detail import COUPLING_N_PER_M, GRASP_N_PER_M, RAMP_S, HOLD_S, SETTLED_S, read_log
+from scene_detail import HOLD_S, RAMP_S, SETTLED_S, grasp, pen_config, run_hapticd
 
 START_M = -0.005       # the handle starts 5 mm before the wall, in free space
 PUSH_TO_M = 0.010      # the grasp's set-point 10 mm past it
@@ -21,32 +21,14 @@ def scene(wall_n_per_m):
 
 
 def config(duration_s):
-    return ('[servo]\nrate_hz = 1000.0\nrealtime = "off"\n[device]\nplugin = "sim"\naxes = 1\n'
-            "[device.model]\nmass = 0.1\ndamping = 2.0\n"
-            f'[coupling]\nstiffness = {number(COUPLING_N_PER_M)}\ndamping = 0.0\ncheck = "off"\n'
-            '[scene]\nfile = "scene.toml"\n'
-            "[safety]\nmax_force = 20.0\nmax_speed = 1.0\n"
-            "[device.sim]\nmass = 0.1\ndamping = 2.0\ncounts_per_meter = 1e9\n"
-            f'force_limit = 20.0\nclock = "lockstep"\ninitial_position = {number(START_M)}\n'
-            '[device.sim.human]\nmodel = "stiff-grasp"\nhand_mass = 0.3\n'
-            f"hand_stiffness = {number(GRASP_N_PER_M)}\nhand_damping = 5.0\n"
-            f"push = {{ to = {number(PUSH_TO_M)}, start = 0.3, ramp = {number(RAMP_S)}, "
-            f"hold = {number(duration_s)} }}\n")
+    return pen_config(1, number(START_M), grasp(PUSH_TO_M, duration_s, "[device.sim.human]"))
 
 
 def one_run(ctx, wall_n_per_m):
     tag = "constraint" if wall_n_per_m is None else f"penalty-{wall_n_per_m:g}"
-    work = ctx.scratch(f"flat-{tag}")
     duration_s = 0.3 + RAMP_S + HOLD_S
-    (work / "cfg.toml").write_text(config(duration_s))
-    (work / "scene.toml").write_text(scene(wall_n_per_m))
-    log = work / "run.csv"
-    ctx.run([ctx.program("hapticd"), "--lockstep", "--no-status", "--duration",
-             number(duration_s), "--config", str(work / "cfg.toml"), "--log", str(log),
-             "--summary", str(work / "summary.json")], f"hapticd, the flat wall ({tag})")
-    columns = read_log(log)
-    log.unlink()
-    summary = ctx.run_json(["cat", str(work / "summary.json")], "the run's summary")
+    columns, summary = run_hapticd(ctx, ctx.scratch(f"flat-{tag}"), config(duration_s),
+                                   scene(wall_n_per_m), duration_s, f"the flat wall ({tag})")
     settled = [i for i, t in enumerate(columns["t_s"]) if t >= duration_s - SETTLED_S]
 
     def mean(name):

@@ -14,6 +14,7 @@ Past the plane count where the facets' error drops under the coupling's give, mo
 buy the hand nothing: the point the chart marks.
 """
 
+import json
 import math
 
 from hil import number
@@ -50,22 +51,45 @@ def scene(planes):
     return text
 
 
-def config(direction, duration_s):
-    humans = ""
-    for c in direction:
-        target = c * (RADIUS_M + PUSH_PAST_M)
-        humans += ('[[device.sim.human]]\nmodel = "stiff-grasp"\nhand_mass = 0.3\n'
-                   f'hand_stiffness = {number(GRASP_N_PER_M)}\nhand_damping = 5.0\n'
-                   f"push = {{ to = {number(target)}, start = 0.3, ramp = {number(RAMP_S)}, "
-                   f"hold = {number(duration_s)} }}\n")
-    return ('[servo]\nrate_hz = 1000.0\nrealtime = "off"\n[device]\nplugin = "sim"\naxes = 3\n'
-            "[device.model]\nmass = 0.1\ndamping = 2.0\n"
+def grasp(target_m, duration_s, table="[[device.sim.human]]"):
+    """One axis' stiff grasp (0.3 kg, GRASP_N_PER_M, 5 N s/m), its set-point ramping to
+    `target_m` from 0.3 s and held."""
+    return (f'{table}\nmodel = "stiff-grasp"\nhand_mass = 0.3\n'
+            f"hand_stiffness = {number(GRASP_N_PER_M)}\nhand_damping = 5.0\n"
+            f"push = {{ to = {number(target_m)}, start = 0.3, ramp = {number(RAMP_S)}, "
+            f"hold = {number(duration_s)} }}\n")
+
+
+def pen_config(axes, initial_position, humans):
+    """hapticd's config: the sim pen display on `axes` axes with a 1 nm encoder, the default
+    config's coupling with the check off, the scene in scene.toml, and `humans`."""
+    return ('[servo]\nrate_hz = 1000.0\nrealtime = "off"\n[device]\nplugin = "sim"\n'
+            f"axes = {axes}\n[device.model]\nmass = 0.1\ndamping = 2.0\n"
             f'[coupling]\nstiffness = {number(COUPLING_N_PER_M)}\ndamping = 0.0\ncheck = "off"\n'
             '[scene]\nfile = "scene.toml"\n'
             "[safety]\nmax_force = 20.0\nmax_speed = 1.0\n"
             "[device.sim]\nmass = 0.1\ndamping = 2.0\ncounts_per_meter = 1e9\n"
-            'force_limit = 20.0\nclock = "lockstep"\ninitial_position = [0.0, 0.0, 0.0]\n'
+            f'force_limit = 20.0\nclock = "lockstep"\ninitial_position = {initial_position}\n'
             + humans)
+
+
+def config(direction, duration_s):
+    humans = "".join(grasp(c * (RADIUS_M + PUSH_PAST_M), duration_s) for c in direction)
+    return pen_config(3, "[0.0, 0.0, 0.0]", humans)
+
+
+def run_hapticd(ctx, work, config_text, scene_text, duration_s, what):
+    """One lockstep run in `work`: the log's columns (the log itself removed) and the
+    summary."""
+    (work / "cfg.toml").write_text(config_text)
+    (work / "scene.toml").write_text(scene_text)
+    log = work / "run.csv"
+    ctx.run([ctx.program("hapticd"), "--lockstep", "--no-status", "--duration",
+             number(duration_s), "--config", str(work / "cfg.toml"), "--log", str(log),
+             "--summary", str(work / "summary.json")], f"hapticd, {what}")
+    columns = read_log(log)
+    log.unlink()
+    return columns, json.loads((work / "summary.json").read_text())
 
 
 def read_log(path):
@@ -88,16 +112,9 @@ def settled_radius(columns, prefix, from_s):
 
 
 def one_run(ctx, planes, index, direction, duration_s):
-    work = ctx.scratch(f"cavity-{planes}-{index}")
-    (work / "cfg.toml").write_text(config(direction, duration_s))
-    (work / "scene.toml").write_text(scene(planes))
-    log = work / "run.csv"
-    ctx.run([ctx.program("hapticd"), "--lockstep", "--no-status", "--duration",
-             number(duration_s), "--config", str(work / "cfg.toml"), "--log", str(log),
-             "--summary", str(work / "summary.json")], f"hapticd, cavity of {planes} planes")
-    columns = read_log(log)
-    log.unlink()
-    summary = ctx.run_json(["cat", str(work / "summary.json")], "the run's summary")
+    columns, summary = run_hapticd(ctx, ctx.scratch(f"cavity-{planes}-{index}"),
+                                   config(direction, duration_s), scene(planes), duration_s,
+                                   f"cavity of {planes} planes")
     from_s = duration_s - SETTLED_S
     return {"surface_error_m": settled_radius(columns, "xe", from_s) - RADIUS_M,
             "handle_depth_m": settled_radius(columns, "x", from_s) - RADIUS_M,
