@@ -36,3 +36,21 @@ install(CODE "
   set(HAPTICD_UNIT_INSTALL_DIR \"${HAPTICD_UNIT_INSTALL_DIR}\")
   include(\"${PROJECT_SOURCE_DIR}/cmake/HapticdInstallTime.cmake\")
 ")
+
+# The Python client (python/hapticd, docs/python.md), pure Python, where Debian's python3
+# finds it for the prefix of the install: /usr/lib/python3/dist-packages for /usr (the .deb),
+# else PREFIX/lib/python3.N/dist-packages (for /usr/local, on Debian's sys.path too).
+execute_process(
+  COMMAND /usr/bin/python3 -c "import sys; print('%d.%d' % sys.version_info[:2])"
+  OUTPUT_VARIABLE HAPTICD_PYTHON_VERSION OUTPUT_STRIP_TRAILING_WHITESPACE
+  COMMAND_ERROR_IS_FATAL ANY)
+install(CODE "
+  if(CMAKE_INSTALL_PREFIX STREQUAL \"/usr\")
+    set(hapticd_python_dir \"\${CMAKE_INSTALL_PREFIX}/lib/python3/dist-packages\")
+  else()
+    set(hapticd_python_dir
+        \"\${CMAKE_INSTALL_PREFIX}/lib/python${HAPTICD_PYTHON_VERSION}/dist-packages\")
+  endif()
+  file(INSTALL \"${PROJECT_SOURCE_DIR}/python/hapticd\" DESTINATION \"\${hapticd_python_dir}\"
+       FILES_MATCHING PATTERN \"*.py\")
+")

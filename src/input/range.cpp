@@ -1,5 +1,7 @@
 #include "hapticd/input/range.hpp"
 
+#include <array>
+#include <charconv>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -37,6 +39,12 @@ std::string format_number(double value) {
     std::ostringstream out;
     out << value;
     return out.str();
+}
+
+std::string exact_number(double value) {
+    std::array<char, 64> buffer{};
+    const auto [end, error] = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value);
+    return error == std::errc() ? std::string(buffer.data(), end) : format_number(value);
 }
 
 std::string format_quantity(double value, std::string_view unit) {

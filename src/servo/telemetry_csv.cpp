@@ -15,8 +15,9 @@ struct AxisColumn {
 };
 constexpr AxisColumn kAxisColumns[] = {{"x", "_m"}, {"v", "_mps"}, {"xe", "_m"}, {"f", "_n"}};
 
-constexpr const char* kStatusColumns[] = {"status",          "flags",      "faults",  "state",
-                                          "wake_latency_us", "compute_us", "energy_j"};
+// `tick_flags`, not `flags`: a pandas DataFrame's attribute of that name hides the column.
+constexpr const char* kStatusColumns[] = {"status",          "tick_flags", "faults",   "state",
+                                          "wake_latency_us", "compute_us", "energy_j", "mark"};
 
 bool axes_in_range(int axes) noexcept { return axes >= 1 && axes <= kMaxAxes; }
 
@@ -55,7 +56,7 @@ std::string csv_header(int axes) {
         throw std::invalid_argument("telemetry csv: axes must be in 1.." +
                                     std::to_string(kMaxAxes) + ", got " + std::to_string(axes));
     }
-    std::string header = "tick,t_s";
+    std::string header = "tick,t_s,unix_time_s";
     for (int i = 0; i < axes; ++i) {
         const std::string axis = std::to_string(i);
         for (const auto& [prefix, unit] : kAxisColumns) {
@@ -79,6 +80,8 @@ std::size_t format_csv_record(const TelemetryRecord& record, int axes,
     line.number(record.tick);
     line.character(',');
     line.number(record.t_s);
+    line.character(',');
+    line.number(record.unix_time_s);
     for (int i = 0; i < axes; ++i) {
         for (double value : {record.x_m[i], record.v_mps[i], record.xe_m[i], record.f_n[i]}) {
             line.character(',');
@@ -93,6 +96,8 @@ std::size_t format_csv_record(const TelemetryRecord& record, int axes,
         line.character(',');
         line.number(value);
     }
+    line.character(',');
+    line.number(record.mark);
     line.character('\n');
     return line.cursor() == nullptr ? 0 : static_cast<std::size_t>(line.cursor() - out.data());
 }

@@ -105,9 +105,9 @@ void check_status(const TelemetryLog& log, AxisData& data, const IdentificationO
     }
     std::size_t saturated = 0;
     std::size_t first_saturated = n;
-    if (const std::vector<double>* flags = log.column("flags")) {
+    if (const std::vector<double>* flags = log.column("tick_flags")) {
         for (std::size_t i = 0; i < n; ++i) {
-            const std::uint32_t mask = bit_mask(log, *flags, i, "flags");
+            const std::uint32_t mask = bit_mask(log, *flags, i, "tick_flags");
             if (mask & servo::kFlagNoSample) data.masked[i] = 1;
             if (mask & servo::kFlagSaturated) {
                 ++saturated;

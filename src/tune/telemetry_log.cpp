@@ -73,6 +73,32 @@ std::size_t lines_left(std::istream& in) {
     return in ? lines : 0;
 }
 
+/// "# key: value" -> (key, value); false for any other comment.
+bool preamble_entry(std::string_view line, std::pair<std::string, std::string>& entry) {
+    std::string_view text = trim(line);
+    if (!text.starts_with('#')) return false;
+    text = trim(text.substr(1));
+    const std::size_t colon = text.find(": ");
+    if (colon == std::string_view::npos || colon == 0) return false;
+    const std::string_view key = text.substr(0, colon);
+    if (key.find_first_of(" \t") != std::string_view::npos) return false;
+    entry = {std::string(key), std::string(trim(text.substr(colon + 2)))};
+    return true;
+}
+
+/// "# mark N: text" -> (N, text); false for any other comment.
+bool mark_line(std::string_view line, TelemetryMark& mark) {
+    std::string_view text = trim(line);
+    if (!text.starts_with("# mark ")) return false;
+    text.remove_prefix(7);
+    const char* const last = text.data() + text.size();
+    const auto [end, error] = std::from_chars(text.data(), last, mark.number);
+    const std::string_view rest(end, static_cast<std::size_t>(last - end));
+    if (error != std::errc{} || end == text.data() || !rest.starts_with(':')) return false;
+    mark.text = std::string(trim(rest.substr(1)));
+    return true;
+}
+
 bool is_required(std::string_view name, int axes) {
     if (name == "t_s") return true;
     for (int axis = 0; axis < axes; ++axis) {
@@ -89,7 +115,7 @@ TelemetryLogOptions TelemetryLogOptions::identification() {
     // t_s, x{i}_m and f{i}_n are kept as required columns; these are the masks
     // identification_data.cpp reads.
     options.keep_column = [](std::string_view name) {
-        return name == "status" || name == "flags" || name == "faults";
+        return name == "status" || name == "tick_flags" || name == "faults";
     };
     options.row_lines = false;
     return options;
@@ -98,6 +124,13 @@ TelemetryLogOptions TelemetryLogOptions::identification() {
 const std::vector<double>* TelemetryLog::column(std::string_view name) const {
     for (std::size_t c = 0; c < columns.size(); ++c) {
         if (columns[c] == name) return c < kept.size() && kept[c] ? &values[c] : nullptr;
+    }
+    return nullptr;
+}
+
+const std::string* TelemetryLog::preamble_value(std::string_view key) const {
+    for (const auto& [name, value] : preamble) {
+        if (name == key) return &value;
     }
     return nullptr;
 }
@@ -146,6 +179,9 @@ TelemetryLog parse_telemetry_log(std::istream& in, const std::string& source,
     std::size_t header_line = 0;
     while (std::getline(in, line)) {
         ++line_number;
+        if (std::pair<std::string, std::string> entry; preamble_entry(line, entry)) {
+            log.preamble.push_back(std::move(entry));
+        }
         if (is_skipped(line)) continue;
         header_line = line_number;
         break;
@@ -165,6 +201,7 @@ TelemetryLog parse_telemetry_log(std::istream& in, const std::string& source,
             throw LogFormatError(source + ":" + std::to_string(header_line) + ":" +
                                  std::to_string(c + 1) + ": empty column name in the header");
         }
+        if (name == "flags") name = "tick_flags";  // its name before 0.1.0's preamble
         if (!index.emplace(std::string(name), c).second) {
             throw LogFormatError(source + ":" + std::to_string(header_line) + ":" +
                                  std::to_string(c + 1) + ": column " + std::string(name) +
@@ -210,6 +247,10 @@ TelemetryLog parse_telemetry_log(std::istream& in, const std::string& source,
     std::size_t previous_line = 0;
     while (std::getline(in, line)) {
         ++line_number;
+        if (TelemetryMark mark; mark_line(line, mark)) {
+            mark.row = log.row_count;
+            log.marks.push_back(std::move(mark));
+        }
         if (is_skipped(line)) continue;
         split_fields(line, fields);
         if (fields.size() != columns) {

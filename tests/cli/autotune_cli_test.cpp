@@ -624,7 +624,8 @@ void expect_the_log_kept_and_named(const CommandResult& r, const std::string& tm
     const std::string path = r.err.substr(start, r.err.find_first_of(")\n", start) - start);
     EXPECT_EQ(fs::path(path).parent_path(), fs::path(tmp)) << path;
     EXPECT_EQ(names_in(tmp), std::vector<std::string>{fs::path(path).filename().string()});
-    const std::vector<std::string> rows = lines(read(path));
+    std::vector<std::string> rows = lines(read(path));
+    std::erase_if(rows, [](const std::string& line) { return line.starts_with('#'); });
     ASSERT_GE(rows.size(), 2u) << path;
     EXPECT_EQ(rows.front().rfind("tick,t_s,", 0), 0u) << rows.front();
 }

@@ -332,7 +332,9 @@ class GainsLoop final : public ServoControl {
         ++sets;
     }
     servo::CouplingGains coupling() const noexcept override { return gains_; }
+    void mark(std::uint32_t number) noexcept override { marked = number; }
     int sets = 0;
+    std::uint32_t marked = 0;
 
   private:
     servo::CouplingGains gains_{.stiffness_n_per_m = 2000.0, .damping_n_s_per_m = 0.5};

@@ -26,6 +26,7 @@ struct CountingLoop {
     void disarm() noexcept {}
     void request_fault_reset() noexcept {}
     void request_coupling(const servo::CouplingGains& /*gains*/) noexcept {}
+    void mark(std::uint32_t /*number*/) noexcept {}
 };
 
 TEST(DaemonLoopControl, ServesOneStatusReadToEveryAskerWithinItsMaxAgeThenReadsAgain) {

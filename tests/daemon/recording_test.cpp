@@ -93,25 +93,30 @@ TEST(DaemonRecording, EveryTickFromTheStartToTheStopIsInTheFileOnce) {
     }
 }
 
-// A named instance's recordings begin with its name (telemetry_preamble()), and count only
-// records.
-TEST(DaemonRecording, ANamedInstancesRecordingBeginsWithItsName) {
+// Each recording begins with the preamble as it is when the recording starts (the gains and
+// scene in force then), and counts only records.
+TEST(DaemonRecording, EachRecordingBeginsWithThePreambleOfItsStart) {
     const ScratchDir dir;
     const OutputsDirectory outputs(dir.path().string());
     FakeServo servo;
-    Recording recording([&servo](servo::TelemetryRing* ring) { servo.attach(ring); },
-                        [&servo] { return servo.tick(); }, /*axes=*/1, /*lockstep=*/false, &outputs,
-                        telemetry_preamble("rig 2"));
-    const std::string file = dir.file("named.csv");
-    ASSERT_TRUE(recording.start(file).ok);
-    std::this_thread::sleep_for(50ms);
-    const RecordingResult stopped = recording.stop();
-    ASSERT_TRUE(stopped.ok) << stopped.message;
-    const std::vector<std::string> lines = hapticd::testing::lines_of_file(file);
-    ASSERT_GE(lines.size(), 2u);
-    EXPECT_EQ(lines[0], "# name: rig 2");
-    EXPECT_EQ(lines[1].rfind("tick,", 0), 0u) << lines[1];
-    EXPECT_EQ(lines.size(), stopped.records + 2);
+    int starts = 0;
+    Recording recording(
+        [&servo](servo::TelemetryRing* ring) { servo.attach(ring); },
+        [&servo] { return servo.tick(); }, /*axes=*/1, /*lockstep=*/false, &outputs,
+        [&starts] { return "# name: rig 2\n# start: " + std::to_string(++starts) + "\n"; });
+    for (int round = 1; round <= 2; ++round) {
+        const std::string file = dir.file("named" + std::to_string(round) + ".csv");
+        ASSERT_TRUE(recording.start(file).ok);
+        std::this_thread::sleep_for(50ms);
+        const RecordingResult stopped = recording.stop();
+        ASSERT_TRUE(stopped.ok) << stopped.message;
+        const std::vector<std::string> lines = hapticd::testing::lines_of_file(file);
+        ASSERT_GE(lines.size(), 3u);
+        EXPECT_EQ(lines[0], "# name: rig 2");
+        EXPECT_EQ(lines[1], "# start: " + std::to_string(round));
+        EXPECT_EQ(lines[2].rfind("tick,", 0), 0u) << lines[2];
+        EXPECT_EQ(lines.size(), stopped.records + 3);
+    }
 }
 
 TEST(DaemonRecording, EachRefusalSaysWhyAndNothingIsOverwritten) {

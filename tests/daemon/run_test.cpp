@@ -195,7 +195,8 @@ TEST_F(DaemonRun, LogIsCompleteInLockstep) {
     const std::vector<std::string> first(
         csv.columns().begin(),
         csv.columns().begin() + std::min<std::size_t>(csv.columns().size(), 6));
-    EXPECT_EQ(first, (std::vector<std::string>{"tick", "t_s", "x0_m", "v0_mps", "xe0_m", "f0_n"}));
+    EXPECT_EQ(first,
+              (std::vector<std::string>{"tick", "t_s", "unix_time_s", "x0_m", "v0_mps", "xe0_m"}));
     EXPECT_GT(csv.columns().size(), 6u);  // the status columns follow
     const std::vector<double>& tick = csv.column("tick");
     for (std::size_t row = 0; row < tick.size(); ++row) {
@@ -346,14 +347,13 @@ TEST_F(DaemonRun, TheServoNameLabelsTheSummaryAndTheStartLine) {
     ASSERT_EQ(outcome.exit_code, kExitOk) << outcome.log;
     EXPECT_EQ(outcome.summary()["name"], "left arm");
     EXPECT_NE(outcome.log.find("hapticd: left arm: sim device"), std::string::npos) << outcome.log;
-    // And the log: its first line names the instance, and haptic-tune's reader reads past it.
-    std::ifstream in(*options.log_path);
-    std::string first;
-    ASSERT_TRUE(std::getline(in, first));
-    EXPECT_EQ(first, "# name: left arm");
+    // And the log: its preamble names the instance, and haptic-tune's reader reads past it.
     const tune::TelemetryLog log = tune::read_telemetry_log(*options.log_path);
+    ASSERT_NE(log.preamble_value("name"), nullptr);
+    EXPECT_EQ(*log.preamble_value("name"), "left arm");
     EXPECT_EQ(log.rows(), 50u);
-    EXPECT_EQ(log.line(0), 3u);  // after the name and the header
+    EXPECT_EQ(log.line(0),
+              log.preamble.size() + 3);  // after the preamble, its title and the header
 }
 
 TEST_F(DaemonRun, EachStartWritesFilesOfItsOwnWhereThePathsSayStart) {

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -491,6 +492,98 @@ TEST(HilControlSocket, HapticctlRecordsEveryTickLosslessly) {
     EXPECT_NE(daemon.process.messages().find("take3.csv closed: "), std::string::npos)
         << daemon.process.messages();
     EXPECT_GT(read_telemetry(dir.file("take3.csv")).rows(), 0u);
+}
+
+// hapticctl mark: each marker and each change of gains is numbered, stamped on every record
+// from the servo's next tick on and named in a "# mark N:" line before the first of them; a
+// recording's preamble names the gains, the verdict and the scene in force as it starts, and
+// plot-run reads k_c, and its change, from the recording alone.
+TEST(HilControlSocket, HapticctlMarksTrialsInTheRecordingWhosePreambleNamesTheGains) {
+    const ScratchDir dir;
+    Daemon daemon(dir, "lab0", "");
+    ASSERT_TRUE(daemon.process.wait_for_socket(daemon.socket)) << daemon.process.messages();
+    const std::string first = dir.file("trials.csv");
+    // Each step waits for the servo to be two ticks past the request, so that each mark has
+    // records of its own whatever the host's timing; the recording, rows before the first.
+    const auto step = [&](const std::string& arguments) {
+        CommandResult r = hapticctl(daemon.socket, arguments);
+        EXPECT_EQ(r.exit_code, 0) << arguments << ": " << r.err;
+        const auto tick = status_of(daemon.socket)["tick"].get<std::uint64_t>();
+        status_when(daemon.socket, [tick](const nlohmann::json& s) {
+            return s["tick"].get<std::uint64_t>() >= tick + 3;
+        });
+        return r;
+    };
+    step("record start " + shell_quote(first));
+    const CommandResult a = step("mark 'trial A'");
+    EXPECT_EQ(a.out.rfind("mark 1 from the tick after ", 0), 0u) << a.out;
+    step("coupling 2000");
+    step("mark 'trial B, caf\xc3\xa9'");
+    ASSERT_EQ(hapticctl(daemon.socket, "record stop").exit_code, 0);
+
+    const TelemetryLog log = read_telemetry(first);
+    EXPECT_EQ(log.preamble("coupling_stiffness_n_per_m"), "3600");  // the config's, at the start
+    EXPECT_NE(log.preamble("stability").find("passive model"), std::string::npos);
+    EXPECT_EQ(log.preamble("scene").rfind("demo-wall (impedance, ", 0), 0u)
+        << log.preamble("scene");
+    ASSERT_EQ(log.marks().size(), 3u);
+    EXPECT_EQ(log.marks()[0].text, "trial A");
+    EXPECT_EQ(log.marks()[1].text.rfind("coupling k_c 2000 N/m, b_c 0 N s/m; ", 0), 0u)
+        << log.marks()[1].text;
+    EXPECT_NE(log.marks()[1].text.find("passive model"), std::string::npos);
+    EXPECT_EQ(log.marks()[2].text, "trial B, caf\xc3\xa9");
+    const std::vector<double>& mark = log.column("mark");
+    EXPECT_EQ(mark.front(), 0.0);
+    EXPECT_TRUE(std::is_sorted(mark.begin(), mark.end()));
+    for (const tune::TelemetryMark& m : log.marks()) {
+        SCOPED_TRACE(m.number);
+        ASSERT_LT(m.row, log.rows());
+        ASSERT_GT(m.row, 0u);
+        EXPECT_EQ(mark[m.row], static_cast<double>(m.number));  // the first row that carries it
+        EXPECT_EQ(mark[m.row - 1], static_cast<double>(m.number - 1));
+    }
+
+    // A second recording starts in trial 3, with the gains in force then.
+    const std::string second = dir.file("later.csv");
+    ASSERT_EQ(hapticctl(daemon.socket, "record start " + shell_quote(second)).exit_code, 0);
+    step("status");
+    ASSERT_EQ(hapticctl(daemon.socket, "record stop").exit_code, 0);
+    const TelemetryLog later = read_telemetry(second);
+    EXPECT_EQ(later.preamble("coupling_stiffness_n_per_m"), "2000");
+    ASSERT_EQ(later.marks().size(), 1u);
+    EXPECT_EQ(later.marks()[0].number, 3u);
+    EXPECT_EQ(later.marks()[0].row, 0u);
+
+    // plot-run takes k_c from the recording: 3600 N/m, then 2000 from the coupling's mark.
+    const CommandResult judged =
+        run_command(shell_quote(HAPTIC_TUNE_BIN) + " plot-run --json " + shell_quote(first));
+    ASSERT_EQ(judged.exit_code, 0) << judged.err;
+    const nlohmann::json j = nlohmann::json::parse(judged.out);
+    EXPECT_EQ(j.at("coupling_stiffness_n_per_m"), 3600.0);
+    EXPECT_EQ(j.at("coupling_stiffness_source"), "the log's preamble and its coupling marks");
+    ASSERT_EQ(j.at("coupling_stiffness_changes").size(), 2u);
+    EXPECT_EQ(j.at("coupling_stiffness_changes")[1].at("stiffness_n_per_m"), 2000.0);
+
+    // Marks a client may not make: each refused, naming why.
+    for (const auto& [arguments, says] : std::vector<std::pair<std::string, std::string>>{
+             {"mark ''", "empty"},
+             {"mark " + std::string(201, 'x'), "201 bytes: allowed 1 to 200"},
+             {"mark $'two\\nlines'", "a control character at byte 4"}}) {
+        const CommandResult r =
+            run_command("bash -c " + shell_quote(shell_quote(HAPTICCTL_BIN) + " --socket " +
+                                                 shell_quote(daemon.socket) + " " + arguments));
+        EXPECT_EQ(r.exit_code, 2) << arguments;
+        EXPECT_NE(r.err.find(says), std::string::npos) << arguments << ": " << r.err;
+    }
+    UnixClient raw(daemon.socket);
+    raw.send(R"({"v":1,"id":9,"request":"mark","text":"a\u001b[2Jb"})"
+             "\n");
+    const auto refused = raw.line(10s);
+    ASSERT_TRUE(refused.has_value());
+    EXPECT_NE(refused->find("a control character at byte 2"), std::string::npos) << *refused;
+    EXPECT_EQ(daemon.process.stop(), 0) << daemon.process.messages();
+    EXPECT_NE(daemon.process.messages().find("control: mark 1 from pid "), std::string::npos)
+        << daemon.process.messages();
 }
 
 struct BadUsage {

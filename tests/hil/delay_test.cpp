@@ -247,8 +247,8 @@ TEST(HilDelay, ZeroDelayReproducesTheNoCouplingResult) {
         const DaemonRun without_key = run(wall_n_per_m, "");
         const DaemonRun zero_delay = run(wall_n_per_m, "delay = 0.0\n");
         ASSERT_GT(zero_delay.log.rows(), 0u);
-        for (const char* column :
-             {"t_s", "x0_m", "v0_mps", "xe0_m", "f0_n", "status", "flags", "faults", "energy_j"}) {
+        for (const char* column : {"t_s", "x0_m", "v0_mps", "xe0_m", "f0_n", "status", "tick_flags",
+                                   "faults", "energy_j"}) {
             EXPECT_EQ(zero_delay.log.column(column), without_key.log.column(column)) << column;
         }
         const ContactJudgement judged = judge_wall_contact(zero_delay.log, kNoCouplingJudgeFromS);

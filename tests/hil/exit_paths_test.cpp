@@ -14,6 +14,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <cstring>
@@ -66,7 +67,8 @@ bool eventually(Predicate predicate, std::chrono::milliseconds timeout) {
 // the missing newline at the end of the file shows the cut. last_row_t() and the row counts
 // read the file while hapticd appends to it, where the last line may be cut at any byte.
 
-/// The log's lines, and whether the file ends on a newline (its last line is whole).
+/// The log's lines from its header row on (the preamble's "# " lines left out), and whether
+/// the file ends on a newline (its last line is whole).
 struct LogFile {
     std::vector<std::string> lines;
     bool ends_whole = true;
@@ -78,6 +80,10 @@ LogFile read_log(const std::string& path) {
     log.bytes = text.size();
     log.ends_whole = text.empty() || text.back() == '\n';
     log.lines = lines_of_text(text);
+    const auto header =
+        std::find_if(log.lines.begin(), log.lines.end(),
+                     [](const std::string& line) { return !line.starts_with('#'); });
+    log.lines.erase(log.lines.begin(), header);
     return log;
 }
 

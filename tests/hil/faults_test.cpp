@@ -51,7 +51,7 @@ std::uint32_t faults_at(const TelemetryLog& log, std::size_t row) {
 }
 
 std::uint32_t flags_at(const TelemetryLog& log, std::size_t row) {
-    return static_cast<std::uint32_t>(log.column("flags")[row]);
+    return static_cast<std::uint32_t>(log.column("tick_flags")[row]);
 }
 
 TEST(HilFaults, DisconnectStopsTheRunWithZeroForce) {

@@ -94,7 +94,7 @@ TEST(HilGodObject, ProxyStaysInFreeSpaceWhileTheDevicePressesIntoBallAndTable) {
     double proxy_ball_gap_min_m = 1.0, proxy_table_gap_min_m = 1.0;
     std::size_t pushed_out_of_ball = 0, in_ball = 0, pushed_out_of_table = 0, in_table = 0;
     double coupling_law_error_max_n = 0.0;
-    const auto& flags = run.log.column("flags");
+    const auto& flags = run.log.column("tick_flags");
     for (std::size_t i = 0; i < run.log.rows(); ++i) {
         const Vec x = row_vector(run.log, "x", "_m", i);
         const Vec xe = row_vector(run.log, "xe", "_m", i);

@@ -71,7 +71,7 @@ struct PlayedTicks {
 };
 
 PlayedTicks played_ticks(const TelemetryLog& log) {
-    const auto& flags = log.column("flags");
+    const auto& flags = log.column("tick_flags");
     const auto& f = log.column("f0_n");
     PlayedTicks played;
     for (std::size_t row = 0; row < log.rows(); ++row) {
@@ -148,7 +148,7 @@ TEST(HilIdentifySocket, TheExcitationPlaysOnTheDisarmedDaemonAndIdentifiesThePen
     const PlayedTicks ticks = played_ticks(log);
     EXPECT_GE(ticks.force_n.size(), static_cast<std::size_t>(e.samples()));
     EXPECT_EQ(mismatches_with_plan(ticks.force_n, e), 0u);
-    const auto& flags = log.column("flags");
+    const auto& flags = log.column("tick_flags");
     EXPECT_FALSE(has_flag(flags.back(), servo::kFlagOpenLoop)) << "the log ends let go";
     EXPECT_EQ(log.column("f0_n").back(), 0.0);
 

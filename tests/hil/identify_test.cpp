@@ -98,10 +98,9 @@ TEST(HilIdentify, PenDisplayLogsTheSignalItCommandedAndStaysInTheWorkspace) {
 
     // Complete: the columns of docs/architecture.md §4.5, one row per tick of the whole
     // excitation and its tail.
-    EXPECT_EQ(
-        run.log_header,
-        "tick,t_s,x0_m,v0_mps,xe0_m,f0_n,status,flags,faults,state,wake_latency_us,compute_us,"
-        "energy_j");
+    EXPECT_EQ(run.log_header,
+              "tick,t_s,unix_time_s,x0_m,v0_mps,xe0_m,f0_n,status,tick_flags,faults,state,"
+              "wake_latency_us,compute_us,energy_j,mark");
     const std::size_t expected_rows = static_cast<std::size_t>(kStartTick + e.samples() + 500);
     ASSERT_EQ(run.log.rows(), expected_rows);
     EXPECT_EQ(run.summary.at("telemetry_records"), expected_rows);

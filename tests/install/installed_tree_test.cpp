@@ -194,5 +194,23 @@ TEST_F(InstalledTree, TheServiceFilesManPagesAndDataAreInstalled) {
         fs::is_regular_file(installed("share/hapticd/examples/../scenes/god-object-sphere.toml")));
 }
 
+// The Python client goes where Debian's python3 looks below a prefix other than /usr
+// (lib/python3.N/dist-packages), and imports from there alone.
+TEST_F(InstalledTree, ThePythonClientImportsFromTheInstall) {
+    const CommandResult version =
+        run_command("/usr/bin/python3 -c \"import sys; print('%d.%d' % sys.version_info[:2])\"");
+    ASSERT_EQ(version.exit_code, 0) << version.err;
+    const std::string packages =
+        installed("lib/python" + version.out.substr(0, version.out.find('\n')) + "/dist-packages");
+    EXPECT_TRUE(fs::is_regular_file(packages + "/hapticd/__init__.py")) << packages;
+    EXPECT_TRUE(fs::is_regular_file(packages + "/hapticd/control.py")) << packages;
+    const CommandResult imported =
+        run_command("cd / && PYTHONPATH=" + shell_quote(packages) +
+                    " /usr/bin/python3 -c \"import hapticd; print(hapticd.__file__); "
+                    "print(hapticd.instance_socket('lab0'))\"");
+    ASSERT_EQ(imported.exit_code, 0) << imported.err;
+    EXPECT_EQ(imported.out, packages + "/hapticd/__init__.py\n/run/hapticd/lab0.sock\n");
+}
+
 }  // namespace
 }  // namespace hapticd::testing

@@ -45,6 +45,10 @@ TEST(LoopInbox, ATakeWithNothingAskedChangesNothing) {
     EXPECT_EQ(requests.open_loop, nullptr);
     EXPECT_EQ(requests.open_loop_change, OpenLoopChange::none);
     EXPECT_EQ(requests.recording, nullptr);
+    EXPECT_EQ(requests.mark, 0u);
+    inbox.mark(7);
+    EXPECT_EQ(inbox.take(false).mark, 7u);
+    EXPECT_EQ(inbox.take(false).mark, 7u);  // a mark holds until the next
 }
 
 TEST(LoopInbox, ArmingIsAnEdgeOnceAndDisarmingIsSeenAtTheNextTake) {

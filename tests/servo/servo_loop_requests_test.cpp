@@ -42,6 +42,31 @@ TEST(ServoLoop, DisarmZeroesAndArmSoftStartsAgain) {
     EXPECT_NEAR(device.last_command.force_n[0], 3.0, 1e-12);
 }
 
+// A mark is stamped on every record from the next tick on, and changes nothing else: the
+// force, the soft start and the state go on as without it. The record's time is the double
+// nearest tick / rate, its wall clock the host's.
+TEST(ServoLoop, AMarkIsStampedOnEveryRecordFromTheNextTickOn) {
+    VirtualTime time;
+    FakeDevice device;
+    device.set_position_counts(-2000);
+    PlaneWall wall{.wall_m = 0.0, .stiffness_n_per_m = 6000.0};
+    TestLoop<PlaneWall> loop(device, wall, test_config(), nullptr, FakeClock{&time});
+    const auto unix_before_s = static_cast<double>(unix_now_us()) / 1e6;
+    for (int n = 0; n < 3; ++n) EXPECT_EQ(loop.tick().mark, 0u);
+    loop.inbox().mark(1);
+    loop.inbox().mark(2);  // two before a tick: the tick takes the latest
+    EXPECT_EQ(loop.last_record().mark, 0u);
+    for (int n = 0; n < 3; ++n) {
+        const TelemetryRecord& record = loop.tick();
+        EXPECT_EQ(record.mark, 2u);
+        EXPECT_NEAR(device.last_command.force_n[0], 3.0, 1e-12);
+        EXPECT_EQ(record.t_s, static_cast<double>(record.tick) / test_config().rate_hz);
+        EXPECT_GE(record.unix_time_s, unix_before_s);
+    }
+    loop.inbox().mark(3);
+    EXPECT_EQ(loop.tick().mark, 3u);
+}
+
 // scene_load's path through the loop: an offered environment is taken at the start of the
 // next tick, reset where the handle is, and rendered through the soft start; the one it
 // replaced is not touched again. A second offer waits for the first; a withdrawn one is

@@ -24,7 +24,7 @@ struct DaemonRun {
     std::string err;         ///< its messages (standard error)
     nlohmann::json summary;  ///< summary.json; null if hapticd wrote none
     TelemetryLog log;        ///< run.csv; empty if hapticd wrote none
-    std::string log_header;  ///< the CSV's first line, verbatim
+    std::string log_header;  ///< the CSV's header row (after the preamble), verbatim
 };
 
 struct RunRequest {
@@ -64,7 +64,8 @@ inline DaemonRun run_hapticd(const ScratchDir& dir, const RunRequest& request) {
     }
     if (std::filesystem::exists(log)) {
         std::ifstream in(log);
-        std::getline(in, run.log_header);
+        while (std::getline(in, run.log_header) && run.log_header.starts_with('#')) {
+        }
         run.log = read_telemetry(log);
     }
     return run;

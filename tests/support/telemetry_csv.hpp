@@ -29,6 +29,16 @@ class TelemetryLog {
     std::size_t rows() const { return log_.rows(); }
     /// The header's names, in file order.
     const std::vector<std::string>& columns() const { return log_.columns; }
+    /// The preamble's value for `key` ("# key: value"); throws naming it when absent.
+    const std::string& preamble(std::string_view key) const {
+        const std::string* value = log_.preamble_value(key);
+        if (value == nullptr) {
+            throw std::runtime_error(log_.source + " has no preamble line " + std::string(key));
+        }
+        return *value;
+    }
+    /// The "# mark N: text" lines, in order.
+    const std::vector<tune::TelemetryMark>& marks() const { return log_.marks; }
 
   private:
     tune::TelemetryLog log_;

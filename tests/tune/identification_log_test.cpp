@@ -64,10 +64,11 @@ TEST(IdentificationLog, ReadsTheDaemonsWriterBitForBit) {
     EXPECT_EQ(log.axes, 2);
     EXPECT_EQ(log.rows(), records.size());
     const std::vector<std::string> expected_columns = {
-        "tick",       "t_s",     "x0_m",   "v0_mps", "xe0_m",
-        "f0_n",       "x1_m",    "v1_mps", "xe1_m",  "f1_n",
-        "status",     "flags",   "faults", "state",  "wake_latency_us",
-        "compute_us", "energy_j"};
+        "tick",       "t_s",      "unix_time_s", "x0_m",
+        "v0_mps",     "xe0_m",    "f0_n",        "x1_m",
+        "v1_mps",     "xe1_m",    "f1_n",        "status",
+        "tick_flags", "faults",   "state",       "wake_latency_us",
+        "compute_us", "energy_j", "mark"};
     EXPECT_EQ(log.columns, expected_columns);
     EXPECT_EQ(log.lines.front(), 2u);
     EXPECT_EQ(log.lines.back(), 6u);
@@ -83,12 +84,12 @@ TEST(IdentificationLog, ReadsTheDaemonsWriterBitForBit) {
             EXPECT_EQ((*log.column("f" + i + "_n"))[n], r.f_n[axis]);
         }
         EXPECT_EQ((*log.column("status"))[n], r.status);
-        EXPECT_EQ((*log.column("flags"))[n], r.flags);
+        EXPECT_EQ((*log.column("tick_flags"))[n], r.flags);
         EXPECT_EQ((*log.column("energy_j"))[n], r.energy_j);
     }
     EXPECT_EQ(log.column("nope"), nullptr);
     EXPECT_EQ(log.where(2), "daemon.csv:4");
-    EXPECT_EQ(log.where(2, "f1_n"), "daemon.csv:4:10 (f1_n)");
+    EXPECT_EQ(log.where(2, "f1_n"), "daemon.csv:4:11 (f1_n)");
 }
 
 TEST(IdentificationLog, ReadsAFileFromDisk) {
@@ -153,7 +154,7 @@ TEST(IdentificationLog, KeepsOnlyTheColumnsIdentificationReadsWithinTheirOwnSize
     const std::size_t n = records.size();
     ASSERT_EQ(lean.rows(), n);
     ASSERT_EQ(full.rows(), n);
-    for (const char* name : {"t_s", "x0_m", "f0_n", "status", "flags", "faults"}) {
+    for (const char* name : {"t_s", "x0_m", "f0_n", "status", "tick_flags", "faults"}) {
         ASSERT_NE(lean.column(name), nullptr) << name;
         EXPECT_EQ(*lean.column(name), *full.column(name)) << name;
     }
@@ -177,7 +178,7 @@ TEST(IdentificationLog, KeepsOnlyTheColumnsIdentificationReadsWithinTheirOwnSize
     const double lean_bound = 6 * sizeof(double) * 1.01 + 512.0 / static_cast<double>(n);
     EXPECT_LE(per_row(lean), lean_bound);
     EXPECT_GE(per_row(lean), 6 * sizeof(double));
-    const double full_bound = (13 + 1) * sizeof(double) * 1.01 + 1024.0 / static_cast<double>(n);
+    const double full_bound = (15 + 1) * sizeof(double) * 1.01 + 1024.0 / static_cast<double>(n);
     EXPECT_LE(per_row(full), full_bound);
 
     // And identification reads the same numbers from either.

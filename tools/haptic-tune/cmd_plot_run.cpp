@@ -6,9 +6,11 @@
 // (tune/oscillation.hpp): does it grow or die out, and how fast. Exit 0 judged, 2 for a log
 // that cannot be read.
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <iostream>
 #include <memory>
+#include <string_view>
 
 #include "chart_options.hpp"
 #include "chart_script.hpp"
@@ -81,11 +83,53 @@ double median_period_s(const std::vector<double>& t) {
     return steps[steps.size() / 2];
 }
 
-std::optional<double> coupling_stiffness(const PlotRunOptions& o) {
-    if (o.stiffness_n_per_m) return o.stiffness_n_per_m;
-    if (o.config_path.empty()) return std::nullopt;
-    const double stiffness = daemon::load_config(o.config_path).coupling.stiffness_n_per_m;
-    return stiffness > 0.0 ? std::optional<double>(stiffness) : std::nullopt;
+/// `text` whole as a finite number.
+bool finite_number(std::string_view text, double& value) {
+    const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+    return error == std::errc() && end == text.data() + text.size() && std::isfinite(value);
+}
+
+/// k_c from the row `from_row` on: one entry at row 0, and one at each coupling change the
+/// log's marks name.
+struct StiffnessChange {
+    std::size_t from_row = 0;
+    double stiffness_n_per_m = 0.0;
+};
+
+/// Where k_c comes from: --stiffness, else --config's [coupling] stiffness, else the log's
+/// own preamble (coupling_stiffness_n_per_m) and its "# mark N: coupling k_c X N/m" lines
+/// (a hapticctl coupling during the run). Empty when none says.
+std::vector<StiffnessChange> coupling_stiffness(const PlotRunOptions& o,
+                                                const tune::TelemetryLog& log,
+                                                std::string& source) {
+    if (o.stiffness_n_per_m) {
+        source = "--stiffness";
+        return {{0, *o.stiffness_n_per_m}};
+    }
+    if (!o.config_path.empty()) {
+        const double stiffness = daemon::load_config(o.config_path).coupling.stiffness_n_per_m;
+        source = "--config";
+        if (stiffness > 0.0) return {{0, stiffness}};
+        return {};
+    }
+    const std::string* preamble = log.preamble_value("coupling_stiffness_n_per_m");
+    double initial = 0.0;
+    if (preamble == nullptr || !finite_number(*preamble, initial) || !(initial > 0.0)) {
+        return {};
+    }
+    source = "the log's preamble";
+    std::vector<StiffnessChange> changes = {{0, initial}};
+    constexpr std::string_view kCouplingNote = "coupling k_c ";
+    for (const tune::TelemetryMark& mark : log.marks) {
+        if (!mark.text.starts_with(kCouplingNote)) continue;
+        const std::string rest = mark.text.substr(kCouplingNote.size());
+        double stiffness = 0.0;
+        if (finite_number(rest.substr(0, rest.find(' ')), stiffness) && stiffness > 0.0) {
+            changes.push_back({mark.row, stiffness});
+            source = "the log's preamble and its coupling marks";
+        }
+    }
+    return changes;
 }
 
 /// "grows" when the oscillation's growth fitted over every judged window exceeds the
@@ -133,9 +177,20 @@ int run_plot_run(const PlotRunOptions& o) {
         chart["tool"] = chart_series(t, *xe);
     }
     chart["force"] = chart_series(t, f);
-    const std::optional<double> stiffness = coupling_stiffness(o);
+    std::string stiffness_source;
+    const std::vector<StiffnessChange> stiffness_changes =
+        coupling_stiffness(o, log, stiffness_source);
+    const bool stiffness = !stiffness_changes.empty();
+    const double initial_stiffness_n_per_m =
+        stiffness ? stiffness_changes.front().stiffness_n_per_m : 0.0;
     double peak_coupling_energy_j = 0.0;
     if (stiffness) {
+        std::vector<double> k_n_per_m(log.rows(), 0.0);
+        for (const StiffnessChange& change : stiffness_changes) {
+            std::fill(k_n_per_m.begin() +
+                          static_cast<std::ptrdiff_t>(std::min(change.from_row, k_n_per_m.size())),
+                      k_n_per_m.end(), change.stiffness_n_per_m);
+        }
         std::vector<double> energy(log.rows(), 0.0);
         for (int a = 0; a < log.axes; ++a) {
             const std::vector<double>* xa = log.column("x" + std::to_string(a) + "_m");
@@ -143,12 +198,12 @@ int run_plot_run(const PlotRunOptions& o) {
             if (xa == nullptr || xea == nullptr) continue;
             for (std::size_t i = 0; i < energy.size(); ++i) {
                 const double stretch_m = (*xa)[i] - (*xea)[i];
-                energy[i] += 0.5 * *stiffness * stretch_m * stretch_m;
+                energy[i] += 0.5 * k_n_per_m[i] * stretch_m * stretch_m;
             }
         }
         peak_coupling_energy_j = *std::max_element(energy.begin(), energy.end());
         chart["coupling_energy"] = chart_series(t, energy);
-        chart["coupling_stiffness_n_per_m"] = *stiffness;
+        chart["coupling_stiffness_n_per_m"] = initial_stiffness_n_per_m;
     }
     if (const std::vector<double>* energy = log.column("energy_j")) {
         chart["observer_energy"] = chart_series(t, *energy);
@@ -167,7 +222,7 @@ int run_plot_run(const PlotRunOptions& o) {
             before = now;
         }
     }
-    if (const std::vector<double>* flags = log.column("flags")) {
+    if (const std::vector<double>* flags = log.column("tick_flags")) {
         for (const auto& [flag, name] : kMarkedFlags) {
             std::vector<double> at_s;
             std::size_t count = 0;
@@ -190,10 +245,11 @@ int run_plot_run(const PlotRunOptions& o) {
     chart["title"] = "Run " + o.log_path + ", axis " + axis + ": the oscillation " + judged +
                      " (growth fitted from " + number_text(t[std::min(first, t.size() - 1)], 3) +
                      " s: " + number_text(trend.growth_per_s, 3) + " /s)";
-    chart["caption"] = "haptic-tune plot-run; " + o.log_path + ", " + std::to_string(log.rows()) +
-                       " ticks at " + number_text(1.0 / period_s, 4) + " Hz" +
-                       (stiffness ? "; k_c = " + number_text(*stiffness, 4) + " N/m" : "") +
-                       "; hapticd " + install::kVersion;
+    chart["caption"] =
+        "haptic-tune plot-run; " + o.log_path + ", " + std::to_string(log.rows()) + " ticks at " +
+        number_text(1.0 / period_s, 4) + " Hz" +
+        (stiffness ? "; k_c = " + number_text(initial_stiffness_n_per_m, 4) + " N/m" : "") +
+        "; hapticd " + install::kVersion;
     if (!o.look.out.empty()) render_chart(chart, o.look);
 
     nlohmann::ordered_json summary = {
@@ -220,11 +276,21 @@ int run_plot_run(const PlotRunOptions& o) {
         {"flag_counts", flag_counts},
     };
     if (stiffness) {
-        summary["coupling_stiffness_n_per_m"] = *stiffness;
+        summary["coupling_stiffness_n_per_m"] = initial_stiffness_n_per_m;
+        summary["coupling_stiffness_source"] = stiffness_source;
+        if (stiffness_changes.size() > 1) {
+            nlohmann::ordered_json changes = nlohmann::ordered_json::array();
+            for (const StiffnessChange& change : stiffness_changes) {
+                changes.push_back({{"from_t_s", t[std::min(change.from_row, t.size() - 1)]},
+                                   {"stiffness_n_per_m", change.stiffness_n_per_m}});
+            }
+            summary["coupling_stiffness_changes"] = changes;
+        }
         summary["peak_coupling_energy_j"] = peak_coupling_energy_j;
     } else {
         summary["coupling_energy"] =
-            "not drawn: give --stiffness, or --config with [coupling] stiffness";
+            "not drawn: the log's preamble names no k_c; give --stiffness, or --config with "
+            "[coupling] stiffness";
     }
     print_result(summary, o.look.json);
     return kExitOk;
@@ -250,7 +316,7 @@ void add_plot_run_command(CLI::App& app, Invocation& invocation) {
     command
         ->add_option("--stiffness", options->stiffness_n_per_m,
                      "coupling stiffness k_c (N/m) for the coupling's energy; default [coupling] "
-                     "stiffness from --config")
+                     "stiffness from --config, else the log's own preamble and coupling marks")
         ->check(positive_finite("N/m"));
     command->add_option("--config", options->config_path, "the run's hapticd config (for k_c)");
     command

@@ -9,7 +9,6 @@
 #include <algorithm>
 #include <array>
 #include <cerrno>
-#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -18,6 +17,7 @@
 #include <map>
 #include <sstream>
 
+#include "hapticd/input/range.hpp"
 #include "hapticd/input/text_input.hpp"
 
 namespace hapticd::daemon {
@@ -125,9 +125,7 @@ toml::table parse(std::string_view text, const std::string& source, const char* 
 }  // namespace
 
 std::string format_config_number(double value) {
-    char buffer[64];
-    const auto [end, error] = std::to_chars(buffer, buffer + sizeof buffer, value);  // shortest
-    std::string text = error == std::errc() ? std::string(buffer, end) : std::to_string(value);
+    std::string text = input::exact_number(value);
     if (std::isfinite(value) && text.find_first_of(".e") == std::string::npos) text += ".0";
     return text;
 }

@@ -123,6 +123,7 @@ int change_state(ControlConnection& daemon, RequestKind kind) {
             case RequestKind::record_stop:
             case RequestKind::scene_load:
             case RequestKind::identify:
+            case RequestKind::mark:
                 break;
         }
         return true;
@@ -252,6 +253,21 @@ int load_scene(ControlConnection& daemon, const std::string& path) {
               << reply.at("path").get<std::string>()
               << " from the next tick, through the soft start\n"
               << reply.at("verdict").get<std::string>() << "\n";
+    return hapticd::daemon::kExitOk;
+}
+
+// mark TEXT: the daemon numbers it, and every record from the servo's next tick on carries
+// the number in its `mark` column, the text in a "# mark N:" line of the log and recording.
+int mark(ControlConnection& daemon, const std::string& text) {
+    hapticd::daemon::control_socket::Request request{.kind = RequestKind::mark, .id = nullptr};
+    request.text = text;
+    const nlohmann::json reply = daemon.request(request);
+    if (!reply.at("ok").get<bool>()) {
+        std::cerr << "hapticctl: " << reply.value("error", std::string("refused")) << "\n";
+        return hapticd::daemon::kExitFault;
+    }
+    std::cout << "mark " << reply.at("mark").get<std::uint32_t>() << " from the tick after "
+              << reply.at("after_tick").get<std::uint64_t>() << "\n";
     return hapticd::daemon::kExitOk;
 }
 
@@ -422,6 +438,19 @@ int run_main(int argc, char** argv) {
         ->required()
         ->check(non_empty_path("name the scene file"));
 
+    std::string mark_text;
+    auto* mark_command = app.add_subcommand(
+        "mark",
+        "put a trial marker in the log and the recording from the next tick on: the `mark` "
+        "column counts the marks (and the changes of gains and scene), a \"# mark N: TEXT\" "
+        "line names them (docs/daemon.md, \"Telemetry\")");
+    mark_command->add_option("TEXT", mark_text, "the marker: 1 to 200 bytes, one line")
+        ->required()
+        ->check([](const std::string& text) {
+            const auto problem = hapticd::daemon::control_socket::mark_text_problem(text);
+            return problem ? "TEXT: " + *problem : std::string();
+        });
+
     std::string identify_path;
     bool no_wait = false;
     auto* identify_command = app.add_subcommand(
@@ -456,7 +485,7 @@ int run_main(int argc, char** argv) {
                           ? std::string("no command")
                           : "\"" + app.remaining().front() + "\" is not a command")
                   << ": one of status, watch, arm, disarm, reset, coupling, stream, record, scene, "
-                     "identify (hapticctl --help)\n";
+                     "identify, mark (hapticctl --help)\n";
         return hapticd::daemon::kExitBadInput;
     }
     if (instance_option->count() == 0 && socket_option->count() == 0) {
@@ -493,6 +522,7 @@ int run_main(int argc, char** argv) {
         if (record_start->parsed()) return record(daemon, record_path);
         if (record_stop->parsed()) return record(daemon, std::nullopt);
         if (scene_command->parsed()) return load_scene(daemon, scene_path);
+        if (mark_command->parsed()) return mark(daemon, mark_text);
         if (identify_command->parsed()) {
             return identify(daemon,
                             identify_file->count() == 0 ? std::nullopt

@@ -152,6 +152,8 @@ inline constexpr auto kIdentifyFields = input::fields<IdentifySection>(
 struct Config {
     std::string source;    ///< the file name, or "<embedded default>"
     std::string base_dir;  ///< relative paths (the scene file) resolve against this
+    /// SHA-256 of the config's text as read, in hex: what the telemetry's preamble names it by.
+    std::string sha256;
     ServoSection servo;
     DeviceSection device;
     CouplingSection coupling;

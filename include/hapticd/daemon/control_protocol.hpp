@@ -33,6 +33,13 @@ inline constexpr std::size_t kMaxSocketPathBytes = sizeof(sockaddr_un::sun_path)
 /// terminator).
 inline constexpr std::size_t kMaxRequestPathBytes = 4095;
 
+/// The longest text a mark request may carry, in bytes (UTF-8).
+inline constexpr std::size_t kMaxMarkTextBytes = 200;
+
+/// Why `text` cannot be a mark (empty, too long, a control character at byte N), or nullopt
+/// when it can. UTF-8 validity is the JSON reader's (parse_request refuses a line without it).
+std::optional<std::string> mark_text_problem(std::string_view text);
+
 enum class RequestKind {
     status,
     arm,
@@ -44,7 +51,8 @@ enum class RequestKind {
     record_start,
     record_stop,
     scene_load,
-    identify
+    identify,
+    mark
 };
 
 /// The name on the wire ("status", ...).
@@ -67,6 +75,9 @@ struct Request {
     /// most kMaxRequestPathBytes, no control character. Whether the daemon may create or read
     /// it is the daemon's to say (docs/control.md, "Paths and strings").
     std::optional<std::string> path{};
+    /// mark: "text" (required), the trial marker the recordings carry (docs/control.md,
+    /// "mark"): 1 to 200 bytes of UTF-8, no control character.
+    std::optional<std::string> text{};
 };
 
 /// A line, parsed: the request, or the error to reply with (the id is kept where the line

@@ -26,15 +26,35 @@
 #include <thread>
 #include <vector>
 
+#include "hapticd/daemon/run_notes.hpp"
 #include "hapticd/servo/telemetry_ring.hpp"
 
 namespace hapticd::daemon {
 
-/// The comment lines a log or a recording begins with, before its header row: "# name:
-/// NAME\n" for an instance with a [servo] name (control characters were refused when the
-/// config was read), none otherwise. Readers skip lines that begin with '#'
-/// (tune/telemetry_log.hpp; pandas: comment="#").
-std::string telemetry_preamble(std::string_view instance_name);
+/// What a log's or a recording's preamble says of the run it comes from, as the file starts.
+struct TelemetryHeader {
+    std::string version;     ///< hapticd's
+    std::string name;        ///< [servo] name; "" for none
+    std::string started_at;  ///< ISO 8601, UTC (RunStamp::started_at)
+    std::string host;
+    std::string device;         ///< the device line
+    std::string config;         ///< the config's path, or "<embedded default>"
+    std::string config_sha256;  ///< of the config's text as read (Config::sha256)
+    double rate_hz = 0.0;
+    bool coupling_enabled = true;    ///< [coupling] enabled
+    double stiffness_n_per_m = 0.0;  ///< k_c of (16) in force
+    double damping_n_s_per_m = 0.0;  ///< b_c of (16) in force
+    std::string stability;  ///< the stability check's verdict on them (StartupCheck::describe())
+    std::string scene;      ///< "NAME (CAUSALITY, SOURCE)"
+};
+
+/// The comment lines a log or a recording begins with, before its header row: "# key:
+/// value" lines (docs/daemon.md, "Telemetry"): version, name (when set), started, host,
+/// device, config, config_sha256, rate_hz, coupling_stiffness_n_per_m and
+/// coupling_damping_n_s_per_m (or coupling: off), stability and scene. Values are one line
+/// each, control characters written out (input::printable). Readers skip lines that begin
+/// with '#' (tune/telemetry_log.hpp reads these; pandas: comment="#").
+std::string telemetry_preamble(const TelemetryHeader& header);
 
 class TelemetryWriter {
   public:
@@ -47,9 +67,10 @@ class TelemetryWriter {
     /// Writes to `fd` (an open, empty file; the writer owns and closes it); `path` is for
     /// messages. `sync_interval` > 0: fdatasync() at most that often (0: never). `preamble`:
     /// whole comment lines ("# ...\n", telemetry_preamble()) written before the header row.
+    /// `notes`: the run's (may be null: then no "# mark" lines), read on the writer's thread.
     TelemetryWriter(servo::TelemetryRing& ring, int fd, std::string path, int axes,
                     std::chrono::milliseconds sync_interval = std::chrono::milliseconds{0},
-                    std::string_view preamble = {});
+                    std::string_view preamble = {}, const RunNotes* notes = nullptr);
     ~TelemetryWriter();
     TelemetryWriter(const TelemetryWriter&) = delete;
     TelemetryWriter& operator=(const TelemetryWriter&) = delete;
@@ -84,6 +105,7 @@ class TelemetryWriter {
     void run() noexcept;
     void drain() noexcept;
     void flush_buffer() noexcept;
+    void write_marks(std::uint32_t mark) noexcept;
 
     servo::TelemetryRing& ring_;
     std::string path_;
@@ -92,10 +114,11 @@ class TelemetryWriter {
     std::chrono::milliseconds sync_interval_{0};
     std::vector<char> buffer_;
     std::size_t used_ = 0;
-    std::uint64_t buffered_records_ = 0;  ///< lines in buffer_ (the header is not one)
+    std::uint64_t buffered_records_ = 0;  ///< record lines in buffer_ (no comment, no header)
     std::uint64_t file_bytes_ = 0;        ///< bytes on disk: whole lines only
-    /// Lines before the first record (the preamble and the header row) still in buffer_.
-    std::uint64_t header_lines_pending_ = 1;
+    const RunNotes* notes_ = nullptr;
+    std::uint32_t last_mark_ = 0;  ///< the mark of the last record taken
+    bool first_record_ = true;
     std::atomic<int> write_errno_{0};  // the writer thread's; read by complete() from any
     std::uint64_t first_tick_ = 0;
     std::chrono::steady_clock::time_point oldest_buffered_{};

@@ -34,6 +34,9 @@ struct Range {
 /// A number as every message prints it: six significant digits (the C++ stream default:
 /// 1000, 0.001, 2e+09), "nan", "inf".
 [[nodiscard]] std::string format_number(double value);
+/// A number as a file that is read back prints it: the shortest text that reads back to the
+/// same double (std::to_chars: 4000, 0.009, 1e-05), "nan", "inf".
+[[nodiscard]] std::string exact_number(double value);
 /// "0.1 kg": a number with its unit ("0.1" without one).
 [[nodiscard]] std::string format_quantity(double value, std::string_view unit);
 

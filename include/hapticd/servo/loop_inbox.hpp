@@ -3,7 +3,7 @@
 // control socket and identify session talk to it, never to the loop.
 //
 // Any thread: arm(), disarm(), request_fault_reset(), request_coupling(), attach_recording(),
-// offer_environment() and withdraw_environment(), play_open_loop(), and the answers
+// mark(), offer_environment() and withdraw_environment(), play_open_loop(), and the answers
 // offer_taken(), open_loop_idle() and status(). Each is lock-free and never waits for the servo
 // thread: an atomic, an atomic pointer, or a seqlock (seqlock.hpp).
 //
@@ -49,6 +49,7 @@ struct LoopRequests {
     /// The environment offered (offer_environment), now the loop's; never while a source plays.
     Environment* environment = nullptr;
     TelemetryRing* recording = nullptr;  ///< attach_recording()'s ring, or null
+    std::uint32_t mark = 0;              ///< the latest mark() (the telemetry's `mark`)
 };
 
 template <typename Environment>
@@ -83,6 +84,10 @@ class LoopInbox {
     void attach_recording(TelemetryRing* ring) noexcept {
         recording_.store(ring, std::memory_order_release);
     }
+
+    /// Every record from the next tick on carries `number` in its `mark` column (a trial
+    /// marker or a change of gains or scene: the daemon keeps their text, run_notes.hpp).
+    void mark(std::uint32_t number) noexcept { mark_.store(number, std::memory_order_release); }
 
     /// Render `next` in place of the environment from the start of a coming tick, through the
     /// soft start (as new gains are: zero force, then the ramp once the handle is still), with
@@ -143,6 +148,7 @@ class LoopInbox {
     LoopRequests<Environment> take(bool faulted) noexcept {
         LoopRequests<Environment> requests;
         requests.recording = recording();
+        requests.mark = mark_.load(std::memory_order_acquire);
         requests.fault_reset = reset_requested_.exchange(false, std::memory_order_acq_rel);
         if (requests.fault_reset) faulted = false;
         requests.armed = armed_.load(std::memory_order_acquire);
@@ -215,6 +221,7 @@ class LoopInbox {
     std::atomic<bool> reset_requested_{false};                ///< request_fault_reset()'s
     Seqlock<CouplingGains> pending_gains_;                    ///< request_coupling()'s
     std::atomic<TelemetryRing*> recording_{nullptr};          ///< attach_recording()'s
+    std::atomic<std::uint32_t> mark_{0};                      ///< mark()'s
     std::atomic<Environment*> offered_environment_{nullptr};  ///< offer_environment()'s
     std::atomic<OpenLoopSource*> open_loop_{nullptr};         ///< play_open_loop()'s, until let go
     std::atomic<std::uint64_t> disarms_at_offer_{0};          ///< disarms_ before the offer

@@ -21,6 +21,14 @@ inline std::int64_t monotonic_now_ns() noexcept {
     return static_cast<std::int64_t>(now.tv_sec) * kNanosecondsPerSecond + now.tv_nsec;
 }
 
+/// CLOCK_REALTIME now, in whole microseconds since the Unix epoch: the telemetry's
+/// unix_time_s (µs / 1e6 is then the double nearest the decimal, and prints as one).
+inline std::int64_t unix_now_us() noexcept {
+    timespec now{};
+    clock_gettime(CLOCK_REALTIME, &now);
+    return static_cast<std::int64_t>(now.tv_sec) * 1'000'000 + now.tv_nsec / 1000;
+}
+
 /// Sleeps until CLOCK_MONOTONIC reaches deadline_ns (at once if it has).
 inline void sleep_until_monotonic_ns(std::int64_t deadline_ns) noexcept {
     timespec deadline{};

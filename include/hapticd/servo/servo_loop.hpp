@@ -90,7 +90,6 @@ class ServoLoop {
           inbox_(config.arm_at_start),
           config_(validated(config)),
           period_s_(config.period_s()),
-          counts_to_m_(1.0 / config.counts_per_meter),
           coupling_(config.coupling, config.solver),
           safety_(config.safety, config.axes),
           link_recovery_(config.link_recovery, config.rate_hz),
@@ -243,7 +242,11 @@ class ServoLoop {
     Vec3 to_metres(const Sample& sample) const noexcept {
         Vec3 position(0.0);
         for (int axis = 0; axis < config_.axes; ++axis) {
-            position[axis] = static_cast<double>(sample.encoder_counts[axis]) * counts_to_m_;
+            // A division, not a product with 1/counts_per_meter: the metres are then the
+            // double nearest counts/counts_per_meter, which the telemetry prints as a short
+            // decimal (3 counts at 1e5/m: 3e-05, not 3.0000000000000004e-05).
+            position[axis] =
+                static_cast<double>(sample.encoder_counts[axis]) / config_.counts_per_meter;
         }
         return position;
     }
@@ -497,6 +500,7 @@ class ServoLoop {
     bool take_requests(bool& open_loop) noexcept {
         const LoopRequests<Environment> requests = inbox_.take(safety_.faulted());
         recording_ = requests.recording;
+        mark_ = requests.mark;
         if (requests.fault_reset) {
             clear_fault_latch();
             ++fault_resets_taken_;
@@ -600,9 +604,11 @@ class ServoLoop {
                      const Coupled& coupled, std::uint32_t flags,
                      std::int64_t compute_ns) noexcept {
         record_.tick = stats_.ticks;
+        // Divisions for the same reason as in to_metres(): tick 9 at 1 kHz is 0.009 s.
         record_.t_s = config_.device_paces_loop && sensed.have_sample
                           ? sample.device_time_s
-                          : static_cast<double>(scheduled_periods_ - 1) * period_s_;
+                          : static_cast<double>(scheduled_periods_ - 1) / config_.rate_hz;
+        record_.unix_time_s = static_cast<double>(unix_now_us()) / 1e6;
         for (int axis = 0; axis < kMaxAxes; ++axis) {
             const auto i = static_cast<std::size_t>(axis);
             record_.x_m[i] = sensed.x_d[axis];
@@ -615,8 +621,9 @@ class ServoLoop {
         record_.faults = safety_.faults();
         record_.state = static_cast<std::uint32_t>(
             servo_state(sensed.armed, record_.faults, soft_start_scale_for_state()));
-        record_.wake_latency_us = paced ? static_cast<double>(wake.latency_ns) * 1e-3 : 0.0;
-        record_.compute_us = static_cast<double>(compute_ns) * 1e-3;
+        record_.wake_latency_us = paced ? static_cast<double>(wake.latency_ns) / 1e3 : 0.0;
+        record_.compute_us = static_cast<double>(compute_ns) / 1e3;
+        record_.mark = mark_;
         record_.energy_j = safety_.passivity().energy_j();
     }
 
@@ -668,7 +675,6 @@ class ServoLoop {
     OpenLoopSource* open_loop_source_ = nullptr;  ///< the one playing (servo thread)
     ServoConfig config_;
     double period_s_;
-    double counts_to_m_;
     VirtualCoupling coupling_;
     SafetySupervisor safety_;
     LinkRecovery link_recovery_;
@@ -686,6 +692,7 @@ class ServoLoop {
     TickStats stats_;
     TelemetryRecord record_;
     std::uint64_t fault_resets_taken_ = 0;  ///< servo thread only; published in the status
+    std::uint32_t mark_ = 0;                ///< the latest LoopInbox::mark() taken
     bool initialised_ = false;
     int consecutive_overruns_ = 0;
     int consecutive_timeouts_ = 0;

@@ -9,7 +9,7 @@
 
 namespace hapticd::servo {
 
-/// Servo-side flags of one tick (the `flags` column); the device's own StatusBit flags go
+/// Servo-side flags of one tick (the `tick_flags` column); the device's own StatusBit flags go
 /// unchanged into the `status` column.
 enum TickFlag : std::uint32_t {
     kFlagOverrun = 1u << 0,             ///< this tick started after its deadline had passed
@@ -30,19 +30,21 @@ enum TickFlag : std::uint32_t {
 };
 
 struct TelemetryRecord {
-    std::uint64_t tick = 0;  ///< 0, 1, 2, ... (ticks actually run)
-    double t_s = 0.0;        ///< scheduled time since start, or the device's time if it paces
+    std::uint64_t tick = 0;    ///< 0, 1, 2, ... (ticks actually run)
+    double t_s = 0.0;          ///< scheduled time since start, or the device's time if it paces
+    double unix_time_s = 0.0;  ///< when the tick ran: CLOCK_REALTIME, whole µs, Unix seconds
     std::array<double, kMaxAxes> x_m{};    ///< device position x_d
     std::array<double, kMaxAxes> v_mps{};  ///< device velocity v_d (backward difference)
     std::array<double, kMaxAxes> xe_m{};   ///< environment-side tool position x_e
     std::array<double, kMaxAxes> f_n{};    ///< force commanded on the handle, after safety
     std::uint32_t status = 0;              ///< the sample's StatusBit flags
-    std::uint32_t flags = 0;               ///< TickFlag
+    std::uint32_t flags = 0;               ///< TickFlag (the `tick_flags` column)
     std::uint32_t faults = 0;              ///< latched Fault mask
     std::uint32_t state = 0;               ///< ServoState: 0 disabled 1 arming 2 running 3 fault
     double wake_latency_us = 0.0;          ///< actual wake - deadline
     double compute_us = 0.0;               ///< wake to command written
     double energy_j = 0.0;                 ///< passivity observer energy
+    std::uint32_t mark = 0;                ///< the latest LoopInbox::mark() (0: none yet)
 };
 
 }  // namespace hapticd::servo

@@ -1,7 +1,8 @@
 // Telemetry as CSV (docs/architecture.md §4.5): a header row, then one line per record.
-// Columns: tick, t_s, then per axis i from 0: x{i}_m, v{i}_mps, xe{i}_m, f{i}_n, then the
-// status columns status, flags, faults, wake_latency_us, compute_us, energy_j.
-// Numbers are written in the shortest form that reads back to the same double.
+// Columns: tick, t_s, unix_time_s, then per axis i from 0: x{i}_m, v{i}_mps, xe{i}_m, f{i}_n,
+// then the status columns status, tick_flags, faults, state, wake_latency_us, compute_us,
+// energy_j, mark (docs/daemon.md, "Telemetry"). Numbers are written in the shortest form that
+// reads back to the same double.
 #pragma once
 
 #include <cstddef>

@@ -6,18 +6,23 @@
 // writes with the same names: only `t_s` and, per axis, `x{i}_m` and `f{i}_n` are required;
 // the columns may come in any order; other columns (`tick`, `v{i}_mps`, `xe{i}_m`, the
 // status columns, a script's own extras) are kept if present and otherwise ignored. Lines
-// starting with '#' and blank lines are skipped; '\r' line ends and spaces around fields are
-// accepted; header names may be quoted. Every value must be a finite number.
+// starting with '#' and blank lines are skipped as rows; the daemon's own are read: the
+// preamble's "# key: value" lines before the header (TelemetryLog::preamble) and the
+// "# mark N: text" lines among the rows (TelemetryLog::marks). '\r' line ends and spaces
+// around fields are accepted; header names may be quoted. A column `flags` (the name of
+// `tick_flags` in logs before the recordings' header, 0.1.0) reads as `tick_flags`. Every
+// value must be a finite number.
 //
 // Memory: a kept column costs 8 bytes a row, reserved once from the number of lines left in
 // the stream (when it can seek; otherwise it grows by doubling), and the per-row line
 // numbers another 8. TelemetryLogOptions::identification() keeps only what identification
-// reads (t_s, x{i}_m, f{i}_n, status, flags, faults) and no per-row line vector: 48 bytes a
-// row for one axis, against about 75 bytes a row of the daemon's 12-column text and 104 for
-// the default read (docs/identification.md "Memory").
+// reads (t_s, x{i}_m, f{i}_n, status, tick_flags, faults) and no per-row line vector: 48
+// bytes a row for one axis, against about 83 bytes a row of the daemon's 15-column text and
+// 128 for the default read (docs/identification.md "Memory").
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <iosfwd>
 #include <stdexcept>
@@ -47,13 +52,25 @@ struct TelemetryLogOptions {
     bool row_lines = true;
 
     /// What identification reads (identification_data.cpp): t_s, x{i}_m, f{i}_n and the
-    /// status, flags and faults columns, without TelemetryLog::lines.
+    /// status, tick_flags and faults columns, without TelemetryLog::lines.
     static TelemetryLogOptions identification();
+};
+
+/// A "# mark N: text" line of the log (docs/daemon.md, "Telemetry": hapticctl mark, or a
+/// change of the gains or the scene): the rows from `row` on carry N in their `mark` column.
+struct TelemetryMark {
+    std::uint32_t number = 0;
+    std::size_t row = 0;  ///< the first row after the line
+    std::string text;
 };
 
 /// A telemetry log, column by column.
 struct TelemetryLog {
-    std::string source;                       ///< the file name, for messages
+    std::string source;  ///< the file name, for messages
+    /// The "# key: value" lines before the header, in order (the daemon's preamble: name,
+    /// started, device, config, coupling, stability, scene; docs/daemon.md).
+    std::vector<std::pair<std::string, std::string>> preamble;
+    std::vector<TelemetryMark> marks;         ///< the "# mark N: text" lines, in order
     std::vector<std::string> columns;         ///< header names in file order
     std::vector<std::vector<double>> values;  ///< values[column][row]; empty if not kept
     std::vector<bool> kept;                   ///< kept[column]: values[column] holds it
@@ -67,6 +84,8 @@ struct TelemetryLog {
     int axes = 0;
 
     std::size_t rows() const { return row_count; }
+    /// The preamble's value for `key`, or nullptr.
+    const std::string* preamble_value(std::string_view key) const;
     /// The column's values, or nullptr when the log has no such column (or did not keep it).
     const std::vector<double>* column(std::string_view name) const;
     /// The 1-based file line of row `row` (0 past the last row).

@@ -1,9 +1,11 @@
 #include "hapticd/daemon/config.hpp"
 
+#include <openssl/evp.h>
 #include <toml++/toml.h>
 
 #include <cmath>
 #include <filesystem>
+#include <stdexcept>
 
 #include "embedded_defaults.hpp"
 #include "hapticd/input/table_reader.hpp"
@@ -20,6 +22,23 @@ std::string_view to_string(EnvironmentClass environments) noexcept {
 }
 
 namespace {
+
+// SHA-256 in hex, with OpenSSL's libcrypto (Debian's libssl-dev): the config's name in a
+// recording's preamble, as `sha256sum FILE` prints it.
+std::string sha256_hex(std::string_view text) {
+    unsigned char digest[EVP_MAX_MD_SIZE];
+    unsigned int length = 0;
+    if (EVP_Digest(text.data(), text.size(), digest, &length, EVP_sha256(), nullptr) != 1) {
+        throw std::runtime_error("SHA-256 of the config failed (OpenSSL EVP_Digest)");
+    }
+    static constexpr char kHex[] = "0123456789abcdef";
+    std::string hex;
+    for (unsigned int i = 0; i < length; ++i) {
+        hex += kHex[digest[i] >> 4];
+        hex += kHex[digest[i] & 0xf];
+    }
+    return hex;
+}
 
 using input::TableReader;
 
@@ -214,6 +233,7 @@ Config parse_config(std::string_view toml_text, const std::string& source,
     Config config;
     config.source = source;
     config.base_dir = base_dir;
+    config.sha256 = sha256_hex(toml_text);
     Section servo(file, "servo");
     read_servo(*servo, config.servo);
     Section device(file, "device");

@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <string_view>
 
+#include "hapticd/daemon/control_protocol.hpp"
 #include "hapticd/servo/telemetry_csv.hpp"
 
 namespace hapticd::daemon {
@@ -23,6 +24,20 @@ constexpr std::size_t kBufferBytes = std::size_t{1} << 18;
 // An empty ring at 1 kHz fills with one record per millisecond; polling at a quarter of
 // that keeps the ring nearly empty without spinning a core.
 constexpr auto kIdlePoll = std::chrono::microseconds(250);
+// Room for a mark's line ("# mark N: " and a hapticctl mark's text) beside each record.
+constexpr std::size_t kMarkLineChars = 32 + control_socket::kMaxMarkTextBytes;
+
+// The record lines in `text`, whole lines: those that begin with a digit (the tick). The
+// preamble's and the marks' lines begin with '#', the header row with 't'.
+std::uint64_t record_lines(std::string_view text) {
+    std::uint64_t records = 0;
+    bool line_start = true;
+    for (const char c : text) {
+        if (line_start && c >= '0' && c <= '9') ++records;
+        line_start = c == '\n';
+    }
+    return records;
+}
 
 int create_log(const std::string& path) {
     const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
@@ -38,21 +53,17 @@ int create_log(const std::string& path) {
 TelemetryWriter::TelemetryWriter(servo::TelemetryRing& ring, const std::string& path, int axes)
     : TelemetryWriter(ring, create_log(path), path, axes) {}
 
-std::string telemetry_preamble(std::string_view instance_name) {
-    return instance_name.empty() ? std::string() : "# name: " + std::string(instance_name) + "\n";
-}
-
 TelemetryWriter::TelemetryWriter(servo::TelemetryRing& ring, int fd, std::string path, int axes,
-                                 std::chrono::milliseconds sync_interval, std::string_view preamble)
+                                 std::chrono::milliseconds sync_interval, std::string_view preamble,
+                                 const RunNotes* notes)
     : ring_(ring),
       path_(std::move(path)),
       axes_(axes),
       fd_(fd),
       sync_interval_(sync_interval),
-      buffer_(kBufferBytes) {
+      buffer_(kBufferBytes),
+      notes_(notes) {
     const std::string header = std::string(preamble) + servo::csv_header(axes) + "\n";
-    header_lines_pending_ =
-        1 + static_cast<std::uint64_t>(std::count(preamble.begin(), preamble.end(), '\n'));
     std::memcpy(buffer_.data(), header.data(), header.size());
     used_ = header.size();
     oldest_buffered_ = last_sync_ = Clock::now();
@@ -113,12 +124,38 @@ void TelemetryWriter::drain() noexcept {
     servo::TelemetryRecord record;
     while (ring_.try_pop(record)) {
         if (record.tick < first_tick_) continue;
-        if (buffer_.size() - used_ < servo::kMaxCsvLineChars) flush_buffer();
+        if (buffer_.size() - used_ < servo::kMaxCsvLineChars + kMarkLineChars) {
+            flush_buffer();
+        }
         if (buffered_records_ == 0) oldest_buffered_ = Clock::now();
+        write_marks(record.mark);
         used_ += servo::format_csv_record(
             record, axes_, std::span<char>(buffer_.data() + used_, buffer_.size() - used_));
         ++buffered_records_;
         records_taken_.fetch_add(1, std::memory_order_relaxed);
+    }
+}
+
+// "# mark N: TEXT" before the first record that carries N: for each mark since the last
+// record's, and for the first record's own (the trial a recording starts in). A flush makes
+// room when the line does not fit beside a record (the writer's thread: it may allocate).
+void TelemetryWriter::write_marks(std::uint32_t mark) noexcept {
+    if (notes_ == nullptr || (mark == last_mark_ && !first_record_)) return;
+    const std::uint32_t first = first_record_ || mark < last_mark_ ? mark : last_mark_ + 1;
+    first_record_ = false;
+    last_mark_ = mark;
+    for (std::uint32_t number = std::max<std::uint32_t>(first, 1); number <= mark; ++number) {
+        try {
+            const std::string line =
+                "# mark " + std::to_string(number) + ": " + notes_->text(number) + "\n";
+            if (buffer_.size() - used_ < line.size() + servo::kMaxCsvLineChars) flush_buffer();
+            const std::size_t length = std::min(line.size(), buffer_.size() - used_);
+            std::memcpy(buffer_.data() + used_, line.data(), length);
+            used_ += length;
+            buffer_[used_ - 1] = '\n';
+        } catch (...) {  // out of memory for a line: the mark's number is still in its column
+            return;
+        }
     }
 }
 
@@ -141,19 +178,14 @@ void TelemetryWriter::flush_buffer() noexcept {
         if (write_errno_ == 0) {
             file_bytes_ += used_;
             records_written_.fetch_add(buffered_records_, std::memory_order_relaxed);
-            header_lines_pending_ = 0;
         } else if (done > 0) {
             // The whole lines of what was written stay; a cut last line goes (a device such
             // as /dev/full has no length to cut, and kept nothing).
             const std::string_view written(buffer_.data(), done);
             const std::size_t last_newline = written.rfind('\n');
             const std::size_t keep = last_newline == std::string_view::npos ? 0 : last_newline + 1;
-            auto lines = static_cast<std::uint64_t>(std::count(
-                written.begin(), written.begin() + static_cast<std::ptrdiff_t>(keep), '\n'));
-            const std::uint64_t header_lines = std::min(header_lines_pending_, lines);
-            lines -= header_lines;  // the preamble and the header are not records
-            header_lines_pending_ -= header_lines;
-            records_written_.fetch_add(lines, std::memory_order_relaxed);
+            records_written_.fetch_add(record_lines(written.substr(0, keep)),
+                                       std::memory_order_relaxed);
             file_bytes_ += keep;
             (void)::ftruncate(fd_, static_cast<off_t>(file_bytes_));
         }

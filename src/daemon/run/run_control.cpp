@@ -6,6 +6,7 @@
 #include "hapticd/daemon/journal.hpp"
 #include "hapticd/daemon/startup_check.hpp"
 #include "run/run_messages.hpp"
+#include "run/run_telemetry.hpp"
 
 namespace hapticd::daemon {
 
@@ -29,7 +30,7 @@ control_socket::CouplingVerdict check_new_coupling(const Config& config, const S
 RunControl::RunControl(const Config& config, const device::DeviceInfo& info, const RunScene& scene,
                        const RunContext& context, const SocketLoopPorts& ports,
                        control_socket::SocketServer* server, const OutputsDirectory* outputs,
-                       std::ostream& log, const device::Device* device)
+                       std::ostream& log, const device::Device* device, RunNotes& notes)
     : config_(config), control_(ports.control), server_(server) {
     // scene_load (scene_switch.hpp): a scene of the run's causality, only with a control socket.
     if (server_ != nullptr && scene.scene != nullptr) {
@@ -50,11 +51,14 @@ RunControl::RunControl(const Config& config, const device::DeviceInfo& info, con
                 return check_new_coupling(config_, scenes_ ? &*scenes_ : nullptr, gains);
             },
         .scenes = scenes_ ? &*scenes_ : nullptr,
-        .link_source = device};
+        .link_source = device,
+        .notes = &notes};
     // record start/stop (recording.hpp): a ring for the run, only with a control socket.
     if (server_ != nullptr) {
-        recording_.emplace(ports.attach_recording, ports.tick, info.axes, info.lockstep, outputs,
-                           telemetry_preamble(config_.servo.name));
+        recording_.emplace(
+            ports.attach_recording, ports.tick, info.axes, info.lockstep, outputs,
+            [this, &context, info, scene] { return recording_preamble(context, info, scene); },
+            &notes);
         facts_.recording = &*recording_;
     }
     // identify (excitation_session.hpp): the excitation played open loop on a disarmed run that
@@ -72,6 +76,25 @@ RunControl::RunControl(const Config& config, const device::DeviceInfo& info, con
             [this] { return control_socket::telemetry_event(control_.recent_status(), facts_); });
         log << priority::info << "hapticd: control socket " << server_->path() << "\n";
     }
+}
+
+std::string RunControl::recording_preamble(const RunContext& context,
+                                           const device::DeviceInfo& info,
+                                           const RunScene& scene) const {
+    const servo::CouplingGains gains = control_.coupling();
+    const std::string causality = scene.scene == nullptr
+                                      ? std::string()
+                                      : std::string(env::to_string(scene.scene->causality));
+    std::string in_force = "none (the excitation plays open loop)";
+    if (scenes_) {
+        const SceneInForce now = scenes_->in_force();
+        in_force = scene_text(now.name, causality, now.source);
+    } else if (scene.scene != nullptr) {
+        in_force = scene_text(scene.scene->name, causality, scene.source);
+    }
+    return telemetry_preamble(telemetry_header(
+        config_, context, info, gains,
+        check_new_coupling(config_, scenes_ ? &*scenes_ : nullptr, gains).verdict, in_force));
 }
 
 void RunControl::poll(std::ostream& log) {

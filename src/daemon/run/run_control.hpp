@@ -14,6 +14,7 @@
 #include <string>
 
 #include "hapticd/daemon/config.hpp"
+#include "hapticd/daemon/run_notes.hpp"
 #include "hapticd/device/device.hpp"
 #include "hapticd/env/scene.hpp"
 #include "hapticd/servo/environment_port.hpp"
@@ -61,10 +62,11 @@ class RunControl {  // NOLINT(clang-analyzer-optin.performance.Padding)
     /// line on `log` naming it.
     /// `device` (the run's, open, outliving this): `status` reports its link_quality(), which
     /// the server's thread calls while the servo thread ticks; null: no device counts.
+    /// `notes`: the run's (mark, and the notes of coupling and scene_load), outliving this.
     RunControl(const Config& config, const device::DeviceInfo& info, const RunScene& scene,
                const RunContext& context, const SocketLoopPorts& ports,
                control_socket::SocketServer* server, const OutputsDirectory* outputs,
-               std::ostream& log, const device::Device* device);
+               std::ostream& log, const device::Device* device, RunNotes& notes);
     RunControl(const RunControl&) = delete;
     RunControl& operator=(const RunControl&) = delete;
 
@@ -93,6 +95,9 @@ class RunControl {  // NOLINT(clang-analyzer-optin.performance.Padding)
 
     void drain_messages(std::ostream& log);
     void finish_recording(RunContext& context, std::ostream& log);
+    /// A recording's preamble: the gains, their verdict and the scene in force as it starts.
+    std::string recording_preamble(const RunContext& context, const device::DeviceInfo& info,
+                                   const RunScene& scene) const;
 
     const Config& config_;
     control_socket::ServoControl& control_;

@@ -8,9 +8,12 @@
 #include <memory>
 #include <string_view>
 
+#include "hapticd/daemon/config.hpp"
 #include "hapticd/daemon/run.hpp"
+#include "hapticd/daemon/run_notes.hpp"
 #include "hapticd/daemon/telemetry_writer.hpp"
 #include "hapticd/device/device.hpp"
+#include "hapticd/servo/coupling.hpp"
 #include "hapticd/servo/telemetry_ring.hpp"
 #include "outputs/summary_json.hpp"
 #include "run/run_outputs.hpp"
@@ -22,13 +25,22 @@ namespace hapticd::daemon {
 inline constexpr std::size_t kRealtimeRingRecords = std::size_t{1} << 16;
 inline constexpr std::size_t kLockstepRingRecords = std::size_t{1} << 14;
 
+/// The preamble's facts of this run as a file starts now, with the `gains` in force, the
+/// stability check's `verdict` on them and the `scene` ("NAME (CAUSALITY, SOURCE)").
+TelemetryHeader telemetry_header(const Config& config, const RunContext& context,
+                                 const device::DeviceInfo& info, const servo::CouplingGains& gains,
+                                 std::string verdict, std::string scene);
+
+/// "NAME (CAUSALITY, SOURCE)", the preamble's scene.
+std::string scene_text(const std::string& name, std::string_view causality,
+                       const std::string& source);
+
 class RunTelemetry {
   public:
-    /// With --log: the ring, and the writer on `outputs.log` (begun) started; without,
-    /// nothing.
-    /// `instance_name`: [servo] name, for the log's preamble (telemetry_preamble()).
+    /// With --log: the ring, and the writer on `outputs.log` (begun) started, its file begun
+    /// with `preamble` and carrying the run's `notes` as "# mark" lines; without, nothing.
     RunTelemetry(const RunOptions& options, const device::DeviceInfo& info, Outputs& outputs,
-                 std::string_view instance_name);
+                 std::string_view preamble, const RunNotes* notes);
     RunTelemetry(const RunTelemetry&) = delete;
     RunTelemetry& operator=(const RunTelemetry&) = delete;
 

@@ -51,7 +51,18 @@ int run_loop(const RunOptions& options, const Config& config,
     // outlive a run that is killed), kept whatever happens.
     outputs.log.begin();  // throws OutputError
     outputs.summary.begin();
-    RunTelemetry telemetry(options, info, outputs, config.servo.name);
+    // The run's notes (marks, changes of gains and scene): the servo stamps their numbers on
+    // its records, the writers put their text in the files (run_notes.hpp).
+    RunNotes notes;
+    const std::string scene_in_force =
+        scene.scene == nullptr
+            ? std::string("none (the excitation plays open loop)")
+            : scene_text(scene.scene->name, env::to_string(scene.scene->causality), scene.source);
+    RunTelemetry telemetry(
+        options, info, outputs,
+        telemetry_preamble(telemetry_header(config, context, info, servo_config.coupling,
+                                            context.check.describe(), scene_in_force)),
+        &notes);
     Loop loop(device, environment, servo_config, telemetry.ring());
     // The directory of the flight records and a client's recordings, opened once.
     const std::unique_ptr<OutputsDirectory> outputs_directory =
@@ -62,7 +73,7 @@ int run_loop(const RunOptions& options, const Config& config,
     InboxServoControl control_port(loop.inbox(), servo_config.coupling);
     RunControl control(config, info, scene, context,
                        socket_loop_ports<Environment>(loop.inbox(), control_port),
-                       outputs.control.get(), outputs_directory.get(), log, &device);
+                       outputs.control.get(), outputs_directory.get(), log, &device, notes);
 
     // Run. The servo thread reads `stop` itself, so a signal (or the parent's death) ends the
     // run at the next tick; the watcher sets it too when the duration ends.

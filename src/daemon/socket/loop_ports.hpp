@@ -50,6 +50,7 @@ class InboxServoControl final : public control_socket::ServoControl {
         return status_;
     }
     void arm() noexcept override { inbox_.arm(); }
+    void mark(std::uint32_t number) noexcept override { inbox_.mark(number); }
     void disarm() noexcept override { inbox_.disarm(); }
     void reset() noexcept override {
         resets_requested_.fetch_add(1, std::memory_order_acq_rel);

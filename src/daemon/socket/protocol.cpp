@@ -15,12 +15,13 @@ constexpr std::array kRequests{
     RequestKind::status,      RequestKind::arm,          RequestKind::disarm,
     RequestKind::reset,       RequestKind::coupling,     RequestKind::subscribe,
     RequestKind::unsubscribe, RequestKind::record_start, RequestKind::record_stop,
-    RequestKind::scene_load,  RequestKind::identify};
+    RequestKind::scene_load,  RequestKind::identify,     RequestKind::mark};
 
 // The fields each request takes besides v, id and request.
 std::vector<std::string_view> own_fields(RequestKind kind) {
     if (kind == RequestKind::coupling) return {"stiffness", "damping"};
     if (kind == RequestKind::subscribe) return {"rate_hz"};
+    if (kind == RequestKind::mark) return {"text"};
     if (kind == RequestKind::record_start || kind == RequestKind::scene_load ||
         kind == RequestKind::identify) {
         return {"path"};
@@ -57,6 +58,19 @@ std::optional<double> finite_number(const nlohmann::json& j, std::string_view fi
 
 }  // namespace
 
+std::optional<std::string> mark_text_problem(std::string_view text) {
+    if (text.empty()) return "empty: a mark needs a text (1 to 200 bytes)";
+    if (text.size() > kMaxMarkTextBytes) {
+        return std::to_string(text.size()) + " bytes: allowed 1 to " +
+               std::to_string(kMaxMarkTextBytes);
+    }
+    if (const std::size_t at = input::find_control(text); at != std::string_view::npos) {
+        return "a control character at byte " + std::to_string(at + 1) +
+               ": a mark is one line of text without them";
+    }
+    return std::nullopt;
+}
+
 std::string_view request_name(RequestKind kind) noexcept {
     switch (kind) {
         case RequestKind::status:
@@ -81,6 +95,8 @@ std::string_view request_name(RequestKind kind) noexcept {
             return "scene_load";
         case RequestKind::identify:
             return "identify";
+        case RequestKind::mark:
+            return "mark";
     }
     return "unknown";
 }
@@ -205,6 +221,21 @@ ParsedRequest parse_request(std::string_view line) {
         }
         request.path = text;
     }
+    if (*kind == RequestKind::mark) {
+        const auto text = j.find("text");
+        if (text == j.end() || !text->is_string()) {
+            parsed.error = (text == j.end() ? std::string("\"text\" is missing")
+                                            : "\"text\" = " + shown(*text) + " is not a string") +
+                           ": mark names the trial, 1 to 200 bytes of text";
+            return parsed;
+        }
+        const std::string& value = text->get_ref<const std::string&>();
+        if (const std::optional<std::string> problem = mark_text_problem(value)) {
+            parsed.error = "\"text\" = " + shown(*text) + ": " + *problem;
+            return parsed;
+        }
+        request.text = value;
+    }
     parsed.request = request;
     return parsed;
 }
@@ -216,6 +247,7 @@ std::string request_line(const Request& request) {
     if (request.damping_n_s_per_m) j["damping"] = *request.damping_n_s_per_m;
     if (request.rate_hz) j["rate_hz"] = *request.rate_hz;
     if (request.path) j["path"] = *request.path;
+    if (request.text) j["text"] = *request.text;
     return j.dump() + "\n";
 }
 

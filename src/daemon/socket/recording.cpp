@@ -1,5 +1,7 @@
 #include "socket/recording.hpp"
 
+#include <unistd.h>
+
 #include <chrono>
 #include <cstring>
 #include <stdexcept>
@@ -17,14 +19,16 @@ constexpr std::size_t kRecordingRingRecords = std::size_t{1} << 16;
 
 Recording::Recording(std::function<void(servo::TelemetryRing*)> attach,
                      std::function<std::uint64_t()> tick, int axes, bool lockstep,
-                     const OutputsDirectory* directory, std::string preamble)
+                     const OutputsDirectory* directory, std::function<std::string()> preamble,
+                     const RunNotes* notes)
     : ring_(kRecordingRingRecords),
       attach_(std::move(attach)),
       tick_(std::move(tick)),
       axes_(axes),
       lockstep_(lockstep),
       directory_(directory),
-      preamble_(std::move(preamble)) {}
+      preamble_(std::move(preamble)),
+      notes_(notes) {}
 
 Recording::~Recording() { attach_(nullptr); }
 
@@ -54,12 +58,21 @@ RecordingResult Recording::start(const std::string& requested) {
     // Attached first, then the first tick the file holds: the tick after the next one to be
     // published cannot have read the ring pointer before the attach. The writer skips
     // anything earlier (a tick that was already under way).
+    std::string preamble;
+    try {
+        if (preamble_) preamble = preamble_();
+    } catch (const std::exception& e) {
+        (void)::close(fd);
+        (void)directory_->remove(file.name);
+        return {.ok = false, .message = std::string("cannot record: ") + e.what(), .path = path};
+    }
     attach_(&ring_);
     const std::uint64_t first_tick = tick_() + 2;
     try {
         writer_ = std::make_unique<TelemetryWriter>(
             ring_, fd, path, axes_,
-            lockstep_ ? std::chrono::milliseconds{0} : std::chrono::milliseconds{1000}, preamble_);
+            lockstep_ ? std::chrono::milliseconds{0} : std::chrono::milliseconds{1000}, preamble,
+            notes_);
         writer_->skip_ticks_before(first_tick);
         writer_->start();
     } catch (const std::exception& e) {

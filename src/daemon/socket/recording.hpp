@@ -44,10 +44,13 @@ class Recording {
     /// `attach` hands the ring (or null) to the servo loop; `tick` is the servo's last
     /// published tick. `lockstep`: the loop waits for the writer (no fdatasync either). The
     /// files go in `directory` (the run's outputs directory; null: none, and start refuses).
-    /// Each file begins with `preamble` (telemetry_preamble()).
+    /// Each file begins with what `preamble` returns as it starts (telemetry_preamble(): the
+    /// gains, verdict and scene in force then; unset: nothing), and carries the run's
+    /// `notes` as "# mark" lines (null: none).
     Recording(std::function<void(servo::TelemetryRing*)> attach,
               std::function<std::uint64_t()> tick, int axes, bool lockstep,
-              const OutputsDirectory* directory, std::string preamble = {});
+              const OutputsDirectory* directory, std::function<std::string()> preamble = {},
+              const RunNotes* notes = nullptr);
     ~Recording();
     Recording(const Recording&) = delete;
     Recording& operator=(const Recording&) = delete;
@@ -85,7 +88,8 @@ class Recording {
     int axes_;
     bool lockstep_;
     const OutputsDirectory* directory_;
-    std::string preamble_;  ///< each file's first lines (telemetry_preamble())
+    std::function<std::string()> preamble_;  ///< each file's first lines (telemetry_preamble())
+    const RunNotes* notes_;
 };
 
 }  // namespace hapticd::daemon

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "hapticd/daemon/config_schema.hpp"
+#include "hapticd/input/printable.hpp"
 #include "hapticd/input/range.hpp"
 #include "hapticd/input/text_input.hpp"
 #include "hapticd/servo/faults.hpp"
@@ -41,6 +42,13 @@ std::string state_of(const servo::StatusSnapshot& s) {
 // Whether identify's excitation plays: asked on the worker, when a request's work runs.
 bool identify_playing(const RunFacts& facts) {
     return facts.identify != nullptr && facts.identify->active();
+}
+
+// A change of gains or scene as one of the run's notes: the recordings say from which row on
+// it holds (a run that keeps no notes, or holds the most, goes without).
+void note(const RunFacts& facts, ServoControl& loop, const std::string& text) {
+    if (facts.notes == nullptr) return;
+    (void)facts.notes->add(input::printable(text), [&loop](std::uint32_t n) { loop.mark(n); });
 }
 
 constexpr const char* kIdentifyPlaying =
@@ -88,6 +96,7 @@ Answer set_coupling(const Request& request, const Peer& peer, ServoControl& loop
         std::ostringstream set;
         set << "k_c " << input::format_number(gains.stiffness_n_per_m) << " N/m, b_c "
             << input::format_number(gains.damping_n_s_per_m) << " N s/m";
+        note(facts, loop, "coupling " + set.str() + "; " + verdict.verdict);
         return {.reply = ok_reply(id, {{"state_before", state_before},
                                        {"stiffness", gains.stiffness_n_per_m},
                                        {"damping", gains.damping_n_s_per_m},
@@ -95,6 +104,28 @@ Answer set_coupling(const Request& request, const Peer& peer, ServoControl& loop
                 .journal = "control: coupling from " + peer.describe() + ": " + set.str() +
                            " from the next tick, through the soft start; " + verdict.verdict};
     }};
+}
+
+// mark: the text kept in the run's notes, its number to the loop, which stamps it on every
+// record from its next tick on.
+Answer mark(const Request& request, const Peer& peer, ServoControl& loop, const RunFacts& facts,
+            const servo::StatusSnapshot& now) {
+    if (facts.notes == nullptr) {
+        return {.reply = error_reply(request.id, "mark refused: this run keeps no notes"),
+                .journal = {}};
+    }
+    const std::string& text = request.text.value();
+    const std::optional<std::uint32_t> number =
+        facts.notes->add(text, [&loop](std::uint32_t n) { loop.mark(n); });
+    if (!number) {
+        const std::string why = "the run holds " + std::to_string(kMaxRunNotes) +
+                                " marks and changes already, the most it keeps";
+        return {.reply = error_reply(request.id, "mark refused: " + why),
+                .journal = "control: mark from " + peer.describe() + " refused: " + why};
+    }
+    return {.reply = ok_reply(request.id, {{"mark", *number}, {"after_tick", now.tick}}),
+            .journal = "control: mark " + std::to_string(*number) + " from " + peer.describe() +
+                       ": " + input::printable(text)};
 }
 
 // record_start, record_stop: on the worker (a file to create, a writer to drain).
@@ -165,6 +196,7 @@ Answer load_scene(const Request& request, const Peer& peer, ServoControl& loop,
                     .journal = "control: scene_load from " + peer.describe() +
                                " refused: " + result.message};
         }
+        note(facts, loop, "scene " + result.name + " (" + result.path + "); " + result.verdict);
         return {.reply = ok_reply(id, {{"state_before", state_before},
                                        {"scene", result.name},
                                        {"path", result.path},
@@ -340,6 +372,8 @@ Answer answer(const Request& request, const Peer& peer, ServoControl& loop, cons
             return load_scene(request, peer, loop, facts, now);
         case RequestKind::identify:
             return identify(request, peer, facts);
+        case RequestKind::mark:
+            return mark(request, peer, loop, facts, now);
     }
     // The servo thread takes the request at the start of its next tick; the reply says the
     // state it was asked in, and `status` shows what came of it.

@@ -11,6 +11,7 @@
 #include <functional>
 #include <string>
 
+#include "hapticd/daemon/run_notes.hpp"
 #include "hapticd/device/device.hpp"
 #include "hapticd/servo/environment_port.hpp"
 #include "hapticd/servo/status.hpp"
@@ -44,6 +45,9 @@ class ServoControl {
     /// The gains last set (or the config's): what a coupling request without damping keeps.
     /// From the server's thread while the worker may set them.
     virtual servo::CouplingGains coupling() const noexcept = 0;
+    /// Every record from the next tick on carries `number` in its `mark` column
+    /// (LoopInbox::mark; the text is the run's, RunNotes).
+    virtual void mark(std::uint32_t number) noexcept = 0;
 };
 
 /// What the stability check made of new coupling gains.
@@ -75,6 +79,9 @@ struct RunFacts {
     /// call while the servo thread reads and writes it (device.hpp). Null: no counts
     /// (`counted` false).
     const device::Device* link_source = nullptr;
+    /// The run's notes: mark's, and a note for each coupling and scene_load taken; null: this
+    /// run cannot mark.
+    RunNotes* notes = nullptr;
 };
 
 /// The status reply's body: state, tick, rates, forces, positions and faults.

@@ -60,11 +60,13 @@ DeviceInfo SimDevice::info() const {
 }
 
 double SimDevice::units_to_s(std::uint64_t units) const noexcept {
-    // Whole periods and the fraction separately, so lockstep times are exactly n T.
-    const double period_s = config_.period_s();
-    return static_cast<double>(units >> kFractionBits) * period_s +
-           std::ldexp(static_cast<double>(units & (kUnitsPerPeriod - 1)), -kFractionBits) *
-               period_s;
+    // Periods (whole and fraction, exact in a double) divided by the rate: lockstep times
+    // are the doubles nearest n/rate, which the telemetry prints as short decimals (tick 9 at
+    // 1 kHz is 0.009 s, where 9 * (1/1000) is 0.009000000000000001).
+    const double periods =
+        static_cast<double>(units >> kFractionBits) +
+        std::ldexp(static_cast<double>(units & (kUnitsPerPeriod - 1)), -kFractionBits);
+    return periods / config_.rate_hz;
 }
 
 double SimDevice::time_s() const noexcept { return units_to_s(units_); }

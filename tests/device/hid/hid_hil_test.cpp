@@ -92,7 +92,7 @@ TEST(HidClosedLoop, TheDaemonHoldsAStiffWallStablyThroughHid) {
     ASSERT_EQ(direct.exit_code, 0) << direct.err;
     const auto& x_sim = direct.log.column("x0_m");
     ASSERT_EQ(x_sim.size(), x.size());
-    const auto& flags = run.log.column("flags");
+    const auto& flags = run.log.column("tick_flags");
     std::size_t compared = x.size();
     for (std::size_t i = 0; i < flags.size(); ++i) {
         if ((static_cast<std::uint32_t>(flags[i]) & servo::kFlagNoSample) != 0u) {

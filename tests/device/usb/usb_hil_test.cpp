@@ -207,7 +207,7 @@ TEST(UsbHilReconnect, UnplugZeroesForceAndTheLoopRecoversWhenTheDeviceReturns) {
     ASSERT_EQ(run.log.rows(), static_cast<std::size_t>(kRunS * kRateHz));
     const auto& f = run.log.column("f0_n");
     const auto& faults = run.log.column("faults");
-    const auto& flags = run.log.column("flags");
+    const auto& flags = run.log.column("tick_flags");
     auto flag = [&](std::size_t row, std::uint32_t bit) {
         return (static_cast<std::uint32_t>(flags[row]) & bit) != 0u;
     };
