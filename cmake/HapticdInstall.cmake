@@ -54,3 +54,26 @@ install(CODE "
   file(INSTALL \"${PROJECT_SOURCE_DIR}/python/hapticd\" DESTINATION \"\${hapticd_python_dir}\"
        FILES_MATCHING PATTERN \"*.py\")
 ")
+
+# The environment plugin ABI and hapticd's CMake package (docs/environment-plugins.md):
+# <prefix>/include/hapticd/env/plugin_abi.h, and <prefix>/<libdir>/cmake/hapticd with the
+# imported target hapticd::environment_plugin and hapticd_add_environment_plugin().
+install(FILES ${PROJECT_SOURCE_DIR}/include/hapticd/env/plugin_abi.h
+        DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/hapticd/env)
+install(TARGETS hapticd_environment_plugin EXPORT hapticdTargets)
+set(HAPTICD_CMAKE_PACKAGE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/hapticd)
+install(EXPORT hapticdTargets NAMESPACE hapticd:: DESTINATION ${HAPTICD_CMAKE_PACKAGE_DIR})
+file(STRINGS ${PROJECT_SOURCE_DIR}/include/hapticd/env/plugin_abi.h abi_line
+     REGEX "^#define HAPTICD_ENVIRONMENT_ABI_VERSION [0-9]+u$")
+string(REGEX REPLACE ".* ([0-9]+)u$" "\\1" HAPTICD_ENVIRONMENT_ABI_VERSION "${abi_line}")
+include(CMakePackageConfigHelpers)
+configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/hapticdConfig.cmake.in
+  ${PROJECT_BINARY_DIR}/hapticdConfig.cmake
+  INSTALL_DESTINATION ${HAPTICD_CMAKE_PACKAGE_DIR}
+  PATH_VARS HAPTICD_PLUGIN_INSTALL_DIR)
+write_basic_package_version_file(${PROJECT_BINARY_DIR}/hapticdConfigVersion.cmake
+  COMPATIBILITY SameMinorVersion)
+install(FILES ${PROJECT_BINARY_DIR}/hapticdConfig.cmake
+              ${PROJECT_BINARY_DIR}/hapticdConfigVersion.cmake
+              ${PROJECT_SOURCE_DIR}/cmake/HapticdEnvironmentPlugin.cmake
+        DESTINATION ${HAPTICD_CMAKE_PACKAGE_DIR})

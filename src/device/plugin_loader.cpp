@@ -11,28 +11,18 @@
 #include <system_error>
 
 #include "hapticd/device/plugin_abi.hpp"
-#include "hapticd/install/layout.hpp"
+#include "hapticd/install/plugin_files.hpp"
 
 namespace hapticd::device {
 namespace {
 
+constexpr std::string_view kKind = "device";
 constexpr std::string_view kFilePrefix = "hapticd-device-";
 constexpr std::string_view kFileSuffix = ".so";
 
 std::string dl_error_text() {
     const char* text = dlerror();
     return text != nullptr ? text : "unknown dynamic-loader error";
-}
-
-/// A dlopen handle that dlclose()s when its last owner goes.
-std::shared_ptr<void> open_library(const std::string& path, std::string& error) {
-    dlerror();  // clear any stale error
-    void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
-    if (handle == nullptr) {
-        error = dl_error_text();
-        return nullptr;
-    }
-    return {handle, [](void* h) { dlclose(h); }};
 }
 
 /// The descriptor of an opened library, after the ABI check; empty `error` on success.
@@ -67,11 +57,6 @@ const hapticd_device_plugin* entry_of(void* library, std::string& error) {
     return plugin;
 }
 
-bool is_regular_file(const std::string& path) {
-    std::error_code ec;
-    return std::filesystem::is_regular_file(path, ec);
-}
-
 [[noreturn]] void fail(std::string_view what, const std::string& path, const std::string& why) {
     throw std::runtime_error("device plugin '" + std::string(what) + "' (" + path +
                              ") cannot be used: " + why);
@@ -86,33 +71,16 @@ struct LoadedPlugin {
 
 LoadedPlugin open_plugin(std::string_view what, const std::string& path) {
     std::string error;
-    std::shared_ptr<void> library = open_library(path, error);
+    std::shared_ptr<void> library = install::open_plugin_library(path, error);
     if (!library) fail(what, path, "dlopen failed: " + error);
     const hapticd_device_plugin* plugin = entry_of(library.get(), error);
     if (plugin == nullptr) fail(what, path, error);
     return {std::move(library), plugin, path};
 }
 
-/// The plugin `name_or_path` found (file comment of plugin_loader.hpp), opened and checked.
+/// The plugin `name_or_path` found (install/plugin_files.hpp), opened and checked.
 LoadedPlugin find_plugin(std::string_view name_or_path) {
-    if (name_or_path.empty()) throw std::runtime_error("device plugin name is empty");
-    if (name_or_path.find('/') != std::string_view::npos) {
-        return open_plugin(name_or_path, std::string(name_or_path));
-    }
-    std::vector<std::string> tried;
-    for (const std::string& dir : plugin_search_path()) {
-        for (const std::string& file : plugin_file_names(name_or_path)) {
-            const std::string path = dir + "/" + file;
-            if (is_regular_file(path)) return open_plugin(name_or_path, path);
-            tried.push_back(path);
-        }
-    }
-    std::ostringstream message;
-    message << "device plugin '" << name_or_path << "' not found; looked for:";
-    for (const std::string& path : tried) message << "\n  " << path;
-    message << "\n(set HAPTICD_PLUGIN_PATH to a colon-separated list of directories, or give "
-               "a path containing '/')";
-    throw std::runtime_error(message.str());
+    return open_plugin(name_or_path, install::find_plugin_file(kKind, name_or_path));
 }
 
 }  // namespace
@@ -147,32 +115,10 @@ void PluginDeleter::operator()(Device* device) const noexcept {
     // library_ is released after this, when the unique_ptr's deleter itself is destroyed.
 }
 
-std::vector<std::string> plugin_search_path() {
-    std::vector<std::string> dirs;
-    if (const char* env = std::getenv("HAPTICD_PLUGIN_PATH"); env != nullptr) {
-        std::string_view rest(env);
-        while (true) {
-            const std::size_t colon = rest.find(':');
-            const std::string_view dir = rest.substr(0, colon);
-            if (!dir.empty()) dirs.emplace_back(dir);
-            if (colon == std::string_view::npos) break;
-            rest.remove_prefix(colon + 1);
-        }
-    }
-    dirs.push_back(install::layout().plugin_dir);
-    return dirs;
-}
-
-std::vector<std::string> plugin_file_names(std::string_view name) {
-    const std::string base =
-        std::string(kFilePrefix) + std::string(name) + std::string(kFileSuffix);
-    return {"lib" + base, base};
-}
-
 std::vector<PluginListing> list_plugins() {
     std::vector<PluginListing> listings;
     std::vector<std::string> seen_names;
-    for (const std::string& dir : plugin_search_path()) {
+    for (const std::string& dir : install::plugin_search_path()) {
         std::error_code ec;
         std::vector<std::string> files;
         for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
@@ -192,7 +138,7 @@ std::vector<PluginListing> list_plugins() {
             stem.remove_suffix(kFileSuffix.size());
             listing.name = std::string(stem);
             std::string error;
-            if (std::shared_ptr<void> library = open_library(listing.path, error)) {
+            if (std::shared_ptr<void> library = install::open_plugin_library(listing.path, error)) {
                 if (const hapticd_device_plugin* plugin = entry_of(library.get(), error)) {
                     if (plugin->name != nullptr) listing.name = plugin->name;
                     if (plugin->description != nullptr) listing.description = plugin->description;

@@ -1,9 +1,12 @@
 // The scene loader: TOML -> validated objects -> the one environment the scene needs.
 #include <numbers>
+#include <sstream>
+#include <stdexcept>
 #include <utility>
 
 #include "hapticd/env/god_object.hpp"
 #include "hapticd/env/penalty_scene.hpp"
+#include "hapticd/env/plugin_environment.hpp"
 #include "hapticd/env/scene.hpp"
 #include "hapticd/env/virtual_mass.hpp"
 #include "hapticd/input/text_input.hpp"
@@ -59,18 +62,23 @@ const char* const kArrayKinds[] = {"wall",     "spring",      "damper",      "de
 
 class SceneParser {
   public:
-    SceneParser(const toml::table& root, std::string source)
-        : root_(root), source_(std::move(source)), file_(root, source_, "") {}
+    SceneParser(const toml::table& root, std::string source, const SceneOptions& options)
+        : root_(root), source_(std::move(source)), file_(root, source_, ""), options_(options) {}
 
     Scene parse(int device_axes) {
         // Every table the schema has, then the rest refused, before anything is read.
         const toml::table* header = file_.subtable("scene");
         for (const char* kind : kArrayKinds) (void)file_.array_of_tables(kind);
         (void)file_.subtable("virtual_mass");
+        const toml::table* plugin = file_.subtable("plugin");
         file_.finish();
         Scene scene;
         read_header(header, scene, device_axes);
         axes_ = scene.axes;
+        if (plugin != nullptr) {
+            build_plugin(*plugin, scene);
+            return scene;
+        }
 
         const bool has_penalty = first_present(kPenaltyKinds) != nullptr;
         const bool has_proxy = root_.contains("proxy_plane") || root_.contains("proxy_sphere");
@@ -279,6 +287,62 @@ class SceneParser {
         return std::make_unique<VirtualMass>(parameters, std::move(constraints), axes_);
     }
 
+    // [plugin]: a world of the lab's own (plugin_environment.hpp), alone in its scene. Its
+    // causality is the plugin's. hapticd has no model of it: the stability check holds for it
+    // only as a passive environment (docs/scenes.md, "Your own world").
+    void build_plugin(const toml::table& table, Scene& scene) {
+        for (const char* kind : kArrayKinds) {
+            if (root_.contains(kind)) {
+                throw SceneError(source_ +
+                                 ": [plugin] is the whole scene, but this one also has [[" +
+                                 std::string(kind) +
+                                 "]]: put the objects in the plugin's world, "
+                                 "or in a scene of their own");
+            }
+        }
+        if (root_.contains("virtual_mass")) {
+            throw SceneError(source_ +
+                             ": [plugin] is the whole scene, but this one also has "
+                             "[virtual_mass]: keep one");
+        }
+        TableReader reader = file_.nested(table, "plugin");
+        reader.only({"name", "max_call_us", "settings"});
+        PluginSpec spec;
+        spec.name = reader.read(input::Text{
+            "name", std::nullopt, false,
+            "a plugin name (libhapticd-env-NAME.so on the plugin path) or a path with '/'"});
+        const double period_us = 1e6 / options_.rate_hz;
+        spec.max_call_us = reader.read(input::Number{
+            "max_call_us", input::Range{.lo = 0.0, .hi = period_us, .lo_open = true, .unit = "us"},
+            period_us / 4.0, "the most a tick's calls into the world may take"});
+        if (const toml::table* settings = reader.subtable("settings")) {
+            std::ostringstream text;
+            text << toml::toml_formatter(*settings);
+            spec.settings_toml = text.str();
+        }
+        reader.finish();
+        if (!options_.load_plugins) {
+            throw SceneError(source_ +
+                             ": [plugin] scenes are not read here: " + options_.why_no_plugins);
+        }
+        LoadedPlugin loaded;
+        try {
+            loaded = load_environment_plugin(spec, axes_, options_.rate_hz, source_);
+        } catch (const std::runtime_error& e) {
+            throw SceneError(e.what());
+        }
+        scene.unmodelled = "the plugin world [plugin] " + loaded.name +
+                           ": hapticd has no model of it, and takes it for a passive environment";
+        if (loaded.admittance) {
+            scene.causality = Causality::admittance;
+            scene.admittance = std::move(loaded.admittance_environment);
+        } else {
+            scene.causality = Causality::impedance;
+            scene.impedance = std::move(loaded.impedance);
+        }
+        scene.plugin = loaded.name + " (" + loaded.path + ")";
+    }
+
     void linear(const char* kind, std::size_t index, double mass, double stiffness,
                 double damping) {
         linear_.push_back({"[[" + std::string(kind) + "]] #" + std::to_string(index), mass,
@@ -291,6 +355,7 @@ class SceneParser {
     const toml::table& root_;
     std::string source_;
     TableReader file_;
+    SceneOptions options_;
     int axes_ = 0;
     // What the stability check's scene model needs (Scene::linear_objects).
     std::vector<LinearObject> linear_;
@@ -300,13 +365,14 @@ class SceneParser {
 
 }  // namespace
 
-Scene parse_scene(std::string_view text, const std::string& source_name, int axes) {
+Scene parse_scene(std::string_view text, const std::string& source_name, int axes,
+                  const SceneOptions& options) {
     const toml::table root = input::parse_document(text, source_name);
-    return SceneParser(root, source_name).parse(axes);
+    return SceneParser(root, source_name, options).parse(axes);
 }
 
-Scene load_scene(const std::string& path, int axes) {
-    return parse_scene(input::read_text_file(path, "the scene file"), path, axes);
+Scene load_scene(const std::string& path, int axes, const SceneOptions& options) {
+    return parse_scene(input::read_text_file(path, "the scene file"), path, axes, options);
 }
 
 }  // namespace hapticd::env

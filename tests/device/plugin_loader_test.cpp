@@ -14,6 +14,7 @@
 #include <string>
 
 #include "hapticd/device/plugin_abi.hpp"
+#include "hapticd/install/plugin_files.hpp"
 #include "scratch_dir.hpp"
 
 namespace hapticd::device {
@@ -248,12 +249,12 @@ TEST(DevicePluginLoader, NotFoundListsEveryPlaceSearched) {
 
 TEST(DevicePluginLoader, SearchPathPutsTheEnvironmentFirst) {
     PluginPath path("/x:/y");
-    const auto dirs = plugin_search_path();
+    const auto dirs = install::plugin_search_path();
     ASSERT_EQ(dirs.size(), 3u);
     EXPECT_EQ(dirs[0], "/x");
     EXPECT_EQ(dirs[1], "/y");
     EXPECT_EQ(dirs[2], HAPTICD_TEST_BUILD_PLUGIN_DIR);
-    EXPECT_EQ(plugin_file_names("sim"),
+    EXPECT_EQ(install::plugin_file_names("device", "sim"),
               (std::vector<std::string>{"libhapticd-device-sim.so", "hapticd-device-sim.so"}));
 }
 

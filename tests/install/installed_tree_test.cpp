@@ -4,6 +4,8 @@
 // file a service needs must be in place (docs/install.md).
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -13,6 +15,7 @@
 
 #include "run_command.hpp"
 #include "scratch_dir.hpp"
+#include "telemetry_csv.hpp"
 #include "text_file.hpp"
 
 namespace hapticd::testing {
@@ -210,6 +213,54 @@ TEST_F(InstalledTree, ThePythonClientImportsFromTheInstall) {
                     "print(hapticd.instance_socket('lab0'))\"");
     ASSERT_EQ(imported.exit_code, 0) << imported.err;
     EXPECT_EQ(imported.out, packages + "/hapticd/__init__.py\n/run/hapticd/lab0.sock\n");
+}
+
+// A lab's own world, built out of the tree against the installed package (find_package(hapticd)
+// and hapticd_add_environment_plugin, examples/environment-plugin/), renders in the installed
+// hapticd: the example's spring wall in place of the default config's demo wall, force for
+// force the same.
+TEST_F(InstalledTree, ThePluginExampleBuildsAgainstTheInstalledPackageAndRendersTheDemoWall) {
+    EXPECT_TRUE(fs::is_regular_file(installed("include/hapticd/env/plugin_abi.h")));
+    const std::string example = HAPTICD_TEST_SOURCE_DIR "/examples/environment-plugin";
+    const std::string build = scratch_->file("example-build");
+    const CommandResult configured = run_command(
+        std::string(HAPTICD_TEST_CMAKE) + " -S " + shell_quote(example) + " -B " +
+        shell_quote(build) +
+        " -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH=" + shell_quote(prefix_));
+    ASSERT_EQ(configured.exit_code, 0) << configured.out << configured.err;
+    const CommandResult built =
+        run_command(std::string(HAPTICD_TEST_CMAKE) + " --build " + shell_quote(build));
+    ASSERT_EQ(built.exit_code, 0) << built.out << built.err;
+    ASSERT_TRUE(fs::is_regular_file(build + "/libhapticd-env-spring-wall.so"));
+
+    // The installed default config, once as it is and once with the example's scene.
+    const std::string config = read_file(installed("etc/hapticd/sim.toml"));
+    const std::string demo_scene = installed("share/hapticd/scenes/demo-wall.toml");
+    ASSERT_NE(config.find(demo_scene), std::string::npos);
+    std::string with_plugin = config;
+    with_plugin.replace(with_plugin.find(demo_scene), demo_scene.size(),
+                        example + "/spring-wall.toml");
+    const std::string demo_config = scratch_->write("demo.toml", config);
+    const std::string plugin_config = scratch_->write("plugin.toml", with_plugin);
+    const auto run = [&](const std::string& cfg, const std::string& log, const std::string& env) {
+        return run_command("env -u HAPTICD_CHART_SCRIPT " + env + " " + prefix_ +
+                           "/bin/hapticd --no-status --lockstep --duration 6 --config " +
+                           shell_quote(cfg) + " --log " + shell_quote(scratch_->file(log)));
+    };
+    const CommandResult demo = run(demo_config, "demo.csv", "-u HAPTICD_PLUGIN_PATH");
+    ASSERT_EQ(demo.exit_code, 0) << demo.err;
+    const CommandResult plugin = run(plugin_config, "plugin.csv", "HAPTICD_PLUGIN_PATH=" + build);
+    ASSERT_EQ(plugin.exit_code, 0) << plugin.err;
+    EXPECT_NE(plugin.err.find("scene spring-wall"), std::string::npos) << plugin.err;
+    const TelemetryLog a = read_telemetry(scratch_->file("demo.csv"));
+    const TelemetryLog b = read_telemetry(scratch_->file("plugin.csv"));
+    ASSERT_EQ(a.rows(), b.rows());
+    double peak_n = 0.0;
+    for (std::size_t i = 0; i < a.rows(); ++i) {
+        ASSERT_EQ(a.column("f0_n")[i], b.column("f0_n")[i]) << "row " << i;
+        peak_n = std::max(peak_n, std::abs(b.column("f0_n")[i]));
+    }
+    EXPECT_GT(peak_n, 1.0);  // the default hand pushes 5 mm into the wall
 }
 
 }  // namespace

@@ -1,13 +1,10 @@
 // Loading device plugins (plugin_abi.hpp) by name or by path, outside the tick.
 //
 // A name ("sim") is looked up as `libhapticd-device-<name>.so`, then `hapticd-device-<name>.so`,
-// in each directory of plugin_search_path() in order, first match wins:
-//   1. $HAPTICD_PLUGIN_PATH, a colon-separated list (empty entries are skipped);
-//   2. the executable's own plugin directory (install/layout.hpp): the build tree's
-//      (<build>/lib/hapticd/plugins) for a build tree's executable, else its installation's
-//      (<prefix>/<libdir>/hapticd/plugins), never both.
-// A string containing '/' is a path and is opened as given. The built-in plugins (sim) are
-// shared objects found the same way, so a lab's own device needs no rebuild of the daemon.
+// on the plugins' search path (install/plugin_files.hpp: $HAPTICD_PLUGIN_PATH, then the
+// executable's own plugin directory); a string containing '/' is a path and is opened as given. The
+// built-in plugins (sim) are shared objects found the same way, so a lab's own device needs no
+// rebuild of the daemon.
 //
 // The loader dlopen()s with RTLD_NOW | RTLD_LOCAL, looks up HAPTICD_DEVICE_PLUGIN_ENTRY_SYMBOL,
 // checks abi_version before it reads anything else of the descriptor, then calls create() (or,
@@ -62,12 +59,6 @@ inline constexpr std::size_t kCheckMessageCapacity = 16384;
 std::optional<std::string> check_plugin_config(std::string_view name_or_path,
                                                const DeviceConfig& config,
                                                std::size_t capacity = kCheckMessageCapacity);
-
-/// The directories searched for a plugin name, in order (see the file comment).
-std::vector<std::string> plugin_search_path();
-
-/// File names tried in each directory for a plugin name: lib-prefixed first.
-std::vector<std::string> plugin_file_names(std::string_view name);
 
 /// One plugin found on the search path, for `hapticd --list-plugins`.
 struct PluginListing {

@@ -3,6 +3,8 @@
 // real-time contract). Scenes (env/scene.hpp) build concrete ones.
 #pragma once
 
+#include <string_view>
+
 #include "hapticd/servo/environment_port.hpp"
 
 namespace hapticd::env {
@@ -22,6 +24,11 @@ class ImpedanceEnvironment {
     virtual void commit(const Vec3& tool_position_m, const Vec3& tool_velocity_mps) noexcept = 0;
     /// Forget all state; the tool starts at `tool_position_m`.
     virtual void reset(const Vec3& tool_position_m) noexcept = 0;
+    /// The environment failed in this tick or before (a plugin's world: plugin_environment.hpp);
+    /// the servo raises the fault `environment`. A reset clears it.
+    virtual bool failed() const noexcept { return false; }
+    /// Why it failed, for the journal, the status and the summary ("" when not).
+    virtual std::string_view failure() const noexcept { return {}; }
 };
 static_assert(servo::ImpedancePort<ImpedanceEnvironment>);
 
@@ -34,6 +41,9 @@ class AdmittanceEnvironment {
                       const CouplingGains& gains, double period_s) noexcept = 0;
     /// Forget all state; the tool starts at the constrained point nearest `position_m`.
     virtual void reset(const Vec3& position_m) noexcept = 0;
+    /// As ImpedanceEnvironment::failed().
+    virtual bool failed() const noexcept { return false; }
+    virtual std::string_view failure() const noexcept { return {}; }
 };
 static_assert(servo::AdmittancePort<AdmittanceEnvironment>);
 

@@ -33,6 +33,11 @@
 //   [[virtual_mass.plane]]   as [[proxy_plane]]
 //   [[virtual_mass.sphere]]  as [[proxy_sphere]]
 //
+//   Or a world of the lab's own, alone in its scene (plugin_environment.hpp):
+//   [plugin]          name (a plugin name or a path with '/'), max_call_us (us, > 0 and <=
+//                     the period; default a quarter of it)
+//   [plugin.settings] anything: handed to the plugin's create() as TOML text
+//
 // Upper bounds catch typos: stiffness <= 1e7 N/m, damping <= 1e5 N s/m, forces <= 1e4 N,
 // lengths and coordinates within ±100 m, mass <= 1e3 kg, coefficients <= 10.
 // A scene with no objects is a free-space PenaltyScene.
@@ -92,14 +97,26 @@ struct Scene {
     /// stiffness must exceed its magnitude, or the series solve (17) of a massless tool has
     /// no stable balance there (docs/scenes.md).
     std::optional<LinearObject> most_negative_stiffness;
+    /// A [plugin] scene's world: "NAME (PATH)"; empty for hapticd's own objects.
+    std::string plugin;
+};
+
+/// How a scene is read: the servo's rate, which a [plugin] world is created for.
+struct SceneOptions {
+    double rate_hz = 1000.0;
+    /// False: a [plugin] scene is refused, saying `why_no_plugins` (a reader that only
+    /// checks, and would not load code).
+    bool load_plugins = true;
+    std::string why_no_plugins{};
 };
 
 /// Reads and builds the scene in `path`. `axes` is the device's axis count: the scene's
 /// [scene] axes may not exceed it (a 1-axis scene runs on the first axis of a 3-axis
 /// device). Throws SceneError.
-[[nodiscard]] Scene load_scene(const std::string& path, int axes);
+[[nodiscard]] Scene load_scene(const std::string& path, int axes, const SceneOptions& options = {});
 
 /// The same from text; `source_name` stands for the file in messages.
-[[nodiscard]] Scene parse_scene(std::string_view text, const std::string& source_name, int axes);
+[[nodiscard]] Scene parse_scene(std::string_view text, const std::string& source_name, int axes,
+                                const SceneOptions& options = {});
 
 }  // namespace hapticd::env

@@ -24,9 +24,12 @@ enum Fault : std::uint32_t {
     kFaultDeviceFault = 1u << 6,    ///< the device reported a fault of its own
     kFaultDeviceIo = 1u << 7,       ///< read or write returned IoResult::error
     kFaultEncoderStale = 1u << 8,   ///< kStatusStale: the counts repeat the last good ones
+    /// The environment failed: a plugin's world returned an error, a value that is not
+    /// finite, threw, or took longer than its time (env/plugin_environment.hpp).
+    kFaultEnvironment = 1u << 9,
 };
 
-inline constexpr int kFaultCount = 9;
+inline constexpr int kFaultCount = 10;
 
 /// Link faults: the device or the wire between it and the host failed, not the device's
 /// mechanics, the encoder or this host. They are the only faults that LinkRecovery
@@ -90,6 +93,8 @@ constexpr std::string_view fault_name(std::uint32_t fault_bit) noexcept {
             return "device_io";
         case kFaultEncoderStale:
             return "encoder_stale";
+        case kFaultEnvironment:
+            return "environment";
         default:
             return "unknown";
     }

@@ -153,6 +153,9 @@ class ServoLoop {
     /// environment, open loop, recording) and the status it answers with (loop_inbox.hpp).
     LoopInbox<Environment>& inbox() noexcept { return inbox_; }
     const LoopInbox<Environment>& inbox() const noexcept { return inbox_; }
+    /// The environment the ticks render (the last offer taken); after the servo thread has
+    /// stopped, or from it.
+    const Environment& environment() const noexcept { return *environment_; }
 
     /// Every tick's record also goes to `recorder` (may be null; it must outlive the loop),
     /// which the tick that latches a new fault freezes (flight_recorder.hpp). Before run().
@@ -401,8 +404,10 @@ class ServoLoop {
     // no force and the tool follows the handle.
     [[gnu::always_inline]] Coupled couple(const Sensed& sensed, std::uint32_t& flags) noexcept {
         Coupled coupled{.x_e = coupling_.previous_tool_position_m()};
+        if (!sensed.open_loop && environment_failed()) raise(kFaultEnvironment);  // at its reset
         if (sensed.have_sample && sensed.armed && !safety_.faulted() && !sensed.interval_unknown) {
             const CouplingStep step = coupling_step(sensed, sensed.x_d, sensed.interval_s);
+            if (!sensed.open_loop && environment_failed()) raise(kFaultEnvironment);
             if (!step.finite) raise(kFaultNonFinite);
             if (step.finite && !step.converged) {
                 flags |= kFlagSolverNotConverged;
@@ -562,6 +567,18 @@ class ServoLoop {
             // A step per period: a sample that comes 55 periods after the last may have
             // moved 55 times as far.
             raise(kFaultEncoderJump);
+        }
+    }
+
+    // Whether the environment failed (a plugin's world: env/plugin_environment.hpp); the
+    // servo's own test environments have no failed() and never fail.
+    bool environment_failed() const noexcept {
+        if constexpr (requires(const Environment& e) {
+                          { e.failed() } -> std::same_as<bool>;
+                      }) {
+            return environment_->failed();
+        } else {
+            return false;
         }
     }
 

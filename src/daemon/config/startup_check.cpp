@@ -63,8 +63,9 @@ tune::EnvironmentAssumption configured_environments(const Config& config) {
                              config.device.axes),
             "<embedded demo-wall scene>");
     }
-    return scene_environments(env::load_scene(config.scene_file, config.device.axes),
-                              config.scene_file);
+    return scene_environments(
+        env::load_scene(config.scene_file, config.device.axes, {.rate_hz = config.servo.rate_hz}),
+        config.scene_file);
 }
 
 // Everything of the design but the environments, checked in this order.

@@ -10,6 +10,7 @@
 #include <optional>
 
 #include "hapticd/device/plugin_loader.hpp"
+#include "hapticd/install/plugin_files.hpp"
 
 namespace hapticd::daemon {
 namespace {
@@ -73,8 +74,8 @@ void refuse_overlapping_paths(const std::vector<NamedPath>& inputs,
 std::string plugin_file(const std::string& plugin) {
     if (plugin.empty()) return {};
     if (plugin.find('/') != std::string::npos) return plugin;
-    for (const std::string& dir : device::plugin_search_path()) {
-        for (const std::string& file : device::plugin_file_names(plugin)) {
+    for (const std::string& dir : install::plugin_search_path()) {
+        for (const std::string& file : install::plugin_file_names("device", plugin)) {
             std::string path = dir + "/" + file;
             std::error_code ec;
             if (fs::is_regular_file(path, ec)) return path;

@@ -63,6 +63,7 @@ std::string summary_json(const servo::Summary& s, const RunContext& c) {
     j["exit"] = c.exit;
     j["state"] = c.final_state;
     if (!c.stopped_by.empty()) j["stopped_by"] = c.stopped_by;
+    if (!c.environment_failure.empty()) j["environment_failure"] = c.environment_failure;
     if (!c.final_command.empty()) j["final_command"] = c.final_command;
     j["run_time_s"] = c.run_time_s;
     j["lockstep"] = c.lockstep;

@@ -48,9 +48,12 @@ struct RunContext {
     /// The last command written after the loop stopped: "zero" when the device accepted the
     /// disabled zero-force command, else "zero, not confirmed: REASON".
     std::string final_command;
-    std::string stopped_by;     ///< "SIGTERM", "SIGHUP"..., or "parent lifeline"; empty: n/a
-    double run_time_s = 0.0;    ///< device time covered (virtual time in lockstep)
-    std::string telemetry_log;  ///< the --log path; empty without one
+    std::string stopped_by;  ///< "SIGTERM", "SIGHUP"..., or "parent lifeline"; empty: n/a
+    /// Why the environment in force at the end failed (a plugin's world: fault
+    /// `environment`); empty when it did not.
+    std::string environment_failure;
+    double run_time_s = 0.0;              ///< device time covered (virtual time in lockstep)
+    std::string telemetry_log;            ///< the --log path; empty without one
     std::uint64_t telemetry_records = 0;  ///< records the run gave the writer; 0 without --log
     std::uint64_t telemetry_records_written = 0;  ///< of them, whole lines in the --log file
     bool telemetry_complete = true;  ///< every record is in the file (none failed, none dropped)

@@ -24,7 +24,8 @@ env::Scene load_any_scene(const Config& config) {
         return env::parse_scene(default_scene_text(), "<embedded demo-wall scene>",
                                 config.device.axes);
     }
-    return env::load_scene(config.scene_file, config.device.axes);
+    return env::load_scene(config.scene_file, config.device.axes,
+                           {.rate_hz = config.servo.rate_hz});
 }
 
 // A detent with a short period or a large peak force has such a stiffness between its

@@ -14,8 +14,10 @@
 #include <string>
 
 #include "hapticd/daemon/config.hpp"
+#include "hapticd/daemon/journal.hpp"
 #include "hapticd/daemon/run.hpp"
 #include "hapticd/device/device.hpp"
+#include "hapticd/input/printable.hpp"
 #include "hapticd/servo/servo_loop.hpp"
 #include "hapticd/servo/servo_state.hpp"
 #include "outputs/flight_writer.hpp"
@@ -88,6 +90,13 @@ int run_loop(const RunOptions& options, const Config& config,
     // Finish: the servo thread joined, the control socket's work in, the fault that ended the
     // run written, zero force and once more to know that it landed, the log drained.
     servo.join();
+    if constexpr (requires { loop.environment().failure(); }) {
+        context.environment_failure = std::string(loop.environment().failure());
+        if (!context.environment_failure.empty()) {
+            log << priority::err << "hapticd: the environment failed: "
+                << input::printable(context.environment_failure) << "\n";
+        }
+    }
     control.finish(context, log);
     flight.write_frozen(context, log);
     loop.write_zero_force();

@@ -42,7 +42,7 @@ SceneLoadResult SceneSwitch::load(const std::string& path, const servo::Coupling
     try {
         *scene = env::parse_scene(
             input::read_text_file(path, "the scene file", input::kMaxTomlBytes, may_load), path,
-            config_.device.axes);
+            config_.device.axes, {.rate_hz = config_.servo.rate_hz});
         if (scene->causality != current_->causality) {
             return refused(path, path + " (scene \"" + scene->name + "\") is an " +
                                      env::to_string(scene->causality) +
