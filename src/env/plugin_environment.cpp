@@ -20,6 +20,7 @@ class FixedText {
     FixedText& operator<<(std::string_view text) noexcept {
         const std::size_t room = buffer_.size() - 1 - used_;
         const std::size_t n = std::min(room, text.size());
+        if (n == 0) return *this;  // an empty view may hold no pointer at all
         std::memcpy(buffer_.data() + used_, text.data(), n);
         used_ += n;
         buffer_[used_] = '\0';
