@@ -27,11 +27,12 @@ class FixedText {
         return *this;
     }
     FixedText& operator<<(double value) noexcept {
-        std::array<char, 32> digits{};
-        const auto [end, error] = std::to_chars(digits.data(), digits.data() + digits.size(), value,
-                                                std::chars_format::general, 6);
-        return *this << std::string_view(digits.data(),
-                                         error == std::errc{} ? end - digits.data() : 0);
+        char* const begin = buffer_.data() + used_;
+        char* const last = buffer_.data() + buffer_.size() - 1;  // room for the terminator
+        const auto [end, error] = std::to_chars(begin, last, value, std::chars_format::general, 6);
+        if (error == std::errc{}) used_ = static_cast<std::size_t>(end - buffer_.data());
+        buffer_[used_] = '\0';
+        return *this;
     }
 
   private:
