@@ -45,15 +45,6 @@ bool is_skipped(std::string_view line) {
     return text.empty() || text.front() == '#';
 }
 
-/// Parses a finite double the way the daemon writes it (std::to_chars) or a script does
-/// ("1e-5", "+0.25", "3."). Returns false for anything else.
-bool parse_number(std::string_view text, double& value) {
-    if (!text.empty() && text.front() == '+') text.remove_prefix(1);
-    if (text.empty()) return false;
-    const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
-    return error == std::errc{} && end == text.data() + text.size() && std::isfinite(value);
-}
-
 /// The lines left in `in` (an upper bound of its rows), read ahead and rewound; 0 when the
 /// stream cannot seek back (then the columns grow as they are read).
 std::size_t lines_left(std::istream& in) {
@@ -109,6 +100,13 @@ bool is_required(std::string_view name, int axes) {
 }
 
 }  // namespace
+
+bool parse_log_number(std::string_view text, double& value) {
+    if (!text.empty() && text.front() == '+') text.remove_prefix(1);
+    if (text.empty()) return false;
+    const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+    return error == std::errc{} && end == text.data() + text.size() && std::isfinite(value);
+}
 
 TelemetryLogOptions TelemetryLogOptions::identification() {
     TelemetryLogOptions options;
@@ -260,7 +258,7 @@ TelemetryLog parse_telemetry_log(std::istream& in, const std::string& source,
         }
         for (std::size_t c = 0; c < columns; ++c) {
             double value = 0.0;
-            if (!parse_number(fields[c], value)) {
+            if (!parse_log_number(fields[c], value)) {
                 throw LogFormatError(source + ":" + std::to_string(line_number) + ":" +
                                      std::to_string(c + 1) + " (" + log.columns[c] + "): '" +
                                      std::string(fields[c]) + "' is not a finite number");

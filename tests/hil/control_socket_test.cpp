@@ -517,7 +517,7 @@ TEST(HilControlSocket, HapticctlMarksTrialsInTheRecordingWhosePreambleNamesTheGa
     step("record start " + shell_quote(first));
     const CommandResult a = step("mark 'trial A'");
     EXPECT_EQ(a.out.rfind("mark 1 from the tick after ", 0), 0u) << a.out;
-    step("coupling 2000");
+    step("coupling 1999.123456789");  // more digits than the journal's six: the note keeps all
     step("mark 'trial B, caf\xc3\xa9'");
     ASSERT_EQ(hapticctl(daemon.socket, "record stop").exit_code, 0);
 
@@ -528,7 +528,7 @@ TEST(HilControlSocket, HapticctlMarksTrialsInTheRecordingWhosePreambleNamesTheGa
         << log.preamble("scene");
     ASSERT_EQ(log.marks().size(), 3u);
     EXPECT_EQ(log.marks()[0].text, "trial A");
-    EXPECT_EQ(log.marks()[1].text.rfind("coupling k_c 2000 N/m, b_c 0 N s/m; ", 0), 0u)
+    EXPECT_EQ(log.marks()[1].text.rfind("coupling k_c 1999.123456789 N/m, b_c 0 N s/m; ", 0), 0u)
         << log.marks()[1].text;
     EXPECT_NE(log.marks()[1].text.find("passive model"), std::string::npos);
     EXPECT_EQ(log.marks()[2].text, "trial B, caf\xc3\xa9");
@@ -549,12 +549,12 @@ TEST(HilControlSocket, HapticctlMarksTrialsInTheRecordingWhosePreambleNamesTheGa
     step("status");
     ASSERT_EQ(hapticctl(daemon.socket, "record stop").exit_code, 0);
     const TelemetryLog later = read_telemetry(second);
-    EXPECT_EQ(later.preamble("coupling_stiffness_n_per_m"), "2000");
+    EXPECT_EQ(later.preamble("coupling_stiffness_n_per_m"), "1999.123456789");
     ASSERT_EQ(later.marks().size(), 1u);
     EXPECT_EQ(later.marks()[0].number, 3u);
     EXPECT_EQ(later.marks()[0].row, 0u);
 
-    // plot-run takes k_c from the recording: 3600 N/m, then 2000 from the coupling's mark.
+    // plot-run takes k_c from the recording: 3600 N/m, then the coupling mark's, exactly.
     const CommandResult judged =
         run_command(shell_quote(HAPTIC_TUNE_BIN) + " plot-run --json " + shell_quote(first));
     ASSERT_EQ(judged.exit_code, 0) << judged.err;
@@ -562,7 +562,7 @@ TEST(HilControlSocket, HapticctlMarksTrialsInTheRecordingWhosePreambleNamesTheGa
     EXPECT_EQ(j.at("coupling_stiffness_n_per_m"), 3600.0);
     EXPECT_EQ(j.at("coupling_stiffness_source"), "the log's preamble and its coupling marks");
     ASSERT_EQ(j.at("coupling_stiffness_changes").size(), 2u);
-    EXPECT_EQ(j.at("coupling_stiffness_changes")[1].at("stiffness_n_per_m"), 2000.0);
+    EXPECT_EQ(j.at("coupling_stiffness_changes")[1].at("stiffness_n_per_m"), 1999.123456789);
 
     // Marks a client may not make: each refused, naming why.
     for (const auto& [arguments, says] : std::vector<std::pair<std::string, std::string>>{

@@ -6,7 +6,6 @@
 // (tune/oscillation.hpp): does it grow or die out, and how fast. Exit 0 judged, 2 for a log
 // that cannot be read.
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <iostream>
 #include <memory>
@@ -83,12 +82,6 @@ double median_period_s(const std::vector<double>& t) {
     return steps[steps.size() / 2];
 }
 
-/// `text` whole as a finite number.
-bool finite_number(std::string_view text, double& value) {
-    const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
-    return error == std::errc() && end == text.data() + text.size() && std::isfinite(value);
-}
-
 /// k_c from the row `from_row` on: one entry at row 0, and one at each coupling change the
 /// log's marks name.
 struct StiffnessChange {
@@ -114,7 +107,7 @@ std::vector<StiffnessChange> coupling_stiffness(const PlotRunOptions& o,
     }
     const std::string* preamble = log.preamble_value("coupling_stiffness_n_per_m");
     double initial = 0.0;
-    if (preamble == nullptr || !finite_number(*preamble, initial) || !(initial > 0.0)) {
+    if (preamble == nullptr || !tune::parse_log_number(*preamble, initial) || !(initial > 0.0)) {
         return {};
     }
     source = "the log's preamble";
@@ -124,7 +117,7 @@ std::vector<StiffnessChange> coupling_stiffness(const PlotRunOptions& o,
         if (!mark.text.starts_with(kCouplingNote)) continue;
         const std::string rest = mark.text.substr(kCouplingNote.size());
         double stiffness = 0.0;
-        if (finite_number(rest.substr(0, rest.find(' ')), stiffness) && stiffness > 0.0) {
+        if (tune::parse_log_number(rest.substr(0, rest.find(' ')), stiffness) && stiffness > 0.0) {
             changes.push_back({mark.row, stiffness});
             source = "the log's preamble and its coupling marks";
         }

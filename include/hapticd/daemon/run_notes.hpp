@@ -29,9 +29,8 @@ class RunNotes {
     /// that the numbers reach the loop in order. nullopt when the run holds kMaxRunNotes.
     std::optional<std::uint32_t> add(std::string text,
                                      const std::function<void(std::uint32_t)>& publish);
-    /// The text of note `number` (1..count()); empty for any other number.
+    /// The text of note `number` (1 to the last added); empty for any other number.
     std::string text(std::uint32_t number) const;
-    std::uint32_t count() const;
 
   private:
     mutable std::mutex mutex_;

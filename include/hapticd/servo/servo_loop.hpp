@@ -404,10 +404,8 @@ class ServoLoop {
     // no force and the tool follows the handle.
     [[gnu::always_inline]] Coupled couple(const Sensed& sensed, std::uint32_t& flags) noexcept {
         Coupled coupled{.x_e = coupling_.previous_tool_position_m()};
-        if (!sensed.open_loop && environment_failed()) raise(kFaultEnvironment);  // at its reset
         if (sensed.have_sample && sensed.armed && !safety_.faulted() && !sensed.interval_unknown) {
             const CouplingStep step = coupling_step(sensed, sensed.x_d, sensed.interval_s);
-            if (!sensed.open_loop && environment_failed()) raise(kFaultEnvironment);
             if (!step.finite) raise(kFaultNonFinite);
             if (step.finite && !step.converged) {
                 flags |= kFlagSolverNotConverged;
@@ -421,6 +419,9 @@ class ServoLoop {
             coupling_.track_device(sensed.x_d);
             coupled.x_e = sensed.x_d;
         }
+        // A world that failed in this tick (its reset, or the step's calls) or before: a
+        // failed world gives no force, and the fault zeroes the command (command()).
+        if (!sensed.open_loop && environment_failed()) raise(kFaultEnvironment);
         return coupled;
     }
 

@@ -98,6 +98,11 @@ struct TelemetryLog {
     std::size_t memory_bytes() const;
 };
 
+/// Parses a finite double the way the daemon writes it (std::to_chars) or a script does
+/// ("1e-5", "+0.25", "3."): a field, or a number in the preamble or a mark. False for
+/// anything else.
+bool parse_log_number(std::string_view text, double& value);
+
 /// Reads `path`. Throws LogFormatError naming the file (and line and column) when it cannot
 /// be opened, a header name repeats, `t_s` or an axis's x{i}_m / f{i}_n is missing (the
 /// message lists the columns found), a row has the wrong number of fields, or a value is

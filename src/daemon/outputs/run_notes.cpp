@@ -18,9 +18,4 @@ std::string RunNotes::text(std::uint32_t number) const {
     return texts_[number - 1];
 }
 
-std::uint32_t RunNotes::count() const {
-    const std::lock_guard lock(mutex_);
-    return static_cast<std::uint32_t>(texts_.size());
-}
-
 }  // namespace hapticd::daemon

@@ -10,6 +10,13 @@
 
 namespace hapticd::daemon {
 
+std::string scene_in_force(const RunScene& scene, const SceneSwitch* scenes) {
+    if (scene.scene == nullptr) return "none (the excitation plays open loop)";
+    const SceneInForce now =
+        scenes != nullptr ? scenes->in_force() : SceneInForce{scene.scene->name, scene.source};
+    return now.name + " (" + env::to_string(scene.scene->causality) + ", " + now.source + ")";
+}
+
 control_socket::CouplingVerdict check_new_coupling(const Config& config, const SceneSwitch* scenes,
                                                    const servo::CouplingGains& gains) {
     try {
@@ -82,19 +89,10 @@ std::string RunControl::recording_preamble(const RunContext& context,
                                            const device::DeviceInfo& info,
                                            const RunScene& scene) const {
     const servo::CouplingGains gains = control_.coupling();
-    const std::string causality = scene.scene == nullptr
-                                      ? std::string()
-                                      : std::string(env::to_string(scene.scene->causality));
-    std::string in_force = "none (the excitation plays open loop)";
-    if (scenes_) {
-        const SceneInForce now = scenes_->in_force();
-        in_force = scene_text(now.name, causality, now.source);
-    } else if (scene.scene != nullptr) {
-        in_force = scene_text(scene.scene->name, causality, scene.source);
-    }
-    return telemetry_preamble(telemetry_header(
-        config_, context, info, gains,
-        check_new_coupling(config_, scenes_ ? &*scenes_ : nullptr, gains).verdict, in_force));
+    const SceneSwitch* scenes = scenes_ ? &*scenes_ : nullptr;
+    return telemetry_preamble(telemetry_header(config_, context, info, gains,
+                                               check_new_coupling(config_, scenes, gains).verdict,
+                                               scene_in_force(scene, scenes)));
 }
 
 void RunControl::poll(std::ostream& log) {

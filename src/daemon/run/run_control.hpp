@@ -36,6 +36,10 @@ struct RunScene {
     std::string source;  ///< its file, or "<embedded demo-wall scene>"
 };
 
+/// The scene a file's preamble names: "NAME (CAUSALITY, SOURCE)" of the scene in force, the
+/// last `scenes` loaded or else the run's own; "none (...)" for an excitation run.
+std::string scene_in_force(const RunScene& scene, const SceneSwitch* scenes = nullptr);
+
 /// The start-up check of `config` with the coupling `gains` in place of its own, against the
 /// scene in force (`scenes`; without, the config's): what a control socket's coupling request
 /// must pass ([coupling] check, docs/control.md).

@@ -29,11 +29,6 @@ TelemetryHeader telemetry_header(const Config& config, const RunContext& context
             .scene = std::move(scene)};
 }
 
-std::string scene_text(const std::string& name, std::string_view causality,
-                       const std::string& source) {
-    return name + " (" + std::string(causality) + ", " + source + ")";
-}
-
 RunTelemetry::RunTelemetry(const RunOptions& options, const device::DeviceInfo& info,
                            Outputs& outputs, std::string_view preamble, const RunNotes* notes) {
     if (!options.log_path) return;

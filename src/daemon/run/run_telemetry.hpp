@@ -31,10 +31,6 @@ TelemetryHeader telemetry_header(const Config& config, const RunContext& context
                                  const device::DeviceInfo& info, const servo::CouplingGains& gains,
                                  std::string verdict, std::string scene);
 
-/// "NAME (CAUSALITY, SOURCE)", the preamble's scene.
-std::string scene_text(const std::string& name, std::string_view causality,
-                       const std::string& source);
-
 class RunTelemetry {
   public:
     /// With --log: the ring, and the writer on `outputs.log` (begun) started, its file begun

@@ -56,14 +56,10 @@ int run_loop(const RunOptions& options, const Config& config,
     // The run's notes (marks, changes of gains and scene): the servo stamps their numbers on
     // its records, the writers put their text in the files (run_notes.hpp).
     RunNotes notes;
-    const std::string scene_in_force =
-        scene.scene == nullptr
-            ? std::string("none (the excitation plays open loop)")
-            : scene_text(scene.scene->name, env::to_string(scene.scene->causality), scene.source);
     RunTelemetry telemetry(
         options, info, outputs,
         telemetry_preamble(telemetry_header(config, context, info, servo_config.coupling,
-                                            context.check.describe(), scene_in_force)),
+                                            context.check.describe(), scene_in_force(scene))),
         &notes);
     Loop loop(device, environment, servo_config, telemetry.ring());
     // The directory of the flight records and a client's recordings, opened once.

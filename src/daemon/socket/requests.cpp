@@ -96,7 +96,11 @@ Answer set_coupling(const Request& request, const Peer& peer, ServoControl& loop
         std::ostringstream set;
         set << "k_c " << input::format_number(gains.stiffness_n_per_m) << " N/m, b_c "
             << input::format_number(gains.damping_n_s_per_m) << " N s/m";
-        note(facts, loop, "coupling " + set.str() + "; " + verdict.verdict);
+        // The note's numbers exact, for a reader that takes k_c from it (haptic-tune
+        // plot-run); the journal's and the reply's text keep six digits.
+        note(facts, loop,
+             "coupling k_c " + input::exact_number(gains.stiffness_n_per_m) + " N/m, b_c " +
+                 input::exact_number(gains.damping_n_s_per_m) + " N s/m; " + verdict.verdict);
         return {.reply = ok_reply(id, {{"state_before", state_before},
                                        {"stiffness", gains.stiffness_n_per_m},
                                        {"damping", gains.damping_n_s_per_m},
