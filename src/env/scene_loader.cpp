@@ -4,12 +4,14 @@
 #include <stdexcept>
 #include <utility>
 
+#include "hapticd/env/external_environment.hpp"
 #include "hapticd/env/god_object.hpp"
 #include "hapticd/env/penalty_scene.hpp"
 #include "hapticd/env/plugin_environment.hpp"
 #include "hapticd/env/scene.hpp"
 #include "hapticd/env/virtual_mass.hpp"
 #include "hapticd/input/text_input.hpp"
+#include "hapticd/servo/soft_start.hpp"
 #include "scene_fields.hpp"
 
 namespace hapticd::env {
@@ -56,6 +58,30 @@ std::string_view side_name(SphereSide side) noexcept {
 constexpr SphereSide kSides[] = {SphereSide::outside, SphereSide::inside};
 constexpr input::Choice<SphereSide> kSide{"side", kSides, &side_name, SphereSide::outside};
 
+// [external] (external_environment.hpp).
+std::string_view between_name(BetweenUpdates between) noexcept { return to_string(between); }
+constexpr BetweenUpdates kBetweens[] = {BetweenUpdates::extrapolate, BetweenUpdates::hold};
+constexpr input::Choice<BetweenUpdates> kBetweenUpdates{
+    "between_updates", kBetweens, &between_name, ExternalSpec{}.between_updates,
+    "what the coupling sees between the world's updates"};
+constexpr input::Integer kLockstepEvery{
+    "lockstep_every", 0,
+    100000,           ExternalSpec{}.lockstep_every,
+    "ticks",          "0: free-running; N: the tick waits for the world every N"};
+constexpr Number kStaleAfter{"stale_after",
+                             Range{.lo = 0.0, .hi = 10.0, .lo_open = true, .unit = "s"},
+                             ExternalSpec{}.stale_after_s, "no update for this long is stale"};
+constexpr Number kStaleRamp{"ramp", servo::kRampTimeRange, ExternalSpec{}.ramp_s,
+                            "a stale world's force ramps to zero over this long"};
+constexpr Number kLockstepTimeout{
+    "lockstep_timeout", Range{.lo = 0.0, .hi = 600.0, .lo_open = true, .unit = "s"},
+    ExternalSpec{}.lockstep_timeout_s, "the longest a lockstep tick waits for the world's answer"};
+constexpr servo::PassivityMode kPortPassivityModes[] = {
+    servo::PassivityMode::control, servo::PassivityMode::observe, servo::PassivityMode::off};
+constexpr input::Choice<servo::PassivityMode> kPortPassivity{
+    "passivity", kPortPassivityModes, &servo::to_string, ExternalSpec{}.passivity,
+    "the passivity controller on the world's port; observe or off take the world for passive"};
+
 const char* const kPenaltyKinds[] = {"wall", "spring", "damper", "detent", "friction"};
 const char* const kArrayKinds[] = {"wall",     "spring",      "damper",      "detent",
                                    "friction", "proxy_plane", "proxy_sphere"};
@@ -71,12 +97,21 @@ class SceneParser {
         for (const char* kind : kArrayKinds) (void)file_.array_of_tables(kind);
         (void)file_.subtable("virtual_mass");
         const toml::table* plugin = file_.subtable("plugin");
+        const toml::table* external = file_.subtable("external");
         file_.finish();
         Scene scene;
         read_header(header, scene, device_axes);
         axes_ = scene.axes;
+        if (plugin != nullptr && external != nullptr) {
+            throw SceneError(source_ +
+                             ": [plugin] and [external] are each a whole scene: keep one");
+        }
         if (plugin != nullptr) {
             build_plugin(*plugin, scene);
+            return scene;
+        }
+        if (external != nullptr) {
+            build_external(*external, scene);
             return scene;
         }
 
@@ -291,20 +326,7 @@ class SceneParser {
     // causality is the plugin's. hapticd has no model of it: the stability check holds for it
     // only as a passive environment (docs/scenes.md, "Your own world").
     void build_plugin(const toml::table& table, Scene& scene) {
-        for (const char* kind : kArrayKinds) {
-            if (root_.contains(kind)) {
-                throw SceneError(source_ +
-                                 ": [plugin] is the whole scene, but this one also has [[" +
-                                 std::string(kind) +
-                                 "]]: put the objects in the plugin's world, "
-                                 "or in a scene of their own");
-            }
-        }
-        if (root_.contains("virtual_mass")) {
-            throw SceneError(source_ +
-                             ": [plugin] is the whole scene, but this one also has "
-                             "[virtual_mass]: keep one");
-        }
+        require_alone("plugin");
         TableReader reader = file_.nested(table, "plugin");
         reader.only({"name", "max_call_us", "settings"});
         PluginSpec spec;
@@ -341,6 +363,74 @@ class SceneParser {
             scene.impedance = std::move(loaded.impedance);
         }
         scene.plugin = loaded.name + " (" + loaded.path + ")";
+    }
+
+    // A world of the lab's own ([plugin], [external]) is the whole scene.
+    void require_alone(const std::string& table) const {
+        for (const char* kind : kArrayKinds) {
+            if (root_.contains(kind)) {
+                throw SceneError(source_ + ": [" + table +
+                                 "] is the whole scene, but this one also has [[" +
+                                 std::string(kind) + "]]: put the objects in the " + table +
+                                 " world, or in a scene of their own");
+            }
+        }
+        if (root_.contains("virtual_mass")) {
+            throw SceneError(source_ + ": [" + table +
+                             "] is the whole scene, but this one also has [virtual_mass]: keep "
+                             "one");
+        }
+    }
+
+    // [external]: a world another process renders at its own rate through shared memory
+    // (external_environment.hpp), an admittance (22). hapticd has no model of it; the
+    // passivity controller on its port makes it passive, unless the scene turns it off.
+    void build_external(const toml::table& table, Scene& scene) {
+        require_alone("external");
+        TableReader reader = file_.nested(table, "external");
+        reader.only({"between_updates", "stale_after", "ramp", "lockstep_every", "lockstep_timeout",
+                     "passivity"});
+        ExternalSpec spec;
+        spec.between_updates = reader.read(kBetweenUpdates);
+        spec.lockstep_every = static_cast<std::uint32_t>(reader.read(kLockstepEvery));
+        const double every_s = spec.lockstep_every / options_.rate_hz;
+        spec.stale_after_s = reader.read(kStaleAfter);
+        if (spec.stale_after_s <= every_s) {
+            throw SceneError(
+                source_ + ": [external] stale_after = " + input::exact_number(spec.stale_after_s) +
+                " is out of range: allowed > lockstep_every / rate_hz = " +
+                input::exact_number(every_s) +
+                " s (a world in lockstep answers once in that long)");
+        }
+        spec.ramp_s = reader.read(kStaleRamp);
+        spec.lockstep_timeout_s = reader.read(kLockstepTimeout);
+        spec.passivity = reader.read(kPortPassivity);
+        reader.finish();
+        std::string note;
+        std::unique_ptr<ExternalChannel> channel;
+        try {
+            channel = std::make_unique<ExternalChannel>(
+                options_.external_channel,
+                ChannelShape{.axes = static_cast<std::uint32_t>(axes_),
+                             .lockstep_every = spec.lockstep_every,
+                             .rate_hz = options_.rate_hz,
+                             .stale_after_s = spec.stale_after_s},
+                options_.external_group, note);
+        } catch (const std::runtime_error& e) {
+            throw SceneError(source_ + ": [external]: " + e.what());
+        }
+        scene.external = channel->path();  // "": private
+        scene.external_note = std::move(note);
+        scene.unmodelled =
+            spec.passivity == PassivityMode::control
+                ? "the external world [external]: hapticd has no model of it; the passivity "
+                  "controller on its port keeps it passive"
+                : "the external world [external]: hapticd has no model of it, and takes it for "
+                  "a passive environment (passivity = \"" +
+                      std::string(servo::to_string(spec.passivity)) + "\")";
+        scene.causality = Causality::admittance;
+        scene.admittance =
+            std::make_unique<ExternalEnvironment>(spec, std::move(channel), axes_, options_.stop);
     }
 
     void linear(const char* kind, std::size_t index, double mass, double stiffness,

@@ -5,18 +5,6 @@
 
 namespace hapticd::servo {
 
-std::string_view to_string(PassivityMode mode) noexcept {
-    switch (mode) {
-        case PassivityMode::off:
-            return "off";
-        case PassivityMode::observe:
-            return "observe";
-        case PassivityMode::control:
-            return "control";
-    }
-    return "off";
-}
-
 Vec3 PassivityObserver::control(const Vec3& handle_force_n, const Vec3& handle_velocity_mps,
                                 double period_s) noexcept {
     damping_n_s_per_m_ = 0.0;

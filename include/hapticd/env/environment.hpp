@@ -29,6 +29,8 @@ class ImpedanceEnvironment {
     virtual bool failed() const noexcept { return false; }
     /// Why it failed, for the journal, the status and the summary ("" when not).
     virtual std::string_view failure() const noexcept { return {}; }
+    /// The port's report (an external world's); none for hapticd's own objects.
+    virtual servo::EnvironmentPortReport port_report() const noexcept { return {}; }
 };
 static_assert(servo::ImpedancePort<ImpedanceEnvironment>);
 
@@ -44,6 +46,8 @@ class AdmittanceEnvironment {
     /// As ImpedanceEnvironment::failed().
     virtual bool failed() const noexcept { return false; }
     virtual std::string_view failure() const noexcept { return {}; }
+    /// As ImpedanceEnvironment::port_report().
+    virtual servo::EnvironmentPortReport port_report() const noexcept { return {}; }
 };
 static_assert(servo::AdmittancePort<AdmittanceEnvironment>);
 

@@ -38,6 +38,14 @@
 //                     the period; default a quarter of it)
 //   [plugin.settings] anything: handed to the plugin's create() as TOML text
 //
+//   Or a world another process renders at its own rate, alone in its scene
+//   (external_environment.hpp; an admittance):
+//   [external]        between_updates ("extrapolate" default | "hold"), stale_after (s, > 0
+//                     and > lockstep_every / rate_hz, <= 10; default 0.1), ramp (s, 0..10;
+//                     default 0.2), lockstep_every (ticks, 0..100000; default 0: free-running),
+//                     lockstep_timeout (s, > 0, <= 600; default 10), passivity ("control"
+//                     default | "observe" | "off")
+//
 // Upper bounds catch typos: stiffness <= 1e7 N/m, damping <= 1e5 N s/m, forces <= 1e4 N,
 // lengths and coordinates within ±100 m, mass <= 1e3 kg, coefficients <= 10.
 // A scene with no objects is a free-space PenaltyScene.
@@ -48,6 +56,7 @@
 //   <= 1e+07 (N/m)
 #pragma once
 
+#include <atomic>
 #include <memory>
 #include <optional>
 #include <string>
@@ -99,6 +108,10 @@ struct Scene {
     std::optional<LinearObject> most_negative_stiffness;
     /// A [plugin] scene's world: "NAME (PATH)"; empty for hapticd's own objects.
     std::string plugin;
+    /// An [external] scene's channel (external_channel.hpp): its path ("" for a private one);
+    /// none for other scenes. And why it could not be given to its group, if it could not.
+    std::optional<std::string> external;
+    std::string external_note;
 };
 
 /// How a scene is read: the servo's rate, which a [plugin] world is created for.
@@ -108,6 +121,13 @@ struct SceneOptions {
     /// checks, and would not load code).
     bool load_plugins = true;
     std::string why_no_plugins{};
+    /// Where an [external] scene's channel goes (channel_beside() the control socket); "": a
+    /// private mapping no other process can reach (a reader that only checks the scene).
+    std::string external_channel{};
+    /// The group the channel is given to, as the control socket is.
+    std::string external_group = "hapticd";
+    /// A lockstep wait of an [external] world ends when this is set (the daemon's stop flag).
+    const std::atomic<bool>* stop = nullptr;
 };
 
 /// Reads and builds the scene in `path`. `axes` is the device's axis count: the scene's

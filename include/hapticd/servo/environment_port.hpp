@@ -26,6 +26,7 @@
 #pragma once
 
 #include <concepts>
+#include <cstdint>
 #include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
 
@@ -44,6 +45,19 @@ struct PenaltyForce {
     Vec3 force_n{0.0};            ///< f_env on the tool, N
     Mat3 stiffness_n_per_m{0.0};  ///< -∂f/∂x_e (positive definite for a restoring wall)
     Mat3 damping_n_s_per_m{0.0};  ///< -∂f/∂v_e
+};
+
+/// What an environment with a port of its own to watch reports each tick (an external world:
+/// env/external_environment.hpp), for the status and the summary. `external` false: nothing.
+struct EnvironmentPortReport {
+    bool external = false;
+    std::uint32_t world_state = 0;       ///< 0 waiting for the world, 1 live, 2 stale
+    std::uint64_t update = 0;            ///< the world's update in force (its count)
+    std::uint64_t stale_episodes = 0;    ///< times the world went stale
+    std::uint64_t rejected_updates = 0;  ///< updates refused (a value not finite)
+    double since_update_s = 0.0;         ///< servo time since that update came, s
+    double energy_j = 0.0;               ///< the port's energy E[n] since the last reset, J
+    double energy_removed_j = 0.0;       ///< what the passivity controller took, J
 };
 
 template <typename E>

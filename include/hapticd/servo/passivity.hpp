@@ -27,8 +27,19 @@ enum class PassivityMode {
     observe,  ///< observe the energy only (telemetry, summary)
     control,  ///< observe and add damping when the energy goes negative
 };
-/// "off", "observe", "control" ([safety] passivity).
-std::string_view to_string(PassivityMode mode) noexcept;
+/// "off", "observe", "control" ([safety] passivity, an [external] scene's passivity). Inline:
+/// the env layer, which uses servo's headers only, reads the names too.
+constexpr std::string_view to_string(PassivityMode mode) noexcept {
+    switch (mode) {
+        case PassivityMode::off:
+            return "off";
+        case PassivityMode::observe:
+            return "observe";
+        case PassivityMode::control:
+            return "control";
+    }
+    return "off";
+}
 
 struct PassivitySettings {
     PassivityMode mode = PassivityMode::observe;

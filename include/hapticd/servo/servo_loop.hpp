@@ -681,6 +681,11 @@ class ServoLoop {
         snapshot.damping_n_s_per_m = coupling_.gains().damping_n_s_per_m;
         snapshot.read_timeouts = stats_.read_timeouts;
         snapshot.link_recoveries = stats_.link_recoveries;
+        if constexpr (requires(const Environment& e) {
+                          { e.port_report() } -> std::same_as<EnvironmentPortReport>;
+                      }) {
+            snapshot.environment = environment_->port_report();
+        }
         // The soft start's own scale: a tick without a sample filters nothing, and must not
         // make a running loop look as if it were arming again.
         snapshot.state = servo_state(armed, record_.faults, soft_start_scale_for_state());

@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 
+#include "hapticd/servo/environment_port.hpp"
 #include "hapticd/servo/io.hpp"
 #include "hapticd/servo/servo_state.hpp"
 #include "hapticd/servo/summary.hpp"
@@ -35,6 +36,8 @@ struct StatusSnapshot {
     /// its write).
     WakeLatencySummaryUs wake_latency_us{};
     TickComputeSummaryUs tick_compute_us{};
+    /// The environment's port (an external world's), as its last tick left it.
+    EnvironmentPortReport environment{};
 };
 
 }  // namespace hapticd::servo

@@ -64,6 +64,14 @@ std::string summary_json(const servo::Summary& s, const RunContext& c) {
     j["state"] = c.final_state;
     if (!c.stopped_by.empty()) j["stopped_by"] = c.stopped_by;
     if (!c.environment_failure.empty()) j["environment_failure"] = c.environment_failure;
+    if (c.external_world.external) {
+        const servo::EnvironmentPortReport& w = c.external_world;
+        j["external_world"] = {{"updates", w.update},
+                               {"stale_episodes", w.stale_episodes},
+                               {"rejected_updates", w.rejected_updates},
+                               {"energy_j", w.energy_j},
+                               {"energy_removed_j", w.energy_removed_j}};
+    }
     if (!c.final_command.empty()) j["final_command"] = c.final_command;
     j["run_time_s"] = c.run_time_s;
     j["lockstep"] = c.lockstep;

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "hapticd/daemon/startup_check.hpp"
+#include "hapticd/servo/environment_port.hpp"
 #include "hapticd/servo/realtime.hpp"
 #include "hapticd/servo/summary.hpp"
 #include "run/run_stamp.hpp"
@@ -52,6 +53,8 @@ struct RunContext {
     /// Why the environment in force at the end failed (a plugin's world: fault
     /// `environment`); empty when it did not.
     std::string environment_failure;
+    /// An [external] scene's world at the end (its port's report); `external` false: none.
+    servo::EnvironmentPortReport external_world{};
     double run_time_s = 0.0;              ///< device time covered (virtual time in lockstep)
     std::string telemetry_log;            ///< the --log path; empty without one
     std::uint64_t telemetry_records = 0;  ///< records the run gave the writer; 0 without --log

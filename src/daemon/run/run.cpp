@@ -7,6 +7,7 @@
 #include "hapticd/daemon/journal.hpp"
 #include "hapticd/daemon/servo_settings.hpp"
 #include "hapticd/env/scene.hpp"
+#include "hapticd/input/printable.hpp"
 #include "run/excitation_run.hpp"
 #include "run/run_messages.hpp"
 #include "run/run_outputs.hpp"
@@ -25,7 +26,8 @@ int run_daemon(const RunOptions& given, std::atomic<bool>& stop, std::ostream& o
         const Config config = load_any_config(options);
         RunContext context = begin_context(options, config, stamp);
         context.check = run_startup_check(config, log);
-        env::Scene scene = load_any_scene(config);
+        const env::SceneOptions scene_options = run_scene_options(config, options, stop);
+        env::Scene scene = load_any_scene(config, options, scene_options);
         const std::string scene_source = config.scene_file.empty()
                                              ? std::string("<embedded demo-wall scene>")
                                              : config.scene_file;
@@ -60,7 +62,15 @@ int run_daemon(const RunOptions& given, std::atomic<bool>& stop, std::ostream& o
         // and waits (docs/control.md, "Faults and reset"). Without one nobody can, so
         // the run ends on it.
         if (options.socket_path) servo_config.stop_on_fault = false;
-        const RunScene rendered{.scene = &scene, .source = scene_source};
+        if (scene.external) {
+            log << "hapticd: the external world's channel: " << input::printable(*scene.external)
+                << "\n";
+            if (!scene.external_note.empty()) {
+                log << priority::warning << "hapticd: " << input::printable(scene.external_note)
+                    << "\n";
+            }
+        }
+        const RunScene rendered{.scene = &scene, .source = scene_source, .options = scene_options};
         if (scene.causality == env::Causality::impedance) {
             return run_loop(options, config, servo_config, *device, *scene.impedance, rendered,
                             context, outputs, stop, out, log);

@@ -41,7 +41,7 @@ RunControl::RunControl(const Config& config, const device::DeviceInfo& info, con
     : config_(config), control_(ports.control), server_(server) {
     // scene_load (scene_switch.hpp): a scene of the run's causality, only with a control socket.
     if (server_ != nullptr && scene.scene != nullptr) {
-        scenes_.emplace(config_, *scene.scene, scene.source, ports.scenes);
+        scenes_.emplace(config_, *scene.scene, scene.source, scene.options, ports.scenes);
     }
     facts_ = control_socket::RunFacts{
         .name = config_.servo.name,

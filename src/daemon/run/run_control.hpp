@@ -33,7 +33,8 @@ namespace hapticd::daemon {
 /// control socket's scene_load; an excitation run has none.
 struct RunScene {
     const env::Scene* scene = nullptr;
-    std::string source;  ///< its file, or "<embedded demo-wall scene>"
+    std::string source;           ///< its file, or "<embedded demo-wall scene>"
+    env::SceneOptions options{};  ///< how it was read, and how scenes that replace it are
 };
 
 /// The scene a file's preamble names: "NAME (CAUSALITY, SOURCE)" of the scene in force, the

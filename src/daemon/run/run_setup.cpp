@@ -7,6 +7,7 @@
 
 #include "hapticd/daemon/device_open.hpp"
 #include "hapticd/daemon/journal.hpp"
+#include "hapticd/env/external_channel.hpp"
 
 namespace hapticd::daemon {
 
@@ -19,13 +20,28 @@ Config load_any_config(const RunOptions& options) {
     return config;
 }
 
-env::Scene load_any_scene(const Config& config) {
+env::SceneOptions run_scene_options(const Config& config, const RunOptions& options,
+                                    const std::atomic<bool>& stop) {
+    return {.rate_hz = config.servo.rate_hz,
+            .external_channel =
+                options.socket_path ? env::channel_beside(*options.socket_path) : std::string(),
+            .stop = &stop};
+}
+
+env::Scene load_any_scene(const Config& config, const RunOptions& options,
+                          const env::SceneOptions& scene_options) {
     if (config.scene_file.empty()) {
         return env::parse_scene(default_scene_text(), "<embedded demo-wall scene>",
-                                config.device.axes);
+                                config.device.axes, scene_options);
     }
-    return env::load_scene(config.scene_file, config.device.axes,
-                           {.rate_hz = config.servo.rate_hz});
+    env::Scene scene = env::load_scene(config.scene_file, config.device.axes, scene_options);
+    if (scene.external && !options.socket_path) {
+        throw BadInput(config.scene_file +
+                       ": [external] is a world another process renders "
+                       "through a channel beside the control socket: run "
+                       "hapticd with --socket PATH (the unit gives one)");
+    }
+    return scene;
 }
 
 // A detent with a short period or a large peak force has such a stiffness between its

@@ -36,8 +36,14 @@ struct DeviceCloser {
 
 /// --config, else the embedded default. Throws ConfigError.
 Config load_any_config(const RunOptions& options);
-/// [scene] file, else the embedded demo wall. Throws env::SceneError.
-env::Scene load_any_scene(const Config& config);
+/// How this run reads scenes: its rate; an [external] world's channel beside the control
+/// socket (none without one: private), whose lockstep waits end at `stop`.
+env::SceneOptions run_scene_options(const Config& config, const RunOptions& options,
+                                    const std::atomic<bool>& stop);
+/// [scene] file, else the embedded demo wall. Throws env::SceneError; BadInput for an
+/// [external] scene without a control socket (nobody could reach its channel).
+env::Scene load_any_scene(const Config& config, const RunOptions& options,
+                          const env::SceneOptions& scene_options);
 /// A scene the coupling cannot render is refused before the device opens: an object whose
 /// stiffness is more negative than -k_c leaves the massless tool of (17) no stable balance.
 void check_scene_renderable(const env::Scene& scene, const Config& config,

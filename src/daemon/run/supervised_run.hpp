@@ -93,6 +93,16 @@ int run_loop(const RunOptions& options, const Config& config,
                 << input::printable(context.environment_failure) << "\n";
         }
     }
+    if constexpr (requires { loop.environment().port_report(); }) {
+        context.external_world = loop.environment().port_report();
+        const servo::EnvironmentPortReport& w = context.external_world;
+        if (w.external) {
+            log << "hapticd: the external world: " << w.update << " updates, stale "
+                << w.stale_episodes << " times, " << w.rejected_updates
+                << " refused; the passivity controller on its port removed " << w.energy_removed_j
+                << " J\n";
+        }
+    }
     control.finish(context, log);
     flight.write_frozen(context, log);
     loop.write_zero_force();

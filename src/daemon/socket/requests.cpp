@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "hapticd/daemon/config_schema.hpp"
+#include "hapticd/env/external_environment.hpp"
 #include "hapticd/input/printable.hpp"
 #include "hapticd/input/range.hpp"
 #include "hapticd/input/text_input.hpp"
@@ -276,6 +277,27 @@ nlohmann::json link_body(const servo::StatusSnapshot& s, const RunFacts& facts) 
 
 }  // namespace
 
+// An [external] scene's world (env/external_environment.hpp); null for hapticd's own scenes.
+nlohmann::json external_world_body(const servo::EnvironmentPortReport& port) {
+    if (!port.external) return nullptr;
+    const auto state = static_cast<env::WorldState>(port.world_state);
+    std::string why;
+    if (state == env::WorldState::waiting) {
+        why = "no update from the world yet: the tool follows the handle, no force";
+    } else if (state == env::WorldState::stale) {
+        why = "no update from the world for " + input::exact_number(port.since_update_s) +
+              " s: the tool holds, and its force ramps to zero";
+    }
+    return {{"state", env::to_string(state)},
+            {"why", why},
+            {"update", port.update},
+            {"since_update_s", port.since_update_s},
+            {"stale_episodes", port.stale_episodes},
+            {"rejected_updates", port.rejected_updates},
+            {"energy_j", port.energy_j},
+            {"energy_removed_j", port.energy_removed_j}};
+}
+
 nlohmann::json status_body(const servo::StatusSnapshot& s, const RunFacts& facts) {
     nlohmann::json j;
     j["name"] = facts.name;
@@ -295,6 +317,7 @@ nlohmann::json status_body(const servo::StatusSnapshot& s, const RunFacts& facts
     j["wake_latency_us"] = percentiles_json<nlohmann::json>(s.wake_latency_us);
     j["tick_compute_us"] = percentiles_json<nlohmann::json>(s.tick_compute_us);
     j["link"] = link_body(s, facts);
+    j["external_world"] = external_world_body(s.environment);
     j["axes"] = facts.axes;
     j["x_m"] = first_axes(s.x_m, facts.axes);
     j["xe_m"] = first_axes(s.xe_m, facts.axes);

@@ -27,8 +27,9 @@ SceneLoadResult refused(const std::string& path, std::string why) {
 }  // namespace
 
 SceneSwitch::SceneSwitch(const Config& config, const env::Scene& initial,
-                         std::string initial_source, SceneLoopPort port)
+                         std::string initial_source, env::SceneOptions options, SceneLoopPort port)
     : config_(config),
+      options_(std::move(options)),
       port_(std::move(port)),
       current_(&initial),
       in_force_{.name = initial.name, .source = std::move(initial_source)} {}
@@ -42,7 +43,7 @@ SceneLoadResult SceneSwitch::load(const std::string& path, const servo::Coupling
     try {
         *scene = env::parse_scene(
             input::read_text_file(path, "the scene file", input::kMaxTomlBytes, may_load), path,
-            config_.device.axes, {.rate_hz = config_.servo.rate_hz});
+            config_.device.axes, options_);
         if (scene->causality != current_->causality) {
             return refused(path, path + " (scene \"" + scene->name + "\") is an " +
                                      env::to_string(scene->causality) +

@@ -52,8 +52,9 @@ class SceneSwitch {
   public:
     /// `config` is the run's; `initial` the scene the run started with, from `initial_source`
     /// (it must outlive the switch: the loop renders it until a load).
+    /// Scenes are read with `options` (the initial one's).
     SceneSwitch(const Config& config, const env::Scene& initial, std::string initial_source,
-                SceneLoopPort port);
+                env::SceneOptions options, SceneLoopPort port);
 
     /// Loads `path` and has the loop render it, checked against `gains` (the gains in force).
     /// `may_load` sees the opened file's status first and may refuse it (a client's file:
@@ -69,6 +70,7 @@ class SceneSwitch {
 
   private:
     Config config_;
+    env::SceneOptions options_;
     SceneLoopPort port_;
     mutable std::mutex mutex_;           // one load or check at a time
     mutable std::mutex in_force_mutex_;  // never held while loading: status reads it

@@ -1,0 +1,216 @@
+#include "hapticd/env/external_channel.hpp"
+
+#include <fcntl.h>
+#include <grp.h>
+#include <signal.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <array>
+#include <atomic>
+#include <cerrno>
+#include <cstring>
+#include <stdexcept>
+
+namespace hapticd::env {
+namespace {
+
+constexpr std::size_t kWord = sizeof(std::uint64_t);
+constexpr std::string_view kSocketSuffix = ".sock";
+
+std::string errno_text(int error) { return std::strerror(error); }
+
+std::runtime_error channel_error(const std::string& path, const std::string& why) {
+    return std::runtime_error("external world channel " + path + ": " + why);
+}
+
+// The words of a block in the mapping, as atomics: a seqlock's payload in relaxed atomic
+// words has no data race (Boehm 2012, as servo/seqlock.hpp).
+std::atomic_ref<std::uint64_t> word(void* memory, std::size_t offset) {
+    return std::atomic_ref<std::uint64_t>(
+        *static_cast<std::uint64_t*>(static_cast<void*>(static_cast<char*>(memory) + offset)));
+}
+
+template <typename Block>
+void store_block(void* memory, std::size_t offset, const Block& block) noexcept {
+    static_assert(sizeof(Block) % kWord == 0);
+    std::array<std::uint64_t, sizeof(Block) / kWord> words{};
+    std::memcpy(words.data(), &block, sizeof(Block));
+    auto sequence = word(memory, offset);
+    const std::uint64_t before = sequence.load(std::memory_order_relaxed);
+    sequence.store(before + 1, std::memory_order_relaxed);  // odd: a write in progress
+    std::atomic_thread_fence(std::memory_order_release);
+    for (std::size_t i = 1; i < words.size(); ++i) {
+        word(memory, offset + i * kWord).store(words[i], std::memory_order_relaxed);
+    }
+    sequence.store(before + 2, std::memory_order_release);
+}
+
+template <typename Block>
+bool try_load_block(void* memory, std::size_t offset, Block& block) noexcept {
+    auto sequence = word(memory, offset);
+    const std::uint64_t before = sequence.load(std::memory_order_acquire);
+    if ((before & 1u) != 0u) return false;
+    std::array<std::uint64_t, sizeof(Block) / kWord> words{};
+    words[0] = before;
+    for (std::size_t i = 1; i < words.size(); ++i) {
+        words[i] = word(memory, offset + i * kWord).load(std::memory_order_relaxed);
+    }
+    std::atomic_thread_fence(std::memory_order_acquire);
+    if (sequence.load(std::memory_order_relaxed) != before) return false;
+    std::memcpy(static_cast<void*>(&block), words.data(), sizeof(Block));
+    return true;
+}
+
+bool process_alive(pid_t pid) { return pid > 0 && (::kill(pid, 0) == 0 || errno == EPERM); }
+
+// What is at `path` already: a channel that may be replaced (true), or a refusal (throws).
+void judge_existing(const std::string& path) {
+    const int fd = ::open(path.c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
+    if (fd < 0) {
+        if (errno == ENOENT) return;  // gone meanwhile
+        throw channel_error(path, "exists, and cannot be read to see whose it is (" +
+                                      errno_text(errno) + "): remove it");
+    }
+    hapticd_world_header header{};
+    const ssize_t got = ::pread(fd, &header, sizeof header, 0);
+    ::close(fd);
+    if (got != static_cast<ssize_t>(sizeof header) ||
+        std::memcmp(header.magic, HAPTICD_WORLD_MAGIC, sizeof header.magic) != 0) {
+        throw channel_error(path,
+                            "exists and is not an external world's channel: remove it, or "
+                            "give the control socket another name");
+    }
+    if (header.closed == 0u && header.daemon_pid != ::getpid() &&
+        process_alive(header.daemon_pid)) {
+        throw channel_error(path, "is in use: hapticd pid " + std::to_string(header.daemon_pid) +
+                                      " renders a world through it (one channel per instance)");
+    }
+}
+
+void give_to_group(int fd, const std::string& path, const std::string& group_name,
+                   std::string& note) {
+    if (group_name.empty()) return;
+    std::array<char, 4096> buffer{};
+    struct group entry {};
+    struct group* found = nullptr;
+    if (::getgrnam_r(group_name.c_str(), &entry, buffer.data(), buffer.size(), &found) != 0 ||
+        found == nullptr) {
+        note = "external world channel " + path + ": no group \"" + group_name +
+               "\" on this system, so only this daemon's user may connect";
+        return;
+    }
+    struct stat st {};
+    if (::fstat(fd, &st) == 0 && st.st_gid == found->gr_gid) return;
+    if (::fchown(fd, static_cast<uid_t>(-1), found->gr_gid) != 0) {
+        note = "external world channel " + path + ": could not give it to group \"" + group_name +
+               "\": " + errno_text(errno) + "; only this daemon's user may connect";
+    }
+}
+
+int create_file(const std::string& path) {
+    for (int attempt = 0; attempt < 2; ++attempt) {
+        const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC,
+                              S_IRUSR | S_IWUSR | S_IRGRP | S_IWGRP);
+        if (fd >= 0) return fd;
+        if (errno != EEXIST) throw channel_error(path, "cannot be created: " + errno_text(errno));
+        judge_existing(path);  // throws unless it may be replaced
+        if (::unlink(path.c_str()) != 0 && errno != ENOENT) {
+            throw channel_error(path,
+                                "a channel left by a daemon that is gone cannot be "
+                                "removed: " +
+                                    errno_text(errno));
+        }
+    }
+    throw channel_error(path, "another process keeps creating it");
+}
+
+}  // namespace
+
+std::string channel_beside(const std::string& socket_path) {
+    if (socket_path.size() > kSocketSuffix.size() && socket_path.ends_with(kSocketSuffix)) {
+        return socket_path.substr(0, socket_path.size() - kSocketSuffix.size()) + ".world";
+    }
+    return socket_path + ".world";
+}
+
+ExternalChannel::ExternalChannel(const std::string& path, const ChannelShape& shape,
+                                 const std::string& group, std::string& note)
+    : path_(path) {
+    if (path.empty()) {
+        memory_ = ::mmap(nullptr, HAPTICD_WORLD_SIZE, PROT_READ | PROT_WRITE,
+                         MAP_SHARED | MAP_ANONYMOUS, -1, 0);
+        if (memory_ == MAP_FAILED) {
+            memory_ = nullptr;
+            throw channel_error("(private)", "mmap: " + errno_text(errno));
+        }
+    } else {
+        fd_ = create_file(path);
+        try {
+            // The umask (the unit's 0027) must not take the group's write away.
+            if (::fchmod(fd_, S_IRUSR | S_IWUSR | S_IRGRP | S_IWGRP) != 0) {
+                throw channel_error(path, "chmod 0660: " + errno_text(errno));
+            }
+            give_to_group(fd_, path, group, note);
+            // Its page reserved now: a full /run is an error here, not a SIGBUS in the tick.
+            const int error = ::posix_fallocate(fd_, 0, HAPTICD_WORLD_SIZE);
+            if (error != 0)
+                throw channel_error(path, "cannot reserve its page: " + errno_text(error));
+            struct stat st {};
+            if (::fstat(fd_, &st) != 0) throw channel_error(path, "fstat: " + errno_text(errno));
+            device_ = st.st_dev;
+            inode_ = st.st_ino;
+            memory_ =
+                ::mmap(nullptr, HAPTICD_WORLD_SIZE, PROT_READ | PROT_WRITE, MAP_SHARED, fd_, 0);
+            if (memory_ == MAP_FAILED) {
+                memory_ = nullptr;
+                throw channel_error(path, "mmap: " + errno_text(errno));
+            }
+        } catch (...) {
+            ::unlink(path.c_str());
+            ::close(fd_);
+            throw;
+        }
+    }
+    hapticd_world_header header{};
+    header.version = HAPTICD_WORLD_VERSION;
+    header.size = HAPTICD_WORLD_SIZE;
+    header.axes = shape.axes;
+    header.lockstep_every = shape.lockstep_every;
+    header.rate_hz = shape.rate_hz;
+    header.stale_after_s = shape.stale_after_s;
+    header.daemon_pid = ::getpid();
+    std::memcpy(memory_, &header, sizeof header);
+    publish(hapticd_world_tick{});
+    // The magic last, released: a world that sees it sees the header and the first block.
+    std::uint64_t magic = 0;
+    std::memcpy(&magic, HAPTICD_WORLD_MAGIC, sizeof magic);
+    word(memory_, 0).store(magic, std::memory_order_release);
+}
+
+ExternalChannel::~ExternalChannel() {
+    if (memory_ != nullptr) {
+        auto* header = static_cast<hapticd_world_header*>(memory_);
+        std::atomic_ref<std::uint32_t>(header->closed).store(1u, std::memory_order_release);
+        ::munmap(memory_, HAPTICD_WORLD_SIZE);
+    }
+    if (fd_ >= 0) {
+        // Only the file this channel made: a scene that replaced this one has made its own.
+        struct stat st {};
+        if (::stat(path_.c_str(), &st) == 0 && st.st_dev == device_ && st.st_ino == inode_) {
+            ::unlink(path_.c_str());
+        }
+        ::close(fd_);
+    }
+}
+
+void ExternalChannel::publish(const hapticd_world_tick& tick) noexcept {
+    store_block(memory_, HAPTICD_WORLD_TICK_OFFSET, tick);
+}
+
+bool ExternalChannel::try_take(hapticd_world_update& update) const noexcept {
+    return try_load_block(memory_, HAPTICD_WORLD_UPDATE_OFFSET, update);
+}
+
+}  // namespace hapticd::env
