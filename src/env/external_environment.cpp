@@ -123,7 +123,7 @@ void ExternalEnvironment::take_update() noexcept {
     Vec3 position{0.0};
     Vec3 velocity{0.0};
     const bool position_finite = from_array(update.tool_position_m, axes_, position);
-    const bool velocity_given = std::isfinite(update.tool_velocity_mps[0]);
+    const bool velocity_given = !std::isnan(update.tool_velocity_mps[0]);  // NaN: not given
     const bool velocity_finite = from_array(update.tool_velocity_mps, axes_, velocity);
     if (!position_finite || (velocity_given && !velocity_finite)) {
         ++rejected_updates_;  // not rendered; the world's next update may be
