@@ -57,8 +57,10 @@ install(CODE "
 
 # The environment plugin ABI and hapticd's CMake package (docs/environment-plugins.md):
 # <prefix>/include/hapticd/env/plugin_abi.h, and <prefix>/<libdir>/cmake/hapticd with the
-# imported target hapticd::environment_plugin and hapticd_add_environment_plugin().
+# imported target hapticd::environment_plugin and hapticd_add_environment_plugin(); and the
+# external world channel's layout, for a world in C or C++ (docs/external-worlds.md).
 install(FILES ${PROJECT_SOURCE_DIR}/include/hapticd/env/plugin_abi.h
+              ${PROJECT_SOURCE_DIR}/include/hapticd/env/external_world.h
         DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/hapticd/env)
 install(TARGETS hapticd_environment_plugin EXPORT hapticdTargets)
 set(HAPTICD_CMAKE_PACKAGE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/hapticd)
