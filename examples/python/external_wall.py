@@ -29,12 +29,18 @@ def step(handle_position_m: Sequence[float], offset_m: float = 0.0,
 
 
 def tool_velocity(handle_position_m: Sequence[float], handle_velocity_mps: Sequence[float],
-                  offset_m: float = 0.0, normal: int = -1) -> List[float]:
-    """The tool's velocity, for the daemon's extrapolation between updates: the handle's in
-    free space; in contact, 0 along the normal (the tool rests on the wall)."""
+                  dt_s: float, offset_m: float = 0.0, normal: int = -1) -> List[float]:
+    """The tool's velocity, for the daemon's extrapolation until the next update, dt_s on: the
+    handle's in free space, but never so fast toward the wall that it would cross it within
+    dt_s; in contact, 0 along the normal (the tool rests on the wall)."""
     velocity = [float(v) for v in handle_velocity_mps]
-    if step(handle_position_m, offset_m, normal)[0] != handle_position_m[0]:
+    tool_x = step(handle_position_m, offset_m, normal)[0]
+    if tool_x != handle_position_m[0]:
         velocity[0] = 0.0
+    elif normal > 0:
+        velocity[0] = max(velocity[0], (offset_m - tool_x) / dt_s)
+    else:
+        velocity[0] = min(velocity[0], (offset_m - tool_x) / dt_s)
     return velocity
 
 
@@ -62,7 +68,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                 def tool(now: external.Step, dt_s: float):
                     handle = now.handle_position_m[:world.axes]
                     return (step(handle, arguments.offset_m, arguments.normal),
-                            tool_velocity(handle, now.handle_velocity_mps[:world.axes],
+                            tool_velocity(handle, now.handle_velocity_mps[:world.axes], dt_s,
                                           arguments.offset_m, arguments.normal))
                 world.run(tool,
                           rate_hz=arguments.rate_hz, duration_s=arguments.duration_s)

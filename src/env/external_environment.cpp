@@ -162,7 +162,8 @@ Vec3 ExternalEnvironment::wanted_tool(const Vec3& device_position_m) noexcept {
             spec_.ramp_s > 0.0
                 ? std::clamp(1.0 - (time_s_ - stale_since_s_) / spec_.ramp_s, 0.0, 1.0)
                 : 0.0;
-        return stale_from_m_ + (1.0 - left) * (device_position_m - stale_from_m_);
+        // Written from the handle, so that the ramp's end is the handle exactly (no force).
+        return device_position_m + left * (stale_from_m_ - device_position_m);
     }
     if (spec_.between_updates == BetweenUpdates::hold) return world_position_m_;
     return world_position_m_ + world_velocity_mps_ * since_s;

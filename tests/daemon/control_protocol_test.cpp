@@ -318,6 +318,60 @@ TEST(DaemonControlStatus, ADeviceWithoutCountsSaysSo) {
     EXPECT_EQ(link.size(), 17u);
 }
 
+TEST(DaemonControlStatus, AnExternalWorldSaysWhereItStandsAndWhyThereIsNoForce) {
+    servo::StatusSnapshot s;
+    RunFacts facts;
+    EXPECT_TRUE(status_body(s, facts).at("external_world").is_null());  // hapticd's own scene
+    s.environment = {.external = true,
+                     .world_state = 2,
+                     .update = 41,
+                     .stale_episodes = 1,
+                     .rejected_updates = 3,
+                     .since_update_s = 0.25,
+                     .energy_j = 0.5,
+                     .energy_removed_j = 0.125};
+    EXPECT_EQ(status_body(s, facts).at("external_world"), nlohmann::json::parse(R"({
+        "state": "stale",
+        "why": "no update from the world for 0.25 s: the tool holds, and its force ramps to zero",
+        "update": 41, "since_update_s": 0.25, "stale_episodes": 1, "rejected_updates": 3,
+        "energy_j": 0.5, "energy_removed_j": 0.125})"));
+    s.environment.world_state = 1;
+    EXPECT_EQ(status_body(s, facts).at("external_world").at("why"), "");
+    s.environment.world_state = 0;
+    EXPECT_EQ(status_body(s, facts).at("external_world").at("state"), "waiting");
+}
+
+// A loop whose world failed: the status says why while the fault is latched.
+class FailedWorldLoop final : public ServoControl {
+  public:
+    servo::StatusSnapshot status() const noexcept override { return snapshot; }
+    servo::StatusSnapshot recent_status() const noexcept override { return snapshot; }
+    std::string environment_failure() const override { return "evaluate() returned 7"; }
+    void arm() noexcept override {}
+    void disarm() noexcept override {}
+    void reset() noexcept override {}
+    std::uint64_t resets_requested() const noexcept override { return 0; }
+    void set_coupling(const servo::CouplingGains&) noexcept override {}
+    servo::CouplingGains coupling() const noexcept override { return {}; }
+    void mark(std::uint32_t) noexcept override {}
+    servo::StatusSnapshot snapshot{};
+};
+
+TEST(DaemonControlStatus, AWorldThatFailedSaysWhyWhileItsFaultIsLatched) {
+    FailedWorldLoop loop;
+    const RunFacts facts;
+    const Request status{.kind = RequestKind::status, .id = 1};
+    const Peer peer{.pid = 7, .uid = 1000, .gid = 1000};
+    const auto failure = [&] {
+        return nlohmann::json::parse(answer(status, peer, loop, facts).reply)
+            .at("status")
+            .at("environment_failure");
+    };
+    EXPECT_TRUE(failure().is_null());
+    loop.snapshot.faults = servo::kFaultEnvironment;
+    EXPECT_EQ(failure(), "evaluate() returned 7");
+}
+
 // A loop that keeps the gains it is given, for what a coupling request does.
 class GainsLoop final : public ServoControl {
   public:

@@ -500,6 +500,17 @@ class Examples(ChannelTest):
         self.assertEqual(external_wall.step([0.004, 0.2]), [0.0, 0.2])
         self.assertEqual(external_wall.step([-0.02], 0.01), [-0.02])
 
+    def test_the_walls_velocity_never_extrapolates_the_tool_through_the_wall(self):
+        # In contact: at rest along the normal, the other axes the handle's.
+        self.assertEqual(external_wall.tool_velocity([0.004, 0.0], [0.3, 0.2], 0.01), [0.0, 0.2])
+        # Free, far from the wall: the handle's.
+        self.assertEqual(external_wall.tool_velocity([-0.02], [0.1], 0.01), [0.1])
+        self.assertEqual(external_wall.tool_velocity([-0.02], [-0.5], 0.01), [-0.5])
+        # Free, 1 mm from it at 0.2 m/s: capped so that dt_s on it reaches the wall, no further.
+        self.assertAlmostEqual(external_wall.tool_velocity([-0.001], [0.2], 0.01)[0], 0.1)
+        self.assertAlmostEqual(external_wall.tool_velocity([0.011], [-0.2], 0.01, 0.01, 1)[0],
+                               -0.1)
+
     def test_the_implicit_mass_spring_never_gains_energy(self):
         m, k_s, k_c, b_c, dt = 0.5, 100.0, 2000.0, 10.0, 0.01
         for b_s in (0.0, 1.0):

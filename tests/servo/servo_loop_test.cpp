@@ -91,6 +91,49 @@ TEST(ServoLoop, NonFiniteEnvironmentZeroesForceInTheSameTick) {
     EXPECT_EQ(loop.summary().faults[0], "non_finite");
 }
 
+// A world that fails after a number of evaluations (as a plugin's does: failed(), failure()),
+// until its reset.
+struct FailingWorld : fakes::PlaneWall {
+    int evaluations_left = 3;
+    mutable int evaluations = 0;
+    bool broken = false;
+    PenaltyForce evaluate(const Vec3& x, const Vec3& v) const noexcept {
+        ++evaluations;
+        return fakes::PlaneWall::evaluate(x, v);
+    }
+    void commit(const Vec3&, const Vec3&) noexcept {
+        broken = broken || evaluations > evaluations_left;
+    }
+    void reset(const Vec3&) noexcept {             // the first, at the first sample, too
+        if (broken) evaluations_left = 1'000'000;  // restarted after its failure: it works
+        broken = false;
+        evaluations = 0;
+    }
+    bool failed() const noexcept { return broken; }
+    std::string_view failure() const noexcept { return broken ? "evaluate() returned 7" : ""; }
+};
+
+TEST(ServoLoop, AWorldThatFailedIsAFaultWhoseReasonTheInboxKeepsUntilAReset) {
+    VirtualTime time;
+    FakeDevice device;
+    device.set_position_counts(1000);
+    FailingWorld environment;
+    ServoConfig config = test_config();
+    config.stop_on_fault = false;
+    TestLoop<FailingWorld> loop(device, environment, config, nullptr, FakeClock{&time});
+    EXPECT_EQ(loop.inbox().environment_failure(), "");
+    for (int n = 0; n < 10 && loop.faults() == 0u; ++n) loop.tick();
+    EXPECT_EQ(loop.faults(), kFaultEnvironment);
+    EXPECT_FALSE(device.last_command.enable);
+    EXPECT_EQ(loop.inbox().environment_failure(), "evaluate() returned 7");
+    loop.tick();  // latched: the reason stays
+    EXPECT_EQ(loop.inbox().environment_failure(), "evaluate() returned 7");
+    std::thread([&] { loop.inbox().request_fault_reset(); }).join();
+    loop.tick();  // the world restarts where the handle is
+    EXPECT_EQ(loop.faults(), 0u);
+    EXPECT_EQ(loop.inbox().environment_failure(), "");
+}
+
 // A sample the device flags as bad faults in the tick that reads it: its fault latches and the
 // force is zero in that tick, and stays zero after a good sample until a reset. An encoder
 // jump (kStatusJump) and, docs/architecture.md §7.1, a stale sample (the counts repeat the

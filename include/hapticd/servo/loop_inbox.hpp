@@ -15,9 +15,14 @@
 // tick.
 #pragma once
 
+#include <algorithm>
+#include <array>
 #include <atomic>
 #include <cstdint>
+#include <cstring>
 #include <optional>
+#include <string>
+#include <string_view>
 
 #include "hapticd/servo/coupling.hpp"
 #include "hapticd/servo/open_loop_source.hpp"
@@ -182,6 +187,22 @@ class LoopInbox {
     /// The servo thread's latest state, for status().
     void publish_status(const StatusSnapshot& snapshot) noexcept { status_.store(snapshot); }
 
+    /// Why the environment failed, as the tick that latched the fault `environment` read it
+    /// from the environment (a plugin's world: env/plugin_environment.hpp), cut to fit; ""
+    /// before, and again once a fault reset is taken. The servo thread publishes it only when
+    /// it changes; any thread reads it.
+    using FailureText = std::array<char, 192>;
+    void publish_environment_failure(std::string_view why) noexcept {
+        FailureText text{};
+        const std::size_t n = std::min(why.size(), text.size() - 1);
+        if (n > 0) std::memcpy(text.data(), why.data(), n);
+        environment_failure_.store(text);
+    }
+    std::string environment_failure() const {
+        const FailureText text = environment_failure_.load();
+        return std::string(text.data());
+    }
+
   private:
     // The open-loop source: taken by a take that finds the loop armed (the acquire of armed_
     // sees the offer made before the arm); let go at the take after it is done, at a disarm
@@ -226,6 +247,7 @@ class LoopInbox {
     std::atomic<OpenLoopSource*> open_loop_{nullptr};         ///< play_open_loop()'s, until let go
     std::atomic<std::uint64_t> disarms_at_offer_{0};          ///< disarms_ before the offer
     Seqlock<StatusSnapshot> status_;                          ///< publish_status()'s
+    Seqlock<FailureText> environment_failure_;                ///< publish_environment_failure()'s
     // The servo thread's own.
     bool was_armed_;                     ///< armed at the last take
     std::uint64_t gains_version_ = 0;    ///< pending_gains_.version() last taken

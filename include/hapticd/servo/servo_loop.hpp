@@ -308,6 +308,7 @@ class ServoLoop {
     // coupling and the environment where the handle is; the soft start waits for a still
     // handle again.
     void clear_fault_latch() noexcept {
+        if ((safety_.faults() & kFaultEnvironment) != 0u) inbox_.publish_environment_failure({});
         safety_.reset();
         link_recovery_.reset();
         initialised_ = false;
@@ -421,7 +422,12 @@ class ServoLoop {
         }
         // A world that failed in this tick (its reset, or the step's calls) or before: a
         // failed world gives no force, and the fault zeroes the command (command()).
-        if (!sensed.open_loop && environment_failed()) raise(kFaultEnvironment);
+        if (!sensed.open_loop && environment_failed()) {
+            if ((safety_.faults() & kFaultEnvironment) == 0u) {
+                inbox_.publish_environment_failure(environment_failure());
+            }
+            raise(kFaultEnvironment);
+        }
         return coupled;
     }
 
@@ -580,6 +586,17 @@ class ServoLoop {
             return environment_->failed();
         } else {
             return false;
+        }
+    }
+
+    // Why it failed ("" for the servo's own test environments).
+    std::string_view environment_failure() const noexcept {
+        if constexpr (requires(const Environment& e) {
+                          { e.failure() } -> std::same_as<std::string_view>;
+                      }) {
+            return environment_->failure();
+        } else {
+            return {};
         }
     }
 

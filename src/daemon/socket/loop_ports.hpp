@@ -40,6 +40,13 @@ class InboxServoControl final : public control_socket::ServoControl {
     InboxServoControl(Inbox& inbox, const servo::CouplingGains& gains)
         : inbox_(inbox), gains_(gains) {}
     servo::StatusSnapshot status() const noexcept override { return inbox_.status(); }
+    std::string environment_failure() const override {
+        if constexpr (requires { inbox_.environment_failure(); }) {
+            return inbox_.environment_failure();
+        } else {
+            return {};  // a test's loop without environments
+        }
+    }
     servo::StatusSnapshot recent_status() const noexcept override {
         const std::lock_guard lock(status_mutex_);  // the socket's two threads; never the servo's
         const auto now = std::chrono::steady_clock::now();

@@ -361,9 +361,16 @@ Answer answer(const Request& request, const Peer& peer, ServoControl& loop, cons
         request.kind == RequestKind::status ? loop.recent_status() : loop.status();
     const std::string name(request_name(request.kind));
     switch (request.kind) {
-        case RequestKind::status:
-            return {.reply = ok_reply(request.id, {{"status", status_body(now, facts)}}),
-                    .journal = {}};
+        case RequestKind::status: {
+            nlohmann::json body = status_body(now, facts);
+            // Why the world failed, while the fault `environment` is latched.
+            const std::string failure = (now.faults & servo::kFaultEnvironment) != 0u
+                                            ? loop.environment_failure()
+                                            : std::string();
+            body["environment_failure"] =
+                failure.empty() ? nlohmann::json(nullptr) : nlohmann::json(failure);
+            return {.reply = ok_reply(request.id, {{"status", body}}), .journal = {}};
+        }
         case RequestKind::arm:
             // A reset asked for that this status does not show taken (a pipelined reset, arm)
             // clears the latch at a tick's start, before or with the arming.

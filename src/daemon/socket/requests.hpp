@@ -34,6 +34,8 @@ class ServoControl {
     /// `status` replies and telemetry events, which any client may ask for as fast as it
     /// likes (socket/loop_ports.hpp, kStatusMaxAge).
     virtual servo::StatusSnapshot recent_status() const noexcept = 0;
+    /// Why the environment failed, "" when it has not (LoopInbox::environment_failure).
+    virtual std::string environment_failure() const { return {}; }
     virtual void arm() noexcept = 0;
     virtual void disarm() noexcept = 0;
     virtual void reset() noexcept = 0;
