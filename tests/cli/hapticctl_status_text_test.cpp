@@ -91,5 +91,34 @@ TEST(HapticctlStatusText, TheInstanceNameHeadsTheText) {
         << status_text(status);
 }
 
+std::string line_of(const std::string& text, const std::string& label) {
+    const std::size_t at = text.find("\n" + label);
+    if (at == std::string::npos) return "";
+    return text.substr(at + 1, text.find('\n', at + 1) - at - 1);
+}
+
+TEST(HapticctlStatusText, AnExternalWorldAndAFailedWorldAreShownWithWhy) {
+    nlohmann::json s = status_with_link(abi4_link());
+    EXPECT_EQ(line_of(status_text(s), "world     "), "");  // hapticd's own scene
+    s["external_world"] = {{"state", "stale"},
+                           {"why",
+                            "no update from the world for 0.25 s: the tool holds, and "
+                            "its force ramps to zero"},
+                           {"update", 41},
+                           {"since_update_s", 0.25},
+                           {"stale_episodes", 1},
+                           {"rejected_updates", 0},
+                           {"energy_j", 0.5},
+                           {"energy_removed_j", 0.125}};
+    EXPECT_EQ(line_of(status_text(s), "world     "),
+              "world     stale, update 41, stale 1 times, 0.125000 J removed by the passivity "
+              "controller: no update from the world for 0.25 s: the tool holds, and its force "
+              "ramps to zero");
+    s["environment_failure"] = "evaluate() returned 7";
+    EXPECT_EQ(line_of(status_text(s), "failure   "), "failure   evaluate() returned 7");
+    s["environment_failure"] = nullptr;
+    EXPECT_EQ(line_of(status_text(s), "failure   "), "");
+}
+
 }  // namespace
 }  // namespace hapticd::ctl

@@ -87,6 +87,19 @@ std::string status_text(const nlohmann::json& s) {
         out << "scene     \"" << s["scene"].at("name").get<std::string>() << "\" from "
             << s["scene"].at("source").get<std::string>() << "\n";
     }
+    if (s.contains("external_world") && s["external_world"].is_object()) {
+        const nlohmann::json& w = s["external_world"];
+        out << "world     " << w.at("state").get<std::string>() << ", update "
+            << w.at("update").get<std::uint64_t>() << ", stale "
+            << w.at("stale_episodes").get<std::uint64_t>() << " times, " << std::setprecision(6)
+            << w.at("energy_removed_j").get<double>() << " J removed by the passivity controller"
+            << std::setprecision(1);
+        if (!w.at("why").get<std::string>().empty()) out << ": " << w.at("why").get<std::string>();
+        out << "\n";
+    }
+    if (s.contains("environment_failure") && s["environment_failure"].is_string()) {
+        out << "failure   " << s["environment_failure"].get<std::string>() << "\n";
+    }
     if (s.contains("recording") && s["recording"].is_string()) {
         out << "recording " << s["recording"].get<std::string>() << "\n";
     }
