@@ -7,9 +7,15 @@
 // Each scenario holds the handle in contact: a stiff-grasp human whose fixed set-point lies
 // beyond the surface pulls the handle from free space into it and holds it there, so the
 // numbers are for a loaded contact (coupling stretched, environment active), not free space.
+//
+// An [external] scene's world (external_environment.hpp) is rendered by another process; here
+// ExternalWorld plays it from the benchmark's own thread, through a second mapping of the
+// channel in a scratch directory, between ticks.
 #pragma once
 
+#include <cstdint>
 #include <string>
+#include <string_view>
 
 #include "hapticd/daemon/config.hpp"
 #include "hapticd/device/plugin_loader.hpp"
@@ -35,6 +41,24 @@ extern const Scenario kBox16Planes3Axis;      ///< box-16-planes.toml: past a ch
 extern const Scenario kGodObjectSphere3Axis;  ///< god-object-sphere.toml: pressed into the ball
 extern const Scenario kVirtualMass3Axis;      ///< virtual-mass.toml: the puck pushed onto the floor
 
+/// A scene whose world another process renders ([external]): `scene_text` is the scene (it
+/// has no file: `scenario.scene_file` names it in messages), its world ExternalWorld, which
+/// writes an update every `world_every_ticks` ticks of the servo.
+struct ExternalScenario {
+    Scenario scenario;
+    const char* scene_text;
+    int world_every_ticks;
+};
+
+/// demo_wall_1axis's operator and contact, the wall rendered by an external world: a
+/// god-object wall at x = 0, free side x < 0 (tool = min(handle, 0)), free-running
+/// (lockstep_every = 0), passivity = "control", an update every 10 ticks (100 Hz of the
+/// servo's 1 kHz), between_updates = "extrapolate" (the default): the tool rests 0.16 mm
+/// in, where the approach's extrapolation put it and the passivity controller holds it.
+extern const ExternalScenario kExternalWall1Axis;
+/// The same with between_updates = "hold": the tool rests on the wall, the controller idle.
+extern const ExternalScenario kExternalWallHold1Axis;
+
 /// The opened device, the scene and the servo settings of one scenario. Destroy any
 /// ServoLoop over it first (the loop writes zero force in its destructor).
 class FullStack {
@@ -42,6 +66,9 @@ class FullStack {
     /// `lossless_log`: as hapticd --lockstep --log (the loop waits for the telemetry writer).
     /// Throws what the daemon's start-up would (bad scene, plugin not found, bad sim table).
     explicit FullStack(const Scenario& scenario, bool lossless_log = false);
+    /// An [external] scene from `scene_text`, its channel at `options.external_channel` (the
+    /// servo's rate is taken from the config, as the daemon's run_scene_options does).
+    FullStack(const Scenario& scenario, std::string_view scene_text, env::SceneOptions options);
     ~FullStack();
     FullStack(const FullStack&) = delete;
     FullStack& operator=(const FullStack&) = delete;
@@ -51,6 +78,45 @@ class FullStack {
     env::Scene scene;
     device::DeviceHandle device;
     servo::ServoConfig servo;
+
+  private:
+    void open_device(bool lossless_log);
+};
+
+/// A directory of its own under $TMPDIR (else /tmp), removed with what is left in it.
+class ScratchDir {
+  public:
+    ScratchDir();  ///< throws std::runtime_error
+    ~ScratchDir();
+    ScratchDir(const ScratchDir&) = delete;
+    ScratchDir& operator=(const ScratchDir&) = delete;
+    const std::string& path() const noexcept { return path_; }
+
+  private:
+    std::string path_;
+};
+
+/// The world's side of an external scene's channel (external_world.h), as
+/// python/hapticd/external.py writes it, through a mapping of its own: it reads the daemon's
+/// last step and writes where the tool of a god-object wall at x = 0 (free side x < 0) is,
+/// tool = min(handle, 0) on the first axis, the velocity not given (NaN) and its clock the
+/// step's time_s. Same thread as the ticks: no waiting, no race (the seqlocks are kept anyway).
+class ExternalWorld {
+  public:
+    explicit ExternalWorld(const std::string& channel_path);  ///< throws std::runtime_error
+    ~ExternalWorld();
+    ExternalWorld(const ExternalWorld&) = delete;
+    ExternalWorld& operator=(const ExternalWorld&) = delete;
+
+    /// One update of the world; false when the daemon's block was caught in a write.
+    bool update() noexcept;
+    /// The updates written (the `update` of the last one).
+    std::uint64_t updates() const noexcept { return update_; }
+
+  private:
+    void* memory_ = nullptr;
+    std::uint64_t sequence_ = 0;
+    std::uint64_t update_ = 0;
 };
 
 /// The loop type hapticd runs (run.cpp): abstract device, abstract environment, CLOCK_MONOTONIC.

@@ -82,7 +82,7 @@ Vec3 ExternalEnvironment::step(const Vec3& device_position_m, const Vec3& device
 void ExternalEnvironment::reset(const Vec3& position_m) noexcept {
     tool_m_ = position_m;
     force_n_ = Vec3(0.0);
-    passivity_.reset();
+    passivity_.reset(position_m);
     // A stale world's ramp is over: the tool restarts on the handle, at zero force.
     stale_from_m_ = position_m;
     stale_since_s_ = time_s_ - spec_.ramp_s;

@@ -18,6 +18,10 @@ Vec3 PortPassivity::limit(const Vec3& wanted_m, const Vec3& previous_m,
     const auto energy_of = [&](const Vec3& d) noexcept {
         return glm::dot(f0, d) - kappa * glm::dot(d, d);
     };
+    // What the world's own motion in this tick would take out beyond the port's energy.
+    const double motion_shortfall_j =
+        std::max(0.0, -(energy_j_ + energy_of(wanted_m - previous_wanted_m_)));
+    previous_wanted_m_ = wanted_m;
     Vec3 step = wanted_m - previous_m;
     const double wanted_energy_j = energy_of(step);
     if (mode_ == PassivityMode::control && kappa > 0.0 && !(energy_j_ + wanted_energy_j >= 0.0)) {
@@ -33,10 +37,9 @@ Vec3 PortPassivity::limit(const Vec3& wanted_m, const Vec3& previous_m,
         step = distance > 0.0 ? centre + from_centre * (radius / distance) : Vec3(0.0);
         if (!(energy_j_ + energy_of(step) >= 0.0)) step = Vec3(0.0);  // rounding at the edge
         acted_ = true;
+        removed_j_ += motion_shortfall_j;
     }
-    const double energy = energy_of(step);
-    if (acted_) removed_j_ += energy - wanted_energy_j;
-    energy_j_ += energy;
+    energy_j_ += energy_of(step);
     return previous_m + step;
 }
 

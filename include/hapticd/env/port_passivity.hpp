@@ -35,8 +35,12 @@ class PortPassivity {
     PortPassivity() = default;
     explicit PortPassivity(PassivityMode mode) : mode_(mode) {}
 
-    /// Energy back to 0: the world starts again (what was removed is kept).
-    void reset() noexcept { energy_j_ = 0.0; }
+    /// Energy back to 0: the world starts again, its tool at `tool_position_m` (what was
+    /// removed is kept).
+    void reset(const Vec3& tool_position_m) noexcept {
+        energy_j_ = 0.0;
+        previous_wanted_m_ = tool_position_m;
+    }
 
     /// The tool's position this tick: `wanted_m` (the world's), or the nearest that keeps the
     /// port passive (control); `previous_m` is the tool's last position, x_d and v_d the
@@ -49,10 +53,11 @@ class PortPassivity {
     /// E[n], J: the energy the world has absorbed at the port since the reset (>= 0 under
     /// control).
     double energy_j() const noexcept { return energy_j_; }
-    /// What the controller has removed, J, over every reset: at each tick it acted, the
-    /// energy the world's wanted step would have taken out of the port beyond the step taken,
-    /// g(d) - g(d_wanted) with g(d) = f_c . d; summed. A world held away from where it wants
-    /// its tool is counted at each tick it asks again. 0 when it never acts.
+    /// What the controller has removed, J, over every reset: at each tick it acted, what the
+    /// world's own motion in the tick (w[n] - w[n-1], applied to the tool) would have taken
+    /// out of the port beyond the energy the port held, max(0, -(E[n-1] + g(w[n] - w[n-1])))
+    /// with g(d) = f_c . d; summed. A world at rest adds nothing, however far from its wish
+    /// the tool is held; a world whose motion is active adds what each tick of it would take.
     double removed_j() const noexcept { return removed_j_; }
     /// Whether the controller changed this tick's step.
     bool acted() const noexcept { return acted_; }
@@ -62,6 +67,7 @@ class PortPassivity {
     PassivityMode mode_ = PassivityMode::control;
     double energy_j_ = 0.0;  ///< E[n] of the tool rendered
     double removed_j_ = 0.0;
+    Vec3 previous_wanted_m_{0.0};  ///< w[n-1]
     bool acted_ = false;
 };
 
