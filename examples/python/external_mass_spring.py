@@ -121,25 +121,11 @@ def main(argv: Optional[Sequence[str]] = None, *, prog: str = "external_mass_spr
     if arguments.damping_n_s_per_m < 0.0 and not nonpassive:
         parser.error(f"--damping-n-s-per-m {arguments.damping_n_s_per_m:g}: >= 0 (a negative "
                      f"damping is external_nonpassive.py's)")
-    try:
-        with external.connect(arguments.channel, instance=arguments.instance) as world:
-            model = MassSpring(world.axes, arguments.mass_kg, arguments.stiffness_n_per_m,
-                               arguments.damping_n_s_per_m, explicit=explicit)
-            try:
-                world.run(model, rate_hz=arguments.rate_hz, duration_s=arguments.duration_s)
-            except KeyboardInterrupt:
-                pass
-            last = world.last_step
-            print(f"{prog}: {world.updates} updates written; the passivity controller removed "
-                  f"{last.energy_removed_j:.6g} J" if last is not None else
-                  f"{prog}: {world.updates} updates written; no step read")
-    except (external.WorldError, ValueError) as error:
-        print(f"{prog}: {error}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        return 130
-    return 0
-
+    return external.serve(
+        lambda world: MassSpring(world.axes, arguments.mass_kg, arguments.stiffness_n_per_m,
+                                 arguments.damping_n_s_per_m, explicit=explicit),
+        name=prog, path=arguments.channel, instance=arguments.instance,
+        rate_hz=arguments.rate_hz, duration_s=arguments.duration_s)
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -62,29 +62,17 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     arguments = parser.parse_args(argv)
     if not math.isfinite(arguments.offset_m):
         parser.error(f"--offset-m {arguments.offset_m}: a finite number of metres")
-    try:
-        with external.connect(arguments.channel, instance=arguments.instance) as world:
-            try:
-                def tool(now: external.Step, dt_s: float):
-                    handle = now.handle_position_m[:world.axes]
-                    return (step(handle, arguments.offset_m, arguments.normal),
-                            tool_velocity(handle, now.handle_velocity_mps[:world.axes], dt_s,
-                                          arguments.offset_m, arguments.normal))
-                world.run(tool,
-                          rate_hz=arguments.rate_hz, duration_s=arguments.duration_s)
-            except KeyboardInterrupt:
-                pass
-            last = world.last_step
-            print(f"external_wall: {world.updates} updates written; the passivity controller "
-                  f"removed {last.energy_removed_j:.6g} J" if last is not None else
-                  f"external_wall: {world.updates} updates written; no step read")
-    except (external.WorldError, ValueError) as error:
-        print(f"external_wall: {error}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        return 130
-    return 0
+    def make_step(world: external.World):
+        def tool(now: external.Step, dt_s: float):
+            handle = now.handle_position_m[:world.axes]
+            return (step(handle, arguments.offset_m, arguments.normal),
+                    tool_velocity(handle, now.handle_velocity_mps[:world.axes], dt_s,
+                                  arguments.offset_m, arguments.normal))
+        return tool
 
+    return external.serve(make_step, name="external_wall", path=arguments.channel,
+                          instance=arguments.instance, rate_hz=arguments.rate_hz,
+                          duration_s=arguments.duration_s)
 
 if __name__ == "__main__":
     sys.exit(main())

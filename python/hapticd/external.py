@@ -19,9 +19,10 @@ import mmap
 import numbers
 import os
 import struct
+import sys
 import time
 from dataclasses import dataclass
-from typing import Any, Callable, List, Optional, Sequence, Tuple
+from typing import Any, Callable, List, Optional, Sequence, TextIO, Tuple
 
 from hapticd.control import HapticdError, instance_socket
 
@@ -483,6 +484,36 @@ class World:
         if (status.st_dev, status.st_ino) != self._identity:
             return "the channel has been replaced (the daemon started again)"
         return None
+
+
+def serve(make_step: Callable[["World"], Callable[[Step, float], Any]], *, name: str,
+          path: Optional[str] = None, instance: Optional[str] = None,
+          rate_hz: Optional[float] = None, duration_s: Optional[float] = None,
+          out: Optional[TextIO] = None, err: Optional[TextIO] = None) -> int:
+    """A world's whole life, for a script: connect (`path` or `instance`), run the step
+    function `make_step(world)` returns with World.run() until the daemon lets go, the duration
+    ends or Ctrl-C, then print on `out` "NAME: N updates written; the passivity controller
+    removed E J" (standard output when `out` is None). Returns 0; 2 when the channel cannot be
+    used or a step is refused (the reason on `err`, standard error when None, prefixed with
+    NAME); 130 for a Ctrl-C before the world ran."""
+    out = out if out is not None else sys.stdout
+    err = err if err is not None else sys.stderr
+    try:
+        with connect(path, instance=instance) as world:
+            try:
+                world.run(make_step(world), rate_hz=rate_hz, duration_s=duration_s)
+            except KeyboardInterrupt:
+                pass
+            last = world.last_step
+            print(f"{name}: {world.updates} updates written; the passivity controller removed "
+                  f"{last.energy_removed_j:.6g} J" if last is not None else
+                  f"{name}: {world.updates} updates written; no step read", file=out)
+    except (WorldError, ValueError) as error:
+        print(f"{name}: {error}", file=err)
+        return 2
+    except KeyboardInterrupt:
+        return 130
+    return 0
 
 
 def _tool_state(result: Any) -> Tuple[Sequence[float], Optional[Sequence[float]]]:
