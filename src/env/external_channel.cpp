@@ -65,11 +65,16 @@ bool try_load_block(void* memory, std::size_t offset, Block& block) noexcept {
 
 bool process_alive(pid_t pid) { return pid > 0 && (::kill(pid, 0) == 0 || errno == EPERM); }
 
-// What is at `path` already: a channel that may be replaced (true), or a refusal (throws).
-void judge_existing(const std::string& path) {
+// What is at a channel's path already, when it is not refused (judge_existing throws).
+enum class Existing {
+    replaceable,  ///< nothing, or a channel whose daemon let go of it or is gone
+    ours,         ///< the channel of a scene this process renders now
+};
+
+Existing judge_existing(const std::string& path) {
     const int fd = ::open(path.c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
     if (fd < 0) {
-        if (errno == ENOENT) return;  // gone meanwhile
+        if (errno == ENOENT) return Existing::replaceable;  // gone meanwhile
         throw channel_error(path, "exists, and cannot be read to see whose it is (" +
                                       errno_text(errno) + "): remove it");
     }
@@ -82,11 +87,13 @@ void judge_existing(const std::string& path) {
                             "exists and is not an external world's channel: remove it, or "
                             "give the control socket another name");
     }
-    if (header.closed == 0u && header.daemon_pid != ::getpid() &&
-        process_alive(header.daemon_pid)) {
+    if (header.closed != 0u) return Existing::replaceable;
+    if (header.daemon_pid == ::getpid()) return Existing::ours;
+    if (process_alive(header.daemon_pid)) {
         throw channel_error(path, "is in use: hapticd pid " + std::to_string(header.daemon_pid) +
                                       " renders a world through it (one channel per instance)");
     }
+    return Existing::replaceable;
 }
 
 void give_to_group(int fd, const std::string& path, const std::string& group_name,
@@ -109,15 +116,24 @@ void give_to_group(int fd, const std::string& path, const std::string& group_nam
     }
 }
 
-int create_file(const std::string& path) {
-    for (int attempt = 0; attempt < 2; ++attempt) {
-        const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC,
+// Creates the file at `path`, or `path` + ".next" while a scene of this process renders
+// through `path` (`staged`: claim_path() moves it into place once the scene is taken).
+int create_file(const std::string& path, bool& staged) {
+    staged = false;
+    for (int attempt = 0; attempt < 3; ++attempt) {
+        const std::string target = staged ? path + ".next" : path;
+        const int fd = ::open(target.c_str(), O_RDWR | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC,
                               S_IRUSR | S_IWUSR | S_IRGRP | S_IWGRP);
         if (fd >= 0) return fd;
-        if (errno != EEXIST) throw channel_error(path, "cannot be created: " + errno_text(errno));
-        judge_existing(path);  // throws unless it may be replaced
-        if (::unlink(path.c_str()) != 0 && errno != ENOENT) {
-            throw channel_error(path,
+        if (errno != EEXIST) throw channel_error(target, "cannot be created: " + errno_text(errno));
+        // A ".next" is only ever this process's (a scene that was not taken, left by a crash).
+        if (!staged && judge_existing(path) == Existing::ours) {
+            staged = true;
+            continue;
+        }
+        if (staged) (void)judge_existing(target);  // refuses what is not a channel
+        if (::unlink(target.c_str()) != 0 && errno != ENOENT) {
+            throw channel_error(target,
                                 "a channel left by a daemon that is gone cannot be "
                                 "removed: " +
                                     errno_text(errno));
@@ -146,13 +162,15 @@ ExternalChannel::ExternalChannel(const std::string& path, const ChannelShape& sh
             throw channel_error("(private)", "mmap: " + errno_text(errno));
         }
     } else {
-        fd_ = create_file(path);
+        bool staged = false;
+        fd_ = create_file(path, staged);
+        if (staged) staged_path_ = path + ".next";
         try {
             // The umask (the unit's 0027) must not take the group's write away.
             if (::fchmod(fd_, S_IRUSR | S_IWUSR | S_IRGRP | S_IWGRP) != 0) {
-                throw channel_error(path, "chmod 0660: " + errno_text(errno));
+                throw channel_error(file_path(), "chmod 0660: " + errno_text(errno));
             }
-            give_to_group(fd_, path, group, note);
+            give_to_group(fd_, file_path(), group, note);
             // Its page reserved now: a full /run is an error here, not a SIGBUS in the tick.
             const int error = ::posix_fallocate(fd_, 0, HAPTICD_WORLD_SIZE);
             if (error != 0)
@@ -168,7 +186,7 @@ ExternalChannel::ExternalChannel(const std::string& path, const ChannelShape& sh
                 throw channel_error(path, "mmap: " + errno_text(errno));
             }
         } catch (...) {
-            ::unlink(path.c_str());
+            ::unlink(file_path().c_str());
             ::close(fd_);
             throw;
         }
@@ -197,12 +215,23 @@ ExternalChannel::~ExternalChannel() {
     }
     if (fd_ >= 0) {
         // Only the file this channel made: a scene that replaced this one has made its own.
+        const std::string& file = file_path();
         struct stat st {};
-        if (::stat(path_.c_str(), &st) == 0 && st.st_dev == device_ && st.st_ino == inode_) {
-            ::unlink(path_.c_str());
+        if (::stat(file.c_str(), &st) == 0 && st.st_dev == device_ && st.st_ino == inode_) {
+            ::unlink(file.c_str());
         }
         ::close(fd_);
     }
+}
+
+std::string ExternalChannel::claim_path() {
+    if (staged_path_.empty()) return {};
+    if (::rename(staged_path_.c_str(), path_.c_str()) != 0) {
+        return "external world channel " + staged_path_ + ": cannot be moved to " + path_ + ": " +
+               errno_text(errno) + "; a world may map " + staged_path_ + " instead";
+    }
+    staged_path_.clear();
+    return {};
 }
 
 void ExternalChannel::publish(const hapticd_world_tick& tick) noexcept {

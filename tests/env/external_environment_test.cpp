@@ -389,17 +389,32 @@ TEST(EnvExternalChannel, ADeadDaemonsChannelIsReplacedAndAnythingElseIsRefusedBy
     EXPECT_FALSE(std::filesystem::exists(dir.file("elsewhere")));
 }
 
-TEST(EnvExternalChannel, AChannelThatWasReplacedLeavesTheNewOneAlone) {
+TEST(EnvExternalChannel, ASceneLoadedBesideOneInForceTakesThePathOnlyOnceClaimed) {
     const ScratchDir dir;
     const std::string path = dir.file("d.world");
     std::string note;
-    auto first = std::make_unique<ExternalChannel>(path, ChannelShape{}, "", note);
-    // The same daemon's next scene makes its own (a scene load while one renders).
-    const ExternalChannel second(path, ChannelShape{.axes = 2}, "", note);
-    first.reset();
+    auto in_force = std::make_unique<ExternalChannel>(path, ChannelShape{}, "", note);
+    {
+        // A scene loaded and refused (hapticctl scene): the world in force keeps its file.
+        const ExternalChannel refused(path, ChannelShape{.axes = 3}, "", note);
+        EXPECT_TRUE(std::filesystem::exists(path + ".next"));
+        EXPECT_EQ(WorldSide(path).header().axes, 1u);
+    }
+    EXPECT_FALSE(std::filesystem::exists(path + ".next"));
+    ASSERT_TRUE(std::filesystem::exists(path));
+    EXPECT_EQ(WorldSide(path).header().axes, 1u);
+    // A scene loaded and taken: claimed, its file moves into the path; the one it replaced,
+    // let go of later, leaves it alone.
+    ExternalChannel taken(path, ChannelShape{.axes = 2}, "", note);
+    EXPECT_EQ(taken.path(), path);
+    EXPECT_EQ(taken.claim_path(), "");
+    EXPECT_FALSE(std::filesystem::exists(path + ".next"));
+    EXPECT_EQ(WorldSide(path).header().axes, 2u);
+    in_force.reset();
     ASSERT_TRUE(std::filesystem::exists(path));
     EXPECT_EQ(WorldSide(path).header().axes, 2u);
     EXPECT_EQ(WorldSide(path).header().closed, 0u);
+    EXPECT_EQ(taken.claim_path(), "");  // once is enough
 }
 
 // ---- the scene's table ----

@@ -22,8 +22,8 @@ import numpy
 
 import hapticd
 from hapticd import external
-from daemon_support import (EXAMPLES, HAPTICD_BIN, Daemon, ScratchDir, default_config,
-                            run_lockstep, wait_for_path)
+from daemon_support import (EXAMPLES, HAPTICD_BIN, SOURCE_DIR, Daemon, ScratchDir,
+                            default_config, run_lockstep, wait_for_path)
 
 DURATION_S = 6.0
 RATE_HZ = 1000.0
@@ -212,10 +212,7 @@ STALE_SCENE = ('[scene]\nname = "stale"\naxes = 1\n\n[external]\nlockstep_every 
 def stale_config(scene_path):
     """The default config (with the overrun budget of a real-time test on a shared host) with
     the grasp holding still at -0.01 m: the handle is where it is whenever the host gets to
-    each phase. (It also keeps the held tool, 3 mm from the handle, within a factor 2 of it,
-    where the ramp's end, stale_from + 1.0 * (handle - stale_from), is the handle exactly
-    (Sterbenz) and the force exactly 0; elsewhere that sum may miss the handle by an ulp, and
-    the force after the ramp be k_c times it, ~1e-15 N.)"""
+    each phase."""
     text = default_config(str(scene_path))
     push = re.compile(r"^push = .*\n", re.MULTILINE)
     assert len(push.findall(text)) == 1
@@ -388,6 +385,32 @@ class ChannelFile(unittest.TestCase):
     def test_the_channel_is_the_daemons_while_it_runs_and_gone_after(self):
         daemon = self.start()
         self.assert_the_daemons(daemon)
+        self.assertEqual(daemon.stop(), 0)
+        self.assertFalse(self.channel.exists())
+
+    def test_a_scene_load_makes_its_own_channel_and_a_refused_one_leaves_it_alone(self):
+        daemon = self.start()
+        with hapticd.Client(daemon.socket) as client, \
+                external.connect(str(self.channel), timeout_s=30.0) as world:
+            world.write([-0.01])
+            # Refused (another causality): the world in force keeps its channel.
+            with self.assertRaises(hapticd.RequestRefused):
+                client.scene(f"{SOURCE_DIR}/config/scenes/demo-wall.toml")
+            world.read()  # still its file: no ChannelClosed
+            self.assertEqual(self.header()[6], 0.1)
+            self.assertFalse(Path(str(self.channel) + ".next").exists())
+            # Taken: the new scene's channel has the path; the world on the old one is told.
+            other = self.directory / "other.toml"
+            other.write_text(CHANNEL_SCENE + "stale_after = 0.25\n")
+            client.scene(str(other))
+            self.assertEqual(client.status()["scene"]["source"], str(other))
+            self.assertEqual(self.header()[6], 0.25)
+            self.assertEqual(self.header()[7], daemon.process.pid)
+            self.assertFalse(Path(str(self.channel) + ".next").exists())
+            with self.assertRaises(external.ChannelClosed):
+                world.read()
+        with external.connect(str(self.channel), timeout_s=30.0) as again:
+            self.assertEqual(again.stale_after_s, 0.25)
         self.assertEqual(daemon.stop(), 0)
         self.assertFalse(self.channel.exists())
 

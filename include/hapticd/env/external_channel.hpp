@@ -4,6 +4,9 @@
 // ".world" for ".sock" (the socket's directory, the socket's group); the daemon creates it
 // with O_EXCL and O_NOFOLLOW; a channel there already is replaced only when it is a channel
 // that its daemon let go of, or whose daemon is gone; anything else there is refused, by name.
+// A scene loaded while a scene of this process renders through the path (hapticctl scene)
+// makes its channel at PATH.next, and claim_path() moves it into place once the loop has taken
+// the scene: a scene that is refused leaves the world in force its file.
 #pragma once
 
 #include <sys/types.h>
@@ -38,7 +41,10 @@ class ExternalChannel {
     ExternalChannel(const ExternalChannel&) = delete;
     ExternalChannel& operator=(const ExternalChannel&) = delete;
 
+    /// Where worlds find it, once claimed.
     const std::string& path() const noexcept { return path_; }
+    /// Moves a channel made beside one in force into its path (no-op otherwise): "" or why not.
+    std::string claim_path();
 
     /// The daemon's block, sequence-locked (one writer: the servo tick). Never waits.
     void publish(const hapticd_world_tick& tick) noexcept;
@@ -47,7 +53,13 @@ class ExternalChannel {
     bool try_take(hapticd_world_update& update) const noexcept;
 
   private:
+    /// Where the file is now: path_, or staged_path_ until claimed.
+    const std::string& file_path() const noexcept {
+        return staged_path_.empty() ? path_ : staged_path_;
+    }
+
     std::string path_;
+    std::string staged_path_;  ///< PATH.next until claim_path()
     int fd_ = -1;
     void* memory_ = nullptr;
     dev_t device_ = 0;

@@ -73,6 +73,7 @@ class ExternalEnvironment final : public AdmittanceEnvironment {
 
     const ExternalSpec& spec() const noexcept { return spec_; }
     const ExternalChannel& channel() const noexcept { return *channel_; }
+    ExternalChannel& channel() noexcept { return *channel_; }
     WorldState state() const noexcept { return state_; }
     const PortPassivity& passivity() const noexcept { return passivity_; }
 

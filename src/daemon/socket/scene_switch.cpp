@@ -5,6 +5,7 @@
 #include <thread>
 #include <utility>
 
+#include "hapticd/env/external_environment.hpp"
 #include "run/run_setup.hpp"
 
 namespace hapticd::daemon {
@@ -68,7 +69,12 @@ SceneLoadResult SceneSwitch::load(const std::string& path, const servo::Coupling
     if (!port_.taken() && port_.withdraw(*scene)) {
         return refused(path, "the servo loop took no tick within 2 s (is the run ending?)");
     }
-    // Taken: no tick reaches the scene it replaced any more.
+    // Taken: no tick reaches the scene it replaced any more. An external world's channel made
+    // beside the one in force takes its path now (external_channel.hpp).
+    std::string channel_note;
+    if (auto* world = dynamic_cast<env::ExternalEnvironment*>(scene->admittance.get())) {
+        channel_note = world->channel().claim_path();
+    }
     current_ = scene.get();
     loaded_ = std::move(scene);  // frees the one before, if a load made it
     {
@@ -77,7 +83,8 @@ SceneLoadResult SceneSwitch::load(const std::string& path, const servo::Coupling
     }
     return {.ok = true,
             .message = "scene \"" + current_->name + "\" from " + path +
-                       " from the next tick, through the soft start; " + check.describe(),
+                       " from the next tick, through the soft start; " + check.describe() +
+                       (channel_note.empty() ? "" : "; " + channel_note),
             .name = current_->name,
             .path = path,
             .verdict = check.describe()};
