@@ -1,19 +1,18 @@
 #include "hapticd/env/external_channel.hpp"
 
 #include <fcntl.h>
-#include <grp.h>
 #include <signal.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include <array>
 #include <atomic>
 #include <cerrno>
 #include <cstddef>
 #include <cstring>
 #include <stdexcept>
 
+#include "hapticd/install/group_access.hpp"
 #include "hapticd/servo/seqlock.hpp"
 
 namespace hapticd::env {
@@ -73,26 +72,6 @@ Existing judge_existing(const std::string& path) {
     return Existing::replaceable;
 }
 
-void give_to_group(int fd, const std::string& path, const std::string& group_name,
-                   std::string& note) {
-    if (group_name.empty()) return;
-    std::array<char, 4096> buffer{};
-    struct group entry {};
-    struct group* found = nullptr;
-    if (::getgrnam_r(group_name.c_str(), &entry, buffer.data(), buffer.size(), &found) != 0 ||
-        found == nullptr) {
-        note = "external world channel " + path + ": no group \"" + group_name +
-               "\" on this system, so only this daemon's user may connect";
-        return;
-    }
-    struct stat st {};
-    if (::fstat(fd, &st) == 0 && st.st_gid == found->gr_gid) return;
-    if (::fchown(fd, static_cast<uid_t>(-1), found->gr_gid) != 0) {
-        note = "external world channel " + path + ": could not give it to group \"" + group_name +
-               "\": " + errno_text(errno) + "; only this daemon's user may connect";
-    }
-}
-
 // Creates the file at `path`, or `path` + ".next" while a scene of this process renders
 // through `path` (`staged`: claim_path() moves it into place once the scene is taken).
 int create_file(const std::string& path, bool& staged) {
@@ -147,7 +126,9 @@ ExternalChannel::ExternalChannel(const std::string& path, const ChannelShape& sh
             if (::fchmod(fd_, S_IRUSR | S_IWUSR | S_IRGRP | S_IWGRP) != 0) {
                 throw channel_error(file_path(), "chmod 0660: " + errno_text(errno));
             }
-            give_to_group(fd_, file_path(), group, note);
+            note =
+                install::give_to_group(file_path(), group, "external world channel " + file_path(),
+                                       "docs/external-worlds.md");
             // Its page reserved now: a full /run is an error here, not a SIGBUS in the tick.
             const int error = ::posix_fallocate(fd_, 0, HAPTICD_WORLD_SIZE);
             if (error != 0)

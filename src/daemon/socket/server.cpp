@@ -1,7 +1,6 @@
 #include "socket/server.hpp"
 
 #include <fcntl.h>
-#include <grp.h>
 #include <sys/epoll.h>
 #include <sys/eventfd.h>
 #include <sys/socket.h>
@@ -18,6 +17,7 @@
 #include <utility>
 
 #include "hapticd/input/printable.hpp"
+#include "hapticd/install/group_access.hpp"
 
 namespace hapticd::daemon::control_socket {
 
@@ -111,28 +111,6 @@ void clear_stale_socket(const std::string& path, const sockaddr_un& address) {
     ::unlink(path.c_str());
 }
 
-void give_group(const std::string& path, const std::string& group_name, std::string& note) {
-    if (group_name.empty()) return;
-    std::array<char, 4096> buffer{};
-    struct group entry {};
-    struct group* found = nullptr;
-    if (::getgrnam_r(group_name.c_str(), &entry, buffer.data(), buffer.size(), &found) != 0 ||
-        found == nullptr) {
-        note = "control socket " + path + ": no group \"" + group_name +
-               "\" on this system, so only this daemon's user may connect (docs/control.md)";
-        return;
-    }
-    // Under the unit the socket is born in group hapticd (Group=hapticd), and chown() is
-    // outside its system call filter (@privileged): only a daemon in another group, root
-    // outside the unit, hands the socket over (docs/install.md).
-    struct stat st {};
-    if (::stat(path.c_str(), &st) == 0 && st.st_gid == found->gr_gid) return;
-    if (::chown(path.c_str(), static_cast<uid_t>(-1), found->gr_gid) != 0) {
-        note = "control socket " + path + ": could not give it to group \"" + group_name +
-               "\": " + errno_text(errno) + "; only this daemon's user may connect";
-    }
-}
-
 }  // namespace
 
 std::string Peer::describe() const {
@@ -179,8 +157,8 @@ SocketServer::SocketServer(std::string path, Limits limits, const std::string& g
                                              : "listen(): " + errno_text(listen_error)));
     }
     ::chmod(path_.c_str(), 0660);
-    std::string group_note;
-    give_group(path_, group, group_note);
+    const std::string group_note =
+        install::give_to_group(path_, group, "control socket " + path_, "docs/control.md");
     if (!group_note.empty()) note(group_note);
     epoll_fd_ = ::epoll_create1(EPOLL_CLOEXEC);
     stop_fd_ = ::eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
