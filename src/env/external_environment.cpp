@@ -5,19 +5,16 @@
 #include <algorithm>
 #include <cmath>
 
+#include "c_vectors.hpp"
 #include "hapticd/servo/monotonic_clock.hpp"
 
 namespace hapticd::env {
 namespace {
 
+using detail::to_array;
+
 // How often a lockstep wait looks at the channel.
 constexpr long kLockstepPollNs = 20'000;
-
-void to_array(const Vec3& v, double (&out)[3]) noexcept {
-    out[0] = v.x;
-    out[1] = v.y;
-    out[2] = v.z;
-}
 
 // The world's vector, its components past the scene's axes 0; false if one within is not finite.
 bool from_array(const double (&in)[3], int axes, Vec3& out) noexcept {

@@ -8,10 +8,13 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "c_vectors.hpp"
 #include "hapticd/install/plugin_files.hpp"
 
 namespace hapticd::env {
 namespace {
+
+using detail::to_array;
 
 // Appends to a fixed buffer, cut at its end: the failure's text, written on the servo thread.
 class FixedText {
@@ -39,12 +42,6 @@ class FixedText {
     std::array<char, 256>& buffer_;
     std::size_t used_ = 0;
 };
-
-void to_array(const Vec3& v, double (&out)[3]) noexcept {
-    out[0] = v.x;
-    out[1] = v.y;
-    out[2] = v.z;
-}
 
 Mat3 to_mat3(const double (&rows)[9]) noexcept {
     Mat3 m(0.0);  // glm is column-major: m[column][row]
