@@ -6,18 +6,18 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <array>
 #include <atomic>
 #include <cerrno>
-#include <cstddef>
 #include <cstring>
 #include <stdexcept>
 
 #include "hapticd/install/group_access.hpp"
-#include "hapticd/servo/seqlock.hpp"
 
 namespace hapticd::env {
 namespace {
 
+constexpr std::size_t kWord = sizeof(std::uint64_t);
 constexpr std::string_view kSocketSuffix = ".sock";
 
 std::string errno_text(int error) { return std::strerror(error); }
@@ -26,17 +26,42 @@ std::runtime_error channel_error(const std::string& path, const std::string& why
     return std::runtime_error("external world channel " + path + ": " + why);
 }
 
-// A block of the mapping as a sequence lock (servo/seqlock.hpp): its first word the sequence,
-// the rest the payload, which goes in and out without the sequence field.
-template <typename Block>
-constexpr std::size_t kPayloadWords = sizeof(Block) / sizeof(std::uint64_t) - 1;
-
-std::uint64_t* words_at(void* memory, std::size_t offset) noexcept {
-    return static_cast<std::uint64_t*>(static_cast<void*>(static_cast<char*>(memory) + offset));
+// The words of a block in the mapping, as atomics: a seqlock's payload in relaxed atomic
+// words has no data race (Boehm 2012, as servo/seqlock.hpp).
+std::atomic_ref<std::uint64_t> word(void* memory, std::size_t offset) {
+    return std::atomic_ref<std::uint64_t>(
+        *static_cast<std::uint64_t*>(static_cast<void*>(static_cast<char*>(memory) + offset)));
 }
 
-auto atomic_words(std::uint64_t* payload) noexcept {
-    return [payload](std::size_t i) { return std::atomic_ref<std::uint64_t>(payload[i]); };
+template <typename Block>
+void store_block(void* memory, std::size_t offset, const Block& block) noexcept {
+    static_assert(sizeof(Block) % kWord == 0);
+    std::array<std::uint64_t, sizeof(Block) / kWord> words{};
+    std::memcpy(words.data(), &block, sizeof(Block));
+    auto sequence = word(memory, offset);
+    const std::uint64_t before = sequence.load(std::memory_order_relaxed);
+    sequence.store(before + 1, std::memory_order_relaxed);  // odd: a write in progress
+    std::atomic_thread_fence(std::memory_order_release);
+    for (std::size_t i = 1; i < words.size(); ++i) {
+        word(memory, offset + i * kWord).store(words[i], std::memory_order_relaxed);
+    }
+    sequence.store(before + 2, std::memory_order_release);
+}
+
+template <typename Block>
+bool try_load_block(void* memory, std::size_t offset, Block& block) noexcept {
+    auto sequence = word(memory, offset);
+    const std::uint64_t before = sequence.load(std::memory_order_acquire);
+    if ((before & 1u) != 0u) return false;
+    std::array<std::uint64_t, sizeof(Block) / kWord> words{};
+    words[0] = before;
+    for (std::size_t i = 1; i < words.size(); ++i) {
+        words[i] = word(memory, offset + i * kWord).load(std::memory_order_relaxed);
+    }
+    std::atomic_thread_fence(std::memory_order_acquire);
+    if (sequence.load(std::memory_order_relaxed) != before) return false;
+    std::memcpy(static_cast<void*>(&block), words.data(), sizeof(Block));
+    return true;
 }
 
 bool process_alive(pid_t pid) { return pid > 0 && (::kill(pid, 0) == 0 || errno == EPERM); }
@@ -162,8 +187,7 @@ ExternalChannel::ExternalChannel(const std::string& path, const ChannelShape& sh
     // The magic last, released: a world that sees it sees the header and the first block.
     std::uint64_t magic = 0;
     std::memcpy(&magic, HAPTICD_WORLD_MAGIC, sizeof magic);
-    std::atomic_ref<std::uint64_t>(*static_cast<std::uint64_t*>(memory_))
-        .store(magic, std::memory_order_release);
+    word(memory_, 0).store(magic, std::memory_order_release);
 }
 
 ExternalChannel::~ExternalChannel() {
@@ -194,21 +218,11 @@ std::string ExternalChannel::claim_path() {
 }
 
 void ExternalChannel::publish(const hapticd_world_tick& tick) noexcept {
-    static_assert(offsetof(hapticd_world_tick, sequence) == 0);
-    std::uint64_t* block = words_at(memory_, HAPTICD_WORLD_TICK_OFFSET);
-    servo::seqlock_store<kPayloadWords<hapticd_world_tick>>(
-        std::atomic_ref<std::uint64_t>(block[0]), atomic_words(block + 1),
-        reinterpret_cast<const char*>(&tick) + sizeof tick.sequence,
-        sizeof tick - sizeof tick.sequence);
+    store_block(memory_, HAPTICD_WORLD_TICK_OFFSET, tick);
 }
 
 bool ExternalChannel::try_take(hapticd_world_update& update) const noexcept {
-    static_assert(offsetof(hapticd_world_update, sequence) == 0);
-    std::uint64_t* block = words_at(memory_, HAPTICD_WORLD_UPDATE_OFFSET);
-    return servo::seqlock_try_load<kPayloadWords<hapticd_world_update>>(
-        std::atomic_ref<std::uint64_t>(block[0]), atomic_words(block + 1),
-        reinterpret_cast<char*>(&update) + sizeof update.sequence,
-        sizeof update - sizeof update.sequence, update.sequence);
+    return try_load_block(memory_, HAPTICD_WORLD_UPDATE_OFFSET, update);
 }
 
 }  // namespace hapticd::env

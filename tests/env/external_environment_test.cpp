@@ -27,7 +27,6 @@
 
 #include "alloc_guard.hpp"
 #include "hapticd/env/scene.hpp"
-#include "hapticd/servo/seqlock.hpp"
 #include "scratch_dir.hpp"
 
 namespace hapticd::env {
@@ -38,11 +37,6 @@ using hapticd::testing::ScratchDir;
 constexpr double kT = 1.0 / 1024.0;  // exact in binary: the tick counts below are exact
 const CouplingGains kGains{.stiffness_n_per_m = 2000.0, .damping_n_s_per_m = 0.0};
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-// A block's payload words as atomics, for the sequence lock (servo/seqlock.hpp).
-auto atomic_words(std::uint64_t* payload) {
-    return [payload](std::size_t i) { return std::atomic_ref<std::uint64_t>(payload[i]); };
-}
 
 // The world's side: its own mapping of the channel, writing its block as a world would.
 class WorldSide {
@@ -58,8 +52,8 @@ class WorldSide {
     WorldSide(const WorldSide&) = delete;
     WorldSide& operator=(const WorldSide&) = delete;
 
-    // The blocks through the same sequence lock as the daemon's (servo/seqlock.hpp), word by
-    // word as atomics: a test thread plays the world while the servo's runs, no data race.
+    // The block's words as atomics, as the daemon reads and writes them (a test thread plays
+    // the world while the servo's runs: no data race for TSan to see).
     void write(const Vec3& tool_m, const Vec3& velocity_mps = Vec3(kNaN),
                std::uint64_t answers = 0) {
         hapticd_world_update u{};
@@ -70,18 +64,29 @@ class WorldSide {
             u.tool_position_m[i] = tool_m[i];
             u.tool_velocity_mps[i] = velocity_mps[i];
         }
-        std::uint64_t* block = words(HAPTICD_WORLD_UPDATE_OFFSET);
-        servo::seqlock_store<sizeof u / 8 - 1>(std::atomic_ref<std::uint64_t>(block[0]),
-                                               atomic_words(block + 1),
-                                               reinterpret_cast<const char*>(&u) + 8, sizeof u - 8);
+        std::array<std::uint64_t, sizeof u / 8> words{};
+        std::memcpy(words.data(), &u, sizeof u);
+        auto sequence = word(HAPTICD_WORLD_UPDATE_OFFSET);
+        const std::uint64_t before = sequence.load();
+        sequence.store(before + 1);
+        std::atomic_thread_fence(std::memory_order_release);
+        for (std::size_t i = 1; i < words.size(); ++i) {
+            word(HAPTICD_WORLD_UPDATE_OFFSET + 8 * i).store(words[i], std::memory_order_relaxed);
+        }
+        sequence.store(before + 2, std::memory_order_release);
     }
     hapticd_world_tick tick() const {
-        hapticd_world_tick t{};
-        std::uint64_t* block = words(HAPTICD_WORLD_TICK_OFFSET);
-        while (!servo::seqlock_try_load<sizeof t / 8 - 1>(
-            std::atomic_ref<std::uint64_t>(block[0]), atomic_words(block + 1),
-            reinterpret_cast<char*>(&t) + 8, sizeof t - 8, t.sequence)) {
+        std::array<std::uint64_t, sizeof(hapticd_world_tick) / 8> words{};
+        for (;;) {
+            const std::uint64_t before = word(HAPTICD_WORLD_TICK_OFFSET).load();
+            for (std::size_t i = 0; i < words.size(); ++i) {
+                words[i] = word(HAPTICD_WORLD_TICK_OFFSET + 8 * i).load(std::memory_order_relaxed);
+            }
+            std::atomic_thread_fence(std::memory_order_acquire);
+            if (before % 2 == 0 && word(HAPTICD_WORLD_TICK_OFFSET).load() == before) break;
         }
+        hapticd_world_tick t{};
+        std::memcpy(&t, words.data(), sizeof t);
         return t;
     }
     hapticd_world_header header() const {
@@ -91,8 +96,9 @@ class WorldSide {
     }
 
   private:
-    std::uint64_t* words(std::size_t offset) const {
-        return reinterpret_cast<std::uint64_t*>(static_cast<char*>(memory_) + offset);
+    std::atomic_ref<std::uint64_t> word(std::size_t offset) const {
+        return std::atomic_ref<std::uint64_t>(
+            *reinterpret_cast<std::uint64_t*>(static_cast<char*>(memory_) + offset));
     }
     void* memory_ = nullptr;
     std::uint64_t update_ = 0;
